@@ -1,0 +1,28 @@
+//! Terrain database model and the IG's terrain queries.
+//!
+//! Data flows one way: a [`raster::Raster`] (from an importer or the synthetic generator) has
+//! its voids filled ([`fill`]) and its materials derived when it has none ([`classify`]), then
+//! [`build`] cuts it into the tiles of a quadtree pyramid ([`pyramid`], [`tile`]). An open
+//! [`database::TerrainDatabase`] hands tiles to the paging [`cache::TileCache`], and
+//! [`query::QuerySession`] answers HOT, HAT and line of sight on the finest surface.
+//!
+//! This crate is pure: it never opens files, sockets, the GPU or the terminal. Tile bytes come
+//! from a [`database::TileStore`] that an edge crate implements.
+
+pub mod build;
+pub mod cache;
+pub mod classify;
+pub mod database;
+pub mod fill;
+pub mod material;
+pub mod pyramid;
+pub mod query;
+pub mod raster;
+pub mod tile;
+
+pub use cache::{PagingConfig, TileCache};
+pub use database::{Manifest, TerrainDatabase, TileStore};
+pub use material::Material;
+pub use pyramid::{PyramidLayout, TileKey};
+pub use query::{LosResult, QueryError, QuerySession, SurfacePoint};
+pub use raster::{GeoGrid, Raster};

@@ -1,0 +1,478 @@
+//! The IG's terrain answers: height of terrain (HOT), height above terrain (HAT) with normal and
+//! material, and line of sight (LOS).
+//!
+//! Every answer is taken on the finest level's triangulated surface (see
+//! [`crate::raster::triangulated_height`]), the surface the renderer draws at full detail; the
+//! finest tile is loaded on demand. Where a finest tile is unreadable the answer comes from the
+//! nearest readable coarser level, resampled onto the finest grid, and says so (`level`).
+//!
+//! Line of sight follows the straight chord between two geodetic points (through the ellipsoid's
+//! curvature, so long sightlines drop towards the ground as they should). The chord is split into
+//! pieces of at most 2 km; in each, latitude and longitude are linear and altitude is the
+//! quadratic through the piece's exact end and middle points (error well under a millimetre).
+//! The walk in grid space skips whole quadtree leaves (8 x 8 cells) whose highest point is below
+//! the chord (the tiles' min/max quadtree), and tests each remaining cell's two triangles exactly.
+//!
+//! Limits: a chord that leaves the database sees no terrain outside it; the geoid undulation is
+//! bilinear on the manifest's coarse grid (EGM96 varies by centimetres per kilometre).
+
+use crate::cache::TileCache;
+use crate::database::LoadError;
+use crate::material::Material;
+use crate::pyramid::{PyramidLayout, TileKey};
+use crate::raster::triangulated_height;
+use crate::tile::Tile;
+use cig_geo::Geodetic;
+use std::sync::Arc;
+
+/// A point on the terrain surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    /// Height of the terrain above mean sea level (EGM96), metres.
+    pub height_msl_m: f64,
+    /// Geoid undulation there: height above the ellipsoid = `height_msl_m + geoid_undulation_m`.
+    pub geoid_undulation_m: f64,
+    /// Unit surface normal in the local east-north-up frame.
+    pub normal_enu: [f64; 3],
+    pub material: Material,
+    /// Level the answer came from: 0 unless the finest tile was unreadable.
+    pub level: u8,
+}
+
+impl SurfacePoint {
+    /// Height of the terrain above the WGS84 ellipsoid, metres.
+    pub fn height_ellipsoid_m(&self) -> f64 {
+        self.height_msl_m + self.geoid_undulation_m
+    }
+}
+
+/// Where a sightline first meets the terrain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LosHit {
+    /// The intersection; altitude above the ellipsoid.
+    pub point: Geodetic,
+    /// Distance from the sightline's start, metres.
+    pub range_m: f64,
+    pub material: Material,
+    pub level: u8,
+}
+
+/// Answer to a line-of-sight query.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LosResult {
+    pub visible: bool,
+    pub hit: Option<LosHit>,
+}
+
+/// Why a query has no answer.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum QueryError {
+    #[error("point {lat_deg:.7}, {lon_deg:.7} is outside the database")]
+    Outside { lat_deg: f64, lon_deg: f64 },
+    #[error("point {lat_deg:.7}, {lon_deg:.7} is not a valid coordinate")]
+    Invalid { lat_deg: f64, lon_deg: f64 },
+    #[error("no level of the terrain is readable there ({0})")]
+    Unavailable(LoadError),
+}
+
+/// A thread's query context: keeps the finest tiles it has used at hand so repeated queries cost
+/// no lock. Create one per thread from a shared [`TileCache`].
+pub struct QuerySession {
+    cache: Arc<TileCache>,
+    layout: PyramidLayout,
+    tile_cols: usize,
+    slots: Vec<Option<Arc<Tile>>>,
+    epoch: u64,
+}
+
+const PIECE_M: f64 = 2_000.0;
+/// Snap distance to a post, in posts: a query this close to a post returns the post.
+const POST_SNAP: f64 = 1e-7;
+
+impl QuerySession {
+    pub fn new(cache: Arc<TileCache>) -> QuerySession {
+        let layout = *cache.database().layout();
+        let (rows, cols) = layout.tiles_at(0);
+        QuerySession {
+            epoch: cache.eviction_epoch(),
+            cache,
+            layout,
+            tile_cols: cols as usize,
+            slots: vec![None; rows as usize * cols as usize],
+        }
+    }
+
+    pub fn cache(&self) -> &Arc<TileCache> {
+        &self.cache
+    }
+
+    /// Height of terrain at a point, with normal and material.
+    pub fn hot(&mut self, lat_deg: f64, lon_deg: f64) -> Result<SurfacePoint, QueryError> {
+        if !lat_deg.is_finite() || !lon_deg.is_finite() {
+            return Err(QueryError::Invalid { lat_deg, lon_deg });
+        }
+        let g = self.layout.grid;
+        if !g.contains(lat_deg, lon_deg) {
+            return Err(QueryError::Outside { lat_deg, lon_deg });
+        }
+        let (mut row_f, mut col_f) = g.fractional_index(lat_deg, lon_deg);
+        row_f = snap(row_f).clamp(0.0, (g.rows - 1) as f64);
+        col_f = snap(col_f).clamp(0.0, (g.cols - 1) as f64);
+        let (key, fi, fj) = self.layout.locate(0, row_f, col_f);
+        let tile = self.tile(key)?;
+        let (i, j, u, v) = tile.cell_of(fi, fj);
+        let n = tile.posts_per_side;
+        let e = &tile.elevation_m;
+        let base = i * n + j;
+        let (h00, h01, h10, h11) = (e[base], e[base + 1], e[base + n], e[base + n + 1]);
+        let height = triangulated_height(h00, h01, h10, h11, u, v);
+        // Slopes along the cell's edges, per post, then per metre.
+        let (dh_du, dh_dv) = if u >= v {
+            (f64::from(h01 - h00), f64::from(h11 - h01))
+        } else {
+            (f64::from(h11 - h10), f64::from(h10 - h00))
+        };
+        let (north_m_per_deg, east_m_per_deg) = cig_geo::metres_per_degree(lat_deg);
+        let dx_m = g.dlon_deg * east_m_per_deg;
+        let dy_m = g.dlat_deg * north_m_per_deg;
+        let (gx, gy) = (dh_du / dx_m, dh_dv / dy_m);
+        let len = (gx * gx + gy * gy + 1.0).sqrt();
+        let ni = (i + usize::from(v >= 0.5)).min(n - 1);
+        let nj = (j + usize::from(u >= 0.5)).min(n - 1);
+        Ok(SurfacePoint {
+            lat_deg,
+            lon_deg,
+            height_msl_m: height,
+            geoid_undulation_m: self.cache.database().manifest().geoid.undulation_m(lat_deg, lon_deg),
+            normal_enu: [-gx / len, -gy / len, 1.0 / len],
+            material: tile.material_at(ni, nj),
+            level: tile.degraded_from_level.unwrap_or(0),
+        })
+    }
+
+    /// Height above terrain of a geodetic point (altitude above the ellipsoid), with the
+    /// surface point below it.
+    pub fn hat(&mut self, point: Geodetic) -> Result<(f64, SurfacePoint), QueryError> {
+        let s = self.hot(point.lat_deg, point.lon_deg)?;
+        Ok((point.alt_m - s.height_ellipsoid_m(), s))
+    }
+
+    /// Line of sight between two geodetic points (altitudes above the ellipsoid).
+    pub fn los(&mut self, from: Geodetic, to: Geodetic) -> Result<LosResult, QueryError> {
+        for p in [from, to] {
+            if !(p.lat_deg.is_finite() && p.lon_deg.is_finite() && p.alt_m.is_finite())
+                || p.lat_deg.abs() > 90.0
+            {
+                return Err(QueryError::Invalid {
+                    lat_deg: p.lat_deg,
+                    lon_deg: p.lon_deg,
+                });
+            }
+        }
+        let a = from.to_ecef();
+        let b = to.to_ecef();
+        let length_m = (b - a).length();
+        let pieces = ((length_m / PIECE_M).ceil() as usize).max(1);
+        let db = Arc::clone(self.cache.database());
+        let geoid = &db.manifest().geoid;
+        let g = self.layout.grid;
+        let mut start = from;
+        for p in 0..pieces {
+            let t0 = p as f64 / pieces as f64;
+            let t1 = (p + 1) as f64 / pieces as f64;
+            let mid = Geodetic::from_ecef(a + (b - a) * (0.5 * (t0 + t1)));
+            let end = if p + 1 == pieces { to } else { Geodetic::from_ecef(a + (b - a) * t1) };
+            let piece = Piece {
+                x0: (start.lon_deg - g.west_lon_deg) / g.dlon_deg,
+                y0: (start.lat_deg - g.south_lat_deg) / g.dlat_deg,
+                x1: (end.lon_deg - g.west_lon_deg) / g.dlon_deg,
+                y1: (end.lat_deg - g.south_lat_deg) / g.dlat_deg,
+                alt: quadratic(
+                    start.alt_m - geoid.undulation_m(start.lat_deg, start.lon_deg),
+                    mid.alt_m - geoid.undulation_m(mid.lat_deg, mid.lon_deg),
+                    end.alt_m - geoid.undulation_m(end.lat_deg, end.lon_deg),
+                ),
+            };
+            if let Some((s, material, level)) = self.trace_piece(&piece)? {
+                let t = t0 + s * (t1 - t0);
+                return Ok(LosResult {
+                    visible: false,
+                    hit: Some(LosHit {
+                        point: Geodetic::from_ecef(a + (b - a) * t),
+                        range_m: t * length_m,
+                        material,
+                        level,
+                    }),
+                });
+            }
+            start = end;
+        }
+        Ok(LosResult {
+            visible: true,
+            hit: None,
+        })
+    }
+
+    /// First hit along one piece: (parameter in the piece, material, level).
+    fn trace_piece(&mut self, piece: &Piece) -> Result<Option<(f64, Material, u8)>, QueryError> {
+        let g = self.layout.grid;
+        let max_x = (g.cols - 1) as f64;
+        let max_y = (g.rows - 1) as f64;
+        let (dx, dy) = (piece.x1 - piece.x0, piece.y1 - piece.y0);
+        // Clip to the database.
+        let Some((mut s, s_end)) = clip(piece.x0, dx, 0.0, max_x, 0.0, 1.0)
+            .and_then(|(a, b)| clip(piece.y0, dy, 0.0, max_y, a, b))
+        else {
+            return Ok(None);
+        };
+        let db_max = f64::from(self.cache.database().manifest().max_elevation_m);
+        if piece.alt.min_on(s, s_end) > db_max {
+            return Ok(None);
+        }
+        let span_cells = (dx.abs() + dy.abs()).max(1e-12);
+        let nudge = 1e-9 / span_cells.max(1.0);
+        const LEAF: f64 = crate::tile::QUADTREE_LEAF_CELLS as f64;
+        let tile_cells = f64::from(self.layout.tile_cells);
+        while s < s_end {
+            let probe = (s + nudge).min(s_end);
+            let (px, py) = (piece.x0 + dx * probe, piece.y0 + dy * probe);
+            let bx = (px / LEAF).floor().clamp(0.0, (max_x / LEAF).ceil() - 1.0);
+            let by = (py / LEAF).floor().clamp(0.0, (max_y / LEAF).ceil() - 1.0);
+            let leaf_out = exit_param(piece.x0, dx, bx * LEAF, (bx + 1.0) * LEAF, s)
+                .min(exit_param(piece.y0, dy, by * LEAF, (by + 1.0) * LEAF, s))
+                .min(s_end)
+                .max(s + nudge);
+            let tx = ((bx * LEAF) / tile_cells).floor();
+            let ty = ((by * LEAF) / tile_cells).floor();
+            let key = TileKey {
+                level: 0,
+                row: ty as u32,
+                col: tx as u32,
+            };
+            let tile = self.tile(key)?;
+            let (ti0, tj0) = (ty * tile_cells, tx * tile_cells);
+            let leaf = tile.leaf_bounds((by * LEAF - ti0) as usize, (bx * LEAF - tj0) as usize);
+            if piece.alt.min_on(s, leaf_out) <= f64::from(leaf.max_m) {
+                // Walk the leaf's cells.
+                let mut sc = s;
+                while sc < leaf_out {
+                    let probe = (sc + nudge).min(leaf_out);
+                    let cx = (piece.x0 + dx * probe).floor().clamp(bx * LEAF, (bx + 1.0) * LEAF - 1.0).min(max_x - 1.0);
+                    let cy = (piece.y0 + dy * probe).floor().clamp(by * LEAF, (by + 1.0) * LEAF - 1.0).min(max_y - 1.0);
+                    let cell_out = exit_param(piece.x0, dx, cx, cx + 1.0, sc)
+                        .min(exit_param(piece.y0, dy, cy, cy + 1.0, sc))
+                        .min(leaf_out)
+                        .max(sc + nudge);
+                    let i = (cy - ti0) as usize;
+                    let j = (cx - tj0) as usize;
+                    if let Some(hit) = cell_hit(&tile, i, j, piece, cx, cy, sc, cell_out.min(leaf_out)) {
+                        let (hx, hy) = (piece.x0 + dx * hit, piece.y0 + dy * hit);
+                        let ni = ((hy - ti0).round().max(0.0) as usize).min(tile.posts_per_side - 1);
+                        let nj = ((hx - tj0).round().max(0.0) as usize).min(tile.posts_per_side - 1);
+                        return Ok(Some((hit, tile.material_at(ni, nj), tile.degraded_from_level.unwrap_or(0))));
+                    }
+                    sc = cell_out;
+                }
+            }
+            s = leaf_out;
+        }
+        Ok(None)
+    }
+
+    /// The finest tile `key`, from this session's slots, the cache, the store, or rebuilt from
+    /// the nearest readable coarser level.
+    fn tile(&mut self, key: TileKey) -> Result<Arc<Tile>, QueryError> {
+        let epoch = self.cache.eviction_epoch();
+        if epoch != self.epoch {
+            self.slots.iter_mut().for_each(|s| *s = None);
+            self.epoch = epoch;
+        }
+        let slot = key.row as usize * self.tile_cols + key.col as usize;
+        if let Some(Some(t)) = self.slots.get(slot) {
+            return Ok(Arc::clone(t));
+        }
+        let tile = match self.cache.load_now(key) {
+            Ok(t) => t,
+            Err(first_error) => {
+                let mut parent = key;
+                loop {
+                    if parent.level + 1 >= self.layout.levels {
+                        return Err(QueryError::Unavailable(first_error));
+                    }
+                    parent = parent.parent();
+                    if let Ok(p) = self.cache.load_now(parent) {
+                        break Arc::new(resample_from_parent(&self.layout, &p, key));
+                    }
+                }
+            }
+        };
+        if let Some(s) = self.slots.get_mut(slot) {
+            *s = Some(Arc::clone(&tile));
+        }
+        Ok(tile)
+    }
+}
+
+/// A level-0 stand-in for an unreadable tile, sampled from a coarser tile's surface.
+fn resample_from_parent(layout: &PyramidLayout, coarse: &Tile, key: TileKey) -> Tile {
+    let n = layout.posts_per_side();
+    let scale = (1u64 << coarse.key.level) as f64;
+    let span = f64::from(layout.tile_cells);
+    let mut elevation_m = Vec::with_capacity(n * n);
+    let mut material = Vec::with_capacity(n * n);
+    let coarse_span = span * scale;
+    for i in 0..n {
+        for j in 0..n {
+            let row = f64::from(key.row) * span + i as f64;
+            let col = f64::from(key.col) * span + j as f64;
+            let fi = (row - f64::from(coarse.key.row) * coarse_span) / scale;
+            let fj = (col - f64::from(coarse.key.col) * coarse_span) / scale;
+            elevation_m.push(coarse.surface_height(fi, fj) as f32);
+            let ni = (fi.round().max(0.0) as usize).min(coarse.posts_per_side - 1);
+            let nj = (fj.round().max(0.0) as usize).min(coarse.posts_per_side - 1);
+            material.push(coarse.material[ni * coarse.posts_per_side + nj]);
+        }
+    }
+    // Bounds: the coarse tile's bounds hold the finest surface, so they stay conservative.
+    let depth = coarse.quadtree_depth;
+    Tile {
+        key,
+        posts_per_side: n,
+        elevation_m,
+        material,
+        nodes: vec![coarse.bounds(); crate::pyramid::quadtree_node_count(depth)],
+        quadtree_depth: depth,
+        degraded_from_level: Some(coarse.key.level),
+    }
+}
+
+#[inline]
+fn snap(x: f64) -> f64 {
+    let r = x.round();
+    if (x - r).abs() < POST_SNAP {
+        r
+    } else {
+        x
+    }
+}
+
+/// One piece of a sightline: linear in grid space, quadratic in altitude above sea level.
+struct Piece {
+    x0: f64,
+    y0: f64,
+    x1: f64,
+    y1: f64,
+    alt: Quadratic,
+}
+
+#[derive(Clone, Copy)]
+struct Quadratic {
+    a: f64,
+    b: f64,
+    c: f64,
+}
+
+/// The quadratic through (0, v0), (0.5, vm), (1, v1).
+fn quadratic(v0: f64, vm: f64, v1: f64) -> Quadratic {
+    Quadratic {
+        a: v0,
+        b: 4.0 * vm - 3.0 * v0 - v1,
+        c: 2.0 * v0 + 2.0 * v1 - 4.0 * vm,
+    }
+}
+
+impl Quadratic {
+    #[inline]
+    fn at(&self, s: f64) -> f64 {
+        self.a + s * (self.b + s * self.c)
+    }
+
+    /// Lowest value on `[s0, s1]`.
+    #[inline]
+    fn min_on(&self, s0: f64, s1: f64) -> f64 {
+        let mut m = self.at(s0).min(self.at(s1));
+        if self.c > 0.0 {
+            let v = -self.b / (2.0 * self.c);
+            if v > s0 && v < s1 {
+                m = m.min(self.at(v));
+            }
+        }
+        m
+    }
+}
+
+/// Clips the parameter range `[s0, s1]` to `lo <= p0 + d s <= hi`.
+fn clip(p0: f64, d: f64, lo: f64, hi: f64, s0: f64, s1: f64) -> Option<(f64, f64)> {
+    if d.abs() < 1e-15 {
+        return (p0 >= lo && p0 <= hi).then_some((s0, s1));
+    }
+    let (a, b) = ((lo - p0) / d, (hi - p0) / d);
+    let (a, b) = if a < b { (a, b) } else { (b, a) };
+    let (s0, s1) = (s0.max(a), s1.min(b));
+    (s0 <= s1).then_some((s0, s1))
+}
+
+/// Parameter where `p0 + d s` leaves `[lo, hi]` going forward from `s`.
+#[inline]
+fn exit_param(p0: f64, d: f64, lo: f64, hi: f64, s: f64) -> f64 {
+    if d > 0.0 {
+        ((hi - p0) / d).max(s)
+    } else if d < 0.0 {
+        ((lo - p0) / d).max(s)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// First parameter in `[s0, s1]` where the piece is at or below cell `(i, j)`'s triangles.
+#[allow(clippy::too_many_arguments, reason = "one cell test with its whole context, kept flat for speed")]
+#[inline]
+fn cell_hit(tile: &Tile, i: usize, j: usize, piece: &Piece, cx: f64, cy: f64, s0: f64, s1: f64) -> Option<f64> {
+    let n = tile.posts_per_side;
+    let e = &tile.elevation_m;
+    let base = i * n + j;
+    let (h00, h01, h10, h11) = (e[base], e[base + 1], e[base + n], e[base + n + 1]);
+    let (dx, dy) = (piece.x1 - piece.x0, piece.y1 - piece.y0);
+    let uv = |s: f64| {
+        (
+            (piece.x0 + dx * s - cx).clamp(0.0, 1.0),
+            (piece.y0 + dy * s - cy).clamp(0.0, 1.0),
+        )
+    };
+    // Split at the diagonal u = v.
+    let du = dx - dy;
+    let w0 = piece.x0 - cx - (piece.y0 - cy);
+    let mut bounds = [s0, s1, s1];
+    let mut count = 2;
+    if du.abs() > 1e-15 {
+        let sd = -w0 / du;
+        if sd > s0 && sd < s1 {
+            bounds = [s0, sd, s1];
+            count = 3;
+        }
+    }
+    for k in 0..count - 1 {
+        let (sa, sb) = (bounds[k], bounds[k + 1]);
+        let (um, vm) = uv(0.5 * (sa + sb));
+        let upper = um >= vm;
+        let height = |s: f64| {
+            let (u, v) = uv(s);
+            if upper {
+                f64::from(h00) + u * f64::from(h01 - h00) + v * f64::from(h11 - h01)
+            } else {
+                f64::from(h00) + v * f64::from(h10 - h00) + u * f64::from(h11 - h10)
+            }
+        };
+        let fa = piece.alt.at(sa) - height(sa);
+        if fa <= 0.0 {
+            return Some(sa);
+        }
+        let fb = piece.alt.at(sb) - height(sb);
+        if fb <= 0.0 {
+            return Some(sa + fa / (fa - fb) * (sb - sa));
+        }
+    }
+    None
+}

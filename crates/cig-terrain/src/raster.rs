@@ -1,0 +1,120 @@
+//! Geographic post grids and whole-area rasters: the exchange form between importers, the
+//! synthetic generator and the pyramid builder.
+//!
+//! A [`GeoGrid`] is a regular WGS84 latitude/longitude lattice of *posts* (point samples, as in
+//! DTED and SRTM), row 0 at the south edge, column 0 at the west edge. A post is a point, not a
+//! cell: a grid of `rows x cols` posts spans `(rows - 1) x (cols - 1)` cells.
+
+use crate::material::Material;
+
+/// A regular geographic lattice of posts. Post `(row, col)` lies at
+/// `lat = south_lat_deg + row * dlat_deg`, `lon = west_lon_deg + col * dlon_deg`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GeoGrid {
+    /// Latitude of row 0 (the southernmost posts), degrees.
+    pub south_lat_deg: f64,
+    /// Longitude of column 0 (the westernmost posts), degrees.
+    pub west_lon_deg: f64,
+    /// Post spacing in latitude, degrees (> 0).
+    pub dlat_deg: f64,
+    /// Post spacing in longitude, degrees (> 0).
+    pub dlon_deg: f64,
+    /// Number of post rows (south to north).
+    pub rows: usize,
+    /// Number of post columns (west to east).
+    pub cols: usize,
+}
+
+impl GeoGrid {
+    /// Latitude of the northernmost row, degrees.
+    pub fn north_lat_deg(&self) -> f64 {
+        self.south_lat_deg + (self.rows.saturating_sub(1)) as f64 * self.dlat_deg
+    }
+
+    /// Longitude of the easternmost column, degrees.
+    pub fn east_lon_deg(&self) -> f64 {
+        self.west_lon_deg + (self.cols.saturating_sub(1)) as f64 * self.dlon_deg
+    }
+
+    /// Number of posts.
+    pub fn len(&self) -> usize {
+        self.rows * self.cols
+    }
+
+    /// True when the grid holds no post.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Latitude and longitude of post `(row, col)`, degrees.
+    pub fn post_lat_lon_deg(&self, row: usize, col: usize) -> (f64, f64) {
+        (
+            self.south_lat_deg + row as f64 * self.dlat_deg,
+            self.west_lon_deg + col as f64 * self.dlon_deg,
+        )
+    }
+
+    /// Fractional (row, col) of a point; integral values are posts.
+    pub fn fractional_index(&self, lat_deg: f64, lon_deg: f64) -> (f64, f64) {
+        (
+            (lat_deg - self.south_lat_deg) / self.dlat_deg,
+            (lon_deg - self.west_lon_deg) / self.dlon_deg,
+        )
+    }
+
+    /// True when the point lies inside the grid's rectangle (edges included).
+    pub fn contains(&self, lat_deg: f64, lon_deg: f64) -> bool {
+        let (r, c) = self.fractional_index(lat_deg, lon_deg);
+        let eps = 1e-9;
+        r >= -eps
+            && c >= -eps
+            && r <= (self.rows.saturating_sub(1)) as f64 + eps
+            && c <= (self.cols.saturating_sub(1)) as f64 + eps
+    }
+}
+
+/// A whole-area elevation raster on a [`GeoGrid`], row-major, south row first.
+///
+/// `elevation_m` holds heights above mean sea level (EGM96), `NaN` where the source had a void
+/// (nodata). `material` is `None` until classified or set by the source.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Raster {
+    pub grid: GeoGrid,
+    pub elevation_m: Vec<f32>,
+    pub material: Option<Vec<Material>>,
+}
+
+impl Raster {
+    /// Index of post `(row, col)` in the row-major arrays.
+    pub fn index(&self, row: usize, col: usize) -> usize {
+        row * self.grid.cols + col
+    }
+
+    /// Elevation of post `(row, col)`; `NaN` for a void.
+    pub fn elevation_at(&self, row: usize, col: usize) -> f32 {
+        self.elevation_m[self.index(row, col)]
+    }
+
+    /// Number of void (`NaN`) posts.
+    pub fn void_count(&self) -> usize {
+        self.elevation_m.iter().filter(|h| h.is_nan()).count()
+    }
+}
+
+/// Height on the triangulated surface of one grid cell.
+///
+/// This is *the* surface of the database: every query and the renderer at full detail use it.
+/// The cell's corners are `h00` (south-west), `h01` (south-east), `h10` (north-west) and `h11`
+/// (north-east); `u` is the fraction eastwards and `v` northwards, both in `[0, 1]`. The cell is
+/// split along the south-west to north-east diagonal: the south-east triangle (`u >= v`) is
+/// `(h00, h01, h11)`, the north-west one is `(h00, h10, h11)`. At a corner the result is that
+/// corner's height exactly.
+#[inline]
+pub fn triangulated_height(h00: f32, h01: f32, h10: f32, h11: f32, u: f64, v: f64) -> f64 {
+    let (h00, h01, h10, h11) = (h00 as f64, h01 as f64, h10 as f64, h11 as f64);
+    if u >= v {
+        h00 + u * (h01 - h00) + v * (h11 - h01)
+    } else {
+        h00 + v * (h10 - h00) + u * (h11 - h10)
+    }
+}
