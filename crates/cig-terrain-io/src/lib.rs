@@ -2,3 +2,4 @@
 //! directory on disk ([`store`]).
 
 pub mod import;
+pub mod store;

@@ -85,10 +85,7 @@ pub fn build_pyramid<E: From<BuildError>>(
         return Err(BuildError::Voids(voids).into());
     }
     let layout = PyramidLayout::new(grid, tile_cells);
-    let mut material_posts = [0u64; 9];
-    for m in materials {
-        material_posts[m.to_byte() as usize] += 1;
-    }
+    let material_posts = material_histogram(materials);
     let mut level_materials = LevelGrid {
         rows: grid.rows,
         cols: grid.cols,
@@ -263,4 +260,24 @@ pub fn material_histogram(materials: &[Material]) -> [u64; 9] {
         counts[m.to_byte() as usize] += 1;
     }
     counts
+}
+
+/// What [`prepare_raster`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PrepareReport {
+    pub void_posts_filled: usize,
+    pub materials_derived: bool,
+}
+
+/// Makes a raster ready to build: fills its voids and derives materials when it has none.
+pub fn prepare_raster(raster: &mut Raster) -> Result<PrepareReport, crate::fill::FillError> {
+    let void_posts_filled = crate::fill::fill_voids(raster)?;
+    let materials_derived = raster.material.is_none();
+    if materials_derived {
+        crate::classify::classify_materials(raster);
+    }
+    Ok(PrepareReport {
+        void_posts_filled,
+        materials_derived,
+    })
 }

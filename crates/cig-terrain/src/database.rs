@@ -297,3 +297,18 @@ impl Manifest {
         }
     }
 }
+
+impl GeoidGrid {
+    /// EGM96 undulations every `step_deg` over a post grid (the spherical-harmonic synthesis
+    /// costs about a millisecond a node, so the grid is coarse; EGM96 is smooth at that scale).
+    pub fn egm96_over(grid: &crate::raster::GeoGrid, step_deg: f64) -> GeoidGrid {
+        GeoidGrid::sample(
+            grid.south_lat_deg,
+            grid.west_lon_deg,
+            grid.north_lat_deg(),
+            grid.east_lon_deg(),
+            step_deg,
+            cig_geo::geoid::egm96_undulation_m,
+        )
+    }
+}

@@ -17,7 +17,7 @@
 //! bilinear on the manifest's coarse grid (EGM96 varies by centimetres per kilometre).
 
 use crate::cache::TileCache;
-use crate::database::LoadError;
+use crate::database::{LoadError, TerrainDatabase};
 use crate::material::Material;
 use crate::pyramid::{PyramidLayout, TileKey};
 use crate::raster::triangulated_height;
@@ -75,11 +75,45 @@ pub enum QueryError {
     Invalid { lat_deg: f64, lon_deg: f64 },
     #[error("no level of the terrain is readable there ({0})")]
     Unavailable(LoadError),
+    #[error("tile {0} is not part of the database")]
+    NoSuchTile(TileKey),
 }
 
 /// A thread's query context: keeps the finest tiles it has used at hand so repeated queries cost
 /// no lock. Create one per thread from a shared [`TileCache`].
 pub struct QuerySession {
+    db: Arc<TerrainDatabase>,
+    layout: PyramidLayout,
+    tiles: TileSlots,
+    /// Precomputed for the per-query path: no division, no search.
+    fast: FastIndex,
+}
+
+/// What the per-query path needs to find a point's finest cell with multiplications and shifts.
+struct FastIndex {
+    south_lat_deg: f64,
+    west_lon_deg: f64,
+    rows_per_deg: f64,
+    cols_per_deg: f64,
+    max_row: f64,
+    max_col: f64,
+    last_cell_row: usize,
+    last_cell_col: usize,
+    tile_shift: u32,
+}
+
+/// A point's place on the finest grid: tile, cell in the tile, fractions in the cell.
+#[derive(Clone, Copy)]
+struct CellRef {
+    key: TileKey,
+    i: usize,
+    j: usize,
+    u: f64,
+    v: f64,
+}
+
+/// The finest tiles a session has used, by tile index.
+struct TileSlots {
     cache: Arc<TileCache>,
     layout: PyramidLayout,
     tile_cols: usize,
@@ -95,38 +129,94 @@ impl QuerySession {
     pub fn new(cache: Arc<TileCache>) -> QuerySession {
         let layout = *cache.database().layout();
         let (rows, cols) = layout.tiles_at(0);
+        let g = layout.grid;
+        let fast = FastIndex {
+            south_lat_deg: g.south_lat_deg,
+            west_lon_deg: g.west_lon_deg,
+            rows_per_deg: 1.0 / g.dlat_deg,
+            cols_per_deg: 1.0 / g.dlon_deg,
+            max_row: (g.rows - 1) as f64,
+            max_col: (g.cols - 1) as f64,
+            last_cell_row: g.rows - 2,
+            last_cell_col: g.cols - 2,
+            tile_shift: layout.tile_cells.trailing_zeros(),
+        };
         QuerySession {
-            epoch: cache.eviction_epoch(),
-            cache,
+            db: Arc::clone(cache.database()),
             layout,
-            tile_cols: cols as usize,
-            slots: vec![None; rows as usize * cols as usize],
+            fast,
+            tiles: TileSlots {
+                epoch: cache.eviction_epoch(),
+                cache,
+                layout,
+                tile_cols: cols as usize,
+                slots: vec![None; rows as usize * cols as usize],
+            },
         }
     }
 
     pub fn cache(&self) -> &Arc<TileCache> {
-        &self.cache
+        &self.tiles.cache
+    }
+
+    /// The finest cell holding a point (snapped onto a post when within [`POST_SNAP`] of one),
+    /// or why the point has no answer.
+    #[inline]
+    fn cell(&self, lat_deg: f64, lon_deg: f64) -> Result<CellRef, QueryError> {
+        let f = &self.fast;
+        let row_f = (lat_deg - f.south_lat_deg) * f.rows_per_deg;
+        let col_f = (lon_deg - f.west_lon_deg) * f.cols_per_deg;
+        const EDGE: f64 = 1e-9;
+        // Written so that NaN fails the test.
+        if !(row_f >= -EDGE && row_f <= f.max_row + EDGE && col_f >= -EDGE && col_f <= f.max_col + EDGE) {
+            return Err(if lat_deg.is_finite() && lon_deg.is_finite() {
+                QueryError::Outside { lat_deg, lon_deg }
+            } else {
+                QueryError::Invalid { lat_deg, lon_deg }
+            });
+        }
+        let row_f = snap(row_f).clamp(0.0, f.max_row);
+        let col_f = snap(col_f).clamp(0.0, f.max_col);
+        let r = (row_f as usize).min(f.last_cell_row);
+        let c = (col_f as usize).min(f.last_cell_col);
+        let (tr, tc) = (r >> f.tile_shift, c >> f.tile_shift);
+        Ok(CellRef {
+            key: TileKey {
+                level: 0,
+                row: tr as u32,
+                col: tc as u32,
+            },
+            i: r - (tr << f.tile_shift),
+            j: c - (tc << f.tile_shift),
+            u: col_f - c as f64,
+            v: row_f - r as f64,
+        })
+    }
+
+    /// Height of terrain above mean sea level at a point: the HOT answer without normal and
+    /// material (CIGI's basic HAT/HOT response).
+    #[inline]
+    pub fn height_msl_m(&mut self, lat_deg: f64, lon_deg: f64) -> Result<f64, QueryError> {
+        let cell = self.cell(lat_deg, lon_deg)?;
+        let tile = self.tiles.get(cell.key)?;
+        let [h00, h01, h10, h11] = tile.cell_corners(cell.i, cell.j);
+        Ok(triangulated_height(h00, h01, h10, h11, cell.u, cell.v))
+    }
+
+    /// Height above terrain of a geodetic point (altitude above the ellipsoid), height only.
+    #[inline]
+    pub fn hat_m(&mut self, point: Geodetic) -> Result<f64, QueryError> {
+        let h = self.height_msl_m(point.lat_deg, point.lon_deg)?;
+        Ok(point.alt_m - h - self.db.manifest().geoid.undulation_m(point.lat_deg, point.lon_deg))
     }
 
     /// Height of terrain at a point, with normal and material.
     pub fn hot(&mut self, lat_deg: f64, lon_deg: f64) -> Result<SurfacePoint, QueryError> {
-        if !lat_deg.is_finite() || !lon_deg.is_finite() {
-            return Err(QueryError::Invalid { lat_deg, lon_deg });
-        }
+        let CellRef { key, i, j, u, v } = self.cell(lat_deg, lon_deg)?;
         let g = self.layout.grid;
-        if !g.contains(lat_deg, lon_deg) {
-            return Err(QueryError::Outside { lat_deg, lon_deg });
-        }
-        let (mut row_f, mut col_f) = g.fractional_index(lat_deg, lon_deg);
-        row_f = snap(row_f).clamp(0.0, (g.rows - 1) as f64);
-        col_f = snap(col_f).clamp(0.0, (g.cols - 1) as f64);
-        let (key, fi, fj) = self.layout.locate(0, row_f, col_f);
-        let tile = self.tile(key)?;
-        let (i, j, u, v) = tile.cell_of(fi, fj);
+        let tile = self.tiles.get(key)?;
         let n = tile.posts_per_side;
-        let e = &tile.elevation_m;
-        let base = i * n + j;
-        let (h00, h01, h10, h11) = (e[base], e[base + 1], e[base + n], e[base + n + 1]);
+        let [h00, h01, h10, h11] = tile.cell_corners(i, j);
         let height = triangulated_height(h00, h01, h10, h11, u, v);
         // Slopes along the cell's edges, per post, then per metre.
         let (dh_du, dh_dv) = if u >= v {
@@ -145,7 +235,7 @@ impl QuerySession {
             lat_deg,
             lon_deg,
             height_msl_m: height,
-            geoid_undulation_m: self.cache.database().manifest().geoid.undulation_m(lat_deg, lon_deg),
+            geoid_undulation_m: self.db.manifest().geoid.undulation_m(lat_deg, lon_deg),
             normal_enu: [-gx / len, -gy / len, 1.0 / len],
             material: tile.material_at(ni, nj),
             level: tile.degraded_from_level.unwrap_or(0),
@@ -175,7 +265,7 @@ impl QuerySession {
         let b = to.to_ecef();
         let length_m = (b - a).length();
         let pieces = ((length_m / PIECE_M).ceil() as usize).max(1);
-        let db = Arc::clone(self.cache.database());
+        let db = Arc::clone(&self.db);
         let geoid = &db.manifest().geoid;
         let g = self.layout.grid;
         let mut start = from;
@@ -227,7 +317,7 @@ impl QuerySession {
         else {
             return Ok(None);
         };
-        let db_max = f64::from(self.cache.database().manifest().max_elevation_m);
+        let db_max = f64::from(self.db.manifest().max_elevation_m);
         if piece.alt.min_on(s, s_end) > db_max {
             return Ok(None);
         }
@@ -251,7 +341,7 @@ impl QuerySession {
                 row: ty as u32,
                 col: tx as u32,
             };
-            let tile = self.tile(key)?;
+            let tile = self.tiles.get(key)?;
             let (ti0, tj0) = (ty * tile_cells, tx * tile_cells);
             let leaf = tile.leaf_bounds((by * LEAF - ti0) as usize, (bx * LEAF - tj0) as usize);
             if piece.alt.min_on(s, leaf_out) <= f64::from(leaf.max_m) {
@@ -281,37 +371,43 @@ impl QuerySession {
         Ok(None)
     }
 
-    /// The finest tile `key`, from this session's slots, the cache, the store, or rebuilt from
-    /// the nearest readable coarser level.
-    fn tile(&mut self, key: TileKey) -> Result<Arc<Tile>, QueryError> {
+}
+
+impl TileSlots {
+    /// The finest tile `key`, from the slots, the cache, the store, or rebuilt from the nearest
+    /// readable coarser level.
+    #[inline]
+    fn get(&mut self, key: TileKey) -> Result<&Tile, QueryError> {
         let epoch = self.cache.eviction_epoch();
         if epoch != self.epoch {
             self.slots.iter_mut().for_each(|s| *s = None);
             self.epoch = epoch;
         }
         let slot = key.row as usize * self.tile_cols + key.col as usize;
-        if let Some(Some(t)) = self.slots.get(slot) {
-            return Ok(Arc::clone(t));
+        let entry = self.slots.get_mut(slot).ok_or(QueryError::NoSuchTile(key))?;
+        if entry.is_none() {
+            *entry = Some(fetch(&self.cache, &self.layout, key)?);
         }
-        let tile = match self.cache.load_now(key) {
-            Ok(t) => t,
-            Err(first_error) => {
-                let mut parent = key;
-                loop {
-                    if parent.level + 1 >= self.layout.levels {
-                        return Err(QueryError::Unavailable(first_error));
-                    }
-                    parent = parent.parent();
-                    if let Ok(p) = self.cache.load_now(parent) {
-                        break Arc::new(resample_from_parent(&self.layout, &p, key));
-                    }
+        entry.as_deref().ok_or(QueryError::NoSuchTile(key))
+    }
+}
+
+/// Loads a finest tile, or rebuilds it from the nearest readable coarser level.
+fn fetch(cache: &TileCache, layout: &PyramidLayout, key: TileKey) -> Result<Arc<Tile>, QueryError> {
+    match cache.load_now(key) {
+        Ok(t) => Ok(t),
+        Err(first_error) => {
+            let mut parent = key;
+            loop {
+                if parent.level + 1 >= layout.levels {
+                    return Err(QueryError::Unavailable(first_error));
+                }
+                parent = parent.parent();
+                if let Ok(p) = cache.load_now(parent) {
+                    return Ok(Arc::new(resample_from_parent(layout, &p, key)));
                 }
             }
-        };
-        if let Some(s) = self.slots.get_mut(slot) {
-            *s = Some(Arc::clone(&tile));
         }
-        Ok(tile)
     }
 }
 

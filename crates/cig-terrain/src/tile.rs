@@ -123,6 +123,15 @@ impl Tile {
         self.elevation_m[i * self.posts_per_side + j]
     }
 
+    /// Heights of cell `(i, j)`'s corners: south-west, south-east, north-west, north-east.
+    #[inline]
+    pub fn cell_corners(&self, i: usize, j: usize) -> [f32; 4] {
+        let n = self.posts_per_side;
+        let base = i * n + j;
+        let e = &self.elevation_m[base..base + n + 2];
+        [e[0], e[1], e[n], e[n + 1]]
+    }
+
     /// Material of post `(i, j)`.
     #[inline]
     pub fn material_at(&self, i: usize, j: usize) -> Material {

@@ -1,1 +1,52 @@
-fn main() {}
+//! `cig`: the command line of the cig image generator. Thin glue: parses arguments, reads the
+//! configuration, calls the library crates, prints results. See `ARCHITECTURE.md`.
+
+mod bench;
+mod cli;
+mod config;
+mod db;
+mod demo;
+mod output;
+mod query;
+
+use clap::Parser;
+
+fn main() -> std::process::ExitCode {
+    let cli = cli::Cli::parse();
+    let filter = tracing_subscriber::EnvFilter::try_from_env("CIG_LOG").unwrap_or_else(|_| {
+        tracing_subscriber::EnvFilter::new(match cli.verbose {
+            0 => "warn",
+            1 => "info",
+            _ => "debug",
+        })
+    });
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .init();
+    match run(cli) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: cli::Cli) -> anyhow::Result<()> {
+    let config = config::Config::load(cli.config.as_deref())?;
+    match cli.command {
+        cli::Command::Db(cli::DbCommand::Synth(args)) => db::synth(&args, &config),
+        cli::Command::Db(cli::DbCommand::Import(args)) => db::import(&args, &config),
+        cli::Command::Db(cli::DbCommand::Info(args)) => db::info(&args),
+        cli::Command::Query(cli::QueryCommand::Hat(args)) => query::hat(&args, &config),
+        cli::Command::Query(cli::QueryCommand::Los(args)) => query::los(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),
+        cli::Command::Demo(args) => demo::run(&args, &config),
+        cli::Command::Config(cli::ConfigCommand::Default) => {
+            print!("{}", config::Config::default_toml()?);
+            Ok(())
+        }
+    }
+}

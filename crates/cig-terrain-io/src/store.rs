@@ -1,0 +1,214 @@
+//! The terrain database on disk: a directory holding `manifest.json` and one memory-image file
+//! per tile, `tiles/L<level>/<row>_<col>.tile` (format in `cig_terrain::tile`).
+//!
+//! Writing is all-or-nothing: a database is built in a hidden sibling directory and renamed
+//! into place only when every tile and the manifest are written, so an interrupted or failed
+//! build leaves what was on disk untouched. An existing database is replaced only when the
+//! caller asks, and then by rename, never by writing over its files.
+
+use cig_terrain::build::{build_pyramid, BuildError, BuildSummary};
+use cig_terrain::database::{
+    GeoidGrid, Manifest, ManifestError, StoreError, TerrainDatabase, TileStore,
+};
+use cig_terrain::raster::Raster;
+use cig_terrain::tile::Tile;
+use cig_terrain::TileKey;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Name of the manifest file in a database directory.
+pub const MANIFEST_FILE: &str = "manifest.json";
+
+/// Why a database could not be written or opened.
+#[derive(Debug, thiserror::Error)]
+pub enum DbError {
+    #[error("{reason}: {path}")]
+    Io { reason: String, path: PathBuf },
+    #[error("output already exists (pass --force to replace it): {0}")]
+    Exists(PathBuf),
+    #[error("not a cig terrain database (no {MANIFEST_FILE}): {0}")]
+    NotADatabase(PathBuf),
+    #[error("bad manifest: {reason}: {path}")]
+    Manifest { reason: String, path: PathBuf },
+    #[error(transparent)]
+    Build(#[from] BuildError),
+}
+
+fn io_err(path: &Path, e: std::io::Error) -> DbError {
+    DbError::Io {
+        reason: e.to_string(),
+        path: path.to_path_buf(),
+    }
+}
+
+/// Tiles read from a database directory.
+pub struct FsTileStore {
+    root: PathBuf,
+}
+
+impl FsTileStore {
+    pub fn new(root: impl Into<PathBuf>) -> FsTileStore {
+        FsTileStore { root: root.into() }
+    }
+
+    /// Path of a tile's file.
+    pub fn tile_path(&self, key: TileKey) -> PathBuf {
+        tile_path(&self.root, key)
+    }
+}
+
+/// Path of a tile's file under a database root.
+pub fn tile_path(root: &Path, key: TileKey) -> PathBuf {
+    root.join("tiles")
+        .join(format!("L{}", key.level))
+        .join(format!("{}_{}.tile", key.row, key.col))
+}
+
+impl TileStore for FsTileStore {
+    fn read_tile(&self, key: TileKey) -> Result<Vec<u8>, StoreError> {
+        let path = self.tile_path(key);
+        std::fs::read(&path).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::NotFound {
+                StoreError::Missing(path.display().to_string())
+            } else {
+                StoreError::Io {
+                    reason: e.to_string(),
+                    location: path.display().to_string(),
+                }
+            }
+        })
+    }
+
+    fn location(&self, key: TileKey) -> String {
+        self.tile_path(key).display().to_string()
+    }
+}
+
+/// Opens a database directory: reads and validates its manifest.
+pub fn open_database(dir: &Path) -> Result<TerrainDatabase, DbError> {
+    let manifest_path = dir.join(MANIFEST_FILE);
+    let text = match std::fs::read_to_string(&manifest_path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(if dir.is_dir() {
+                DbError::NotADatabase(dir.to_path_buf())
+            } else {
+                DbError::Io {
+                    reason: "no such database directory".into(),
+                    path: dir.to_path_buf(),
+                }
+            })
+        }
+        Err(e) => return Err(io_err(&manifest_path, e)),
+    };
+    let manifest: Manifest = serde_json::from_str(&text).map_err(|e| DbError::Manifest {
+        reason: e.to_string(),
+        path: manifest_path.clone(),
+    })?;
+    TerrainDatabase::new(manifest, Arc::new(FsTileStore::new(dir))).map_err(|e: ManifestError| {
+        DbError::Manifest {
+            reason: e.to_string(),
+            path: manifest_path,
+        }
+    })
+}
+
+/// Where the posts of a database came from, and how much was filled.
+#[derive(Clone, Debug, Default)]
+pub struct BuildInputs {
+    pub sources: Vec<String>,
+    pub void_posts_filled: u64,
+    pub tile_cells: u32,
+}
+
+/// Builds `raster` (voids filled, materials set) into a database at `out`. Replaces an
+/// existing `out` only when `replace` is set. `progress(tiles_written, tiles_total)`.
+pub fn write_database(
+    out: &Path,
+    raster: &Raster,
+    inputs: &BuildInputs,
+    replace: bool,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<Manifest, DbError> {
+    if out.exists() && !replace {
+        return Err(DbError::Exists(out.to_path_buf()));
+    }
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .ok_or_else(|| DbError::Io {
+            reason: "output path has no directory name".into(),
+            path: out.to_path_buf(),
+        })?;
+    std::fs::create_dir_all(&parent).map_err(|e| io_err(&parent, e))?;
+    let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging).map_err(|e| io_err(&staging, e))?;
+    }
+    let result = write_into(&staging, raster, inputs, progress);
+    let manifest = match result {
+        Ok(m) => m,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&staging);
+            return Err(e);
+        }
+    };
+    if out.exists() {
+        let old = parent.join(format!(".{name}.old-{}", std::process::id()));
+        std::fs::rename(out, &old).map_err(|e| io_err(out, e))?;
+        if let Err(e) = std::fs::rename(&staging, out) {
+            // Put the old database back; the new one stays in the staging directory.
+            let _ = std::fs::rename(&old, out);
+            return Err(io_err(out, e));
+        }
+        std::fs::remove_dir_all(&old).map_err(|e| io_err(&old, e))?;
+    } else {
+        std::fs::rename(&staging, out).map_err(|e| io_err(out, e))?;
+    }
+    Ok(manifest)
+}
+
+fn write_into(
+    staging: &Path,
+    raster: &Raster,
+    inputs: &BuildInputs,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<Manifest, DbError> {
+    let layout = cig_terrain::PyramidLayout::new(raster.grid, inputs.tile_cells);
+    let total = layout.tile_count();
+    let mut made_dirs = vec![false; usize::from(layout.levels)];
+    let mut written = 0u64;
+    let summary: BuildSummary =
+        build_pyramid::<DbError>(raster, inputs.tile_cells, &mut |tile: &Tile| {
+            let path = tile_path(staging, tile.key);
+            let level = usize::from(tile.key.level);
+            if !made_dirs.get(level).copied().unwrap_or(true) {
+                if let Some(dir) = path.parent() {
+                    std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
+                }
+                made_dirs[level] = true;
+            }
+            std::fs::write(&path, tile.encode()).map_err(|e| io_err(&path, e))?;
+            written += 1;
+            progress(written, total);
+            Ok(())
+        })?;
+    let geoid = GeoidGrid::egm96_over(&raster.grid, 0.25);
+    let manifest = Manifest::from_build(
+        &summary,
+        geoid,
+        inputs.void_posts_filled,
+        inputs.sources.clone(),
+    );
+    let manifest_path = staging.join(MANIFEST_FILE);
+    let text = serde_json::to_string_pretty(&manifest).map_err(|e| DbError::Manifest {
+        reason: e.to_string(),
+        path: manifest_path.clone(),
+    })?;
+    std::fs::write(&manifest_path, text).map_err(|e| io_err(&manifest_path, e))?;
+    Ok(manifest)
+}

@@ -1,0 +1,160 @@
+//! Command-line syntax.
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(name = "cig", version, about = "cig: a real-time computer image generator for training simulators")]
+pub struct Cli {
+    /// Configuration file (TOML); `cig config default` prints one with every setting.
+    #[arg(long, global = true, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// More log output (-v info, -vv debug); CIG_LOG overrides (tracing filter syntax).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Build and inspect terrain databases.
+    #[command(subcommand)]
+    Db(DbCommand),
+    /// Ask a database the host's terrain questions.
+    #[command(subcommand)]
+    Query(QueryCommand),
+    /// Measure performance.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+    /// Build the demo database if needed and show what cig does with it.
+    Demo(DemoArgs),
+    /// Configuration helpers.
+    #[command(subcommand)]
+    Config(ConfigCommand),
+}
+
+#[derive(Subcommand)]
+pub enum DbCommand {
+    /// Generate a deterministic synthetic database.
+    Synth(SynthArgs),
+    /// Import DEM files (GeoTIFF, SRTM .hgt, DTED .dt0/.dt1/.dt2, ESRI .asc) into one database.
+    Import(ImportArgs),
+    /// Describe a database.
+    Info(InfoArgs),
+}
+
+#[derive(Args)]
+pub struct SynthArgs {
+    /// Output database directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// South-west corner, "LAT,LON" in degrees.
+    #[arg(long, value_name = "LAT,LON", allow_hyphen_values = true)]
+    pub origin: String,
+    /// Side of the square area, km.
+    #[arg(long)]
+    pub size_km: f64,
+    /// Post spacing, metres.
+    #[arg(long)]
+    pub spacing_m: f64,
+    /// Random seed: the same seed gives the same bytes.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Replace the output if it exists.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Args)]
+pub struct ImportArgs {
+    /// Output database directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Replace the output if it exists.
+    #[arg(long)]
+    pub force: bool,
+    /// DEM files; several are mosaicked into one database.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct InfoArgs {
+    pub db: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Subcommand)]
+pub enum QueryCommand {
+    /// Height of terrain (and above terrain with --alt) at a point, with normal and material.
+    #[command(allow_negative_numbers = true)]
+    Hat(HatArgs),
+    /// Line of sight between two points (altitudes above the WGS84 ellipsoid).
+    #[command(allow_negative_numbers = true)]
+    Los(LosArgs),
+}
+
+#[derive(Args)]
+pub struct HatArgs {
+    pub db: PathBuf,
+    /// Latitude, degrees.
+    pub lat: f64,
+    /// Longitude, degrees.
+    pub lon: f64,
+    /// Altitude of the asking point above the WGS84 ellipsoid, metres: adds height above terrain.
+    #[arg(long)]
+    pub alt: Option<f64>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct LosArgs {
+    pub db: PathBuf,
+    pub lat1: f64,
+    pub lon1: f64,
+    pub alt1: f64,
+    pub lat2: f64,
+    pub lon2: f64,
+    pub alt2: f64,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// Terrain database benchmarks: HAT and LOS rates, tile loads, build and import times.
+    Db(BenchDbArgs),
+}
+
+#[derive(Args)]
+pub struct BenchDbArgs {
+    pub db: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Seconds to spend on each rate measurement.
+    #[arg(long, default_value_t = 2.0)]
+    pub seconds: f64,
+    /// Skip the build and import timings (they write about 100 MB to a temporary directory).
+    #[arg(long)]
+    pub no_build: bool,
+}
+
+#[derive(Args)]
+pub struct DemoArgs {
+    /// Demo database directory (built when missing).
+    #[arg(long, default_value = "demo-db")]
+    pub db: PathBuf,
+}
+
+#[derive(Subcommand)]
+pub enum ConfigCommand {
+    /// Print the default configuration as TOML.
+    Default,
+}

@@ -1,0 +1,192 @@
+//! `cig db synth|import|info`.
+
+use crate::cli::{ImportArgs, InfoArgs, SynthArgs};
+use crate::config::Config;
+use anyhow::Context;
+use cig_terrain::build::prepare_raster;
+use cig_terrain::raster::Raster;
+use cig_terrain_io::store::{open_database, write_database, BuildInputs};
+use std::path::Path;
+use std::time::Instant;
+
+/// Parses "LAT,LON" in degrees.
+pub fn parse_lat_lon(text: &str) -> anyhow::Result<(f64, f64)> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [lat, lon] = parts.as_slice() else {
+        anyhow::bail!("--origin {text:?} must be LAT,LON in degrees");
+    };
+    let lat: f64 = lat.parse().with_context(|| format!("--origin latitude {lat:?} is not a number"))?;
+    let lon: f64 = lon.parse().with_context(|| format!("--origin longitude {lon:?} is not a number"))?;
+    anyhow::ensure!((-90.0..=90.0).contains(&lat), "--origin latitude {lat} is outside -90..90");
+    anyhow::ensure!((-180.0..=180.0).contains(&lon), "--origin longitude {lon} is outside -180..180");
+    Ok((lat, lon))
+}
+
+pub fn synth(args: &SynthArgs, config: &Config) -> anyhow::Result<()> {
+    let (lat, lon) = parse_lat_lon(&args.origin)?;
+    let params = cig_synth::SynthParams {
+        origin_lat_deg: lat,
+        origin_lon_deg: lon,
+        size_km: args.size_km,
+        spacing_m: args.spacing_m,
+        seed: args.seed,
+    };
+    let started = Instant::now();
+    let summary = synthesize_database(&params, &args.out, args.force, config)?;
+    eprintln!(
+        "built {} tiles in {:.1} s: {}",
+        summary.tile_count,
+        started.elapsed().as_secs_f64(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// Generates and writes a synthetic database (shared with `demo` and `bench`).
+pub fn synthesize_database(
+    params: &cig_synth::SynthParams,
+    out: &Path,
+    force: bool,
+    config: &Config,
+) -> anyhow::Result<cig_terrain::Manifest> {
+    if out.exists() && !force {
+        anyhow::bail!("output already exists (pass --force to replace it): {}", out.display());
+    }
+    let bar = crate::output::bar(100, "synthesize");
+    let mut raster = cig_synth::synthesize(params, &mut |stage, fraction| {
+        bar.set_message(stage.to_string());
+        bar.set_position((fraction * 100.0) as u64);
+    })
+    .context("cannot synthesize terrain")?;
+    bar.finish_and_clear();
+    let source = format!(
+        "cig-synth seed={} origin={},{} size_km={} spacing_m={}",
+        params.seed, params.origin_lat_deg, params.origin_lon_deg, params.size_km, params.spacing_m
+    );
+    build(&mut raster, vec![source], out, force, config)
+}
+
+fn build(
+    raster: &mut Raster,
+    sources: Vec<String>,
+    out: &Path,
+    force: bool,
+    config: &Config,
+) -> anyhow::Result<cig_terrain::Manifest> {
+    let report = prepare_raster(raster).context("cannot fill voids")?;
+    if report.void_posts_filled > 0 {
+        tracing::warn!("filled {} void posts", report.void_posts_filled);
+    }
+    let inputs = BuildInputs {
+        sources,
+        void_posts_filled: report.void_posts_filled as u64,
+        tile_cells: config.database.tile_cells,
+    };
+    let bar = crate::output::bar(0, "write tiles");
+    let manifest = write_database(out, raster, &inputs, force, &mut |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })
+    .context("cannot build database")?;
+    bar.finish_and_clear();
+    Ok(manifest)
+}
+
+pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
+    if args.out.exists() && !args.force {
+        anyhow::bail!("output already exists (pass --force to replace it): {}", args.out.display());
+    }
+    let started = Instant::now();
+    let bar = crate::output::bar(args.inputs.len() as u64, "read DEMs");
+    let area = cig_terrain_io::import::import_files(&args.inputs, &mut |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })
+    .context("cannot import")?;
+    bar.finish_and_clear();
+    let mut raster = area.raster;
+    let sources = area
+        .sources
+        .iter()
+        .map(|s| {
+            let mut line = format!("{} {}", s.format.name(), s.path.display());
+            if let Some(epsg) = s.reprojected_from_epsg {
+                line.push_str(&format!(" (resampled from EPSG:{epsg})"));
+            }
+            if s.void_posts > 0 {
+                line.push_str(&format!(" ({} void posts)", s.void_posts));
+            }
+            line
+        })
+        .collect();
+    let manifest = build(&mut raster, sources, &args.out, args.force, config)?;
+    eprintln!(
+        "imported {} file(s) into {} tiles in {:.1} s ({} void posts filled): {}",
+        args.inputs.len(),
+        manifest.tile_count,
+        started.elapsed().as_secs_f64(),
+        manifest.void_posts_filled,
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// `db info` as JSON.
+pub fn info_json(manifest: &cig_terrain::Manifest) -> serde_json::Value {
+    let g = manifest.layout.grid;
+    serde_json::json!({
+        "origin": {"lat": g.south_lat_deg, "lon": g.west_lon_deg},
+        "extent_deg": {
+            "south": g.south_lat_deg, "west": g.west_lon_deg,
+            "north": g.north_lat_deg(), "east": g.east_lon_deg(),
+            "lat": g.north_lat_deg() - g.south_lat_deg, "lon": g.east_lon_deg() - g.west_lon_deg,
+        },
+        "spacing_m": 0.5 * (manifest.spacing_m[0] + manifest.spacing_m[1]),
+        "spacing_m_north_east": manifest.spacing_m,
+        "spacing_deg": {"lat": g.dlat_deg, "lon": g.dlon_deg},
+        "posts": {"rows": g.rows, "cols": g.cols},
+        "tile_cells": manifest.layout.tile_cells,
+        "levels": manifest.layout.levels,
+        "tiles": manifest.tile_count,
+        "min_elev_m": manifest.min_elevation_m,
+        "max_elev_m": manifest.max_elevation_m,
+        "vertical_datum": manifest.vertical_datum,
+        "void_posts_filled": manifest.void_posts_filled,
+        "materials": manifest.material_posts,
+        "sources": manifest.sources,
+        "format_version": manifest.format_version,
+    })
+}
+
+pub fn info(args: &InfoArgs) -> anyhow::Result<()> {
+    let db = open_database(&args.db)?;
+    let m = db.manifest();
+    if args.json {
+        println!("{}", info_json(m));
+        return Ok(());
+    }
+    let g = m.layout.grid;
+    println!("database      {}", args.db.display());
+    println!("origin        {:.6}, {:.6} (south-west post)", g.south_lat_deg, g.west_lon_deg);
+    println!(
+        "extent        {:.6} .. {:.6} N, {:.6} .. {:.6} E",
+        g.south_lat_deg,
+        g.north_lat_deg(),
+        g.west_lon_deg,
+        g.east_lon_deg()
+    );
+    println!("posts         {} x {} at {:.2} m x {:.2} m", g.rows, g.cols, m.spacing_m[0], m.spacing_m[1]);
+    println!("pyramid       {} levels, {} tiles of {} cells", m.layout.levels, m.tile_count, m.layout.tile_cells);
+    println!("elevation     {:.1} .. {:.1} m ({})", m.min_elevation_m, m.max_elevation_m, m.vertical_datum);
+    println!("voids filled  {}", m.void_posts_filled);
+    let total: u64 = m.material_posts.values().sum();
+    for (name, n) in &m.material_posts {
+        if *n > 0 {
+            println!("  {name:<11} {:5.1} %", 100.0 * *n as f64 / total.max(1) as f64);
+        }
+    }
+    for s in &m.sources {
+        println!("source        {s}");
+    }
+    Ok(())
+}

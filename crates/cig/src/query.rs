@@ -1,0 +1,90 @@
+//! `cig query hat|los`.
+
+use crate::cli::{HatArgs, LosArgs};
+use crate::config::Config;
+use anyhow::Context;
+use cig_geo::Geodetic;
+use cig_terrain::{QuerySession, TileCache};
+use cig_terrain_io::store::open_database;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Opens a database with a paging cache and a query session.
+pub fn session(db: &Path, config: &Config) -> anyhow::Result<QuerySession> {
+    let db = Arc::new(open_database(db)?);
+    let cache = TileCache::new(db, config.paging.clone())?;
+    Ok(QuerySession::new(Arc::new(cache)))
+}
+
+pub fn surface_json(s: &cig_terrain::SurfacePoint) -> serde_json::Value {
+    serde_json::json!({
+        "lat": s.lat_deg,
+        "lon": s.lon_deg,
+        "height_m": s.height_msl_m,
+        "height_ellipsoid_m": s.height_ellipsoid_m(),
+        "geoid_undulation_m": s.geoid_undulation_m,
+        "normal": s.normal_enu,
+        "material": s.material.name(),
+        "level": s.level,
+    })
+}
+
+pub fn los_json(r: &cig_terrain::LosResult) -> serde_json::Value {
+    serde_json::json!({
+        "visible": r.visible,
+        "hit": r.hit.map(|h| serde_json::json!({
+            "lat": h.point.lat_deg,
+            "lon": h.point.lon_deg,
+            "alt_m": h.point.alt_m,
+            "range_m": h.range_m,
+            "material": h.material.name(),
+            "level": h.level,
+        })),
+    })
+}
+
+pub fn hat(args: &HatArgs, config: &Config) -> anyhow::Result<()> {
+    let mut q = session(&args.db, config)?;
+    let s = q.hot(args.lat, args.lon).with_context(|| format!("no terrain answer from {}", args.db.display()))?;
+    let mut json = surface_json(&s);
+    if let Some(alt) = args.alt {
+        anyhow::ensure!(alt.is_finite(), "--alt {alt} is not a number");
+        json["alt_m"] = alt.into();
+        json["hat_m"] = (alt - s.height_ellipsoid_m()).into();
+    }
+    if args.json {
+        println!("{json}");
+    } else {
+        println!(
+            "terrain at {:.7}, {:.7}: {:.2} m above sea level ({:.2} m above the ellipsoid), {}, normal [{:.4}, {:.4}, {:.4}]",
+            s.lat_deg, s.lon_deg, s.height_msl_m, s.height_ellipsoid_m(), s.material,
+            s.normal_enu[0], s.normal_enu[1], s.normal_enu[2]
+        );
+        if let Some(alt) = args.alt {
+            println!("height above terrain: {:.2} m", alt - s.height_ellipsoid_m());
+        }
+        if s.level > 0 {
+            println!("(answered from level {}: the finest tile is unreadable)", s.level);
+        }
+    }
+    Ok(())
+}
+
+pub fn los(args: &LosArgs, config: &Config) -> anyhow::Result<()> {
+    let mut q = session(&args.db, config)?;
+    let from = Geodetic::new(args.lat1, args.lon1, args.alt1);
+    let to = Geodetic::new(args.lat2, args.lon2, args.alt2);
+    let r = q.los(from, to).with_context(|| format!("no line-of-sight answer from {}", args.db.display()))?;
+    if args.json {
+        println!("{}", los_json(&r));
+    } else {
+        match r.hit {
+            None => println!("visible"),
+            Some(h) => println!(
+                "blocked at {:.7}, {:.7}, {:.2} m, {:.1} m from the start ({})",
+                h.point.lat_deg, h.point.lon_deg, h.point.alt_m, h.range_m, h.material
+            ),
+        }
+    }
+    Ok(())
+}

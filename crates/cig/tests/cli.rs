@@ -1,0 +1,257 @@
+//! End-to-end runs of the `cig` binary.
+
+use assert_cmd::Command;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn cig() -> Command {
+    let mut c = Command::cargo_bin("cig").expect("binary");
+    c.env_remove("CIG_LOG");
+    c
+}
+
+fn json(out: &[u8]) -> Value {
+    serde_json::from_slice(out).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(out)))
+}
+
+fn synth(dir: &Path, name: &str, seed: u64, size_km: &str, spacing: &str) -> PathBuf {
+    let db = dir.join(name);
+    cig()
+        .args(["db", "synth", "--out"])
+        .arg(&db)
+        .args(["--origin", "35.98,-121.23", "--size-km", size_km, "--spacing-m", spacing])
+        .args(["--seed", &seed.to_string()])
+        .assert()
+        .success();
+    db
+}
+
+fn files(root: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![root.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("dir") {
+            let p = e.expect("entry").path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((p.strip_prefix(root).expect("prefix").to_path_buf(), std::fs::read(&p).expect("read")));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn synth_is_deterministic_and_info_describes_it() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let a = synth(dir.path(), "a", 7, "4", "30");
+    let b = synth(dir.path(), "b", 7, "4", "30");
+    let c = synth(dir.path(), "c", 8, "4", "30");
+    let (fa, fb, fc) = (files(&a), files(&b), files(&c));
+    assert!(fa.len() > 2);
+    assert_eq!(fa, fb, "same seed, same bytes");
+    assert_ne!(fa, fc, "another seed, another world");
+
+    let out = cig().args(["db", "info"]).arg(&a).arg("--json").assert().success();
+    let info = json(&out.get_output().stdout);
+    assert_eq!(info["origin"]["lat"].as_f64(), Some(35.98));
+    assert_eq!(info["origin"]["lon"].as_f64(), Some(-121.23));
+    assert!((info["spacing_m"].as_f64().expect("spacing") - 30.0).abs() < 0.01);
+    assert!((info["extent_deg"]["lat"].as_f64().expect("extent") - 4000.0 / 110_960.0).abs() < 1e-3);
+    assert_eq!(info["format_version"].as_u64(), Some(1));
+    assert!(info["levels"].as_u64().expect("levels") >= 2);
+    assert!(info["tiles"].as_u64().expect("tiles") >= 5);
+    assert!(info["min_elev_m"].as_f64() < info["max_elev_m"].as_f64());
+}
+
+#[test]
+fn hat_and_los_answer_in_json() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = synth(dir.path(), "db", 3, "6", "30");
+    let out = cig()
+        .args(["query", "hat"])
+        .arg(&db)
+        .args(["36.0", "-121.2", "--alt", "2000", "--json"])
+        .assert()
+        .success();
+    let hat = json(&out.get_output().stdout);
+    assert_eq!(hat["lat"].as_f64(), Some(36.0));
+    assert_eq!(hat["lon"].as_f64(), Some(-121.2));
+    let h = hat["height_m"].as_f64().expect("height");
+    let n = hat["geoid_undulation_m"].as_f64().expect("geoid");
+    assert!((-40.0..-25.0).contains(&n), "EGM96 near Hunter Liggett is about -33 m: {n}");
+    assert!((hat["hat_m"].as_f64().expect("hat") - (2000.0 - (h + n))).abs() < 1e-6);
+    let normal: Vec<f64> = hat["normal"].as_array().expect("normal").iter().filter_map(Value::as_f64).collect();
+    assert_eq!(normal.len(), 3);
+    assert!((normal.iter().map(|v| v * v).sum::<f64>() - 1.0).abs() < 1e-9);
+    assert!(normal[2] > 0.0);
+    assert!(hat["material"].is_string());
+
+    // From 3 km up to 3 km up: visible. From underground: blocked at once.
+    let out = cig()
+        .args(["query", "los"])
+        .arg(&db)
+        .args(["36.0", "-121.2", "3000", "36.03", "-121.17", "3000", "--json"])
+        .assert()
+        .success();
+    let los = json(&out.get_output().stdout);
+    assert_eq!(los, serde_json::json!({"visible": true, "hit": null}));
+    let out = cig()
+        .args(["query", "los"])
+        .arg(&db)
+        .args(["36.0", "-121.2", "-100", "36.03", "-121.17", "3000", "--json"])
+        .assert()
+        .success();
+    let los = json(&out.get_output().stdout);
+    assert_eq!(los["visible"], Value::Bool(false));
+    assert_eq!(los["hit"]["range_m"].as_f64(), Some(0.0));
+    assert!(los["hit"]["material"].is_string());
+}
+
+fn one_line_error(out: &assert_cmd::assert::Assert) -> String {
+    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(lines.len(), 1, "one error line: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    lines[0].to_string()
+}
+
+#[test]
+fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = synth(dir.path(), "db", 1, "3", "60");
+    // Outside the database.
+    let out = cig().args(["query", "hat"]).arg(&db).args(["10.0", "10.0"]).assert().failure();
+    assert!(one_line_error(&out).contains("10.0000000, 10.0000000 is outside the database"));
+    // Not a database.
+    let out = cig().args(["db", "info"]).arg(dir.path()).assert().failure();
+    assert!(one_line_error(&out).contains("not a cig terrain database"));
+    // A missing DEM.
+    let missing = dir.path().join("nope.hgt");
+    let out = cig().args(["db", "import", "--out"]).arg(dir.path().join("x")).arg(&missing).assert().failure();
+    assert!(one_line_error(&out).contains("nope.hgt"));
+    // A truncated SRTM file.
+    let bad = dir.path().join("N35W122.hgt");
+    std::fs::write(&bad, vec![0u8; 1000]).expect("write");
+    let out = cig().args(["db", "import", "--out"]).arg(dir.path().join("x")).arg(&bad).assert().failure();
+    assert!(one_line_error(&out).contains("N35W122.hgt"));
+    assert!(!dir.path().join("x").exists());
+    // An existing output is not overwritten without --force.
+    let before = files(&db);
+    let out = cig()
+        .args(["db", "synth", "--out"])
+        .arg(&db)
+        .args(["--origin", "35.98,-121.23", "--size-km", "3", "--spacing-m", "60", "--seed", "2"])
+        .assert()
+        .failure();
+    assert!(one_line_error(&out).contains("--force"));
+    assert_eq!(files(&db), before);
+    // Bad command-line values.
+    let out = cig()
+        .args(["db", "synth", "--out"])
+        .arg(dir.path().join("y"))
+        .args(["--origin", "95,0", "--size-km", "3", "--spacing-m", "60"])
+        .assert()
+        .failure();
+    assert!(one_line_error(&out).contains("latitude 95"));
+    // A bad configuration file.
+    let conf = dir.path().join("cig.toml");
+    std::fs::write(&conf, "[paging]\nbudget_bytes = -3\n").expect("write");
+    let out = cig().arg("--config").arg(&conf).args(["db", "info"]).arg(&db).assert().failure();
+    assert!(one_line_error(&out).contains("cig.toml"));
+    std::fs::write(&conf, "[paging]\nhysteresis_box_m = 10\n").expect("write");
+    let out = cig().arg("--config").arg(&conf).args(["db", "info"]).arg(&db).assert().failure();
+    assert!(one_line_error(&out).contains("hysteresis_box_m"));
+}
+
+#[test]
+fn a_corrupt_tile_is_served_from_its_parent_and_left_on_disk() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = synth(dir.path(), "db", 5, "6", "30");
+    let tile = db.join("tiles/L0/0_0.tile");
+    let mut bytes = std::fs::read(&tile).expect("tile");
+    let k = bytes.len() / 3;
+    bytes[k] ^= 0x55;
+    std::fs::write(&tile, &bytes).expect("write");
+    let out = cig()
+        .args(["query", "hat"])
+        .arg(&db)
+        .args(["35.985", "-121.225", "--json"])
+        .assert()
+        .success();
+    let hat = json(&out.get_output().stdout);
+    assert!(hat["level"].as_u64().expect("level") >= 1);
+    let stderr = String::from_utf8_lossy(&out.get_output().stderr);
+    assert_eq!(stderr.matches("checksum mismatch").count(), 1, "{stderr}");
+    assert!(stderr.contains("0_0.tile"), "{stderr}");
+    assert_eq!(std::fs::read(&tile).expect("tile"), bytes);
+}
+
+#[test]
+fn import_of_an_esri_grid_keeps_every_post() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let asc = dir.path().join("area.asc");
+    let (rows, cols) = (40usize, 50usize);
+    let cell = 1.0 / 1200.0;
+    let mut text = format!(
+        "ncols {cols}\nnrows {rows}\nxllcenter -121.0\nyllcenter 36.0\ncellsize {cell}\nNODATA_value -9999\n"
+    );
+    let h = |r: usize, c: usize| 200 + (r * 3 + c * 7) % 41;
+    for r in (0..rows).rev() {
+        let line: Vec<String> = (0..cols).map(|c| h(r, c).to_string()).collect();
+        text.push_str(&line.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(&asc, text).expect("write");
+    let db = dir.path().join("db");
+    cig().args(["db", "import", "--out"]).arg(&db).arg(&asc).assert().success();
+    for (r, c) in [(0, 0), (5, 7), (39, 49), (20, 33)] {
+        let lat = 36.0 + r as f64 * cell;
+        let lon = -121.0 + c as f64 * cell;
+        let out = cig()
+            .args(["query", "hat"])
+            .arg(&db)
+            .args([&lat.to_string(), &lon.to_string(), "--json"])
+            .assert()
+            .success();
+        let hat = json(&out.get_output().stdout);
+        assert_eq!(hat["height_m"].as_f64(), Some(h(r, c) as f64), "post {r},{c}");
+    }
+}
+
+#[test]
+fn bench_prints_its_figures() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = synth(dir.path(), "db", 2, "12", "60");
+    let out = cig()
+        .args(["bench", "db"])
+        .arg(&db)
+        .args(["--json", "--no-build", "--seconds", "0.2"])
+        .assert()
+        .success();
+    let report = json(&out.get_output().stdout);
+    for key in [
+        "hat_per_s_one_core",
+        "hat_extended_per_s_one_core",
+        "los_10km_ground_to_ground_per_s_one_core",
+        "los_10km_air_to_ground_per_s_one_core",
+        "tile_loads_per_s_cold",
+    ] {
+        assert!(report[key].as_f64().expect(key) > 0.0, "{key}");
+    }
+}
+
+#[test]
+fn config_default_round_trips() {
+    let out = cig().args(["config", "default"]).assert().success();
+    let text = String::from_utf8_lossy(&out.get_output().stdout).to_string();
+    assert!(text.contains("active_area_m = 16000.0"));
+    assert!(text.contains("hysteresis_box_m = 1200.0"));
+    let dir = tempfile::tempdir().expect("tmp");
+    let conf = dir.path().join("cig.toml");
+    std::fs::write(&conf, &text).expect("write");
+    let db = synth(dir.path(), "db", 1, "3", "60");
+    cig().arg("--config").arg(&conf).args(["db", "info"]).arg(&db).assert().success();
+}

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Installs what cig needs beyond a Rust toolchain on Debian/Ubuntu. Idempotent.
+#   scripts/setup.sh          what the demo needs
+#   scripts/setup.sh --test   also what the test suite needs
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+die() { echo "setup: $*" >&2; exit 1; }
+command -v cargo >/dev/null || die "cargo not found: install a Rust toolchain (https://rustup.rs) first"
+
+as_root() {
+  if [ "$(id -u)" = 0 ]; then "$@"
+  elif command -v sudo >/dev/null; then sudo "$@"
+  else die "need root (or sudo) to run: $*"; fi
+}
+
+# Debian packages the demo needs. (The renderer will add mesa-vulkan-drivers here: Mesa's
+# lavapipe, the Vulkan driver for machines without a GPU.)
+packages=()
+[ "${1:-}" = "--test" ] && packages+=()
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+  command -v apt-get >/dev/null || die "apt-get not found: install ${missing[*]} by hand"
+  as_root apt-get update -qq
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
+fi
+
+if [ "${1:-}" = "--test" ]; then
+  scripts/fetch-test-data.sh >/dev/null
+fi

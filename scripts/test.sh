@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# README command 2: the whole test suite (what CI runs).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh --test
+CIG_TEST_REAL_DEM="$(scripts/fetch-test-data.sh)"
+export CIG_TEST_REAL_DEM
+cargo fmt --all -- --check
+cargo clippy --workspace --all-targets --locked -- -D warnings
+cargo test --workspace --locked
