@@ -19,7 +19,7 @@
 use crate::cache::TileCache;
 use crate::database::{LoadError, TerrainDatabase};
 use crate::material::Material;
-use crate::pyramid::{PyramidLayout, TileKey};
+use crate::pyramid::{quadtree_index, PyramidLayout, TileKey};
 use crate::raster::triangulated_height;
 use crate::tile::Tile;
 use cig_geo::Geodetic;
@@ -306,6 +306,11 @@ impl QuerySession {
     }
 
     /// First hit along one piece: (parameter in the piece, material, level).
+    ///
+    /// Walks the tiles' min/max quadtrees from the root down: a node whose highest point is
+    /// below the sightline over the node's stretch is skipped whole; in a leaf that cannot be
+    /// skipped, cells are walked one by one (Amanatides and Woo's grid traversal) and a cell is
+    /// tested exactly only when the sightline comes below its highest corner.
     fn trace_piece(&mut self, piece: &Piece) -> Result<Option<(f64, Material, u8)>, QueryError> {
         let g = self.layout.grid;
         let max_x = (g.cols - 1) as f64;
@@ -321,56 +326,71 @@ impl QuerySession {
         if piece.alt.min_on(s, s_end) > db_max {
             return Ok(None);
         }
-        let span_cells = (dx.abs() + dy.abs()).max(1e-12);
-        let nudge = 1e-9 / span_cells.max(1.0);
-        const LEAF: f64 = crate::tile::QUADTREE_LEAF_CELLS as f64;
-        let tile_cells = f64::from(self.layout.tile_cells);
+        let walk = Walk::new(piece);
+        let nudge = 1e-9 / (dx.abs() + dy.abs()).max(1.0);
+        let shift = self.fast.tile_shift;
+        let tile_cells = 1usize << shift;
+        let (last_cx, last_cy) = (self.fast.last_cell_col, self.fast.last_cell_row);
         while s < s_end {
             let probe = (s + nudge).min(s_end);
-            let (px, py) = (piece.x0 + dx * probe, piece.y0 + dy * probe);
-            let bx = (px / LEAF).floor().clamp(0.0, (max_x / LEAF).ceil() - 1.0);
-            let by = (py / LEAF).floor().clamp(0.0, (max_y / LEAF).ceil() - 1.0);
-            let leaf_out = exit_param(piece.x0, dx, bx * LEAF, (bx + 1.0) * LEAF, s)
-                .min(exit_param(piece.y0, dy, by * LEAF, (by + 1.0) * LEAF, s))
-                .min(s_end)
-                .max(s + nudge);
-            let tx = ((bx * LEAF) / tile_cells).floor();
-            let ty = ((by * LEAF) / tile_cells).floor();
+            let cx = ((piece.x0 + dx * probe).max(0.0) as usize).min(last_cx);
+            let cy = ((piece.y0 + dy * probe).max(0.0) as usize).min(last_cy);
             let key = TileKey {
                 level: 0,
-                row: ty as u32,
-                col: tx as u32,
+                row: (cy >> shift) as u32,
+                col: (cx >> shift) as u32,
             };
             let tile = self.tiles.get(key)?;
-            let (ti0, tj0) = (ty * tile_cells, tx * tile_cells);
-            let leaf = tile.leaf_bounds((by * LEAF - ti0) as usize, (bx * LEAF - tj0) as usize);
-            if piece.alt.min_on(s, leaf_out) <= f64::from(leaf.max_m) {
-                // Walk the leaf's cells.
-                let mut sc = s;
-                while sc < leaf_out {
-                    let probe = (sc + nudge).min(leaf_out);
-                    let cx = (piece.x0 + dx * probe).floor().clamp(bx * LEAF, (bx + 1.0) * LEAF - 1.0).min(max_x - 1.0);
-                    let cy = (piece.y0 + dy * probe).floor().clamp(by * LEAF, (by + 1.0) * LEAF - 1.0).min(max_y - 1.0);
-                    let cell_out = exit_param(piece.x0, dx, cx, cx + 1.0, sc)
-                        .min(exit_param(piece.y0, dy, cy, cy + 1.0, sc))
-                        .min(leaf_out)
-                        .max(sc + nudge);
-                    let i = (cy - ti0) as usize;
-                    let j = (cx - tj0) as usize;
-                    if let Some(hit) = cell_hit(&tile, i, j, piece, cx, cy, sc, cell_out.min(leaf_out)) {
+            let (ti0, tj0) = ((cy >> shift) << shift, (cx >> shift) << shift);
+            let depth = tile.quadtree_depth;
+            // Descend the quadtree to the largest node that can be skipped, or to a leaf.
+            let mut leaf_end = s_end;
+            let mut skipped = false;
+            for d in 0..=depth {
+                let node_cells = tile_cells >> d;
+                let (nx, ny) = ((cx - tj0) / node_cells, (cy - ti0) / node_cells);
+                let (x_lo, y_lo) = (tj0 + nx * node_cells, ti0 + ny * node_cells);
+                let out = walk
+                    .exit(x_lo as f64, (x_lo + node_cells) as f64, y_lo as f64, (y_lo + node_cells) as f64, s)
+                    .min(s_end);
+                let bounds = tile.nodes[quadtree_index(d, nx, ny)];
+                if piece.alt.min_on(s, out) > f64::from(bounds.max_m) {
+                    s = out.max(s + nudge);
+                    skipped = true;
+                    break;
+                }
+                leaf_end = out;
+            }
+            if skipped {
+                continue;
+            }
+            // Walk the leaf's cells.
+            let mut sc = s;
+            while sc < leaf_end {
+                let probe = (sc + nudge).min(leaf_end);
+                let cx = ((piece.x0 + dx * probe).max(0.0) as usize).min(last_cx);
+                let cy = ((piece.y0 + dy * probe).max(0.0) as usize).min(last_cy);
+                let cell_out = walk
+                    .exit(cx as f64, (cx + 1) as f64, cy as f64, (cy + 1) as f64, sc)
+                    .min(leaf_end)
+                    .max(sc + nudge);
+                let (i, j) = (cy - ti0, cx - tj0);
+                let corners = tile.cell_corners(i, j);
+                let top = corners.iter().fold(f32::NEG_INFINITY, |m, &h| m.max(h));
+                if piece.alt.min_on(sc, cell_out) <= f64::from(top) {
+                    if let Some(hit) = cell_hit(corners, piece, cx as f64, cy as f64, sc, cell_out) {
                         let (hx, hy) = (piece.x0 + dx * hit, piece.y0 + dy * hit);
-                        let ni = ((hy - ti0).round().max(0.0) as usize).min(tile.posts_per_side - 1);
-                        let nj = ((hx - tj0).round().max(0.0) as usize).min(tile.posts_per_side - 1);
+                        let ni = ((hy - ti0 as f64).round().max(0.0) as usize).min(tile.posts_per_side - 1);
+                        let nj = ((hx - tj0 as f64).round().max(0.0) as usize).min(tile.posts_per_side - 1);
                         return Ok(Some((hit, tile.material_at(ni, nj), tile.degraded_from_level.unwrap_or(0))));
                     }
-                    sc = cell_out;
                 }
+                sc = cell_out;
             }
-            s = leaf_out;
+            s = leaf_end.max(s + nudge);
         }
         Ok(None)
     }
-
 }
 
 impl TileSlots {
@@ -510,26 +530,56 @@ fn clip(p0: f64, d: f64, lo: f64, hi: f64, s0: f64, s1: f64) -> Option<(f64, f64
     (s0 <= s1).then_some((s0, s1))
 }
 
-/// Parameter where `p0 + d s` leaves `[lo, hi]` going forward from `s`.
-#[inline]
-fn exit_param(p0: f64, d: f64, lo: f64, hi: f64, s: f64) -> f64 {
-    if d > 0.0 {
-        ((hi - p0) / d).max(s)
-    } else if d < 0.0 {
-        ((lo - p0) / d).max(s)
-    } else {
-        f64::INFINITY
+/// Exit parameters of a piece from axis-aligned boxes, with the divisions done once.
+struct Walk {
+    x0: f64,
+    y0: f64,
+    inv_dx: f64,
+    inv_dy: f64,
+    dx_sign: f64,
+    dy_sign: f64,
+}
+
+impl Walk {
+    fn new(piece: &Piece) -> Walk {
+        let (dx, dy) = (piece.x1 - piece.x0, piece.y1 - piece.y0);
+        Walk {
+            x0: piece.x0,
+            y0: piece.y0,
+            inv_dx: if dx != 0.0 { 1.0 / dx } else { 0.0 },
+            inv_dy: if dy != 0.0 { 1.0 / dy } else { 0.0 },
+            dx_sign: dx.signum() * f64::from(u8::from(dx != 0.0)),
+            dy_sign: dy.signum() * f64::from(u8::from(dy != 0.0)),
+        }
+    }
+
+    /// Parameter where the piece leaves the box `[x_lo, x_hi] x [y_lo, y_hi]` going forward
+    /// from `s` (never before `s`).
+    #[inline]
+    fn exit(&self, x_lo: f64, x_hi: f64, y_lo: f64, y_hi: f64, s: f64) -> f64 {
+        let tx = if self.dx_sign > 0.0 {
+            (x_hi - self.x0) * self.inv_dx
+        } else if self.dx_sign < 0.0 {
+            (x_lo - self.x0) * self.inv_dx
+        } else {
+            f64::INFINITY
+        };
+        let ty = if self.dy_sign > 0.0 {
+            (y_hi - self.y0) * self.inv_dy
+        } else if self.dy_sign < 0.0 {
+            (y_lo - self.y0) * self.inv_dy
+        } else {
+            f64::INFINITY
+        };
+        tx.min(ty).max(s)
     }
 }
 
-/// First parameter in `[s0, s1]` where the piece is at or below cell `(i, j)`'s triangles.
-#[allow(clippy::too_many_arguments, reason = "one cell test with its whole context, kept flat for speed")]
+/// First parameter in `[s0, s1]` where the piece is at or below the triangles of the cell whose
+/// south-west post is `(cx, cy)` and whose corners are `[h00, h01, h10, h11]`.
 #[inline]
-fn cell_hit(tile: &Tile, i: usize, j: usize, piece: &Piece, cx: f64, cy: f64, s0: f64, s1: f64) -> Option<f64> {
-    let n = tile.posts_per_side;
-    let e = &tile.elevation_m;
-    let base = i * n + j;
-    let (h00, h01, h10, h11) = (e[base], e[base + 1], e[base + n], e[base + n + 1]);
+fn cell_hit(corners: [f32; 4], piece: &Piece, cx: f64, cy: f64, s0: f64, s1: f64) -> Option<f64> {
+    let [h00, h01, h10, h11] = corners;
     let (dx, dy) = (piece.x1 - piece.x0, piece.y1 - piece.y0);
     let uv = |s: f64| {
         (

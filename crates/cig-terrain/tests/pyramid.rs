@@ -1,0 +1,84 @@
+//! Properties of the built pyramid: coarse levels decimate, bounds are conservative, error
+//! bounds hold, materials are majorities.
+mod common;
+
+use cig_terrain::pyramid::quadtree_index;
+use cig_terrain::raster::triangulated_height;
+use cig_terrain::TileKey;
+use common::*;
+use proptest::prelude::*;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    #[test]
+    fn bounds_hold_the_finest_surface_and_errors_bound_the_coarse_one(
+        rows in 20usize..90, cols in 20usize..90, seed in 0u32..1000, amp in 1.0f32..500.0
+    ) {
+        let f = move |r: usize, c: usize| {
+            let x = (r as u32).wrapping_mul(73_856_093) ^ (c as u32).wrapping_mul(19_349_663) ^ seed.wrapping_mul(83_492_791);
+            (x % 1000) as f32 / 1000.0 * amp + (r as f32 * 0.3).sin() * amp
+        };
+        let g = grid(rows, cols, 30.0);
+        let raster = raster(g, f);
+        let (db, _) = database(&raster, 16, 0.0);
+        let layout = *db.layout();
+        for level in 0..layout.levels {
+            for key in layout.keys_at(level) {
+                let tile = db.load_tile(key).expect("tile");
+                let step = 1usize << level;
+                let span = 16 * step;
+                let depth = tile.quadtree_depth;
+                let leaf = 16 >> depth;
+                for r in key.row as usize * span..=((key.row as usize + 1) * span).min(rows - 1) {
+                    for c in key.col as usize * span..=((key.col as usize + 1) * span).min(cols - 1) {
+                        let h = f(r, c);
+                        let (i, j) = (r - key.row as usize * span, c - key.col as usize * span);
+                        // Tile posts are the finest posts they sit on (decimation).
+                        if i % step == 0 && j % step == 0 {
+                            prop_assert_eq!(tile.elevation(i / step, j / step), h);
+                        }
+                        let (fi, fj) = (i as f64 / step as f64, j as f64 / step as f64);
+                        let root = tile.bounds();
+                        prop_assert!(root.min_m <= h && h <= root.max_m);
+                        // The leaf holding the post bounds it and its own error.
+                        let (ci, cj) = ((fi as usize).min(15), (fj as usize).min(15));
+                        let lb = tile.nodes[quadtree_index(depth, cj / leaf, ci / leaf)];
+                        prop_assert!(lb.min_m <= h && h <= lb.max_m, "leaf {:?} vs {}", lb, h);
+                        let coarse = tile.surface_height(fi, fj);
+                        prop_assert!((coarse - f64::from(h)).abs() <= f64::from(lb.error_m) + 1e-3,
+                            "{:?} level {}: coarse {} fine {} error {}", key, level, coarse, h, lb.error_m);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn top_level_is_one_tile_and_parents_nest() {
+    let g = grid(300, 200, 30.0);
+    let (db, _) = database(&raster(g, |r, c| (r + c) as f32), 32, 0.0);
+    let layout = *db.layout();
+    assert_eq!(layout.tiles_at(layout.levels - 1), (1, 1));
+    for level in 0..layout.levels - 1 {
+        for key in layout.keys_at(level) {
+            assert!(layout.contains_key(key.parent()), "{key} has parent {}", key.parent());
+        }
+    }
+    let top = db.load_tile(TileKey { level: layout.levels - 1, row: 0, col: 0 }).expect("top");
+    assert_eq!(top.bounds().min_m, 0.0);
+    assert_eq!(top.bounds().max_m, 498.0);
+}
+
+#[test]
+fn triangulated_height_is_exact_at_corners_and_linear_on_edges() {
+    let (a, b, c, d) = (1.0f32, 5.0, -3.0, 10.0);
+    assert_eq!(triangulated_height(a, b, c, d, 0.0, 0.0), 1.0);
+    assert_eq!(triangulated_height(a, b, c, d, 1.0, 0.0), 5.0);
+    assert_eq!(triangulated_height(a, b, c, d, 0.0, 1.0), -3.0);
+    assert_eq!(triangulated_height(a, b, c, d, 1.0, 1.0), 10.0);
+    // Along the diagonal both triangles agree.
+    assert!((triangulated_height(a, b, c, d, 0.5, 0.5) - 5.5).abs() < 1e-12);
+    assert!((triangulated_height(a, b, c, d, 0.5, 0.0) - 3.0).abs() < 1e-12);
+}
