@@ -163,7 +163,12 @@ impl LevelGrid {
     }
 }
 
-fn build_tile(raster: &Raster, layout: &PyramidLayout, materials: &LevelGrid, key: TileKey) -> Tile {
+fn build_tile(
+    raster: &Raster,
+    layout: &PyramidLayout,
+    materials: &LevelGrid,
+    key: TileKey,
+) -> Tile {
     let grid = raster.grid;
     let n = layout.posts_per_side();
     let mut elevation_m = Vec::with_capacity(n * n);

@@ -162,7 +162,10 @@ pub struct TileCache {
 
 impl TileCache {
     /// Starts the cache and its worker threads.
-    pub fn new(db: Arc<TerrainDatabase>, config: PagingConfig) -> Result<TileCache, PagingConfigError> {
+    pub fn new(
+        db: Arc<TerrainDatabase>,
+        config: PagingConfig,
+    ) -> Result<TileCache, PagingConfigError> {
         config.validate()?;
         let (req_tx, req_rx) = crossbeam_channel::unbounded::<TileKey>();
         let (done_tx, done_rx) = crossbeam_channel::unbounded();
@@ -251,7 +254,10 @@ impl TileCache {
                 }
                 previous => {
                     let step = self.config.recenter_step_m;
-                    let c = ((north_m / step).round() * step, (east_m / step).round() * step);
+                    let c = (
+                        (north_m / step).round() * step,
+                        (east_m / step).round() * step,
+                    );
                     if previous.is_some() {
                         s.stats.active_area_moves += 1;
                     }
@@ -316,7 +322,10 @@ impl TileCache {
                     return;
                 }
             }
-            if let Ok((key, result)) = self.completions.recv_timeout(std::time::Duration::from_millis(50)) {
+            if let Ok((key, result)) = self
+                .completions
+                .recv_timeout(std::time::Duration::from_millis(50))
+            {
                 let mut s = self.state.lock();
                 self.finish_load(&mut s, key, result);
             }
@@ -459,7 +468,8 @@ impl TileCache {
     fn wanted_for(&self, centre: (f64, f64), eye: (f64, f64), out: &mut Vec<(u8, f64, TileKey)>) {
         let layout = self.db.layout();
         for level in 0..layout.levels {
-            let half = 0.5 * self.config.active_area_m * self.config.ring_growth.powi(i32::from(level));
+            let half =
+                0.5 * self.config.active_area_m * self.config.ring_growth.powi(i32::from(level));
             let (dlat, dlon) = layout.spacing_deg(level);
             let tile_n_m = dlat * f64::from(layout.tile_cells) * self.metres_per_deg.0;
             let tile_e_m = dlon * f64::from(layout.tile_cells) * self.metres_per_deg.1;

@@ -36,8 +36,16 @@ pub fn classify_materials(raster: &mut Raster) {
     let slope_deg = |r: usize, c: usize| -> f64 {
         let (r0, r1) = (r.saturating_sub(1), (r + 1).min(rows - 1));
         let (c0, c1) = (c.saturating_sub(1), (c + 1).min(cols - 1));
-        let dzdy = if r1 > r0 { (at(r1, c) - at(r0, c)) / ((r1 - r0) as f64 * dy_m) } else { 0.0 };
-        let dzdx = if c1 > c0 { (at(r, c1) - at(r, c0)) / ((c1 - c0) as f64 * dx_m) } else { 0.0 };
+        let dzdy = if r1 > r0 {
+            (at(r1, c) - at(r0, c)) / ((r1 - r0) as f64 * dy_m)
+        } else {
+            0.0
+        };
+        let dzdx = if c1 > c0 {
+            (at(r, c1) - at(r, c0)) / ((c1 - c0) as f64 * dx_m)
+        } else {
+            0.0
+        };
         (dzdx.hypot(dzdy)).atan().to_degrees()
     };
 
@@ -110,8 +118,7 @@ pub fn classify_materials(raster: &mut Raster) {
                     Material::Rock
                 } else if elev > snowline {
                     Material::Snow
-                } else if slope < 5.0
-                    && near_water(r, c).is_some_and(|w| elev < f64::from(w) + 3.0)
+                } else if slope < 5.0 && near_water(r, c).is_some_and(|w| elev < f64::from(w) + 3.0)
                 {
                     Material::Sand
                 } else if (10.0..=35.0).contains(&slope) && elev < treeline {
@@ -157,13 +164,20 @@ mod tests {
                 }
             })
             .collect();
-        let mut raster = Raster { grid, elevation_m, material: None };
+        let mut raster = Raster {
+            grid,
+            elevation_m,
+            material: None,
+        };
         classify_materials(&mut raster);
         let m = raster.material.expect("classified");
         assert_eq!(m[30 * cols + 5], Material::Water);
         assert_eq!(m[30 * cols + 50], Material::Rock);
         assert_eq!(m[30 * cols + 20], Material::Sand);
-        assert!(matches!(m[30 * cols + 30], Material::Grass | Material::DryClay | Material::Forest));
+        assert!(matches!(
+            m[30 * cols + 30],
+            Material::Grass | Material::DryClay | Material::Forest
+        ));
     }
 
     #[test]

@@ -76,7 +76,8 @@ impl GeoidGrid {
     /// Undulation at a point, metres (bilinear; clamped at the grid's edges).
     #[inline]
     pub fn undulation_m(&self, lat_deg: f64, lon_deg: f64) -> f64 {
-        let fr = ((lat_deg - self.south_lat_deg) / self.step_deg).clamp(0.0, (self.rows - 1) as f64);
+        let fr =
+            ((lat_deg - self.south_lat_deg) / self.step_deg).clamp(0.0, (self.rows - 1) as f64);
         let fc = ((lon_deg - self.west_lon_deg) / self.step_deg).clamp(0.0, (self.cols - 1) as f64);
         let r0 = (fr.floor() as usize).min(self.rows.saturating_sub(2));
         let c0 = (fc.floor() as usize).min(self.cols.saturating_sub(2));
@@ -126,7 +127,9 @@ pub struct Manifest {
 pub enum ManifestError {
     #[error("not a cig terrain database (format {0:?})")]
     Format(String),
-    #[error("database format version {found} is not supported (this build reads {DB_FORMAT_VERSION})")]
+    #[error(
+        "database format version {found} is not supported (this build reads {DB_FORMAT_VERSION})"
+    )]
     Version { found: u32 },
     #[error("manifest is inconsistent: {0}")]
     Inconsistent(String),
@@ -145,7 +148,11 @@ impl Manifest {
         }
         let g = &self.layout.grid;
         let bad = |what: &str| Err(ManifestError::Inconsistent(what.to_string()));
-        if !(g.dlat_deg.is_finite() && g.dlat_deg > 0.0 && g.dlon_deg.is_finite() && g.dlon_deg > 0.0) {
+        if !(g.dlat_deg.is_finite()
+            && g.dlat_deg > 0.0
+            && g.dlon_deg.is_finite()
+            && g.dlon_deg > 0.0)
+        {
             return bad("post spacing must be positive");
         }
         if !(g.south_lat_deg.is_finite() && g.west_lon_deg.is_finite()) {
@@ -239,7 +246,10 @@ pub struct TerrainDatabase {
 
 impl TerrainDatabase {
     /// Opens a database over a validated manifest and its store.
-    pub fn new(manifest: Manifest, store: Arc<dyn TileStore>) -> Result<TerrainDatabase, ManifestError> {
+    pub fn new(
+        manifest: Manifest,
+        store: Arc<dyn TileStore>,
+    ) -> Result<TerrainDatabase, ManifestError> {
         manifest.validate()?;
         Ok(TerrainDatabase { manifest, store })
     }
@@ -290,7 +300,12 @@ impl Manifest {
             void_posts_filled,
             material_posts: crate::material::Material::ALL
                 .iter()
-                .map(|m| (m.name().to_string(), summary.material_posts[m.to_byte() as usize]))
+                .map(|m| {
+                    (
+                        m.name().to_string(),
+                        summary.material_posts[m.to_byte() as usize],
+                    )
+                })
                 .collect(),
             sources,
             tile_count: summary.tiles,

@@ -37,10 +37,26 @@ impl TileKey {
         let level = self.level.saturating_sub(1);
         let (r, c) = (self.row * 2, self.col * 2);
         [
-            TileKey { level, row: r, col: c },
-            TileKey { level, row: r, col: c + 1 },
-            TileKey { level, row: r + 1, col: c },
-            TileKey { level, row: r + 1, col: c + 1 },
+            TileKey {
+                level,
+                row: r,
+                col: c,
+            },
+            TileKey {
+                level,
+                row: r,
+                col: c + 1,
+            },
+            TileKey {
+                level,
+                row: r + 1,
+                col: c,
+            },
+            TileKey {
+                level,
+                row: r + 1,
+                col: c + 1,
+            },
         ]
     }
 }
@@ -237,8 +253,8 @@ mod tests {
             let col_f = fc * (cols - 1) as f64;
             let (key, i, j) = l.locate(level, row_f, col_f);
             proptest::prop_assert!(l.contains_key(key));
-            proptest::prop_assert!(i >= -1e-9 && i <= 64.0 + 1e-9, "i={}", i);
-            proptest::prop_assert!(j >= -1e-9 && j <= 64.0 + 1e-9, "j={}", j);
+            proptest::prop_assert!((-1e-9..=64.0 + 1e-9).contains(&i), "i={}", i);
+            proptest::prop_assert!((-1e-9..=64.0 + 1e-9).contains(&j), "j={}", j);
             // The tile's post (i, j) maps back onto the point.
             let scale = (1u64 << level) as f64;
             let back_r = (key.row as f64 * 64.0 + i) * scale;

@@ -168,7 +168,11 @@ impl QuerySession {
         let col_f = (lon_deg - f.west_lon_deg) * f.cols_per_deg;
         const EDGE: f64 = 1e-9;
         // Written so that NaN fails the test.
-        if !(row_f >= -EDGE && row_f <= f.max_row + EDGE && col_f >= -EDGE && col_f <= f.max_col + EDGE) {
+        if !(row_f >= -EDGE
+            && row_f <= f.max_row + EDGE
+            && col_f >= -EDGE
+            && col_f <= f.max_col + EDGE)
+        {
             return Err(if lat_deg.is_finite() && lon_deg.is_finite() {
                 QueryError::Outside { lat_deg, lon_deg }
             } else {
@@ -207,7 +211,13 @@ impl QuerySession {
     #[inline]
     pub fn hat_m(&mut self, point: Geodetic) -> Result<f64, QueryError> {
         let h = self.height_msl_m(point.lat_deg, point.lon_deg)?;
-        Ok(point.alt_m - h - self.db.manifest().geoid.undulation_m(point.lat_deg, point.lon_deg))
+        Ok(point.alt_m
+            - h
+            - self
+                .db
+                .manifest()
+                .geoid
+                .undulation_m(point.lat_deg, point.lon_deg))
     }
 
     /// Height of terrain at a point, with normal and material.
@@ -273,7 +283,11 @@ impl QuerySession {
             let t0 = p as f64 / pieces as f64;
             let t1 = (p + 1) as f64 / pieces as f64;
             let mid = Geodetic::from_ecef(a + (b - a) * (0.5 * (t0 + t1)));
-            let end = if p + 1 == pieces { to } else { Geodetic::from_ecef(a + (b - a) * t1) };
+            let end = if p + 1 == pieces {
+                to
+            } else {
+                Geodetic::from_ecef(a + (b - a) * t1)
+            };
             let piece = Piece {
                 x0: (start.lon_deg - g.west_lon_deg) / g.dlon_deg,
                 y0: (start.lat_deg - g.south_lat_deg) / g.dlat_deg,
@@ -351,7 +365,13 @@ impl QuerySession {
                 let (nx, ny) = ((cx - tj0) / node_cells, (cy - ti0) / node_cells);
                 let (x_lo, y_lo) = (tj0 + nx * node_cells, ti0 + ny * node_cells);
                 let out = walk
-                    .exit(x_lo as f64, (x_lo + node_cells) as f64, y_lo as f64, (y_lo + node_cells) as f64, s)
+                    .exit(
+                        x_lo as f64,
+                        (x_lo + node_cells) as f64,
+                        y_lo as f64,
+                        (y_lo + node_cells) as f64,
+                        s,
+                    )
                     .min(s_end);
                 let bounds = tile.nodes[quadtree_index(d, nx, ny)];
                 if piece.alt.min_on(s, out) > f64::from(bounds.max_m) {
@@ -378,11 +398,18 @@ impl QuerySession {
                 let corners = tile.cell_corners(i, j);
                 let top = corners.iter().fold(f32::NEG_INFINITY, |m, &h| m.max(h));
                 if piece.alt.min_on(sc, cell_out) <= f64::from(top) {
-                    if let Some(hit) = cell_hit(corners, piece, cx as f64, cy as f64, sc, cell_out) {
+                    if let Some(hit) = cell_hit(corners, piece, cx as f64, cy as f64, sc, cell_out)
+                    {
                         let (hx, hy) = (piece.x0 + dx * hit, piece.y0 + dy * hit);
-                        let ni = ((hy - ti0 as f64).round().max(0.0) as usize).min(tile.posts_per_side - 1);
-                        let nj = ((hx - tj0 as f64).round().max(0.0) as usize).min(tile.posts_per_side - 1);
-                        return Ok(Some((hit, tile.material_at(ni, nj), tile.degraded_from_level.unwrap_or(0))));
+                        let ni = ((hy - ti0 as f64).round().max(0.0) as usize)
+                            .min(tile.posts_per_side - 1);
+                        let nj = ((hx - tj0 as f64).round().max(0.0) as usize)
+                            .min(tile.posts_per_side - 1);
+                        return Ok(Some((
+                            hit,
+                            tile.material_at(ni, nj),
+                            tile.degraded_from_level.unwrap_or(0),
+                        )));
                     }
                 }
                 sc = cell_out;
@@ -404,7 +431,10 @@ impl TileSlots {
             self.epoch = epoch;
         }
         let slot = key.row as usize * self.tile_cols + key.col as usize;
-        let entry = self.slots.get_mut(slot).ok_or(QueryError::NoSuchTile(key))?;
+        let entry = self
+            .slots
+            .get_mut(slot)
+            .ok_or(QueryError::NoSuchTile(key))?;
         if entry.is_none() {
             *entry = Some(fetch(&self.cache, &self.layout, key)?);
         }

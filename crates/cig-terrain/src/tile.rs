@@ -74,7 +74,9 @@ pub enum TileDecodeError {
     TooShort { len: usize },
     #[error("not a cig tile (bad magic)")]
     BadMagic,
-    #[error("tile format version {found} is not supported (this build reads {TILE_FORMAT_VERSION})")]
+    #[error(
+        "tile format version {found} is not supported (this build reads {TILE_FORMAT_VERSION})"
+    )]
     Version { found: u32 },
     #[error("tile header is inconsistent: {0}")]
     Header(String),
@@ -215,7 +217,8 @@ impl Tile {
         if &bytes[0..8] != MAGIC {
             return Err(TileDecodeError::BadMagic);
         }
-        let u32_at = |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+        let u32_at =
+            |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
         let version = u32_at(8);
         if version != TILE_FORMAT_VERSION {
             return Err(TileDecodeError::Version { found: version });
@@ -345,7 +348,9 @@ mod tests {
                 col: seed,
             },
             posts_per_side: n,
-            elevation_m: (0..n * n).map(|k| (k as f32 * 0.37 + seed as f32).sin() * 100.0).collect(),
+            elevation_m: (0..n * n)
+                .map(|k| (k as f32 * 0.37 + seed as f32).sin() * 100.0)
+                .collect(),
             material: (0..n * n).map(|k| (k % 9) as u8).collect(),
             nodes: (0..quadtree_node_count(depth))
                 .map(|k| NodeBounds {
@@ -381,7 +386,11 @@ mod tests {
     #[test]
     fn wrong_key_is_reported() {
         let tile = sample_tile(17, 1);
-        let other = TileKey { level: 0, row: 0, col: 0 };
+        let other = TileKey {
+            level: 0,
+            row: 0,
+            col: 0,
+        };
         assert!(matches!(
             Tile::decode(&tile.encode(), Some(other)),
             Err(TileDecodeError::WrongTile { .. })

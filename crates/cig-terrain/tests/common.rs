@@ -23,7 +23,9 @@ pub fn grid(rows: usize, cols: usize, spacing_m: f64) -> GeoGrid {
 
 /// A raster whose post (row, col) has height `f(row, col)`; materials cycle by column.
 pub fn raster(grid: GeoGrid, f: impl Fn(usize, usize) -> f32) -> Raster {
-    let elevation_m = (0..grid.len()).map(|k| f(k / grid.cols, k % grid.cols)).collect();
+    let elevation_m = (0..grid.len())
+        .map(|k| f(k / grid.cols, k % grid.cols))
+        .collect();
     let material = (0..grid.len())
         .map(|k| Material::ALL[(k % grid.cols) % 9])
         .collect();
@@ -35,7 +37,11 @@ pub fn raster(grid: GeoGrid, f: impl Fn(usize, usize) -> f32) -> Raster {
 }
 
 /// Builds `raster` into a memory store; `geoid_m` is a constant undulation.
-pub fn database(raster: &Raster, tile_cells: u32, geoid_m: f32) -> (Arc<TerrainDatabase>, Arc<MemoryTileStore>) {
+pub fn database(
+    raster: &Raster,
+    tile_cells: u32,
+    geoid_m: f32,
+) -> (Arc<TerrainDatabase>, Arc<MemoryTileStore>) {
     let store = Arc::new(MemoryTileStore::new());
     let summary = build_pyramid::<cig_terrain::build::BuildError>(raster, tile_cells, &mut |t| {
         store.insert(t.key, t.encode());
@@ -45,7 +51,8 @@ pub fn database(raster: &Raster, tile_cells: u32, geoid_m: f32) -> (Arc<TerrainD
     let mut geoid = GeoidGrid::zero();
     geoid.undulation_m.iter_mut().for_each(|v| *v = geoid_m);
     let manifest = Manifest::from_build(&summary, geoid, 0, vec!["test".into()]);
-    let db = TerrainDatabase::new(manifest, store.clone() as Arc<dyn cig_terrain::TileStore>).expect("db");
+    let db = TerrainDatabase::new(manifest, store.clone() as Arc<dyn cig_terrain::TileStore>)
+        .expect("db");
     (Arc::new(db), store)
 }
 

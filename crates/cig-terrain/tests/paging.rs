@@ -51,7 +51,10 @@ fn a_300_m_per_s_flight_never_exceeds_the_budget_and_keeps_its_area_loaded() {
     let layout = *db.layout();
     let (row_f, col_f) = g.fractional_index(lat, lon);
     let (key, _, _) = layout.locate(0, row_f, col_f);
-    assert!(c.resident(key).is_some(), "finest tile under the eye is resident");
+    assert!(
+        c.resident(key).is_some(),
+        "finest tile under the eye is resident"
+    );
 }
 
 #[test]
@@ -96,8 +99,18 @@ fn update_does_not_wait_for_loads() {
     assert_eq!(after.in_flight, 0);
     assert!(after.resident_tiles > 0);
     // While a finer tile is missing, the coarsest level serves the area.
-    let top = TileKey { level: db.layout().levels - 1, row: 0, col: 0 };
-    assert!(c.best_resident(TileKey { level: 0, row: 0, col: 0 }).is_some());
+    let top = TileKey {
+        level: db.layout().levels - 1,
+        row: 0,
+        col: 0,
+    };
+    assert!(c
+        .best_resident(TileKey {
+            level: 0,
+            row: 0,
+            col: 0
+        })
+        .is_some());
     assert!(c.resident(top).is_some());
 }
 
@@ -107,7 +120,11 @@ fn corrupt_tile_is_logged_once_and_served_from_its_parent() {
     // A smooth surface: the parent level's answer is close to the finest one.
     let smooth = |r: usize, c: usize| 100.0 + r as f32 * 0.5 + c as f32 * 0.25;
     let (db, store) = database(&raster(g, smooth), 32, 0.0);
-    let bad = TileKey { level: 0, row: 1, col: 2 };
+    let bad = TileKey {
+        level: 0,
+        row: 1,
+        col: 2,
+    };
     let mut bytes = db.load_tile(bad).expect("load").encode();
     let mid = bytes.len() / 2;
     bytes[mid] ^= 0xff;
@@ -126,7 +143,10 @@ fn corrupt_tile_is_logged_once_and_served_from_its_parent() {
     // Neighbours are unaffected, and the bytes on "disk" were not touched.
     let (lat, lon) = g.post_lat_lon_deg(10, 10);
     assert_eq!(q.hot(lat, lon).expect("ok").level, 0);
-    assert_eq!(cig_terrain::TileStore::read_tile(store.as_ref(), bad).expect("read"), original);
+    assert_eq!(
+        cig_terrain::TileStore::read_tile(store.as_ref(), bad).expect("read"),
+        original
+    );
 }
 
 #[test]

@@ -63,10 +63,20 @@ fn top_level_is_one_tile_and_parents_nest() {
     assert_eq!(layout.tiles_at(layout.levels - 1), (1, 1));
     for level in 0..layout.levels - 1 {
         for key in layout.keys_at(level) {
-            assert!(layout.contains_key(key.parent()), "{key} has parent {}", key.parent());
+            assert!(
+                layout.contains_key(key.parent()),
+                "{key} has parent {}",
+                key.parent()
+            );
         }
     }
-    let top = db.load_tile(TileKey { level: layout.levels - 1, row: 0, col: 0 }).expect("top");
+    let top = db
+        .load_tile(TileKey {
+            level: layout.levels - 1,
+            row: 0,
+            col: 0,
+        })
+        .expect("top");
     assert_eq!(top.bounds().min_m, 0.0);
     assert_eq!(top.bounds().max_m, 498.0);
 }

@@ -23,7 +23,11 @@ fn hot_at_every_source_post_is_the_post() {
         for col in 0..g.cols {
             let (lat, lon) = g.post_lat_lon_deg(row, col);
             let s = q.hot(lat, lon).expect("inside");
-            assert_eq!(s.height_msl_m, f64::from(bumpy(row, col)), "post {row},{col}");
+            assert_eq!(
+                s.height_msl_m,
+                f64::from(bumpy(row, col)),
+                "post {row},{col}"
+            );
             assert_eq!(s.level, 0);
         }
     }
@@ -37,7 +41,9 @@ fn hot_between_posts_lies_on_the_drawn_triangle() {
     let mut q = QuerySession::new(cache(&db, PagingConfig::default()));
     let mut rng = 12345u64;
     let mut next = || {
-        rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        rng = rng
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (rng >> 11) as f64 / (1u64 << 53) as f64
     };
     for _ in 0..2000 {
@@ -46,7 +52,14 @@ fn hot_between_posts_lies_on_the_drawn_triangle() {
         let lon = g.west_lon_deg + fc * g.dlon_deg;
         let (row, col) = (fr.floor() as usize, fc.floor() as usize);
         let (u, v) = (fc - col as f64, fr - row as f64);
-        let expected = triangulated_height(bumpy(row, col), bumpy(row, col + 1), bumpy(row + 1, col), bumpy(row + 1, col + 1), u, v);
+        let expected = triangulated_height(
+            bumpy(row, col),
+            bumpy(row, col + 1),
+            bumpy(row + 1, col),
+            bumpy(row + 1, col + 1),
+            u,
+            v,
+        );
         let got = q.hot(lat, lon).expect("inside").height_msl_m;
         assert!((got - expected).abs() < 1e-6, "{got} vs {expected}");
     }
@@ -60,7 +73,9 @@ fn normal_of_a_plane_is_its_normal() {
     let (db, _) = database(&r, 16, 0.0);
     let mut q = QuerySession::new(cache(&db, PagingConfig::default()));
     let (lat, lon) = g.post_lat_lon_deg(20, 20);
-    let s = q.hot(lat + 0.3 * g.dlat_deg, lon + 0.6 * g.dlon_deg).expect("inside");
+    let s = q
+        .hot(lat + 0.3 * g.dlat_deg, lon + 0.6 * g.dlon_deg)
+        .expect("inside");
     let (_, east_m_per_deg) = cig_geo::metres_per_degree(s.lat_deg);
     let slope = 1.0 / (g.dlon_deg * east_m_per_deg);
     let len = (1.0 + slope * slope).sqrt();
@@ -87,9 +102,15 @@ fn queries_outside_or_invalid_are_errors() {
     let (db, _) = database(&raster(g, |_, _| 1.0), 16, 0.0);
     let mut q = QuerySession::new(cache(&db, PagingConfig::default()));
     assert!(matches!(q.hot(10.0, 10.0), Err(QueryError::Outside { .. })));
-    assert!(matches!(q.hot(f64::NAN, -121.0), Err(QueryError::Invalid { .. })));
     assert!(matches!(
-        q.los(Geodetic::new(f64::INFINITY, 0.0, 0.0), Geodetic::new(36.0, -121.0, 0.0)),
+        q.hot(f64::NAN, -121.0),
+        Err(QueryError::Invalid { .. })
+    ));
+    assert!(matches!(
+        q.los(
+            Geodetic::new(f64::INFINITY, 0.0, 0.0),
+            Geodetic::new(36.0, -121.0, 0.0)
+        ),
         Err(QueryError::Invalid { .. })
     ));
 }
@@ -107,7 +128,12 @@ fn los_across_an_analytic_ridge() {
     let (lat, lon_a) = g.post_lat_lon_deg(60, 20);
     let (_, lon_b) = g.post_lat_lon_deg(60, 180);
     // 10 m above flat ground either side: blocked by the ridge.
-    let blocked = q.los(Geodetic::new(lat, lon_a, 10.0), Geodetic::new(lat, lon_b, 10.0)).expect("los");
+    let blocked = q
+        .los(
+            Geodetic::new(lat, lon_a, 10.0),
+            Geodetic::new(lat, lon_b, 10.0),
+        )
+        .expect("los");
     assert!(!blocked.visible);
     let hit = blocked.hit.expect("hit");
     // The sightline meets the west flank (300 - 10 (100 - c)) where the flank reaches it: the
@@ -115,15 +141,33 @@ fn los_across_an_analytic_ridge() {
     // so at column 70.96, not 71.
     let col_f = (hit.point.lon_deg - g.west_lon_deg) / g.dlon_deg;
     let flank_m = 300.0 - 10.0 * (100.0 - col_f);
-    assert!((hit.point.alt_m - flank_m).abs() < 0.01, "hit at {:?}, flank {flank_m}", hit.point);
-    assert!((hit.point.alt_m - 9.61).abs() < 0.03, "hit at {:?}", hit.point);
+    assert!(
+        (hit.point.alt_m - flank_m).abs() < 0.01,
+        "hit at {:?}, flank {flank_m}",
+        hit.point
+    );
+    assert!(
+        (hit.point.alt_m - 9.61).abs() < 0.03,
+        "hit at {:?}",
+        hit.point
+    );
     let start = Geodetic::new(lat, lon_a, 10.0).to_ecef();
     assert!((hit.range_m - (hit.point.to_ecef() - start).length()).abs() < 0.01);
     // 320 m up on both sides: clears the 300 m crest (the chord sags only ~0.1 m over 4.8 km).
-    let clear = q.los(Geodetic::new(lat, lon_a, 320.0), Geodetic::new(lat, lon_b, 320.0)).expect("los");
+    let clear = q
+        .los(
+            Geodetic::new(lat, lon_a, 320.0),
+            Geodetic::new(lat, lon_b, 320.0),
+        )
+        .expect("los");
     assert!(clear.visible && clear.hit.is_none());
     // 290 m: blocked near the crest.
-    let grazing = q.los(Geodetic::new(lat, lon_a, 290.0), Geodetic::new(lat, lon_b, 290.0)).expect("los");
+    let grazing = q
+        .los(
+            Geodetic::new(lat, lon_a, 290.0),
+            Geodetic::new(lat, lon_b, 290.0),
+        )
+        .expect("los");
     let hit = grazing.hit.expect("hit");
     let (_, lon_crest) = g.post_lat_lon_deg(60, 99);
     let (_, east_m_per_deg) = cig_geo::metres_per_degree(lat);
@@ -137,7 +181,12 @@ fn los_starting_underground_hits_at_range_zero() {
     let mut q = QuerySession::new(cache(&db, PagingConfig::default()));
     let (lat, lon) = g.post_lat_lon_deg(5, 5);
     let (lat2, lon2) = g.post_lat_lon_deg(30, 30);
-    let r = q.los(Geodetic::new(lat, lon, 10.0), Geodetic::new(lat2, lon2, 500.0)).expect("los");
+    let r = q
+        .los(
+            Geodetic::new(lat, lon, 10.0),
+            Geodetic::new(lat2, lon2, 500.0),
+        )
+        .expect("los");
     assert_eq!(r.hit.expect("hit").range_m, 0.0);
 }
 
@@ -150,9 +199,19 @@ fn long_sightlines_drop_below_a_flat_plain_with_earth_curvature() {
     let mut q = QuerySession::new(cache(&db, PagingConfig::default()));
     let (lat, lon_a) = g.post_lat_lon_deg(30, 50);
     let (_, lon_b) = g.post_lat_lon_deg(30, 50 + 833);
-    let low = q.los(Geodetic::new(lat, lon_a, 1.0), Geodetic::new(lat, lon_b, 1.0)).expect("los");
+    let low = q
+        .los(
+            Geodetic::new(lat, lon_a, 1.0),
+            Geodetic::new(lat, lon_b, 1.0),
+        )
+        .expect("los");
     assert!(!low.visible);
-    let high = q.los(Geodetic::new(lat, lon_a, 60.0), Geodetic::new(lat, lon_b, 60.0)).expect("los");
+    let high = q
+        .los(
+            Geodetic::new(lat, lon_a, 60.0),
+            Geodetic::new(lat, lon_b, 60.0),
+        )
+        .expect("los");
     assert!(high.visible);
 }
 

@@ -35,7 +35,10 @@ pub fn db(args: &BenchDbArgs, config: &Config) -> anyhow::Result<()> {
         (tile_rows.saturating_sub(side_tiles)) / 2,
         (tile_cols.saturating_sub(side_tiles)) / 2,
     );
-    let (r1, c1) = ((r0 + side_tiles).min(tile_rows), (c0 + side_tiles).min(tile_cols));
+    let (r1, c1) = (
+        (r0 + side_tiles).min(tile_rows),
+        (c0 + side_tiles).min(tile_cols),
+    );
     let span = f64::from(layout.tile_cells);
     let lat_lo = g.south_lat_deg + f64::from(r0) * span * g.dlat_deg;
     let lon_lo = g.west_lon_deg + f64::from(c0) * span * g.dlon_deg;
@@ -90,20 +93,34 @@ pub fn db(args: &BenchDbArgs, config: &Config) -> anyhow::Result<()> {
             continue;
         }
         let a = q.hat(Geodetic::new(lat, lon, 0.0))?.1.height_ellipsoid_m();
-        let b = q.hat(Geodetic::new(lat2, lon2, 0.0))?.1.height_ellipsoid_m();
-        ground.push((Geodetic::new(lat, lon, a + 2.0), Geodetic::new(lat2, lon2, b + 2.0)));
-        air.push((Geodetic::new(lat, lon, a + 500.0), Geodetic::new(lat2, lon2, b + 2.0)));
+        let b = q
+            .hat(Geodetic::new(lat2, lon2, 0.0))?
+            .1
+            .height_ellipsoid_m();
+        ground.push((
+            Geodetic::new(lat, lon, a + 2.0),
+            Geodetic::new(lat2, lon2, b + 2.0),
+        ));
+        air.push((
+            Geodetic::new(lat, lon, a + 500.0),
+            Geodetic::new(lat2, lon2, b + 2.0),
+        ));
     }
-    anyhow::ensure!(!ground.is_empty(), "the database is too small for 10 km sightlines: {}", args.db.display());
-    let mut visible_fraction = |segments: &[(Geodetic, Geodetic)]| -> anyhow::Result<(f64, Vec<(Geodetic, Geodetic)>)> {
-        let mut visible = Vec::new();
-        for (a, b) in segments {
-            if q.los(*a, *b)?.visible {
-                visible.push((*a, *b));
+    anyhow::ensure!(
+        !ground.is_empty(),
+        "the database is too small for 10 km sightlines: {}",
+        args.db.display()
+    );
+    let mut visible_fraction =
+        |segments: &[(Geodetic, Geodetic)]| -> anyhow::Result<(f64, Vec<(Geodetic, Geodetic)>)> {
+            let mut visible = Vec::new();
+            for (a, b) in segments {
+                if q.los(*a, *b)?.visible {
+                    visible.push((*a, *b));
+                }
             }
-        }
-        Ok((visible.len() as f64 / segments.len() as f64, visible))
-    };
+            Ok((visible.len() as f64 / segments.len() as f64, visible))
+        };
     let (ground_visible, _) = visible_fraction(&ground)?;
     let (air_visible, clear) = visible_fraction(&air)?;
     let mut los_rate = |segments: &[(Geodetic, Geodetic)]| -> anyhow::Result<Option<f64>> {
@@ -192,12 +209,22 @@ fn time_srtm1_import() -> anyhow::Result<f64> {
         void_posts_filled: report.void_posts_filled as u64,
         tile_cells: crate::config::DatabaseConfig::default().tile_cells,
     };
-    cig_terrain_io::store::write_database(&dir.path().join("db"), &raster, &inputs, false, &mut |_, _| {})?;
+    cig_terrain_io::store::write_database(
+        &dir.path().join("db"),
+        &raster,
+        &inputs,
+        false,
+        &mut |_, _| {},
+    )?;
     Ok(started.elapsed().as_secs_f64())
 }
 
 /// Calls `batch` (which answers `per_batch` queries) until `budget` has passed; answers per second.
-fn rate(budget: Duration, per_batch: usize, mut batch: impl FnMut() -> anyhow::Result<()>) -> anyhow::Result<f64> {
+fn rate(
+    budget: Duration,
+    per_batch: usize,
+    mut batch: impl FnMut() -> anyhow::Result<()>,
+) -> anyhow::Result<f64> {
     let started = Instant::now();
     let mut count = 0u64;
     while started.elapsed() < budget {
@@ -242,5 +269,10 @@ fn date_utc() -> String {
     let m = if mp < 10 { mp + 3 } else { mp - 9 };
     let y = yoe + era * 400 + i64::from(m <= 2);
     let rem = secs % 86_400;
-    format!("{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z", rem / 3600, rem % 3600 / 60, rem % 60)
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
 }

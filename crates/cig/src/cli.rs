@@ -4,7 +4,11 @@ use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
 #[derive(Parser)]
-#[command(name = "cig", version, about = "cig: a real-time computer image generator for training simulators")]
+#[command(
+    name = "cig",
+    version,
+    about = "cig: a real-time computer image generator for training simulators"
+)]
 pub struct Cli {
     /// Configuration file (TOML); `cig config default` prints one with every setting.
     #[arg(long, global = true, value_name = "FILE")]

@@ -15,10 +15,20 @@ pub fn parse_lat_lon(text: &str) -> anyhow::Result<(f64, f64)> {
     let [lat, lon] = parts.as_slice() else {
         anyhow::bail!("--origin {text:?} must be LAT,LON in degrees");
     };
-    let lat: f64 = lat.parse().with_context(|| format!("--origin latitude {lat:?} is not a number"))?;
-    let lon: f64 = lon.parse().with_context(|| format!("--origin longitude {lon:?} is not a number"))?;
-    anyhow::ensure!((-90.0..=90.0).contains(&lat), "--origin latitude {lat} is outside -90..90");
-    anyhow::ensure!((-180.0..=180.0).contains(&lon), "--origin longitude {lon} is outside -180..180");
+    let lat: f64 = lat
+        .parse()
+        .with_context(|| format!("--origin latitude {lat:?} is not a number"))?;
+    let lon: f64 = lon
+        .parse()
+        .with_context(|| format!("--origin longitude {lon:?} is not a number"))?;
+    anyhow::ensure!(
+        (-90.0..=90.0).contains(&lat),
+        "--origin latitude {lat} is outside -90..90"
+    );
+    anyhow::ensure!(
+        (-180.0..=180.0).contains(&lon),
+        "--origin longitude {lon} is outside -180..180"
+    );
     Ok((lat, lon))
 }
 
@@ -50,7 +60,10 @@ pub fn synthesize_database(
     config: &Config,
 ) -> anyhow::Result<cig_terrain::Manifest> {
     if out.exists() && !force {
-        anyhow::bail!("output already exists (pass --force to replace it): {}", out.display());
+        anyhow::bail!(
+            "output already exists (pass --force to replace it): {}",
+            out.display()
+        );
     }
     let bar = crate::output::bar(100, "synthesize");
     let mut raster = cig_synth::synthesize(params, &mut |stage, fraction| {
@@ -94,7 +107,10 @@ fn build(
 
 pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
     if args.out.exists() && !args.force {
-        anyhow::bail!("output already exists (pass --force to replace it): {}", args.out.display());
+        anyhow::bail!(
+            "output already exists (pass --force to replace it): {}",
+            args.out.display()
+        );
     }
     let started = Instant::now();
     let bar = crate::output::bar(args.inputs.len() as u64, "read DEMs");
@@ -167,7 +183,10 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<()> {
     }
     let g = m.layout.grid;
     println!("database      {}", args.db.display());
-    println!("origin        {:.6}, {:.6} (south-west post)", g.south_lat_deg, g.west_lon_deg);
+    println!(
+        "origin        {:.6}, {:.6} (south-west post)",
+        g.south_lat_deg, g.west_lon_deg
+    );
     println!(
         "extent        {:.6} .. {:.6} N, {:.6} .. {:.6} E",
         g.south_lat_deg,
@@ -175,14 +194,26 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<()> {
         g.west_lon_deg,
         g.east_lon_deg()
     );
-    println!("posts         {} x {} at {:.2} m x {:.2} m", g.rows, g.cols, m.spacing_m[0], m.spacing_m[1]);
-    println!("pyramid       {} levels, {} tiles of {} cells", m.layout.levels, m.tile_count, m.layout.tile_cells);
-    println!("elevation     {:.1} .. {:.1} m ({})", m.min_elevation_m, m.max_elevation_m, m.vertical_datum);
+    println!(
+        "posts         {} x {} at {:.2} m x {:.2} m",
+        g.rows, g.cols, m.spacing_m[0], m.spacing_m[1]
+    );
+    println!(
+        "pyramid       {} levels, {} tiles of {} cells",
+        m.layout.levels, m.tile_count, m.layout.tile_cells
+    );
+    println!(
+        "elevation     {:.1} .. {:.1} m ({})",
+        m.min_elevation_m, m.max_elevation_m, m.vertical_datum
+    );
     println!("voids filled  {}", m.void_posts_filled);
     let total: u64 = m.material_posts.values().sum();
     for (name, n) in &m.material_posts {
         if *n > 0 {
-            println!("  {name:<11} {:5.1} %", 100.0 * *n as f64 / total.max(1) as f64);
+            println!(
+                "  {name:<11} {:5.1} %",
+                100.0 * *n as f64 / total.max(1) as f64
+            );
         }
     }
     for s in &m.sources {

@@ -22,7 +22,10 @@ pub fn demo_params() -> cig_synth::SynthParams {
 
 pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
     if !args.db.exists() {
-        println!("building the demo database (50 km x 50 km, 30 m posts): {}", args.db.display());
+        println!(
+            "building the demo database (50 km x 50 km, 30 m posts): {}",
+            args.db.display()
+        );
         let started = Instant::now();
         crate::db::synthesize_database(&demo_params(), &args.db, false, config)?;
         println!("built in {:.1} s", started.elapsed().as_secs_f64());
@@ -48,7 +51,9 @@ pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
         let (hat, s) = q.hat(Geodetic::new(lat, lon, 1500.0))?;
         println!(
             "  {lat:.5}, {lon:.5}: ground {:7.1} m MSL, {:<10} HAT {:7.1} m",
-            s.height_msl_m, s.material.name(), hat
+            s.height_msl_m,
+            s.material.name(),
+            hat
         );
     }
     println!();
@@ -79,7 +84,10 @@ pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
         )?;
         match r.hit {
             None => println!("  azimuth {az:5.1}: target visible"),
-            Some(h) => println!("  azimuth {az:5.1}: blocked {:6.0} m out, by {}", h.range_m, h.material),
+            Some(h) => println!(
+                "  azimuth {az:5.1}: blocked {:6.0} m out, by {}",
+                h.range_m, h.material
+            ),
         }
     }
     println!();
@@ -88,7 +96,9 @@ pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
     let mut max_bytes = 0;
     for frame in 0..9000u32 {
         let t_s = f64::from(frame) / 60.0;
-        let lon = g.west_lon_deg + 0.05 * (g.east_lon_deg() - g.west_lon_deg) + 300.0 * t_s / east_m_per_deg;
+        let lon = g.west_lon_deg
+            + 0.05 * (g.east_lon_deg() - g.west_lon_deg)
+            + 300.0 * t_s / east_m_per_deg;
         let stats = cache.update(&[Geodetic::new(clat, lon.min(g.east_lon_deg()), 1500.0)]);
         max_bytes = max_bytes.max(stats.resident_bytes);
     }

@@ -45,7 +45,9 @@ pub fn los_json(r: &cig_terrain::LosResult) -> serde_json::Value {
 
 pub fn hat(args: &HatArgs, config: &Config) -> anyhow::Result<()> {
     let mut q = session(&args.db, config)?;
-    let s = q.hot(args.lat, args.lon).with_context(|| format!("no terrain answer from {}", args.db.display()))?;
+    let s = q
+        .hot(args.lat, args.lon)
+        .with_context(|| format!("no terrain answer from {}", args.db.display()))?;
     let mut json = surface_json(&s);
     if let Some(alt) = args.alt {
         anyhow::ensure!(alt.is_finite(), "--alt {alt} is not a number");
@@ -61,10 +63,16 @@ pub fn hat(args: &HatArgs, config: &Config) -> anyhow::Result<()> {
             s.normal_enu[0], s.normal_enu[1], s.normal_enu[2]
         );
         if let Some(alt) = args.alt {
-            println!("height above terrain: {:.2} m", alt - s.height_ellipsoid_m());
+            println!(
+                "height above terrain: {:.2} m",
+                alt - s.height_ellipsoid_m()
+            );
         }
         if s.level > 0 {
-            println!("(answered from level {}: the finest tile is unreadable)", s.level);
+            println!(
+                "(answered from level {}: the finest tile is unreadable)",
+                s.level
+            );
         }
     }
     Ok(())
@@ -74,7 +82,9 @@ pub fn los(args: &LosArgs, config: &Config) -> anyhow::Result<()> {
     let mut q = session(&args.db, config)?;
     let from = Geodetic::new(args.lat1, args.lon1, args.alt1);
     let to = Geodetic::new(args.lat2, args.lon2, args.alt2);
-    let r = q.los(from, to).with_context(|| format!("no line-of-sight answer from {}", args.db.display()))?;
+    let r = q
+        .los(from, to)
+        .with_context(|| format!("no line-of-sight answer from {}", args.db.display()))?;
     if args.json {
         println!("{}", los_json(&r));
     } else {

@@ -19,7 +19,14 @@ fn synth(dir: &Path, name: &str, seed: u64, size_km: &str, spacing: &str) -> Pat
     cig()
         .args(["db", "synth", "--out"])
         .arg(&db)
-        .args(["--origin", "35.98,-121.23", "--size-km", size_km, "--spacing-m", spacing])
+        .args([
+            "--origin",
+            "35.98,-121.23",
+            "--size-km",
+            size_km,
+            "--spacing-m",
+            spacing,
+        ])
         .args(["--seed", &seed.to_string()])
         .assert()
         .success();
@@ -35,7 +42,10 @@ fn files(root: &Path) -> Vec<(PathBuf, Vec<u8>)> {
             if p.is_dir() {
                 stack.push(p);
             } else {
-                out.push((p.strip_prefix(root).expect("prefix").to_path_buf(), std::fs::read(&p).expect("read")));
+                out.push((
+                    p.strip_prefix(root).expect("prefix").to_path_buf(),
+                    std::fs::read(&p).expect("read"),
+                ));
             }
         }
     }
@@ -54,12 +64,19 @@ fn synth_is_deterministic_and_info_describes_it() {
     assert_eq!(fa, fb, "same seed, same bytes");
     assert_ne!(fa, fc, "another seed, another world");
 
-    let out = cig().args(["db", "info"]).arg(&a).arg("--json").assert().success();
+    let out = cig()
+        .args(["db", "info"])
+        .arg(&a)
+        .arg("--json")
+        .assert()
+        .success();
     let info = json(&out.get_output().stdout);
     assert_eq!(info["origin"]["lat"].as_f64(), Some(35.98));
     assert_eq!(info["origin"]["lon"].as_f64(), Some(-121.23));
     assert!((info["spacing_m"].as_f64().expect("spacing") - 30.0).abs() < 0.01);
-    assert!((info["extent_deg"]["lat"].as_f64().expect("extent") - 4000.0 / 110_960.0).abs() < 1e-3);
+    assert!(
+        (info["extent_deg"]["lat"].as_f64().expect("extent") - 4000.0 / 110_960.0).abs() < 1e-3
+    );
     assert_eq!(info["format_version"].as_u64(), Some(1));
     assert!(info["levels"].as_u64().expect("levels") >= 2);
     assert!(info["tiles"].as_u64().expect("tiles") >= 5);
@@ -81,9 +98,17 @@ fn hat_and_los_answer_in_json() {
     assert_eq!(hat["lon"].as_f64(), Some(-121.2));
     let h = hat["height_m"].as_f64().expect("height");
     let n = hat["geoid_undulation_m"].as_f64().expect("geoid");
-    assert!((-40.0..-25.0).contains(&n), "EGM96 near Hunter Liggett is about -33 m: {n}");
+    assert!(
+        (-40.0..-25.0).contains(&n),
+        "EGM96 near Hunter Liggett is about -33 m: {n}"
+    );
     assert!((hat["hat_m"].as_f64().expect("hat") - (2000.0 - (h + n))).abs() < 1e-6);
-    let normal: Vec<f64> = hat["normal"].as_array().expect("normal").iter().filter_map(Value::as_f64).collect();
+    let normal: Vec<f64> = hat["normal"]
+        .as_array()
+        .expect("normal")
+        .iter()
+        .filter_map(Value::as_f64)
+        .collect();
     assert_eq!(normal.len(), 3);
     assert!((normal.iter().map(|v| v * v).sum::<f64>() - 1.0).abs() < 1e-9);
     assert!(normal[2] > 0.0);
@@ -93,7 +118,9 @@ fn hat_and_los_answer_in_json() {
     let out = cig()
         .args(["query", "los"])
         .arg(&db)
-        .args(["36.0", "-121.2", "3000", "36.03", "-121.17", "3000", "--json"])
+        .args([
+            "36.0", "-121.2", "3000", "36.03", "-121.17", "3000", "--json",
+        ])
         .assert()
         .success();
     let los = json(&out.get_output().stdout);
@@ -101,7 +128,9 @@ fn hat_and_los_answer_in_json() {
     let out = cig()
         .args(["query", "los"])
         .arg(&db)
-        .args(["36.0", "-121.2", "-100", "36.03", "-121.17", "3000", "--json"])
+        .args([
+            "36.0", "-121.2", "-100", "36.03", "-121.17", "3000", "--json",
+        ])
         .assert()
         .success();
     let los = json(&out.get_output().stdout);
@@ -123,19 +152,38 @@ fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
     let dir = tempfile::tempdir().expect("tmp");
     let db = synth(dir.path(), "db", 1, "3", "60");
     // Outside the database.
-    let out = cig().args(["query", "hat"]).arg(&db).args(["10.0", "10.0"]).assert().failure();
+    let out = cig()
+        .args(["query", "hat"])
+        .arg(&db)
+        .args(["10.0", "10.0"])
+        .assert()
+        .failure();
     assert!(one_line_error(&out).contains("10.0000000, 10.0000000 is outside the database"));
     // Not a database.
-    let out = cig().args(["db", "info"]).arg(dir.path()).assert().failure();
+    let out = cig()
+        .args(["db", "info"])
+        .arg(dir.path())
+        .assert()
+        .failure();
     assert!(one_line_error(&out).contains("not a cig terrain database"));
     // A missing DEM.
     let missing = dir.path().join("nope.hgt");
-    let out = cig().args(["db", "import", "--out"]).arg(dir.path().join("x")).arg(&missing).assert().failure();
+    let out = cig()
+        .args(["db", "import", "--out"])
+        .arg(dir.path().join("x"))
+        .arg(&missing)
+        .assert()
+        .failure();
     assert!(one_line_error(&out).contains("nope.hgt"));
     // A truncated SRTM file.
     let bad = dir.path().join("N35W122.hgt");
     std::fs::write(&bad, vec![0u8; 1000]).expect("write");
-    let out = cig().args(["db", "import", "--out"]).arg(dir.path().join("x")).arg(&bad).assert().failure();
+    let out = cig()
+        .args(["db", "import", "--out"])
+        .arg(dir.path().join("x"))
+        .arg(&bad)
+        .assert()
+        .failure();
     assert!(one_line_error(&out).contains("N35W122.hgt"));
     assert!(!dir.path().join("x").exists());
     // An existing output is not overwritten without --force.
@@ -143,7 +191,16 @@ fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
     let out = cig()
         .args(["db", "synth", "--out"])
         .arg(&db)
-        .args(["--origin", "35.98,-121.23", "--size-km", "3", "--spacing-m", "60", "--seed", "2"])
+        .args([
+            "--origin",
+            "35.98,-121.23",
+            "--size-km",
+            "3",
+            "--spacing-m",
+            "60",
+            "--seed",
+            "2",
+        ])
         .assert()
         .failure();
     assert!(one_line_error(&out).contains("--force"));
@@ -159,10 +216,22 @@ fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
     // A bad configuration file.
     let conf = dir.path().join("cig.toml");
     std::fs::write(&conf, "[paging]\nbudget_bytes = -3\n").expect("write");
-    let out = cig().arg("--config").arg(&conf).args(["db", "info"]).arg(&db).assert().failure();
+    let out = cig()
+        .arg("--config")
+        .arg(&conf)
+        .args(["db", "info"])
+        .arg(&db)
+        .assert()
+        .failure();
     assert!(one_line_error(&out).contains("cig.toml"));
     std::fs::write(&conf, "[paging]\nhysteresis_box_m = 10\n").expect("write");
-    let out = cig().arg("--config").arg(&conf).args(["db", "info"]).arg(&db).assert().failure();
+    let out = cig()
+        .arg("--config")
+        .arg(&conf)
+        .args(["db", "info"])
+        .arg(&db)
+        .assert()
+        .failure();
     assert!(one_line_error(&out).contains("hysteresis_box_m"));
 }
 
@@ -206,7 +275,12 @@ fn import_of_an_esri_grid_keeps_every_post() {
     }
     std::fs::write(&asc, text).expect("write");
     let db = dir.path().join("db");
-    cig().args(["db", "import", "--out"]).arg(&db).arg(&asc).assert().success();
+    cig()
+        .args(["db", "import", "--out"])
+        .arg(&db)
+        .arg(&asc)
+        .assert()
+        .success();
     for (r, c) in [(0, 0), (5, 7), (39, 49), (20, 33)] {
         let lat = 36.0 + r as f64 * cell;
         let lon = -121.0 + c as f64 * cell;
@@ -217,7 +291,11 @@ fn import_of_an_esri_grid_keeps_every_post() {
             .assert()
             .success();
         let hat = json(&out.get_output().stdout);
-        assert_eq!(hat["height_m"].as_f64(), Some(h(r, c) as f64), "post {r},{c}");
+        assert_eq!(
+            hat["height_m"].as_f64(),
+            Some(h(r, c) as f64),
+            "post {r},{c}"
+        );
     }
 }
 
@@ -253,5 +331,11 @@ fn config_default_round_trips() {
     let conf = dir.path().join("cig.toml");
     std::fs::write(&conf, &text).expect("write");
     let db = synth(dir.path(), "db", 1, "3", "60");
-    cig().arg("--config").arg(&conf).args(["db", "info"]).arg(&db).assert().success();
+    cig()
+        .arg("--config")
+        .arg(&conf)
+        .args(["db", "info"])
+        .arg(&db)
+        .assert()
+        .success();
 }
