@@ -49,10 +49,14 @@ fn adjacent_srtm_tiles_share_their_edge_column() {
         assert_close(g.east_lon_deg(), -120.0, 1e-9, "east");
         assert_posts(&area.raster, |row, col| {
             let row_from_north = 1200 - row;
-            if col < 1200 || (col == 1200 && edge_from_west) {
-                west_tile(row_from_north, col).map(f32::from)
-            } else {
-                east_tile(row_from_north, col - 1200).map(f32::from)
+            let west = || west_tile(row_from_north, col).map(f32::from);
+            let east = || east_tile(row_from_north, col - 1200).map(f32::from);
+            match col {
+                c if c < 1200 => west(),
+                // The shared edge: the first file's post, or the other's where it is void.
+                1200 if edge_from_west => west().or_else(east),
+                1200 => east().or_else(west),
+                _ => east(),
             }
         });
     }
@@ -110,6 +114,7 @@ fn finer_dted2_over_coarser_dted1_keeps_the_finer_posts_unchanged() {
 
     // Every fine post: a query at it lands on an output post carrying its value.
     let mut checked = 0;
+    let mut filled_from_coarse = 0;
     for row in 0..fine.grid.rows {
         for col in 0..fine.grid.cols {
             let (lat, lon) = fine.grid.post_lat_lon_deg(row, col);
@@ -119,12 +124,26 @@ fn finer_dted2_over_coarser_dted1_keeps_the_finer_posts_unchanged() {
             let got = out.elevation_at(r as usize, c as usize);
             match fine_value(row, col) {
                 Some(want) => assert_eq!(got, want, "fine post ({row}, {col})"),
-                None => assert!(got.is_nan(), "fine void ({row}, {col}) got {got}"),
+                // A fine void is filled from the coarse source (its field is 7 m higher),
+                // unless the coarse cell around it has a void too.
+                None if got.is_nan() => {}
+                None => {
+                    let coarse_field = field_m(lat, lon) + 7.0;
+                    assert!(
+                        (f64::from(got) - coarse_field).abs() < 8.0,
+                        "fine void ({row}, {col}) got {got}, coarse field {coarse_field}"
+                    );
+                    filled_from_coarse += 1;
+                }
             }
             checked += 1;
         }
     }
     assert_eq!(checked, 181 * 181);
+    assert!(
+        filled_from_coarse > 100,
+        "fine voids filled from DTED1: {filled_from_coarse}"
+    );
 
     // Outside the fine patch: coarse posts exactly, triangulated surface between them.
     let inside_fine = |lat: f64, lon: f64| fine.grid.contains(lat, lon);
@@ -186,7 +205,7 @@ fn flat(grid: GeoGrid, value: f32) -> Raster {
 }
 
 #[test]
-fn first_covering_source_decides_even_when_void() {
+fn a_void_is_filled_from_the_next_source() {
     let grid = GeoGrid {
         south_lat_deg: 10.0,
         west_lon_deg: 20.0,
@@ -206,7 +225,11 @@ fn first_covering_source_decides_even_when_void() {
     );
     let out = mosaic(&[first, second]).expect("mosaic");
     assert_eq!((out.grid.rows, out.grid.cols), (3, 4));
-    assert!(out.elevation_at(1, 1).is_nan());
+    assert_eq!(
+        out.elevation_at(1, 1),
+        2.0,
+        "the first source's void, from the second"
+    );
     assert_eq!(out.elevation_at(1, 2), 1.0);
     assert_eq!(out.elevation_at(1, 3), 2.0);
 }

@@ -73,18 +73,10 @@ impl GeoidGrid {
         }
     }
 
-    /// Undulation at a point, metres (bilinear; clamped at the grid's edges).
-    #[inline]
+    /// Undulation at a point, metres (bilinear; clamped at the grid's edges). Builds a
+    /// [`GeoidLookup`] each call: use one of those for many points.
     pub fn undulation_m(&self, lat_deg: f64, lon_deg: f64) -> f64 {
-        let fr =
-            ((lat_deg - self.south_lat_deg) / self.step_deg).clamp(0.0, (self.rows - 1) as f64);
-        let fc = ((lon_deg - self.west_lon_deg) / self.step_deg).clamp(0.0, (self.cols - 1) as f64);
-        let r0 = (fr.floor() as usize).min(self.rows.saturating_sub(2));
-        let c0 = (fc.floor() as usize).min(self.cols.saturating_sub(2));
-        let (tr, tc) = (fr - r0 as f64, fc - c0 as f64);
-        let at = |r: usize, c: usize| f64::from(self.undulation_m[r * self.cols + c]);
-        (1.0 - tr) * ((1.0 - tc) * at(r0, c0) + tc * at(r0, c0 + 1))
-            + tr * ((1.0 - tc) * at(r0 + 1, c0) + tc * at(r0 + 1, c0 + 1))
+        GeoidLookup::new(self).undulation_m(lat_deg, lon_deg)
     }
 
     fn is_consistent(&self) -> bool {
@@ -94,6 +86,55 @@ impl GeoidGrid {
             && self.step_deg > 0.0
             && self.undulation_m.len() == self.rows * self.cols
             && self.undulation_m.iter().all(|v| v.is_finite())
+    }
+}
+
+/// A [`GeoidGrid`] prepared for many lookups: no division per lookup.
+#[derive(Clone, Debug)]
+pub struct GeoidLookup {
+    south_lat_deg: f64,
+    west_lon_deg: f64,
+    nodes_per_deg: f64,
+    max_row: f64,
+    max_col: f64,
+    last_cell_row: usize,
+    last_cell_col: usize,
+    cols: usize,
+    undulation_m: Vec<f32>,
+}
+
+impl GeoidLookup {
+    pub fn new(grid: &GeoidGrid) -> GeoidLookup {
+        GeoidLookup {
+            south_lat_deg: grid.south_lat_deg,
+            west_lon_deg: grid.west_lon_deg,
+            nodes_per_deg: 1.0 / grid.step_deg,
+            max_row: (grid.rows - 1) as f64,
+            max_col: (grid.cols - 1) as f64,
+            last_cell_row: grid.rows.saturating_sub(2),
+            last_cell_col: grid.cols.saturating_sub(2),
+            cols: grid.cols,
+            undulation_m: grid.undulation_m.clone(),
+        }
+    }
+
+    /// Undulation at a point, metres (bilinear; clamped at the grid's edges).
+    #[inline]
+    pub fn undulation_m(&self, lat_deg: f64, lon_deg: f64) -> f64 {
+        let fr = ((lat_deg - self.south_lat_deg) * self.nodes_per_deg).clamp(0.0, self.max_row);
+        let fc = ((lon_deg - self.west_lon_deg) * self.nodes_per_deg).clamp(0.0, self.max_col);
+        let r0 = (fr as usize).min(self.last_cell_row);
+        let c0 = (fc as usize).min(self.last_cell_col);
+        let (tr, tc) = (fr - r0 as f64, fc - c0 as f64);
+        let k = r0 * self.cols + c0;
+        let n = &self.undulation_m[k..k + self.cols + 2];
+        let (a, b, c, d) = (
+            f64::from(n[0]),
+            f64::from(n[1]),
+            f64::from(n[self.cols]),
+            f64::from(n[self.cols + 1]),
+        );
+        (1.0 - tr) * ((1.0 - tc) * a + tc * b) + tr * ((1.0 - tc) * c + tc * d)
     }
 }
 

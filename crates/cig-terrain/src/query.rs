@@ -17,7 +17,7 @@
 //! bilinear on the manifest's coarse grid (EGM96 varies by centimetres per kilometre).
 
 use crate::cache::TileCache;
-use crate::database::{LoadError, TerrainDatabase};
+use crate::database::{GeoidLookup, LoadError, TerrainDatabase};
 use crate::material::Material;
 use crate::pyramid::{quadtree_index, PyramidLayout, TileKey};
 use crate::raster::triangulated_height;
@@ -87,6 +87,7 @@ pub struct QuerySession {
     tiles: TileSlots,
     /// Precomputed for the per-query path: no division, no search.
     fast: FastIndex,
+    geoid: GeoidLookup,
 }
 
 /// What the per-query path needs to find a point's finest cell with multiplications and shifts.
@@ -142,6 +143,7 @@ impl QuerySession {
             tile_shift: layout.tile_cells.trailing_zeros(),
         };
         QuerySession {
+            geoid: GeoidLookup::new(&cache.database().manifest().geoid),
             db: Arc::clone(cache.database()),
             layout,
             fast,
@@ -179,8 +181,8 @@ impl QuerySession {
                 QueryError::Invalid { lat_deg, lon_deg }
             });
         }
-        let row_f = snap(row_f).clamp(0.0, f.max_row);
-        let col_f = snap(col_f).clamp(0.0, f.max_col);
+        let row_f = snap(row_f.max(0.0)).min(f.max_row);
+        let col_f = snap(col_f.max(0.0)).min(f.max_col);
         let r = (row_f as usize).min(f.last_cell_row);
         let c = (col_f as usize).min(f.last_cell_col);
         let (tr, tc) = (r >> f.tile_shift, c >> f.tile_shift);
@@ -207,17 +209,42 @@ impl QuerySession {
         Ok(triangulated_height(h00, h01, h10, h11, cell.u, cell.v))
     }
 
+    /// Heights above terrain of many points (a frame's worth of host requests), height only:
+    /// the same answers as [`QuerySession::hat_m`] one by one, with the memory of each point's
+    /// cell requested a few points ahead so that cache misses overlap.
+    pub fn hat_batch_m(&mut self, points: &[Geodetic], out: &mut Vec<Result<f64, QueryError>>) {
+        const AHEAD: usize = 8;
+        out.clear();
+        out.reserve(points.len());
+        for (k, p) in points.iter().enumerate() {
+            if let Some(next) = points.get(k + AHEAD) {
+                self.prefetch_cell(next.lat_deg, next.lon_deg);
+            }
+            out.push(self.hat_m(*p));
+        }
+    }
+
+    /// Asks the memory system for the cell under a point without waiting for it.
+    #[inline]
+    fn prefetch_cell(&self, lat_deg: f64, lon_deg: f64) {
+        let Ok(cell) = self.cell(lat_deg, lon_deg) else {
+            return;
+        };
+        let slot = cell.key.row as usize * self.tiles.tile_cols + cell.key.col as usize;
+        if let Some(Some(tile)) = self.tiles.slots.get(slot) {
+            let base = cell.i * tile.posts_per_side + cell.j;
+            if let Some(row) = tile.elevation_m.get(base..base + tile.posts_per_side + 2) {
+                prefetch(row.as_ptr());
+                prefetch(row[tile.posts_per_side..].as_ptr());
+            }
+        }
+    }
+
     /// Height above terrain of a geodetic point (altitude above the ellipsoid), height only.
     #[inline]
     pub fn hat_m(&mut self, point: Geodetic) -> Result<f64, QueryError> {
         let h = self.height_msl_m(point.lat_deg, point.lon_deg)?;
-        Ok(point.alt_m
-            - h
-            - self
-                .db
-                .manifest()
-                .geoid
-                .undulation_m(point.lat_deg, point.lon_deg))
+        Ok(point.alt_m - h - self.geoid.undulation_m(point.lat_deg, point.lon_deg))
     }
 
     /// Height of terrain at a point, with normal and material.
@@ -245,7 +272,7 @@ impl QuerySession {
             lat_deg,
             lon_deg,
             height_msl_m: height,
-            geoid_undulation_m: self.db.manifest().geoid.undulation_m(lat_deg, lon_deg),
+            geoid_undulation_m: self.geoid.undulation_m(lat_deg, lon_deg),
             normal_enu: [-gx / len, -gy / len, 1.0 / len],
             material: tile.material_at(ni, nj),
             level: tile.degraded_from_level.unwrap_or(0),
@@ -275,8 +302,6 @@ impl QuerySession {
         let b = to.to_ecef();
         let length_m = (b - a).length();
         let pieces = ((length_m / PIECE_M).ceil() as usize).max(1);
-        let db = Arc::clone(&self.db);
-        let geoid = &db.manifest().geoid;
         let g = self.layout.grid;
         let mut start = from;
         for p in 0..pieces {
@@ -294,9 +319,9 @@ impl QuerySession {
                 x1: (end.lon_deg - g.west_lon_deg) / g.dlon_deg,
                 y1: (end.lat_deg - g.south_lat_deg) / g.dlat_deg,
                 alt: quadratic(
-                    start.alt_m - geoid.undulation_m(start.lat_deg, start.lon_deg),
-                    mid.alt_m - geoid.undulation_m(mid.lat_deg, mid.lon_deg),
-                    end.alt_m - geoid.undulation_m(end.lat_deg, end.lon_deg),
+                    start.alt_m - self.geoid.undulation_m(start.lat_deg, start.lon_deg),
+                    mid.alt_m - self.geoid.undulation_m(mid.lat_deg, mid.lon_deg),
+                    end.alt_m - self.geoid.undulation_m(end.lat_deg, end.lon_deg),
                 ),
             };
             if let Some((s, material, level)) = self.trace_piece(&piece)? {
@@ -494,9 +519,23 @@ fn resample_from_parent(layout: &PyramidLayout, coarse: &Tile, key: TileKey) -> 
     }
 }
 
+/// A hint to bring the cache line holding `p` closer; no effect on results.
+#[inline]
+fn prefetch(p: *const f32) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch never dereferences its address and cannot fault; SSE is part of the
+    // x86_64 baseline, so the instruction exists on every x86_64 CPU.
+    unsafe {
+        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(p.cast::<i8>());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
 #[inline]
 fn snap(x: f64) -> f64 {
-    let r = x.round();
+    // For the non-negative indices this sees, a cast rounds without a libm call.
+    let r = (x.max(0.0) + 0.5) as u64 as f64;
     if (x - r).abs() < POST_SNAP {
         r
     } else {

@@ -218,6 +218,24 @@ fn long_sightlines_drop_below_a_flat_plain_with_earth_curvature() {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
+    /// Batched HAT answers are the one-by-one answers, errors included.
+    #[test]
+    fn batched_hat_equals_single_hat(pts in proptest::collection::vec((-2.0f64..102.0, -2.0f64..102.0, 0.0f64..900.0), 0..100)) {
+        let g = grid(100, 100, 30.0);
+        let (db, _) = database(&raster(g, bumpy), 32, -20.0);
+        let mut q = QuerySession::new(cache(&db, PagingConfig::default()));
+        let points: Vec<Geodetic> = pts
+            .iter()
+            .map(|&(r, c, a)| Geodetic::new(g.south_lat_deg + r * g.dlat_deg, g.west_lon_deg + c * g.dlon_deg, a))
+            .collect();
+        let mut out = Vec::new();
+        q.hat_batch_m(&points, &mut out);
+        prop_assert_eq!(out.len(), points.len());
+        for (p, batched) in points.iter().zip(&out) {
+            prop_assert_eq!(batched, &q.hat_m(*p));
+        }
+    }
+
     /// The reported hit lies on the terrain, and the sightline before it is above the terrain.
     #[test]
     fn los_hits_lie_on_the_surface_and_nothing_earlier_is_underground(

@@ -3,10 +3,11 @@
 //! Rules: the output spacing is the finest source's (smallest latitude spacing, then longitude
 //! spacing); the output lattice is anchored on that source's posts, so they are kept unchanged;
 //! the extent is the union of the sources (lattice posts inside it). Each output post takes its
-//! value from the first source, finest first then in the given order, that covers it: the exact
-//! post value where the output post coincides with a source post (within 1e-6 of an index),
-//! otherwise [`triangulated_height`] on the source cell around it. Posts no source covers, or
-//! whose source value is void, are `NaN`. Limits: at most [`MAX_POSTS`] output posts; materials
+//! value from the first source, finest first then in the given order, that covers it with a
+//! value: the exact post value where the output post coincides with a source post (within 1e-6
+//! of an index), otherwise [`triangulated_height`] on the source cell around it. A void in one
+//! source is filled from the next source that has a value there (an SRTM void from the DTED
+//! under it); posts no source has a value for are `NaN`. Limits: at most [`MAX_POSTS`] output posts; materials
 //! are dropped (the mosaic's `material` is `None`) unless there is a single source, which is
 //! returned unchanged.
 
@@ -142,7 +143,7 @@ fn check_source(index: usize, source: &Raster) -> Result<(), ImportError> {
     }
 }
 
-/// Fills the unset posts of output row `row` from the sources, in priority order.
+/// Fills the unset and void posts of output row `row` from the sources, in priority order.
 fn fill_row(grid: &GeoGrid, row: usize, line: &mut [f32], sources: &[&Raster]) {
     let lat = grid.south_lat_deg + row as f64 * grid.dlat_deg;
     for source in sources {
@@ -167,7 +168,8 @@ fn fill_row(grid: &GeoGrid, row: usize, line: &mut [f32], sources: &[&Raster]) {
             continue;
         };
         for (offset, dst) in span.iter_mut().enumerate() {
-            if dst.to_bits() != UNSET {
+            // Unset, or void in a source tried before: this source may have a value.
+            if !dst.is_nan() {
                 continue;
             }
             let lon = grid.west_lon_deg + (first + offset) as f64 * grid.dlon_deg;
