@@ -15,6 +15,8 @@ use std::sync::Arc;
 
 /// Version of the database layout (manifest + tiles) written by this build.
 pub const DB_FORMAT_VERSION: u32 = 1;
+/// Most finest-level tiles a database may have (query sessions index them densely).
+pub const MAX_FINEST_TILES: u64 = 1 << 22;
 /// The manifest's `format` field.
 pub const DB_FORMAT_NAME: &str = "cig-terrain-db";
 
@@ -211,6 +213,10 @@ impl Manifest {
         }
         if PyramidLayout::new(*g, t) != self.layout {
             return bad("level count does not match the grid");
+        }
+        let (tile_rows, tile_cols) = self.layout.tiles_at(0);
+        if u64::from(tile_rows) * u64::from(tile_cols) > MAX_FINEST_TILES {
+            return bad("more finest tiles than this build handles (4 194 304)");
         }
         if !self.geoid.is_consistent() {
             return bad("geoid grid");

@@ -255,6 +255,15 @@ impl Tile {
                 bytes.len()
             )));
         }
+        if bytes[14..16]
+            .iter()
+            .chain(&bytes[44..HEADER_BYTES])
+            .any(|&b| b != 0)
+        {
+            return Err(TileDecodeError::Header(
+                "reserved header bytes are not zero".into(),
+            ));
+        }
         let computed = tile_crc(bytes);
         if computed != stored_crc {
             return Err(TileDecodeError::Checksum {
@@ -284,6 +293,9 @@ impl Tile {
         let material = p[n2 * 4 + node_count * 12..n2 * 5 + node_count * 12].to_vec();
         if let Some(&bad) = material.iter().find(|&&m| Material::from_byte(m).is_none()) {
             return Err(TileDecodeError::Material(bad));
+        }
+        if p[needed..].iter().any(|&b| b != 0) {
+            return Err(TileDecodeError::Header("padding bytes are not zero".into()));
         }
         Ok(Tile {
             key,
