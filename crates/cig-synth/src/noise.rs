@@ -183,12 +183,9 @@ impl Layer {
             }
             sum += amp * w * gradient(seed, x, y);
             norm += amp;
-            let (rx, ry) = (ROT_COS * x - ROT_SIN * y, ROT_SIN * x + ROT_COS * y);
-            x = rx * lacunarity + 17.31;
-            y = ry * lacunarity - 5.77;
+            (x, y, seed) = next_octave(x, y, seed, lacunarity);
             wavelength /= lacunarity;
             amp *= gain;
-            seed = mix64(seed.wrapping_add(0x9E37_79B9_7F4A_7C15));
         }
         if norm > 0.0 {
             sum / norm
@@ -232,12 +229,9 @@ impl Layer {
             weight = (signal * GAIN).clamp(0.0, 1.0);
             sum += signal * amp * w;
             norm += amp;
-            let (rx, ry) = (ROT_COS * x - ROT_SIN * y, ROT_SIN * x + ROT_COS * y);
-            x = rx * lacunarity + 17.31;
-            y = ry * lacunarity - 5.77;
+            (x, y, seed) = next_octave(x, y, seed, lacunarity);
             wavelength /= lacunarity;
             amp *= amp_step;
-            seed = mix64(seed.wrapping_add(0x9E37_79B9_7F4A_7C15));
         }
         if norm > 0.0 {
             sum / norm
@@ -297,4 +291,16 @@ mod tests {
         assert_eq!(octave_weight(120.0, 30.0), 1.0);
         assert!((octave_weight(90.0, 30.0) - 0.5).abs() < 1e-12);
     }
+}
+
+/// Moves sample coordinates to the next octave: rotated (so octave lattices do not align),
+/// scaled by `lacunarity`, offset, and given a fresh seed.
+#[inline]
+fn next_octave(x: f64, y: f64, seed: u64, lacunarity: f64) -> (f64, f64, u64) {
+    let (rx, ry) = (ROT_COS * x - ROT_SIN * y, ROT_SIN * x + ROT_COS * y);
+    (
+        rx * lacunarity + 17.31,
+        ry * lacunarity - 5.77,
+        mix64(seed.wrapping_add(0x9E37_79B9_7F4A_7C15)),
+    )
 }
