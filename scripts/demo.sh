@@ -3,5 +3,4 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
-cargo build --release -p cig
-exec target/release/cig demo "$@"
+exec cargo run --release --locked -p cig -- demo "$@"

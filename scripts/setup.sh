@@ -17,7 +17,6 @@ as_root() {
 # Debian packages the demo needs. (The renderer will add mesa-vulkan-drivers here: Mesa's
 # lavapipe, the Vulkan driver for machines without a GPU.)
 packages=()
-[ "${1:-}" = "--test" ] && packages+=()
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
