@@ -57,10 +57,10 @@ pub struct SynthArgs {
     #[arg(long, value_name = "LAT,LON", allow_hyphen_values = true)]
     pub origin: String,
     /// Side of the square area, km.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub size_km: f64,
     /// Post spacing, metres.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub spacing_m: f64,
     /// Random seed: the same seed gives the same bytes.
     #[arg(long, default_value_t = 1)]
@@ -109,7 +109,7 @@ pub struct HatArgs {
     /// Longitude, degrees.
     pub lon: f64,
     /// Altitude of the asking point above the WGS84 ellipsoid, metres: adds height above terrain.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub alt: Option<f64>,
     /// Print JSON.
     #[arg(long)]

@@ -213,6 +213,20 @@ fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
         .assert()
         .failure();
     assert!(one_line_error(&out).contains("latitude 95"));
+    let out = cig()
+        .args(["db", "synth", "--out"])
+        .arg(dir.path().join("y"))
+        .args([
+            "--origin",
+            "35,-121",
+            "--size-km",
+            "-5",
+            "--spacing-m",
+            "60",
+        ])
+        .assert()
+        .failure();
+    assert!(one_line_error(&out).contains("size_km = -5"));
     // A bad configuration file.
     let conf = dir.path().join("cig.toml");
     std::fs::write(&conf, "[paging]\nbudget_bytes = -3\n").expect("write");
