@@ -57,11 +57,11 @@ pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
         );
     }
     println!();
-    // The tank sits on the highest post within 2 km of the centre: an overwatch position.
+    // The tank sits on the highest point within 4 km of the centre: an overwatch position.
     let (north_m_per_deg, east_m_per_deg) = cig_geo::metres_per_degree(clat);
     let (mut olat, mut olon, mut best) = (clat, clon, f64::NEG_INFINITY);
-    for i in -20..=20 {
-        for j in -20..=20 {
+    for i in -40..=40 {
+        for j in -40..=40 {
             let lat = clat + f64::from(i) * 100.0 / north_m_per_deg;
             let lon = clon + f64::from(j) * 100.0 / east_m_per_deg;
             let h = q.height_msl_m(lat, lon)?;
@@ -69,6 +69,32 @@ pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
                 (olat, olon, best) = (lat, lon, h);
             }
         }
+    }
+    // Climb post by post to the summit itself.
+    loop {
+        let mut next = (olat, olon, best);
+        for (di, dj) in [
+            (-1, -1),
+            (-1, 0),
+            (-1, 1),
+            (0, -1),
+            (0, 1),
+            (1, -1),
+            (1, 0),
+            (1, 1),
+        ] {
+            let lat = olat + f64::from(di) * g.dlat_deg;
+            let lon = olon + f64::from(dj) * g.dlon_deg;
+            if let Ok(h) = q.height_msl_m(lat, lon) {
+                if h > next.2 {
+                    next = (lat, lon, h);
+                }
+            }
+        }
+        if next.2 <= best {
+            break;
+        }
+        (olat, olon, best) = next;
     }
     println!("line of sight from a tank 2 m above a hilltop ({olat:.5}, {olon:.5}), 8 km in 8 directions:");
     let (clat, clon) = (olat, olon);
