@@ -8,7 +8,7 @@
 
 use cig_terrain::build::{build_pyramid, BuildError, BuildSummary};
 use cig_terrain::database::{
-    GeoidGrid, Manifest, ManifestError, StoreError, TerrainDatabase, TileStore,
+    GeoidGrid, Manifest, ManifestError, StoreError, TerrainDatabase, TileStore, DB_FORMAT_NAME,
 };
 use cig_terrain::raster::Raster;
 use cig_terrain::tile::Tile;
@@ -28,6 +28,8 @@ pub enum DbError {
     Exists(PathBuf),
     #[error("not a cig terrain database (no {MANIFEST_FILE}): {0}")]
     NotADatabase(PathBuf),
+    #[error("refusing to replace something that is not a cig terrain database: {0}")]
+    NotReplaceable(PathBuf),
     #[error("bad manifest: {reason}: {path}")]
     Manifest { reason: String, path: PathBuf },
     #[error(transparent)]
@@ -130,8 +132,14 @@ pub fn write_database(
     replace: bool,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<Manifest, DbError> {
-    if out.exists() && !replace {
-        return Err(DbError::Exists(out.to_path_buf()));
+    if out.exists() {
+        if !replace {
+            return Err(DbError::Exists(out.to_path_buf()));
+        }
+        // --force replaces a database (even a damaged one), never anything else.
+        if !looks_like_database(out) {
+            return Err(DbError::NotReplaceable(out.to_path_buf()));
+        }
     }
     let parent = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -170,6 +178,14 @@ pub fn write_database(
         std::fs::rename(&staging, out).map_err(|e| io_err(out, e))?;
     }
     Ok(manifest)
+}
+
+/// True when `dir` holds a manifest that says it is a cig terrain database.
+fn looks_like_database(dir: &Path) -> bool {
+    std::fs::read(dir.join(MANIFEST_FILE))
+        .ok()
+        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
+        .is_some_and(|v| v.get("format").and_then(|f| f.as_str()) == Some(DB_FORMAT_NAME))
 }
 
 fn write_into(

@@ -63,6 +63,9 @@ impl Default for PagingConfig {
     }
 }
 
+/// Fewest tiles a paging budget must hold.
+pub const MIN_BUDGET_TILES: u64 = 16;
+
 /// A paging configuration that cannot work.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum PagingConfigError {
@@ -72,6 +75,8 @@ pub enum PagingConfigError {
         value: String,
         rule: &'static str,
     },
+    #[error("paging.budget_bytes = {budget_bytes} must hold at least {MIN_BUDGET_TILES} tiles of this database ({min_bytes} bytes)")]
+    BudgetTooSmall { budget_bytes: u64, min_bytes: u64 },
 }
 
 impl PagingConfig {
@@ -98,13 +103,14 @@ impl PagingConfig {
                 rule: "at least 1",
             });
         }
-        if self.hysteresis_box_m < self.recenter_step_m {
+        if self.hysteresis_box_m <= self.recenter_step_m {
             return Err(PagingConfigError::Invalid {
                 name: "hysteresis_box_m",
                 value: self.hysteresis_box_m.to_string(),
-                rule: "at least recenter_step_m (a smaller box thrashes)",
+                rule: "larger than recenter_step_m (a box no larger thrashes)",
             });
         }
+
         if !(1..=64).contains(&self.worker_threads) {
             return Err(PagingConfigError::Invalid {
                 name: "worker_threads",
@@ -167,6 +173,17 @@ impl TileCache {
         config: PagingConfig,
     ) -> Result<TileCache, PagingConfigError> {
         config.validate()?;
+        let layout = *db.layout();
+        let tile_bytes = tile_memory_bytes(
+            layout.posts_per_side(),
+            quadtree_depth_for(layout.tile_cells as usize),
+        ) as u64;
+        if config.budget_bytes < MIN_BUDGET_TILES * tile_bytes {
+            return Err(PagingConfigError::BudgetTooSmall {
+                budget_bytes: config.budget_bytes,
+                min_bytes: MIN_BUDGET_TILES * tile_bytes,
+            });
+        }
         let (req_tx, req_rx) = crossbeam_channel::unbounded::<TileKey>();
         let (done_tx, done_rx) = crossbeam_channel::unbounded();
         let workers = (0..config.worker_threads)
@@ -186,11 +203,6 @@ impl TileCache {
             })
             .filter_map(Result::ok)
             .collect();
-        let layout = *db.layout();
-        let tile_bytes = tile_memory_bytes(
-            layout.posts_per_side(),
-            quadtree_depth_for(layout.tile_cells as usize),
-        ) as u64;
         let centre_lat = 0.5 * (layout.grid.south_lat_deg + layout.grid.north_lat_deg());
         Ok(TileCache {
             db,
@@ -292,7 +304,7 @@ impl TileCache {
             if s.in_flight.contains(&key) || s.failed.contains_key(&key) {
                 continue;
             }
-            if !self.make_room(&mut s, self.tile_bytes, false) {
+            if !self.make_room(&mut s, self.tile_bytes) {
                 break;
             }
             if let Some(tx) = &self.requests {
@@ -360,8 +372,14 @@ impl TileCache {
     /// The tile for `key`, loading it in the calling thread if it is not resident (queries may
     /// wait for the finest tile). A tile that fails is logged once and remembered as failed.
     pub fn load_now(&self, key: TileKey) -> Result<Arc<Tile>, LoadError> {
+        self.load_now_reporting(key).map(|(tile, _)| tile)
+    }
+
+    /// [`TileCache::load_now`], also saying whether the tile is held by the cache (`false`: it
+    /// did not fit the budget and lives only as long as the caller keeps it).
+    pub fn load_now_reporting(&self, key: TileKey) -> Result<(Arc<Tile>, bool), LoadError> {
         if let Some(t) = self.resident(key) {
-            return Ok(t);
+            return Ok((t, true));
         }
         if let Some(reason) = self.state.lock().failed.get(&key) {
             return Err(LoadError::Store(crate::database::StoreError::Io {
@@ -374,10 +392,13 @@ impl TileCache {
         match result {
             Ok(tile) => {
                 let tile = Arc::new(tile);
-                if s.resident.contains_key(&key) {
-                    return Ok(Arc::clone(&s.resident[&key].tile));
+                if let Some(r) = s.resident.get(&key) {
+                    return Ok((Arc::clone(&r.tile), true));
                 }
-                if self.make_room(&mut s, self.tile_bytes, true) {
+                // Room is made from tiles no eyepoint wants; a query never evicts what the
+                // eyepoints need. Without room the tile serves this query uncached.
+                let cached = self.make_room(&mut s, self.tile_bytes);
+                if cached {
                     let clock = s.clock;
                     s.resident_bytes += self.tile_bytes;
                     s.resident.insert(
@@ -390,7 +411,7 @@ impl TileCache {
                     );
                     s.stats.loads_completed += 1;
                 }
-                Ok(tile)
+                Ok((tile, cached))
             }
             Err(e) => {
                 self.record_failure(&mut s, key, &e);
@@ -433,15 +454,15 @@ impl TileCache {
     }
 
     /// Evicts least-recently-used tiles until `bytes` more fit under the budget (counting loads
-    /// in flight). Only tiles no eyepoint wants are evicted unless `evict_wanted`.
-    fn make_room(&self, s: &mut State, bytes: u64, evict_wanted: bool) -> bool {
+    /// in flight). Only tiles no eyepoint wants are evicted.
+    fn make_room(&self, s: &mut State, bytes: u64) -> bool {
         let budget = self.config.budget_bytes;
         let in_flight = s.in_flight.len() as u64 * self.tile_bytes;
         while s.resident_bytes + in_flight + bytes > budget {
             let victim = s
                 .resident
                 .iter()
-                .filter(|(k, _)| evict_wanted || !s.wanted.contains(k))
+                .filter(|(k, _)| !s.wanted.contains(k))
                 .min_by_key(|(k, r)| (r.last_used, **k))
                 .map(|(k, _)| *k);
             let Some(victim) = victim else {

@@ -84,9 +84,11 @@ impl GeoidGrid {
     fn is_consistent(&self) -> bool {
         self.rows >= 2
             && self.cols >= 2
+            && self.rows <= 100_000
+            && self.cols <= 100_000
             && self.step_deg.is_finite()
             && self.step_deg > 0.0
-            && self.undulation_m.len() == self.rows * self.cols
+            && self.rows.checked_mul(self.cols) == Some(self.undulation_m.len())
             && self.undulation_m.iter().all(|v| v.is_finite())
     }
 }
@@ -317,10 +319,20 @@ impl TerrainDatabase {
     /// Reads and decodes one tile (checksum and key checked). Blocks on the store.
     pub fn load_tile(&self, key: TileKey) -> Result<Tile, LoadError> {
         let bytes = self.store.read_tile(key)?;
-        Tile::decode(&bytes, Some(key)).map_err(|error| LoadError::Decode {
+        let decode_error = |error| LoadError::Decode {
             error,
             location: self.store.location(key),
-        })
+        };
+        let tile = Tile::decode(&bytes, Some(key)).map_err(decode_error)?;
+        let posts = self.manifest.layout.posts_per_side();
+        let depth = crate::tile::quadtree_depth_for(self.manifest.layout.tile_cells as usize);
+        if tile.posts_per_side != posts || tile.quadtree_depth != depth {
+            return Err(decode_error(TileDecodeError::Header(format!(
+                "tile has {} posts per side and quadtree depth {}; the database has {posts} and {depth}",
+                tile.posts_per_side, tile.quadtree_depth
+            ))));
+        }
+        Ok(tile)
     }
 }
 
@@ -372,5 +384,37 @@ impl GeoidGrid {
             step_deg,
             cig_geo::geoid::egm96_undulation_m,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_geoid_grid_whose_size_overflows_is_refused() {
+        let grid = GeoidGrid {
+            south_lat_deg: 0.0,
+            west_lon_deg: 0.0,
+            step_deg: 1.0,
+            rows: 1 << 32,
+            cols: 1 << 32,
+            undulation_m: vec![],
+        };
+        assert!(!grid.is_consistent());
+        let ok = GeoidGrid::zero();
+        assert!(ok.is_consistent());
+        assert_eq!(ok.undulation_m(12.0, 34.0), 0.0);
+    }
+
+    #[test]
+    fn geoid_lookup_is_bilinear_and_clamped() {
+        let grid = GeoidGrid::sample(0.0, 0.0, 1.0, 1.0, 0.5, |lat, lon| 10.0 * lat + lon);
+        let lookup = GeoidLookup::new(&grid);
+        for (lat, lon) in [(0.1, 0.2), (0.77, 0.33), (1.0, 1.0)] {
+            assert!((lookup.undulation_m(lat, lon) - (10.0 * lat + lon)).abs() < 1e-5);
+        }
+        // Far outside: the edge value, not a panic.
+        assert!(lookup.undulation_m(80.0, -170.0).is_finite());
     }
 }

@@ -77,6 +77,10 @@ pub enum QueryError {
     Unavailable(LoadError),
     #[error("tile {0} is not part of the database")]
     NoSuchTile(TileKey),
+    #[error("altitude {alt_m} m is outside -12000..1000000 m")]
+    Altitude { alt_m: f64 },
+    #[error("sightline from {lat_deg:.7}, {lon_deg:.7} does not cross the database")]
+    Misses { lat_deg: f64, lon_deg: f64 },
 }
 
 /// A thread's query context: keeps the finest tiles it has used at hand so repeated queries cost
@@ -113,16 +117,29 @@ struct CellRef {
     v: f64,
 }
 
-/// The finest tiles a session has used, by tile index.
+/// The finest tiles a session has used, by tile index. Tiles the cache also holds cost nothing
+/// more; at most [`SESSION_TILES`] that it does not hold are kept on top of its budget, and all
+/// are forgotten when the cache evicts anything.
 struct TileSlots {
     cache: Arc<TileCache>,
     layout: PyramidLayout,
     tile_cols: usize,
     slots: Vec<Option<Arc<Tile>>>,
+    /// Slots holding tiles the cache does not (they did not fit its budget, or were rebuilt
+    /// from a coarser level).
+    uncached: usize,
     epoch: u64,
 }
 
+/// Most finest tiles outside the paging cache one query session keeps at hand (about 5.6 MB of
+/// 128-cell tiles).
+pub const SESSION_TILES: usize = 64;
+
 const PIECE_M: f64 = 2_000.0;
+/// Lowest end-point altitude a sightline may have (below the deepest ocean trench).
+pub const LOS_MIN_ALT_M: f64 = -12_000.0;
+/// Highest end-point altitude a sightline may have (low earth orbit).
+pub const LOS_MAX_ALT_M: f64 = 1_000_000.0;
 /// Snap distance to a post, in posts: a query this close to a post returns the post.
 const POST_SNAP: f64 = 1e-7;
 
@@ -153,6 +170,7 @@ impl QuerySession {
                 layout,
                 tile_cols: cols as usize,
                 slots: vec![None; rows as usize * cols as usize],
+                uncached: 0,
             },
         }
     }
@@ -289,13 +307,17 @@ impl QuerySession {
     /// Line of sight between two geodetic points (altitudes above the ellipsoid).
     pub fn los(&mut self, from: Geodetic, to: Geodetic) -> Result<LosResult, QueryError> {
         for p in [from, to] {
-            if !(p.lat_deg.is_finite() && p.lon_deg.is_finite() && p.alt_m.is_finite())
+            if !(p.lat_deg.is_finite() && p.lon_deg.is_finite())
                 || p.lat_deg.abs() > 90.0
+                || p.lon_deg.abs() > 360.0
             {
                 return Err(QueryError::Invalid {
                     lat_deg: p.lat_deg,
                     lon_deg: p.lon_deg,
                 });
+            }
+            if !(LOS_MIN_ALT_M..=LOS_MAX_ALT_M).contains(&p.alt_m) {
+                return Err(QueryError::Altitude { alt_m: p.alt_m });
             }
         }
         let a = from.to_ecef();
@@ -304,6 +326,7 @@ impl QuerySession {
         let pieces = ((length_m / PIECE_M).ceil() as usize).max(1);
         let g = self.layout.grid;
         let mut start = from;
+        let mut crosses = false;
         for p in 0..pieces {
             let t0 = p as f64 / pieces as f64;
             let t1 = (p + 1) as f64 / pieces as f64;
@@ -324,7 +347,7 @@ impl QuerySession {
                     end.alt_m - self.geoid.undulation_m(end.lat_deg, end.lon_deg),
                 ),
             };
-            if let Some((s, material, level)) = self.trace_piece(&piece)? {
+            if let Some((s, material, level)) = self.trace_piece(&piece, &mut crosses)? {
                 let t = t0 + s * (t1 - t0);
                 return Ok(LosResult {
                     visible: false,
@@ -338,6 +361,12 @@ impl QuerySession {
             }
             start = end;
         }
+        if !crosses {
+            return Err(QueryError::Misses {
+                lat_deg: from.lat_deg,
+                lon_deg: from.lon_deg,
+            });
+        }
         Ok(LosResult {
             visible: true,
             hit: None,
@@ -350,7 +379,12 @@ impl QuerySession {
     /// below the sightline over the node's stretch is skipped whole; in a leaf that cannot be
     /// skipped, cells are walked one by one (Amanatides and Woo's grid traversal) and a cell is
     /// tested exactly only when the sightline comes below its highest corner.
-    fn trace_piece(&mut self, piece: &Piece) -> Result<Option<(f64, Material, u8)>, QueryError> {
+    /// Sets `crosses` when the piece passes over the database.
+    fn trace_piece(
+        &mut self,
+        piece: &Piece,
+        crosses: &mut bool,
+    ) -> Result<Option<(f64, Material, u8)>, QueryError> {
         let g = self.layout.grid;
         let max_x = (g.cols - 1) as f64;
         let max_y = (g.rows - 1) as f64;
@@ -361,6 +395,7 @@ impl QuerySession {
         else {
             return Ok(None);
         };
+        *crosses = true;
         let db_max = f64::from(self.db.manifest().max_elevation_m);
         if piece.alt.min_on(s, s_end) > db_max {
             return Ok(None);
@@ -384,6 +419,7 @@ impl QuerySession {
             let depth = tile.quadtree_depth;
             // Descend the quadtree to the largest node that can be skipped, or to a leaf.
             let mut leaf_end = s_end;
+            let mut leaf_lo = (tj0, ti0);
             let mut skipped = false;
             for d in 0..=depth {
                 let node_cells = tile_cells >> d;
@@ -405,16 +441,24 @@ impl QuerySession {
                     break;
                 }
                 leaf_end = out;
+                leaf_lo = (x_lo, y_lo);
             }
             if skipped {
                 continue;
             }
+            // The leaf's cells, clamped so that a probe landing exactly on the leaf's edge (a
+            // sightline through a post) stays in this leaf and this tile.
+            let leaf_cells = tile_cells >> depth;
+            let (leaf_x_hi, leaf_y_hi) = (
+                (leaf_lo.0 + leaf_cells - 1).min(last_cx),
+                (leaf_lo.1 + leaf_cells - 1).min(last_cy),
+            );
             // Walk the leaf's cells.
             let mut sc = s;
             while sc < leaf_end {
                 let probe = (sc + nudge).min(leaf_end);
-                let cx = ((piece.x0 + dx * probe).max(0.0) as usize).min(last_cx);
-                let cy = ((piece.y0 + dy * probe).max(0.0) as usize).min(last_cy);
+                let cx = ((piece.x0 + dx * probe).max(0.0) as usize).clamp(leaf_lo.0, leaf_x_hi);
+                let cy = ((piece.y0 + dy * probe).max(0.0) as usize).clamp(leaf_lo.1, leaf_y_hi);
                 let cell_out = walk
                     .exit(cx as f64, (cx + 1) as f64, cy as f64, (cy + 1) as f64, sc)
                     .min(leaf_end)
@@ -451,25 +495,34 @@ impl TileSlots {
     #[inline]
     fn get(&mut self, key: TileKey) -> Result<&Tile, QueryError> {
         let epoch = self.cache.eviction_epoch();
-        if epoch != self.epoch {
+        let slot = key.row as usize * self.tile_cols + key.col as usize;
+        let missing = !matches!(self.slots.get(slot), Some(Some(_)));
+        if epoch != self.epoch || (missing && self.uncached >= SESSION_TILES) {
             self.slots.iter_mut().for_each(|s| *s = None);
+            self.uncached = 0;
             self.epoch = epoch;
         }
-        let slot = key.row as usize * self.tile_cols + key.col as usize;
         let entry = self
             .slots
             .get_mut(slot)
             .ok_or(QueryError::NoSuchTile(key))?;
         if entry.is_none() {
-            *entry = Some(fetch(&self.cache, &self.layout, key)?);
+            let (tile, cached) = fetch(&self.cache, &self.layout, key)?;
+            *entry = Some(tile);
+            self.uncached += usize::from(!cached);
         }
         entry.as_deref().ok_or(QueryError::NoSuchTile(key))
     }
 }
 
 /// Loads a finest tile, or rebuilds it from the nearest readable coarser level.
-fn fetch(cache: &TileCache, layout: &PyramidLayout, key: TileKey) -> Result<Arc<Tile>, QueryError> {
-    match cache.load_now(key) {
+/// Returns the tile and whether the cache holds it too.
+fn fetch(
+    cache: &TileCache,
+    layout: &PyramidLayout,
+    key: TileKey,
+) -> Result<(Arc<Tile>, bool), QueryError> {
+    match cache.load_now_reporting(key) {
         Ok(t) => Ok(t),
         Err(first_error) => {
             let mut parent = key;
@@ -479,7 +532,7 @@ fn fetch(cache: &TileCache, layout: &PyramidLayout, key: TileKey) -> Result<Arc<
                 }
                 parent = parent.parent();
                 if let Ok(p) = cache.load_now(parent) {
-                    return Ok(Arc::new(resample_from_parent(layout, &p, key)));
+                    return Ok((Arc::new(resample_from_parent(layout, &p, key)), false));
                 }
             }
         }

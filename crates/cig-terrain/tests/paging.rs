@@ -2,8 +2,10 @@
 mod common;
 
 use cig_geo::Geodetic;
+use cig_terrain::database::{MemoryTileStore, StoreError, TerrainDatabase, TileStore};
 use cig_terrain::{PagingConfig, QuerySession, TileKey};
 use common::*;
+use std::sync::{Arc, Condvar, Mutex};
 
 fn plain(r: usize, c: usize) -> f32 {
     100.0 + ((r * 7 + c * 3) % 50) as f32
@@ -62,56 +64,106 @@ fn hysteresis_stops_thrash_when_the_eye_dithers_across_a_boundary() {
     let g = grid(401, 401, 60.0);
     let (db, _) = database(&raster(g, plain), 32, 0.0);
     let (n_per_deg, _) = cig_geo::metres_per_degree(36.1);
-    // The eye starts exactly on a recentring boundary (centre lattice at 1000 m: 10 500 m is
+    // The eye starts exactly on a recentring boundary (centre lattice at 1000 m: 11 500 m is
     // halfway between centres) and dithers +-90 m around it (180 m of travel, less than the
-    // 200 m the 1200 m box asks for).
-    let base_lat = g.south_lat_deg + 10_500.0 / n_per_deg;
+    // 200 m the 1200 m box asks for). Centres 11 000 and 12 000 put the area's south edge
+    // either side of the tile boundary at 3840 m (tiles are 1920 m), and the budget holds one
+    // active area and little more, so an area that moves must page.
+    let base_lat = g.south_lat_deg + 11_500.0 / n_per_deg;
     let lon = g.west_lon_deg + 0.05;
-    let run = |config: PagingConfig| {
-        let c = cache(&db, config);
+    let run = |hysteresis_box_m: f64| {
+        let probe = cache(&db, PagingConfig::default());
+        probe.update(&[Geodetic::new(base_lat + 90.0 / n_per_deg, lon, 100.0)]);
+        probe.wait_idle();
+        let area_tiles = probe.stats().resident_tiles as u64;
+        let tile_bytes = probe.tile_bytes();
+        drop(probe);
+        let c = cache(
+            &db,
+            PagingConfig {
+                hysteresis_box_m,
+                budget_bytes: (area_tiles + 2) * tile_bytes,
+                ..PagingConfig::default()
+            },
+        );
         for k in 0..200 {
             let offset = if k % 2 == 0 { 90.0 } else { -90.0 };
             c.update(&[Geodetic::new(base_lat + offset / n_per_deg, lon, 100.0)]);
+            c.wait_idle();
         }
-        c.wait_idle();
         c.stats()
     };
-    let npsnet = run(PagingConfig::default());
+    let npsnet = run(1_200.0);
     assert!(npsnet.active_area_moves <= 1, "{npsnet:?}");
-    let no_box = run(PagingConfig {
-        hysteresis_box_m: 1_000.0,
-        recenter_step_m: 1_000.0,
-        ..PagingConfig::default()
-    });
-    assert!(no_box.active_area_moves >= 150, "{no_box:?}");
+    assert!(npsnet.evictions <= 8, "{npsnet:?}");
+    // A box only half a metre larger than the step: every dither moves the area and pages.
+    let no_margin = run(1_000.5);
+    assert!(no_margin.active_area_moves >= 150, "{no_margin:?}");
+    assert!(no_margin.evictions >= 100, "{no_margin:?}");
+    assert!(
+        no_margin.loads_completed > npsnet.loads_completed + 100,
+        "{no_margin:?}"
+    );
+}
+
+/// A store whose finest tiles wait behind a gate: loads of level 0 block until it opens.
+struct GatedStore {
+    inner: Arc<MemoryTileStore>,
+    open: Mutex<bool>,
+    opened: Condvar,
+}
+
+impl TileStore for GatedStore {
+    fn read_tile(&self, key: TileKey) -> Result<Vec<u8>, StoreError> {
+        if key.level == 0 {
+            let mut open = self.open.lock().expect("gate");
+            while !*open {
+                open = self.opened.wait(open).expect("gate");
+            }
+        }
+        self.inner.read_tile(key)
+    }
+
+    fn location(&self, key: TileKey) -> String {
+        self.inner.location(key)
+    }
 }
 
 #[test]
-fn update_does_not_wait_for_loads() {
+fn update_never_waits_and_coarser_levels_serve_while_the_finest_load() {
     let g = grid(401, 401, 60.0);
-    let (db, _) = database(&raster(g, plain), 32, 0.0);
+    let (db, store) = database(&raster(g, plain), 32, 0.0);
+    let gated = Arc::new(GatedStore {
+        inner: store,
+        open: Mutex::new(false),
+        opened: Condvar::new(),
+    });
+    let db = Arc::new(
+        TerrainDatabase::new(db.manifest().clone(), gated.clone() as Arc<dyn TileStore>)
+            .expect("db"),
+    );
     let c = cache(&db, PagingConfig::default());
-    let stats = c.update(&[Geodetic::new(36.1, -120.9, 100.0)]);
-    // The first update only issues requests; loads complete later.
-    assert!(stats.in_flight + stats.resident_tiles > 0);
+    let eye = Geodetic::new(36.1, -120.9, 100.0);
+    // Every level-0 load blocks, yet updates return.
+    let started = std::time::Instant::now();
+    for _ in 0..20 {
+        c.update(&[eye]);
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    assert!(started.elapsed() < std::time::Duration::from_secs(5));
+    let stats = c.stats();
+    assert!(stats.in_flight > 0, "{stats:?}");
+    let (row_f, col_f) = g.fractional_index(eye.lat_deg, eye.lon_deg);
+    let (key, _, _) = db.layout().locate(0, row_f, col_f);
+    assert!(c.resident(key).is_none());
+    let served = c.best_resident(key).expect("a coarser level serves");
+    assert!(served.key.level >= 1, "{:?}", served.key);
+    // Open the gate: the finest tile arrives.
+    *gated.open.lock().expect("gate") = true;
+    gated.opened.notify_all();
     c.wait_idle();
-    let after = c.stats();
-    assert_eq!(after.in_flight, 0);
-    assert!(after.resident_tiles > 0);
-    // While a finer tile is missing, the coarsest level serves the area.
-    let top = TileKey {
-        level: db.layout().levels - 1,
-        row: 0,
-        col: 0,
-    };
-    assert!(c
-        .best_resident(TileKey {
-            level: 0,
-            row: 0,
-            col: 0
-        })
-        .is_some());
-    assert!(c.resident(top).is_some());
+    c.update(&[eye]);
+    assert_eq!(c.best_resident(key).expect("resident").key.level, 0);
 }
 
 #[test]

@@ -268,3 +268,108 @@ proptest! {
         }
     }
 }
+
+/// Sightlines between posts pass exactly through posts on tile and leaf edges; they must never
+/// leave the tile they are walking (a panic before this was fixed), and must agree with HOT.
+#[test]
+fn post_to_post_sightlines_across_tile_edges() {
+    let g = grid(100, 100, 30.0);
+    let (db, _) = database(&raster(g, bumpy), 32, 0.0);
+    let mut q = QuerySession::new(cache(&db, PagingConfig::default()));
+    let mut checked = 0;
+    for (r0, c0) in [
+        (0usize, 0usize),
+        (31, 31),
+        (32, 0),
+        (5, 64),
+        (64, 64),
+        (99, 99),
+        (16, 8),
+    ] {
+        for (r1, c1) in [
+            (0usize, 99usize),
+            (99, 0),
+            (96, 96),
+            (32, 32),
+            (64, 0),
+            (8, 40),
+            (40, 8),
+        ] {
+            for alt in [180.0, 230.0, 290.0] {
+                let (lat0, lon0) = g.post_lat_lon_deg(r0, c0);
+                let (lat1, lon1) = g.post_lat_lon_deg(r1, c1);
+                let Ok(result) = q.los(
+                    Geodetic::new(lat0, lon0, alt),
+                    Geodetic::new(lat1, lon1, alt),
+                ) else {
+                    panic!("los {r0},{c0} -> {r1},{c1} failed");
+                };
+                if let Some(hit) = result.hit {
+                    let ground = q
+                        .hot(hit.point.lat_deg, hit.point.lon_deg)
+                        .expect("inside")
+                        .height_msl_m;
+                    assert!(hit.range_m == 0.0 || (hit.point.alt_m - ground).abs() < 0.02);
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 147);
+}
+
+#[test]
+fn sightlines_that_miss_the_database_or_fly_too_high_are_errors() {
+    let g = grid(40, 40, 30.0);
+    let (db, _) = database(&raster(g, |_, _| 10.0), 16, 0.0);
+    let mut q = QuerySession::new(cache(&db, PagingConfig::default()));
+    let far = q.los(
+        Geodetic::new(10.0, 10.0, 100.0),
+        Geodetic::new(10.1, 10.0, 100.0),
+    );
+    assert!(matches!(far, Err(QueryError::Misses { .. })), "{far:?}");
+    let (lat, lon) = g.post_lat_lon_deg(20, 20);
+    let high = q.los(
+        Geodetic::new(lat, lon, 1e15),
+        Geodetic::new(lat, lon, 100.0),
+    );
+    assert!(matches!(high, Err(QueryError::Altitude { .. })), "{high:?}");
+    let deep = q.los(
+        Geodetic::new(lat, lon, -7e6),
+        Geodetic::new(lat, lon, 100.0),
+    );
+    assert!(matches!(deep, Err(QueryError::Altitude { .. })), "{deep:?}");
+    // From outside into the database is a real question with a real answer.
+    let (lat_in, lon_in) = g.post_lat_lon_deg(20, 20);
+    let from_outside = q.los(
+        Geodetic::new(lat_in, lon_in - 0.05, 5000.0),
+        Geodetic::new(lat_in, lon_in, 5.0),
+    );
+    assert!(from_outside.is_ok());
+}
+
+#[test]
+fn a_tile_of_another_layout_is_refused_and_served_from_its_parent() {
+    let g = grid(129, 129, 30.0);
+    let smooth = |r: usize, c: usize| 100.0 + r as f32 * 0.5 + c as f32 * 0.25;
+    let (db32, store32) = database(&raster(g, smooth), 32, 0.0);
+    let (db16, _) = database(&raster(g, smooth), 16, 0.0);
+    let key = cig_terrain::TileKey {
+        level: 0,
+        row: 0,
+        col: 0,
+    };
+    // Same key, valid checksum, 17 posts per side instead of 33.
+    store32.insert(key, db16.load_tile(key).expect("tile").encode());
+    assert!(db32.load_tile(key).is_err());
+    let mut q = QuerySession::new(cache(&db32, PagingConfig::default()));
+    let (lat, lon) = g.post_lat_lon_deg(3, 3);
+    let s = q.hot(lat, lon).expect("served");
+    assert!(s.level >= 1);
+    let (lat2, lon2) = g.post_lat_lon_deg(40, 40);
+    q.los(
+        Geodetic::new(lat, lon, 300.0),
+        Geodetic::new(lat2, lon2, 50.0),
+    )
+    .expect("los");
+}

@@ -205,6 +205,62 @@ fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
         .failure();
     assert!(one_line_error(&out).contains("--force"));
     assert_eq!(files(&db), before);
+    // --force replaces a database, never anything else.
+    let precious = dir.path().join("precious");
+    std::fs::create_dir(&precious).expect("mkdir");
+    std::fs::write(precious.join("important.txt"), "keep me").expect("write");
+    let out = cig()
+        .args(["db", "synth", "--out"])
+        .arg(&precious)
+        .args([
+            "--origin",
+            "35.98,-121.23",
+            "--size-km",
+            "3",
+            "--spacing-m",
+            "60",
+            "--force",
+        ])
+        .assert()
+        .failure();
+    assert!(one_line_error(&out).contains("refusing to replace"));
+    assert_eq!(
+        std::fs::read_to_string(precious.join("important.txt")).expect("kept"),
+        "keep me"
+    );
+    // ...and does replace a database.
+    cig()
+        .args(["db", "synth", "--out"])
+        .arg(&db)
+        .args([
+            "--origin",
+            "35.98,-121.23",
+            "--size-km",
+            "3",
+            "--spacing-m",
+            "60",
+            "--seed",
+            "9",
+            "--force",
+        ])
+        .assert()
+        .success();
+    assert_ne!(files(&db), before);
+    // A sightline that never crosses the database, and one from beyond the sky.
+    let out = cig()
+        .args(["query", "los"])
+        .arg(&db)
+        .args(["10", "10", "100", "10.1", "10", "100"])
+        .assert()
+        .failure();
+    assert!(one_line_error(&out).contains("does not cross the database"));
+    let out = cig()
+        .args(["query", "los"])
+        .arg(&db)
+        .args(["35.99", "-121.22", "1e15", "35.99", "-121.21", "100"])
+        .assert()
+        .failure();
+    assert!(one_line_error(&out).contains("altitude"));
     // Bad command-line values.
     let out = cig()
         .args(["db", "synth", "--out"])
