@@ -28,5 +28,13 @@ if [ "${#missing[@]}" -gt 0 ]; then
 fi
 
 if [ "${1:-}" = "--test" ]; then
+  # The test command runs rustfmt and clippy: add them where rustup manages the toolchain.
+  for tool in rustfmt clippy; do
+    cmd=$([ "$tool" = clippy ] && echo cargo-clippy || echo rustfmt)
+    if ! command -v "$cmd" >/dev/null; then
+      command -v rustup >/dev/null || die "$tool is missing and there is no rustup to add it"
+      rustup component add "$tool"
+    fi
+  done
   scripts/fetch-test-data.sh >/dev/null
 fi
