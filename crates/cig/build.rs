@@ -11,4 +11,6 @@ fn main() {
     println!("cargo:rustc-env=CIG_GIT_COMMIT={commit}");
     println!("cargo:rerun-if-changed=../../.git/HEAD");
     println!("cargo:rerun-if-changed=../../.git/refs");
+    // Appended on every commit and checkout, so a new commit rebuilds this.
+    println!("cargo:rerun-if-changed=../../.git/logs/HEAD");
 }
