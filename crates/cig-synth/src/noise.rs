@@ -248,6 +248,18 @@ pub(crate) fn smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
     t * t * (3.0 - 2.0 * t)
 }
 
+/// Moves sample coordinates to the next octave: rotated (so octave lattices do not align),
+/// scaled by `lacunarity`, offset, and given a fresh seed.
+#[inline]
+fn next_octave(x: f64, y: f64, seed: u64, lacunarity: f64) -> (f64, f64, u64) {
+    let (rx, ry) = (ROT_COS * x - ROT_SIN * y, ROT_SIN * x + ROT_COS * y);
+    (
+        rx * lacunarity + 17.31,
+        ry * lacunarity - 5.77,
+        mix64(seed.wrapping_add(0x9E37_79B9_7F4A_7C15)),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -291,16 +303,4 @@ mod tests {
         assert_eq!(octave_weight(120.0, 30.0), 1.0);
         assert!((octave_weight(90.0, 30.0) - 0.5).abs() < 1e-12);
     }
-}
-
-/// Moves sample coordinates to the next octave: rotated (so octave lattices do not align),
-/// scaled by `lacunarity`, offset, and given a fresh seed.
-#[inline]
-fn next_octave(x: f64, y: f64, seed: u64, lacunarity: f64) -> (f64, f64, u64) {
-    let (rx, ry) = (ROT_COS * x - ROT_SIN * y, ROT_SIN * x + ROT_COS * y);
-    (
-        rx * lacunarity + 17.31,
-        ry * lacunarity - 5.77,
-        mix64(seed.wrapping_add(0x9E37_79B9_7F4A_7C15)),
-    )
 }

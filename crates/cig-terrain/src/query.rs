@@ -10,8 +10,10 @@
 //! curvature, so long sightlines drop towards the ground as they should). The chord is split into
 //! pieces of at most 2 km; in each, latitude and longitude are linear and altitude is the
 //! quadratic through the piece's exact end and middle points (error well under a millimetre).
-//! The walk in grid space skips whole quadtree leaves (8 x 8 cells) whose highest point is below
-//! the chord (the tiles' min/max quadtree), and tests each remaining cell's two triangles exactly.
+//! The walk in grid space skips whole quadtree nodes whose highest point is below the chord (the
+//! tiles' min/max quadtree, down to 8 x 8-cell leaves) and tests each remaining cell's two
+//! triangles: the terrain is linear along the sightline within a triangle, and the sightline's
+//! altitude is taken as linear across one cell (its curvature there is far below a millimetre).
 //!
 //! Limits: a chord that leaves the database sees no terrain outside it; the geoid undulation is
 //! bilinear on the manifest's coarse grid (EGM96 varies by centimetres per kilometre).
@@ -140,6 +142,9 @@ const PIECE_M: f64 = 2_000.0;
 pub const LOS_MIN_ALT_M: f64 = -12_000.0;
 /// Highest end-point altitude a sightline may have (low earth orbit).
 pub const LOS_MAX_ALT_M: f64 = 1_000_000.0;
+/// How far outside the database's edge (in posts; 1e-6 is 0.03 mm at 30 m posts) a point still
+/// counts as on it: geodetic round trips of edge points land a hair outside.
+const EDGE_TOLERANCE_POSTS: f64 = 1e-6;
 /// Snap distance to a post, in posts: a query this close to a post returns the post.
 const POST_SNAP: f64 = 1e-7;
 
@@ -186,7 +191,7 @@ impl QuerySession {
         let f = &self.fast;
         let row_f = (lat_deg - f.south_lat_deg) * f.rows_per_deg;
         let col_f = (lon_deg - f.west_lon_deg) * f.cols_per_deg;
-        const EDGE: f64 = 1e-9;
+        const EDGE: f64 = EDGE_TOLERANCE_POSTS;
         // Written so that NaN fails the test.
         if !(row_f >= -EDGE
             && row_f <= f.max_row + EDGE
@@ -389,9 +394,12 @@ impl QuerySession {
         let max_x = (g.cols - 1) as f64;
         let max_y = (g.rows - 1) as f64;
         let (dx, dy) = (piece.x1 - piece.x0, piece.y1 - piece.y0);
-        // Clip to the database.
-        let Some((mut s, s_end)) = clip(piece.x0, dx, 0.0, max_x, 0.0, 1.0)
-            .and_then(|(a, b)| clip(piece.y0, dy, 0.0, max_y, a, b))
+        // Clip to the database widened by half a post, where the edge posts' terrain extends: a
+        // chord along an edge bows off the parallel or meridian it joins (by 0.1 m over 3 km)
+        // and must still see the terrain it runs along.
+        const EDGE: f64 = 0.5;
+        let Some((mut s, s_end)) = clip(piece.x0, dx, -EDGE, max_x + EDGE, 0.0, 1.0)
+            .and_then(|(a, b)| clip(piece.y0, dy, -EDGE, max_y + EDGE, a, b))
         else {
             return Ok(None);
         };
@@ -426,11 +434,10 @@ impl QuerySession {
                 let (nx, ny) = ((cx - tj0) / node_cells, (cy - ti0) / node_cells);
                 let (x_lo, y_lo) = (tj0 + nx * node_cells, ti0 + ny * node_cells);
                 let out = walk
-                    .exit(
-                        x_lo as f64,
-                        (x_lo + node_cells) as f64,
-                        y_lo as f64,
-                        (y_lo + node_cells) as f64,
+                    .exit_widened(
+                        (x_lo, x_lo + node_cells, max_x),
+                        (y_lo, y_lo + node_cells, max_y),
+                        EDGE,
                         s,
                     )
                     .min(s_end);
@@ -460,7 +467,7 @@ impl QuerySession {
                 let cx = ((piece.x0 + dx * probe).max(0.0) as usize).clamp(leaf_lo.0, leaf_x_hi);
                 let cy = ((piece.y0 + dy * probe).max(0.0) as usize).clamp(leaf_lo.1, leaf_y_hi);
                 let cell_out = walk
-                    .exit(cx as f64, (cx + 1) as f64, cy as f64, (cy + 1) as f64, sc)
+                    .exit_widened((cx, cx + 1, max_x), (cy, cy + 1, max_y), EDGE, sc)
                     .min(leaf_end)
                     .max(sc + nudge);
                 let (i, j) = (cy - ti0, cx - tj0);
@@ -694,6 +701,30 @@ impl Walk {
             f64::INFINITY
         };
         tx.min(ty).max(s)
+    }
+
+    /// [`Walk::exit`] for a box of whole cells `(lo, hi, grid_max)` along each axis, widened by
+    /// `edge` where it reaches the grid's first or last post: the piece runs on past the edge
+    /// posts for up to `edge` cells and must leave such a box there, not at the edge.
+    #[inline]
+    fn exit_widened(
+        &self,
+        x: (usize, usize, f64),
+        y: (usize, usize, f64),
+        edge: f64,
+        s: f64,
+    ) -> f64 {
+        let widen = |(lo, hi, max): (usize, usize, f64)| {
+            let lo_f = if lo == 0 { -edge } else { lo as f64 };
+            let hi_f = if hi as f64 >= max {
+                max + edge
+            } else {
+                hi as f64
+            };
+            (lo_f, hi_f)
+        };
+        let ((x_lo, x_hi), (y_lo, y_hi)) = (widen(x), widen(y));
+        self.exit(x_lo, x_hi, y_lo, y_hi, s)
     }
 }
 
