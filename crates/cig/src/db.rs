@@ -86,7 +86,9 @@ fn build(
     force: bool,
     config: &Config,
 ) -> anyhow::Result<cig_terrain::Manifest> {
+    let spinner = crate::output::spinner("fill voids, derive materials");
     let report = prepare_raster(raster).context("cannot fill voids")?;
+    spinner.finish_and_clear();
     if report.void_posts_filled > 0 {
         tracing::warn!("filled {} void posts", report.void_posts_filled);
     }

@@ -1,4 +1,4 @@
-//! Progress bars for long commands (shown only on a terminal).
+//! Progress bars and spinners for long commands (drawn only on a terminal).
 
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -9,4 +9,12 @@ pub fn bar(total: u64, what: &str) -> ProgressBar {
     }
     bar.set_message(what.to_string());
     bar
+}
+
+/// A spinner for a stage whose length is unknown.
+pub fn spinner(what: &str) -> ProgressBar {
+    let spinner = ProgressBar::new_spinner();
+    spinner.set_message(what.to_string());
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    spinner
 }
