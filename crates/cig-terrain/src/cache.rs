@@ -137,7 +137,6 @@ pub struct CacheStats {
 struct Resident {
     tile: Arc<Tile>,
     last_used: u64,
-    bytes: u64,
 }
 
 #[derive(Default)]
@@ -150,6 +149,17 @@ struct State {
     clock: u64,
     areas: Vec<Option<(f64, f64)>>,
     stats: CacheStats,
+}
+
+impl State {
+    fn snapshot(&self) -> CacheStats {
+        CacheStats {
+            resident_tiles: self.resident.len(),
+            resident_bytes: self.resident_bytes,
+            in_flight: self.in_flight.len(),
+            ..self.stats
+        }
+    }
 }
 
 /// The paging tile cache over one database.
@@ -231,13 +241,7 @@ impl TileCache {
     }
 
     pub fn stats(&self) -> CacheStats {
-        let s = self.state.lock();
-        CacheStats {
-            resident_tiles: s.resident.len(),
-            resident_bytes: s.resident_bytes,
-            in_flight: s.in_flight.len(),
-            ..s.stats
-        }
+        self.state.lock().snapshot()
     }
 
     /// Number of evictions so far; query sessions drop their tile references when it changes.
@@ -313,13 +317,8 @@ impl TileCache {
                 }
             }
         }
-        // Drop what nobody wants once over budget is not a risk; keep the rest as LRU cache.
-        CacheStats {
-            resident_tiles: s.resident.len(),
-            resident_bytes: s.resident_bytes,
-            in_flight: s.in_flight.len(),
-            ..s.stats
-        }
+        // Tiles nobody wants stay as a least-recently-used cache until room is needed.
+        s.snapshot()
     }
 
     /// Waits until no load is in flight (for tests, benchmarks and start-up), then takes them in.
@@ -399,16 +398,7 @@ impl TileCache {
                 // eyepoints need. Without room the tile serves this query uncached.
                 let cached = self.make_room(&mut s, self.tile_bytes);
                 if cached {
-                    let clock = s.clock;
-                    s.resident_bytes += self.tile_bytes;
-                    s.resident.insert(
-                        key,
-                        Resident {
-                            tile: Arc::clone(&tile),
-                            last_used: clock,
-                            bytes: self.tile_bytes,
-                        },
-                    );
+                    self.insert_resident(&mut s, key, Arc::clone(&tile));
                     s.stats.loads_completed += 1;
                 }
                 Ok((tile, cached))
@@ -430,20 +420,18 @@ impl TileCache {
                 if s.resident.contains_key(&key) {
                     return;
                 }
-                let clock = s.clock;
                 // The bytes were reserved when the load was issued.
-                s.resident_bytes += self.tile_bytes;
-                s.resident.insert(
-                    key,
-                    Resident {
-                        tile: Arc::new(tile),
-                        last_used: clock,
-                        bytes: self.tile_bytes,
-                    },
-                );
+                self.insert_resident(s, key, Arc::new(tile));
             }
             Err(e) => self.record_failure(s, key, &e),
         }
+    }
+
+    /// Makes `tile` resident; the caller has made room for it.
+    fn insert_resident(&self, s: &mut State, key: TileKey, tile: Arc<Tile>) {
+        let last_used = s.clock;
+        s.resident_bytes += self.tile_bytes;
+        s.resident.insert(key, Resident { tile, last_used });
     }
 
     fn record_failure(&self, s: &mut State, key: TileKey, e: &LoadError) {
@@ -468,8 +456,8 @@ impl TileCache {
             let Some(victim) = victim else {
                 return false;
             };
-            if let Some(r) = s.resident.remove(&victim) {
-                s.resident_bytes -= r.bytes;
+            if s.resident.remove(&victim).is_some() {
+                s.resident_bytes -= self.tile_bytes;
                 s.stats.evictions += 1;
                 self.eviction_epoch.fetch_add(1, Ordering::Relaxed);
             }

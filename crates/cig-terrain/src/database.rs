@@ -75,12 +75,6 @@ impl GeoidGrid {
         }
     }
 
-    /// Undulation at a point, metres (bilinear; clamped at the grid's edges). Builds a
-    /// [`GeoidLookup`] each call: use one of those for many points.
-    pub fn undulation_m(&self, lat_deg: f64, lon_deg: f64) -> f64 {
-        GeoidLookup::new(self).undulation_m(lat_deg, lon_deg)
-    }
-
     fn is_consistent(&self) -> bool {
         self.rows >= 2
             && self.cols >= 2
@@ -404,7 +398,7 @@ mod tests {
         assert!(!grid.is_consistent());
         let ok = GeoidGrid::zero();
         assert!(ok.is_consistent());
-        assert_eq!(ok.undulation_m(12.0, 34.0), 0.0);
+        assert_eq!(GeoidLookup::new(&ok).undulation_m(12.0, 34.0), 0.0);
     }
 
     #[test]

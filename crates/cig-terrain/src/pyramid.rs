@@ -156,15 +156,6 @@ impl PyramidLayout {
         )
     }
 
-    /// Geographic bounds of a tile: (south, west, north, east) in degrees, not clamped.
-    pub fn tile_bounds_deg(&self, key: TileKey) -> (f64, f64, f64, f64) {
-        let (dlat, dlon) = self.spacing_deg(key.level);
-        let span = f64::from(self.tile_cells);
-        let south = self.grid.south_lat_deg + f64::from(key.row) * span * dlat;
-        let west = self.grid.west_lon_deg + f64::from(key.col) * span * dlon;
-        (south, west, south + span * dlat, west + span * dlon)
-    }
-
     /// The tile of `level` containing the finest-grid fractional index `(row_f, col_f)`, and
     /// the fractional index within that tile's posts. Points on a shared edge go to the tile
     /// to the north/east, except at the database's last row/column.

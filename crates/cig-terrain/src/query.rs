@@ -754,15 +754,10 @@ fn cell_hit(corners: [f32; 4], piece: &Piece, cx: f64, cy: f64, s0: f64, s1: f64
     }
     for k in 0..count - 1 {
         let (sa, sb) = (bounds[k], bounds[k + 1]);
-        let (um, vm) = uv(0.5 * (sa + sb));
-        let upper = um >= vm;
+        // Within one triangle the terrain is linear along the piece: its ends decide.
         let height = |s: f64| {
             let (u, v) = uv(s);
-            if upper {
-                f64::from(h00) + u * f64::from(h01 - h00) + v * f64::from(h11 - h01)
-            } else {
-                f64::from(h00) + v * f64::from(h10 - h00) + u * f64::from(h11 - h10)
-            }
+            triangulated_height(h00, h01, h10, h11, u, v)
         };
         let fa = piece.alt.at(sa) - height(sa);
         if fa <= 0.0 {
@@ -774,4 +769,40 @@ fn cell_hit(corners: [f32; 4], piece: &Piece, cx: f64, cy: f64, s0: f64, s1: f64
         }
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::build::{build_pyramid, BuildError};
+    use crate::database::{GeoidGrid, Manifest, MemoryTileStore};
+    use crate::raster::{GeoGrid, Raster};
+    use crate::{Material, PagingConfig};
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The division-free per-query index and the layout's general `locate` name the same
+        /// tile and the same point in it.
+        #[test]
+        fn fast_cell_agrees_with_the_layout(rows in 2usize..300, cols in 2usize..300, fr in 0.0f64..=1.0, fc in 0.0f64..=1.0) {
+            let grid = GeoGrid { south_lat_deg: 36.0, west_lon_deg: -121.0, dlat_deg: 0.00027, dlon_deg: 0.00033, rows, cols };
+            let raster = Raster { grid, elevation_m: vec![1.0; rows * cols], material: Some(vec![Material::Grass; rows * cols]) };
+            let store = Arc::new(MemoryTileStore::new());
+            let summary = build_pyramid::<BuildError>(&raster, 16, &mut |t| { store.insert(t.key, t.encode()); Ok(()) }).expect("build");
+            let db = Arc::new(TerrainDatabase::new(Manifest::from_build(&summary, GeoidGrid::zero(), 0, vec![]), store).expect("db"));
+            let q = QuerySession::new(Arc::new(TileCache::new(db, PagingConfig::default()).expect("cache")));
+            let (row_f, col_f) = (fr * (rows - 1) as f64, fc * (cols - 1) as f64);
+            let lat = grid.south_lat_deg + row_f * grid.dlat_deg;
+            let lon = grid.west_lon_deg + col_f * grid.dlon_deg;
+            let cell = q.cell(lat, lon).expect("inside");
+            let (key, fi, fj) = q.layout.locate(0, row_f, col_f);
+            // Both name a cell holding the point; on a tile edge they may pick either side.
+            let back = |k: TileKey, i: f64, j: f64| (f64::from(k.row) * 16.0 + i, f64::from(k.col) * 16.0 + j);
+            let (r1, c1) = back(cell.key, cell.i as f64 + cell.v, cell.j as f64 + cell.u);
+            let (r2, c2) = back(key, fi, fj);
+            prop_assert!((r1 - r2).abs() < 1e-6 && (c1 - c2).abs() < 1e-6, "{:?} vs {:?}", (r1, c1), (r2, c2));
+            prop_assert!(cell.u >= 0.0 && cell.u <= 1.0 && cell.v >= 0.0 && cell.v <= 1.0);
+            prop_assert!(cell.i < 16 && cell.j < 16);
+        }
+    }
 }

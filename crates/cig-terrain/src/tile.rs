@@ -27,7 +27,7 @@
 //! would convert each value (the code does, through `from_le_bytes`).
 
 use crate::material::Material;
-use crate::pyramid::{quadtree_index, quadtree_node_count, TileKey};
+use crate::pyramid::{quadtree_node_count, TileKey};
 use crate::raster::triangulated_height;
 
 /// Version of the tile file format written by this build.
@@ -145,25 +145,13 @@ impl Tile {
         self.nodes.first().copied().unwrap_or(NodeBounds::EMPTY)
     }
 
-    /// Leaf node covering cell `(i, j)`.
-    #[inline]
-    pub fn leaf_bounds(&self, i: usize, j: usize) -> NodeBounds {
-        let d = self.quadtree_depth;
-        let leaf_cells = self.cells() >> d;
-        let x = (j / leaf_cells).min((1 << d) - 1);
-        let y = (i / leaf_cells).min((1 << d) - 1);
-        self.nodes[quadtree_index(d, x, y)]
-    }
-
     /// Height of this tile's triangulated surface at fractional post index `(fi, fj)`, clamped to
-    /// the tile. Returns the height and the cell's `(i, j, u, v)`.
+    /// the tile.
     #[inline]
     pub fn surface_height(&self, fi: f64, fj: f64) -> f64 {
         let (i, j, u, v) = self.cell_of(fi, fj);
-        let n = self.posts_per_side;
-        let base = i * n + j;
-        let e = &self.elevation_m;
-        triangulated_height(e[base], e[base + 1], e[base + n], e[base + n + 1], u, v)
+        let [h00, h01, h10, h11] = self.cell_corners(i, j);
+        triangulated_height(h00, h01, h10, h11, u, v)
     }
 
     /// Cell `(i, j)` holding fractional index `(fi, fj)` and the fractions `(u, v)` within it.
@@ -306,14 +294,6 @@ impl Tile {
             quadtree_depth: depth,
             degraded_from_level: None,
         })
-    }
-
-    /// Resident memory of the tile in bytes (what the paging budget counts).
-    pub fn memory_bytes(&self) -> usize {
-        std::mem::size_of::<Tile>()
-            + self.elevation_m.len() * 4
-            + self.material.len()
-            + self.nodes.len() * std::mem::size_of::<NodeBounds>()
     }
 }
 
