@@ -132,15 +132,7 @@ pub fn write_database(
     replace: bool,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<Manifest, DbError> {
-    if out.exists() {
-        if !replace {
-            return Err(DbError::Exists(out.to_path_buf()));
-        }
-        // --force replaces a database (even a damaged one), never anything else.
-        if !looks_like_database(out) {
-            return Err(DbError::NotReplaceable(out.to_path_buf()));
-        }
-    }
+    check_output(out, replace)?;
     let parent = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
@@ -178,6 +170,21 @@ pub fn write_database(
         std::fs::rename(&staging, out).map_err(|e| io_err(out, e))?;
     }
     Ok(manifest)
+}
+
+/// Whether a database may be written at `out`: it does not exist, or it is a database (even a
+/// damaged one) and `replace` is set. Never anything else is replaced. Callers may ask before
+/// spending time on a build; [`write_database`] asks again.
+pub fn check_output(out: &Path, replace: bool) -> Result<(), DbError> {
+    if !out.exists() {
+        Ok(())
+    } else if !replace {
+        Err(DbError::Exists(out.to_path_buf()))
+    } else if looks_like_database(out) {
+        Ok(())
+    } else {
+        Err(DbError::NotReplaceable(out.to_path_buf()))
+    }
 }
 
 /// True when `dir` holds a manifest that says it is a cig terrain database.

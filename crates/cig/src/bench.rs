@@ -220,11 +220,11 @@ pub fn db(args: &BenchDbArgs, config: &Config) -> anyhow::Result<()> {
         "tile_bytes": cache.tile_bytes(),
     });
     if !args.no_build {
-        let (synth_s, build_s) = time_demo_build()?;
+        let (synth_s, build_s) = time_demo_build(config)?;
         report["demo_synth_s"] = synth_s.into();
         report["demo_build_s"] = build_s.into();
         report["demo_total_s"] = (synth_s + build_s).into();
-        report["srtm1_import_s"] = time_srtm1_import()?.into();
+        report["srtm1_import_s"] = time_srtm1_import(config)?.into();
     }
     if args.json {
         println!("{report}");
@@ -235,25 +235,24 @@ pub fn db(args: &BenchDbArgs, config: &Config) -> anyhow::Result<()> {
 }
 
 /// Seconds to synthesize and to build (pyramid + write) the demo database.
-fn time_demo_build() -> anyhow::Result<(f64, f64)> {
+fn time_demo_build(config: &Config) -> anyhow::Result<(f64, f64)> {
     let dir = tempfile::tempdir()?;
-    let out = dir.path().join("demo");
     let started = Instant::now();
     let mut raster = cig_synth::synthesize(&crate::demo::demo_params(), &mut |_, _| {})?;
     let synth_s = started.elapsed().as_secs_f64();
     let started = Instant::now();
-    cig_terrain::build::prepare_raster(&mut raster)?;
-    let inputs = cig_terrain_io::store::BuildInputs {
-        sources: vec!["bench".into()],
-        void_posts_filled: 0,
-        tile_cells: crate::config::DatabaseConfig::default().tile_cells,
-    };
-    cig_terrain_io::store::write_database(&out, &raster, &inputs, false, &mut |_, _| {})?;
+    crate::db::build(
+        &mut raster,
+        vec!["bench".into()],
+        &dir.path().join("demo"),
+        false,
+        config,
+    )?;
     Ok((synth_s, started.elapsed().as_secs_f64()))
 }
 
 /// Seconds to import a generated 3601 x 3601 SRTM1 tile (read, fill, classify, build, write).
-fn time_srtm1_import() -> anyhow::Result<f64> {
+fn time_srtm1_import(config: &Config) -> anyhow::Result<f64> {
     let dir = tempfile::tempdir()?;
     let hgt = dir.path().join("N35W122.hgt");
     let n = 3601usize;
@@ -267,20 +266,13 @@ fn time_srtm1_import() -> anyhow::Result<f64> {
     }
     std::fs::write(&hgt, &bytes)?;
     let started = Instant::now();
-    let area = cig_terrain_io::import::import_files(&[hgt], &mut |_, _| {})?;
-    let mut raster = area.raster;
-    let report = cig_terrain::build::prepare_raster(&mut raster)?;
-    let inputs = cig_terrain_io::store::BuildInputs {
-        sources: vec!["bench".into()],
-        void_posts_filled: report.void_posts_filled as u64,
-        tile_cells: crate::config::DatabaseConfig::default().tile_cells,
-    };
-    cig_terrain_io::store::write_database(
+    let mut raster = cig_terrain_io::import::import_files(&[hgt], &mut |_, _| {})?.raster;
+    crate::db::build(
+        &mut raster,
+        vec!["bench".into()],
         &dir.path().join("db"),
-        &raster,
-        &inputs,
         false,
-        &mut |_, _| {},
+        config,
     )?;
     Ok(started.elapsed().as_secs_f64())
 }

@@ -5,7 +5,7 @@ use crate::config::Config;
 use anyhow::Context;
 use cig_terrain::build::prepare_raster;
 use cig_terrain::raster::Raster;
-use cig_terrain_io::store::{open_database, write_database, BuildInputs};
+use cig_terrain_io::store::{check_output, open_database, write_database, BuildInputs};
 use std::path::Path;
 use std::time::Instant;
 
@@ -59,12 +59,7 @@ pub fn synthesize_database(
     force: bool,
     config: &Config,
 ) -> anyhow::Result<cig_terrain::Manifest> {
-    if out.exists() && !force {
-        anyhow::bail!(
-            "output already exists (pass --force to replace it): {}",
-            out.display()
-        );
-    }
+    check_output(out, force)?;
     let bar = crate::output::bar(100, "synthesize");
     let mut raster = cig_synth::synthesize(params, &mut |stage, fraction| {
         bar.set_message(stage.to_string());
@@ -79,7 +74,8 @@ pub fn synthesize_database(
     build(&mut raster, vec![source], out, force, config)
 }
 
-fn build(
+/// Fills voids, derives materials and writes a raster as a database (shared with `bench`).
+pub fn build(
     raster: &mut Raster,
     sources: Vec<String>,
     out: &Path,
@@ -108,12 +104,7 @@ fn build(
 }
 
 pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
-    if args.out.exists() && !args.force {
-        anyhow::bail!(
-            "output already exists (pass --force to replace it): {}",
-            args.out.display()
-        );
-    }
+    check_output(&args.out, args.force)?;
     let started = Instant::now();
     let bar = crate::output::bar(args.inputs.len() as u64, "read DEMs");
     let area = cig_terrain_io::import::import_files(&args.inputs, &mut |done, total| {

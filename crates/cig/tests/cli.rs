@@ -147,162 +147,96 @@ fn one_line_error(out: &assert_cmd::assert::Assert) -> String {
     lines[0].to_string()
 }
 
+/// Command-line arguments of mixed kinds (strings, paths).
+macro_rules! argv {
+    ($($arg:expr),* $(,)?) => {
+        vec![$(std::ffi::OsString::from(&$arg)),*]
+    };
+}
+
+/// Runs `cig` with `args`, expects it to fail, and returns its one error line.
+fn error_line(args: Vec<std::ffi::OsString>) -> String {
+    one_line_error(&cig().args(args).assert().failure())
+}
+
+/// `db synth` of a 3 km, 60 m database at `out`, followed by `extra` arguments.
+fn synth_args(out: &Path, extra: &[&str]) -> Vec<std::ffi::OsString> {
+    let mut args = argv!["db", "synth", "--out", out, "--origin", "35.98,-121.23"];
+    args.extend(argv!["--size-km", "3", "--spacing-m", "60"]);
+    args.extend(extra.iter().map(std::ffi::OsString::from));
+    args
+}
+
 #[test]
 fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
     let dir = tempfile::tempdir().expect("tmp");
     let db = synth(dir.path(), "db", 1, "3", "60");
     // Outside the database.
-    let out = cig()
-        .args(["query", "hat"])
-        .arg(&db)
-        .args(["10.0", "10.0"])
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("10.0000000, 10.0000000 is outside the database"));
+    let line = error_line(argv!["query", "hat", db, "10.0", "10.0"]);
+    assert!(line.contains("10.0000000, 10.0000000 is outside the database"));
     // Not a database.
-    let out = cig()
-        .args(["db", "info"])
-        .arg(dir.path())
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("not a cig terrain database"));
+    let line = error_line(argv!["db", "info", dir.path()]);
+    assert!(line.contains("not a cig terrain database"));
     // A missing DEM.
     let missing = dir.path().join("nope.hgt");
-    let out = cig()
-        .args(["db", "import", "--out"])
-        .arg(dir.path().join("x"))
-        .arg(&missing)
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("nope.hgt"));
+    let line = error_line(argv![
+        "db",
+        "import",
+        "--out",
+        dir.path().join("x"),
+        missing
+    ]);
+    assert!(line.contains("nope.hgt"));
     // A truncated SRTM file.
     let bad = dir.path().join("N35W122.hgt");
     std::fs::write(&bad, vec![0u8; 1000]).expect("write");
-    let out = cig()
-        .args(["db", "import", "--out"])
-        .arg(dir.path().join("x"))
-        .arg(&bad)
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("N35W122.hgt"));
+    let line = error_line(argv!["db", "import", "--out", dir.path().join("x"), bad]);
+    assert!(line.contains("N35W122.hgt"));
     assert!(!dir.path().join("x").exists());
     // An existing output is not overwritten without --force.
     let before = files(&db);
-    let out = cig()
-        .args(["db", "synth", "--out"])
-        .arg(&db)
-        .args([
-            "--origin",
-            "35.98,-121.23",
-            "--size-km",
-            "3",
-            "--spacing-m",
-            "60",
-            "--seed",
-            "2",
-        ])
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("--force"));
+    assert!(error_line(synth_args(&db, &["--seed", "2"])).contains("--force"));
     assert_eq!(files(&db), before);
-    // --force replaces a database, never anything else.
+    // --force replaces a database, never anything else...
     let precious = dir.path().join("precious");
     std::fs::create_dir(&precious).expect("mkdir");
     std::fs::write(precious.join("important.txt"), "keep me").expect("write");
-    let out = cig()
-        .args(["db", "synth", "--out"])
-        .arg(&precious)
-        .args([
-            "--origin",
-            "35.98,-121.23",
-            "--size-km",
-            "3",
-            "--spacing-m",
-            "60",
-            "--force",
-        ])
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("refusing to replace"));
+    let line = error_line(synth_args(&precious, &["--force"]));
+    assert!(line.contains("refusing to replace"));
     assert_eq!(
         std::fs::read_to_string(precious.join("important.txt")).expect("kept"),
         "keep me"
     );
     // ...and does replace a database.
     cig()
-        .args(["db", "synth", "--out"])
-        .arg(&db)
-        .args([
-            "--origin",
-            "35.98,-121.23",
-            "--size-km",
-            "3",
-            "--spacing-m",
-            "60",
-            "--seed",
-            "9",
-            "--force",
-        ])
+        .args(synth_args(&db, &["--seed", "9", "--force"]))
         .assert()
         .success();
     assert_ne!(files(&db), before);
     // A sightline that never crosses the database, and one from beyond the sky.
-    let out = cig()
-        .args(["query", "los"])
-        .arg(&db)
-        .args(["10", "10", "100", "10.1", "10", "100"])
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("does not cross the database"));
-    let out = cig()
-        .args(["query", "los"])
-        .arg(&db)
-        .args(["35.99", "-121.22", "1e15", "35.99", "-121.21", "100"])
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("altitude"));
+    let line = error_line(argv![
+        "query", "los", db, "10", "10", "100", "10.1", "10", "100"
+    ]);
+    assert!(line.contains("does not cross the database"));
+    let line = error_line(argv![
+        "query", "los", db, "35.99", "-121.22", "1e15", "35.99", "-121.21", "100"
+    ]);
+    assert!(line.contains("altitude"));
     // Bad command-line values.
-    let out = cig()
-        .args(["db", "synth", "--out"])
-        .arg(dir.path().join("y"))
-        .args(["--origin", "95,0", "--size-km", "3", "--spacing-m", "60"])
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("latitude 95"));
-    let out = cig()
-        .args(["db", "synth", "--out"])
-        .arg(dir.path().join("y"))
-        .args([
-            "--origin",
-            "35,-121",
-            "--size-km",
-            "-5",
-            "--spacing-m",
-            "60",
-        ])
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("size_km = -5"));
+    let y = dir.path().join("y");
+    let mut args = argv!["db", "synth", "--out", y, "--origin", "95,0"];
+    args.extend(argv!["--size-km", "3", "--spacing-m", "60"]);
+    assert!(error_line(args).contains("latitude 95"));
+    let mut args = argv!["db", "synth", "--out", y, "--origin", "35,-121"];
+    args.extend(argv!["--size-km", "-5", "--spacing-m", "60"]);
+    assert!(error_line(args).contains("size_km = -5"));
     // A bad configuration file.
     let conf = dir.path().join("cig.toml");
     std::fs::write(&conf, "[paging]\nbudget_bytes = -3\n").expect("write");
-    let out = cig()
-        .arg("--config")
-        .arg(&conf)
-        .args(["db", "info"])
-        .arg(&db)
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("cig.toml"));
+    assert!(error_line(argv!["--config", conf, "db", "info", db]).contains("cig.toml"));
     std::fs::write(&conf, "[paging]\nhysteresis_box_m = 10\n").expect("write");
-    let out = cig()
-        .arg("--config")
-        .arg(&conf)
-        .args(["db", "info"])
-        .arg(&db)
-        .assert()
-        .failure();
-    assert!(one_line_error(&out).contains("hysteresis_box_m"));
+    let line = error_line(argv!["--config", conf, "db", "info", db]);
+    assert!(line.contains("hysteresis_box_m"));
 }
 
 #[test]
