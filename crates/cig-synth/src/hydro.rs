@@ -211,6 +211,22 @@ fn river_depth_m(catchment_km2: f64) -> f64 {
     1.5 + 1.2 * libm::log10(catchment_km2.max(1.0))
 }
 
+/// Lowers each river centre post's value to its upstream neighbour's where that is lower, from
+/// the sources down (the priority flood's order reversed), so values never rise downstream.
+fn never_rise_downstream(values: &mut [f32], flood: &Flood, flags: &[u16]) {
+    for &c in flood.order.iter().rev() {
+        let c = c as usize;
+        if flags[c] & RIVER_CENTRE == 0 {
+            continue;
+        }
+        let r = flood.receiver[c];
+        if r != NO_RECEIVER && flags[r as usize] & RIVER_CENTRE != 0 {
+            let r = r as usize;
+            values[r] = values[r].min(values[c]);
+        }
+    }
+}
+
 /// Carves rivers; returns (centre posts, water posts).
 fn carve_rivers(
     h: &mut [f32],
@@ -254,17 +270,7 @@ fn carve_rivers(
             surface[c] = s.max(base[c]);
         }
     }
-    for &c in flood.order.iter().rev() {
-        let c = c as usize;
-        if flags[c] & RIVER_CENTRE == 0 {
-            continue;
-        }
-        let r = flood.receiver[c];
-        if r != NO_RECEIVER && flags[r as usize] & RIVER_CENTRE != 0 {
-            let r = r as usize;
-            surface[r] = surface[r].min(surface[c]);
-        }
-    }
+    never_rise_downstream(&mut surface, flood, flags);
     // Paint the channels: water within half the width, banks cut back beyond.
     let nx = dims.nx as i64;
     let ny = dims.ny as i64;
@@ -305,17 +311,7 @@ fn carve_rivers(
         }
     }
     // Keep the centre line non-increasing after the painting.
-    for &c in flood.order.iter().rev() {
-        let c = c as usize;
-        if flags[c] & RIVER_CENTRE == 0 {
-            continue;
-        }
-        let r = flood.receiver[c];
-        if r != NO_RECEIVER && flags[r as usize] & RIVER_CENTRE != 0 {
-            let r = r as usize;
-            h[r] = h[r].min(h[c]);
-        }
-    }
+    never_rise_downstream(h, flood, flags);
     let water = flags.iter().filter(|&&f| f & RIVER != 0).count();
     (centres, water)
 }

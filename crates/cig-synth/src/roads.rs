@@ -100,16 +100,8 @@ struct RoadGrid {
     class: Vec<u8>,
 }
 
-/// 16-connectivity: eight neighbours and eight knight moves.
-const MOVES: [(i64, i64); 16] = [
-    (1, 0),
-    (0, 1),
-    (-1, 0),
-    (0, -1),
-    (1, 1),
-    (-1, 1),
-    (-1, -1),
-    (1, -1),
+/// Knight moves, which let least-cost paths take gentler headings than the eight neighbours.
+const KNIGHT_MOVES: [(i64, i64); 8] = [
     (2, 1),
     (1, 2),
     (-1, 2),
@@ -119,6 +111,18 @@ const MOVES: [(i64, i64); 16] = [
     (1, -2),
     (2, -1),
 ];
+
+/// 16-connectivity: the eight neighbours (in [`NEIGHBOURS`] order), then the knight moves.
+const MOVES: [(i64, i64); 16] = {
+    let mut moves = [(0, 0); 16];
+    let mut k = 0;
+    while k < 8 {
+        moves[k] = NEIGHBOURS[k];
+        moves[k + 8] = KNIGHT_MOVES[k];
+        k += 1;
+    }
+    moves
+};
 
 impl RoadGrid {
     fn new(h: &[f32], flags: &[u16], posts: Dims, spacing_m: f64, size_m: f64) -> RoadGrid {
