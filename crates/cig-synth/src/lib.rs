@@ -315,9 +315,9 @@ fn plan(p: &SynthParams) -> Result<Plan, SynthError> {
 pub(crate) struct Generated {
     pub raster: Raster,
     pub report: SynthReport,
-    #[cfg_attr(not(test), allow(dead_code))]
+    #[cfg_attr(not(test), allow(dead_code, reason = "only the tests read it"))]
     pub flags: Vec<u16>,
-    #[cfg_attr(not(test), allow(dead_code))]
+    #[cfg_attr(not(test), allow(dead_code, reason = "only the tests read it"))]
     pub receiver: Vec<u32>,
 }
 

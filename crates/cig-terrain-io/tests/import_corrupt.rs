@@ -11,18 +11,6 @@ use cig_terrain_io::import::{
 use import_support::*;
 use proptest::prelude::*;
 
-fn small_dted_spec() -> DtedSpec {
-    DtedSpec {
-        origin_lat_arcsec: 35 * 3600,
-        origin_lon_arcsec: -122 * 3600,
-        lat_interval: 300,
-        lon_interval: 300,
-        lat_points: 121,
-        lon_lines: 121,
-        level: 0,
-    }
-}
-
 fn small_dted() -> Vec<u8> {
     write_dted(&small_dted_spec(), |row, col| {
         Some((row as i16 - 60) * 10 + col as i16)

@@ -314,18 +314,7 @@ fn dted_case(spec: DtedSpec, name: &str) {
 
 #[test]
 fn dted_level_0_round_trips() {
-    dted_case(
-        DtedSpec {
-            origin_lat_arcsec: 35 * 3600,
-            origin_lon_arcsec: -122 * 3600,
-            lat_interval: 300,
-            lon_interval: 300,
-            lat_points: 121,
-            lon_lines: 121,
-            level: 0,
-        },
-        "n35w122.dt0",
-    );
+    dted_case(small_dted_spec(), "n35w122.dt0");
 }
 
 #[test]

@@ -1,6 +1,9 @@
 //! Test-side writers for the importer tests: GeoTIFF (through the `tiff` crate's encoder for
 //! strips, by hand for tiles), SRTM .hgt, DTED and ESRI ASCII, plus an analytic elevation field.
-#![allow(dead_code)]
+#![allow(
+    dead_code,
+    reason = "each test file uses a different subset of these helpers"
+)]
 
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
@@ -536,4 +539,17 @@ pub fn write_asc(spec: &AscSpec, values: &[f64]) -> String {
         text.push('\n');
     }
     text
+}
+
+/// A DTED level 0 tile of 121 x 121 posts (30" spacing) from N35 W122.
+pub fn small_dted_spec() -> DtedSpec {
+    DtedSpec {
+        origin_lat_arcsec: 35 * 3600,
+        origin_lon_arcsec: -122 * 3600,
+        lat_interval: 300,
+        lon_interval: 300,
+        lat_points: 121,
+        lon_lines: 121,
+        level: 0,
+    }
 }
