@@ -10,7 +10,8 @@
 //! rings, as NPSNET drew coarser terrain farther out), the top tile is wanted first and then every
 //! level's tiles by their distance from the eye in units of that level's ring, so a tight budget
 //! trims the outer parts of every ring; whatever does not fit the budget is not requested.
-//! Tiles no eyepoint wants are evicted least-recently-used first.
+//! Tiles no eyepoint wants are evicted least-recently-used first. The wanted list is worked out
+//! again only when an active area moves, so a frame's update is a walk over it.
 //!
 //! Memory accounting: resident tiles plus tiles being loaded never exceed `budget_bytes`
 //! (a load reserves its bytes before it is issued). A tile that fails to load (missing,
@@ -145,6 +146,8 @@ struct State {
     in_flight: HashSet<TileKey>,
     failed: HashMap<TileKey, String>,
     wanted: HashSet<TileKey>,
+    /// The wanted tiles in priority order (recomputed when an active area moves).
+    wanted_order: Vec<TileKey>,
     resident_bytes: u64,
     clock: u64,
     areas: Vec<Option<(f64, f64)>>,
@@ -257,8 +260,10 @@ impl TileCache {
         while let Ok((key, result)) = self.completions.try_recv() {
             self.finish_load(&mut s, key, result);
         }
+        // The wanted list changes only when an active area moves or eyepoints come and go.
+        let mut moved = s.areas.len() != eyepoints.len();
         s.areas.resize(eyepoints.len(), None);
-        let mut wanted = Vec::new();
+        let mut eyes_m = Vec::with_capacity(eyepoints.len());
         for (n, eye) in eyepoints.iter().enumerate() {
             let (north_m, east_m) = self.to_local_m(eye.lat_deg, eye.lon_deg);
             let centre = match s.areas[n] {
@@ -278,36 +283,32 @@ impl TileCache {
                         s.stats.active_area_moves += 1;
                     }
                     s.areas[n] = Some(c);
+                    moved = true;
                     c
                 }
             };
-            self.wanted_for(centre, (north_m, east_m), &mut wanted);
+            eyes_m.push((centre, (north_m, east_m)));
         }
-        // The single top tile first (the fallback everywhere), then by distance from the eye in
-        // units of each level's ring size, so that every ring keeps its nearest tiles and a
-        // tight budget trims the rings' outer parts; cut at the budget.
-        wanted.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.2.cmp(&b.2)));
-        let capacity = (self.config.budget_bytes / self.tile_bytes.max(1)) as usize;
-        let mut wanted_set = HashSet::with_capacity(wanted.len());
-        let mut ordered = Vec::with_capacity(wanted.len());
-        for (_, _, key) in wanted {
-            if wanted_set.len() >= capacity {
-                break;
-            }
-            if wanted_set.insert(key) {
-                ordered.push(key);
-            }
+        if moved {
+            self.plan_wanted(&mut s, &eyes_m);
         }
-        s.wanted = wanted_set;
         let clock = s.clock;
-        for key in ordered {
-            if let Some(r) = s.resident.get_mut(&key) {
+        let State {
+            resident,
+            in_flight,
+            failed,
+            wanted_order,
+            ..
+        } = &mut *s;
+        let mut to_request = Vec::new();
+        for key in wanted_order.iter() {
+            if let Some(r) = resident.get_mut(key) {
                 r.last_used = clock;
-                continue;
+            } else if !in_flight.contains(key) && !failed.contains_key(key) {
+                to_request.push(*key);
             }
-            if s.in_flight.contains(&key) || s.failed.contains_key(&key) {
-                continue;
-            }
+        }
+        for key in to_request {
             if !self.make_room(&mut s, self.tile_bytes) {
                 break;
             }
@@ -319,6 +320,29 @@ impl TileCache {
         }
         // Tiles nobody wants stay as a least-recently-used cache until room is needed.
         s.snapshot()
+    }
+
+    /// Recomputes the wanted tiles, in priority order, from the active areas.
+    fn plan_wanted(&self, s: &mut State, eyes_m: &[((f64, f64), (f64, f64))]) {
+        let mut wanted = Vec::new();
+        for &(centre, eye) in eyes_m {
+            self.wanted_for(centre, eye, &mut wanted);
+        }
+        // The single top tile first (the fallback everywhere), then by distance from the eye in
+        // units of each level's ring size, so that every ring keeps its nearest tiles and a
+        // tight budget trims the rings' outer parts; cut at the budget.
+        wanted.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.2.cmp(&b.2)));
+        let capacity = (self.config.budget_bytes / self.tile_bytes.max(1)) as usize;
+        s.wanted.clear();
+        s.wanted_order.clear();
+        for (_, _, key) in wanted {
+            if s.wanted.len() >= capacity {
+                break;
+            }
+            if s.wanted.insert(key) {
+                s.wanted_order.push(key);
+            }
+        }
     }
 
     /// Waits until no load is in flight (for tests, benchmarks and start-up), then takes them in.
