@@ -154,6 +154,9 @@ struct State {
     stats: CacheStats,
 }
 
+/// (north, east) metres in the paging frame.
+type LocalM = (f64, f64);
+
 impl State {
     fn snapshot(&self) -> CacheStats {
         CacheStats {
@@ -323,7 +326,7 @@ impl TileCache {
     }
 
     /// Recomputes the wanted tiles, in priority order, from the active areas.
-    fn plan_wanted(&self, s: &mut State, eyes_m: &[((f64, f64), (f64, f64))]) {
+    fn plan_wanted(&self, s: &mut State, eyes_m: &[(LocalM, LocalM)]) {
         let mut wanted = Vec::new();
         for &(centre, eye) in eyes_m {
             self.wanted_for(centre, eye, &mut wanted);
@@ -498,7 +501,7 @@ impl TileCache {
     }
 
     /// Adds (level, distance from eye, key) for every tile of every level's ring.
-    fn wanted_for(&self, centre: (f64, f64), eye: (f64, f64), out: &mut Vec<(u8, f64, TileKey)>) {
+    fn wanted_for(&self, centre: LocalM, eye: LocalM, out: &mut Vec<(u8, f64, TileKey)>) {
         let layout = self.db.layout();
         for level in 0..layout.levels {
             let half =
