@@ -31,6 +31,9 @@ pub enum Command {
     /// Measure performance.
     #[command(subcommand)]
     Bench(BenchCommand),
+    /// Render one frame off-screen to a PNG file.
+    #[command(allow_negative_numbers = true)]
+    Render(RenderArgs),
     /// Build the demo database if needed and show what cig does with it.
     Demo(DemoArgs),
     /// Configuration helpers.
@@ -148,6 +151,63 @@ pub struct BenchDbArgs {
     /// Skip the build and import timings (they write about 100 MB to a temporary directory).
     #[arg(long)]
     pub no_build: bool,
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Terrain database directory.
+    #[arg(long)]
+    pub db: PathBuf,
+    /// Eyepoint "LAT,LON,ALT": degrees, and metres above the WGS84 ellipsoid.
+    #[arg(long, value_name = "LAT,LON,ALT", allow_hyphen_values = true)]
+    pub eye: String,
+    /// Heading, pitch, roll in degrees (heading clockwise from true north, pitch up positive,
+    /// roll right wing down positive).
+    #[arg(
+        long,
+        value_name = "H,P,R",
+        default_value = "0,0,0",
+        allow_hyphen_values = true
+    )]
+    pub hpr: String,
+    /// Horizontal field of view in degrees, optionally ",VERTICAL" (else from the aspect
+    /// ratio), or "LEFT,RIGHT,DOWN,UP" half-angles for an asymmetric frustum.
+    #[arg(
+        long,
+        value_name = "DEG[,VDEG]",
+        default_value = "60",
+        allow_hyphen_values = true
+    )]
+    pub fov: String,
+    /// Frame size in pixels.
+    #[arg(long, value_name = "WxH", default_value = "640x480")]
+    pub size: String,
+    /// Time of day (UTC, ISO 8601, e.g. 2026-06-21T18:00:00Z): sets the sun.
+    #[arg(long, default_value = "2026-06-21T19:00:00Z")]
+    pub time: String,
+    /// Output PNG file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Largest terrain error on screen, pixels (0: full detail everywhere).
+    #[arg(long, default_value_t = 1.0)]
+    pub max_pixel_error: f64,
+    /// Meteorological visibility, metres (2 % contrast).
+    #[arg(long, default_value_t = 40_000.0)]
+    pub visibility: f64,
+    /// Fog mode: off, linear, exp, exp2.
+    #[arg(long, default_value = "exp")]
+    pub fog: String,
+    /// Draw the terrain as a wireframe.
+    #[arg(long)]
+    pub wireframe: bool,
+    /// Entities "MODEL,LAT,LON,ALT[,HEADING[,clamp]]" (altitude above the ellipsoid, or above
+    /// the terrain with "clamp"); built-in models: tank, truck, ship, building, tree; or a
+    /// glTF file path as MODEL.
+    #[arg(long = "entity", value_name = "SPEC", allow_hyphen_values = true)]
+    pub entities: Vec<String>,
+    /// Write frame statistics (triangles, tiles, draw calls, CPU and GPU time) as JSON.
+    #[arg(long, value_name = "FILE.json")]
+    pub stats: Option<PathBuf>,
 }
 
 #[derive(Args)]

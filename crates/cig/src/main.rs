@@ -8,6 +8,7 @@ mod db;
 mod demo;
 mod output;
 mod query;
+mod render;
 
 use clap::Parser;
 
@@ -44,6 +45,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Query(cli::QueryCommand::Hat(args)) => query::hat(&args, &config),
         cli::Command::Query(cli::QueryCommand::Los(args)) => query::los(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),
+        cli::Command::Render(args) => render::run(&args, &config),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Config(cli::ConfigCommand::Default) => {
             print!("{}", config::Config::default_toml()?);

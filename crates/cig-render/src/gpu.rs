@@ -1,0 +1,111 @@
+//! The GPU device: adapter choice (hardware first, then a software rasteriser such as Mesa's
+//! lavapipe), and errors when there is none.
+
+use std::sync::Arc;
+
+/// Why rendering could not start or go on.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("no usable GPU adapter (hardware or software; on Debian install mesa-vulkan-drivers for lavapipe): {0}")]
+    NoAdapter(String),
+    #[error("the GPU device could not be created on {adapter}: {reason}")]
+    Device { adapter: String, reason: String },
+    #[error("reading the frame back from the GPU failed: {0}")]
+    Readback(String),
+    #[error("{0}")]
+    View(#[from] cig_scene::ViewError),
+    #[error("the GPU reported an error: {0}")]
+    Gpu(String),
+}
+
+/// An adapter, its device and queue.
+pub struct Gpu {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    /// True when the device can time GPU work (timestamp queries).
+    pub timestamps: bool,
+}
+
+impl Gpu {
+    /// A device for off-screen rendering: the best hardware adapter, else a software one.
+    /// `WGPU_BACKEND` / `WGPU_ADAPTER_NAME` in the environment narrow the choice (wgpu's own
+    /// variables).
+    pub fn headless() -> Result<Arc<Gpu>, RenderError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::with_instance(instance, None)
+    }
+
+    /// A device that can present to `surface` (created from `instance`).
+    pub fn with_instance(
+        instance: wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Arc<Gpu>, RenderError> {
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: surface,
+            ..Default::default()
+        }))
+        .or_else(|_| {
+            pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::LowPower,
+                force_fallback_adapter: true,
+                compatible_surface: surface,
+                ..Default::default()
+            }))
+        })
+        .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
+        let info = adapter.get_info();
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let mut required_features = wgpu::Features::empty();
+        if timestamps {
+            required_features |= wgpu::Features::TIMESTAMP_QUERY;
+        }
+        if adapter
+            .features()
+            .contains(wgpu::Features::POLYGON_MODE_LINE)
+        {
+            required_features |= wgpu::Features::POLYGON_MODE_LINE;
+        }
+        let adapter_limits = adapter.limits();
+        let required_limits = wgpu::Limits {
+            max_texture_dimension_2d: adapter_limits.max_texture_dimension_2d.min(8192),
+            max_buffer_size: adapter_limits.max_buffer_size.min(1 << 30),
+            max_storage_buffer_binding_size: adapter_limits
+                .max_storage_buffer_binding_size
+                .min(1 << 27),
+            ..wgpu::Limits::default()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("cig"),
+            required_features,
+            required_limits,
+            ..Default::default()
+        }))
+        .map_err(|e| RenderError::Device {
+            adapter: info.name.clone(),
+            reason: e.to_string(),
+        })?;
+        tracing::info!(adapter = %info.name, backend = ?info.backend, "GPU device ready");
+        Ok(Arc::new(Gpu {
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+            timestamps,
+        }))
+    }
+
+    /// "name (backend, type)" for logs and statistics.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?})",
+            self.info.name, self.info.backend, self.info.device_type
+        )
+    }
+}

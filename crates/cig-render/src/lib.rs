@@ -1,0 +1,16 @@
+//! The wgpu renderer of cig: round-earth terrain with continuous level of detail, entity
+//! models, sky and fog, for off-screen frames and windows alike.
+//!
+//! The renderer owns every GPU resource; the world reaches it as plain data (a
+//! [`cig_scene::FrameSnapshot`] and the terrain [`cig_terrain::TileCache`]). Any wgpu backend
+//! works (Vulkan, Metal, DX12, GL); with no GPU, Mesa's lavapipe renders the same frames.
+
+pub mod gpu;
+pub mod offscreen;
+pub mod renderer;
+pub mod terrain;
+
+pub use gpu::{Gpu, RenderError};
+pub use offscreen::{load_for_view, render_image, Image};
+pub use renderer::serde_like::FrameStats;
+pub use renderer::{FrameOptions, Renderer, FRAME_FORMAT, MSAA_SAMPLES};

@@ -1,0 +1,147 @@
+//! Off-screen frames: render a view into a texture and read its pixels back.
+
+use crate::gpu::RenderError;
+use crate::renderer::{serde_like::FrameStats, FrameOptions, Renderer, FRAME_FORMAT};
+use cig_scene::FrameSnapshot;
+use cig_terrain::TileCache;
+
+/// An RGBA8 (sRGB) image, rows from the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
+
+/// Loads, in the calling thread, every tile the view's selection still wants, until the
+/// selection is complete (at most `max_rounds` rounds): what a one-off frame needs.
+pub fn load_for_view(
+    renderer: &mut Renderer,
+    cache: &TileCache,
+    snapshot: &FrameSnapshot,
+    view_index: usize,
+    max_rounds: usize,
+) -> Result<usize, RenderError> {
+    let mut loaded = 0;
+    for _ in 0..max_rounds {
+        let missing = renderer.missing_tiles(cache, snapshot, view_index)?;
+        if missing.is_empty() {
+            break;
+        }
+        let before = loaded;
+        for key in missing {
+            // A tile that fails is logged by the cache and drawn from its parent.
+            if cache.load_now(key).is_ok() {
+                loaded += 1;
+            }
+        }
+        if loaded == before {
+            break;
+        }
+    }
+    Ok(loaded)
+}
+
+/// Renders one view to an image.
+pub fn render_image(
+    renderer: &mut Renderer,
+    cache: &TileCache,
+    snapshot: &FrameSnapshot,
+    view_index: usize,
+) -> Result<(Image, FrameStats), RenderError> {
+    let view = snapshot
+        .views
+        .get(view_index)
+        .ok_or_else(|| RenderError::Gpu(format!("no view {view_index}")))?;
+    view.validate()?;
+    let (width, height) = (view.width_px, view.height_px);
+    let gpu = renderer.gpu().clone();
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("frame"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: FRAME_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let target = texture.create_view(&Default::default());
+    let stats = renderer.render(
+        cache,
+        snapshot,
+        view_index,
+        &target,
+        FrameOptions {
+            mesh_budget: usize::MAX,
+        },
+    )?;
+    let bytes_per_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("frame readback"),
+        size: u64::from(bytes_per_row) * u64::from(height),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("readback"),
+        });
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture: &texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(bytes_per_row),
+                rows_per_image: Some(height),
+            },
+        },
+        wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| RenderError::Readback(e.to_string()))?
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    let mut rgba = Vec::with_capacity((width * height * 4) as usize);
+    {
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        for row in 0..height as usize {
+            let start = row * bytes_per_row as usize;
+            rgba.extend_from_slice(&data[start..start + width as usize * 4]);
+        }
+    }
+    buffer.unmap();
+    Ok((
+        Image {
+            width,
+            height,
+            rgba,
+        },
+        stats,
+    ))
+}

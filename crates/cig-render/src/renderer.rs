@@ -1,0 +1,927 @@
+//! The frame: sky, terrain and models of one view drawn into a multisampled target.
+//!
+//! Algorithm: per view, the CPU selects terrain nodes (`cig_scene::lod`), refreshes the meshes
+//! of nodes whose data changed, writes one record per node and one per entity with positions
+//! relative to the eye (differences taken in f64, then rounded), and records one render pass:
+//! the sky as a full-screen triangle, then every node (one indexed draw each, sharing one vertex
+//! pool, index buffer and bind group), then entity models. Depth is reversed (1 at the near
+//! plane, 0 at infinity) in a 32-bit float buffer with a `Greater` test; colour is rendered
+//! with 4x multisampling and resolved (the edge smoothing of source 001).
+//!
+//! Limits: one pass per view, no shadows; the sky is a gradient until the environment's
+//! atmosphere lands.
+
+use crate::gpu::{Gpu, RenderError};
+use crate::terrain::{MeshStats, NodeRecord, TerrainGpu};
+use cig_geo::Geodetic;
+use cig_scene::lighting::{FogMode, Lighting};
+use cig_scene::lod::{LodSettings, NodeLayout, TerrainLod};
+use cig_scene::models::{Model, ModelVertex};
+use cig_scene::{Camera, FrameSnapshot};
+use cig_terrain::database::GeoidLookup;
+use cig_terrain::TileCache;
+use serde_like::FrameStats;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Frame statistics (also written by `cig render --stats`).
+pub mod serde_like {
+    /// What one view's frame cost and drew.
+    #[derive(Clone, Debug, Default, PartialEq)]
+    pub struct FrameStats {
+        pub triangles: u64,
+        pub terrain_triangles: u64,
+        pub model_triangles: u64,
+        pub draw_calls: u32,
+        pub terrain_nodes: u32,
+        pub nodes_visited: u32,
+        pub meshes_built: u32,
+        pub meshes_deferred: u32,
+        pub nodes_dropped: u32,
+        pub entities_drawn: u32,
+        pub tiles_resident: u32,
+        pub tiles_wanted: u32,
+        /// CPU time of level-of-detail selection and culling, milliseconds.
+        pub cpu_select_ms: f64,
+        /// CPU time of the whole frame (selection, meshes, encoding, submission).
+        pub cpu_frame_ms: f64,
+        /// GPU time of the render pass (timestamp queries) or, when the device has none, the
+        /// time from submission to completion.
+        pub gpu_ms: f64,
+        pub gpu_timed_by: &'static str,
+    }
+}
+
+/// Sample count of the colour and depth targets.
+pub const MSAA_SAMPLES: u32 = 4;
+/// Format of off-screen frames.
+pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+const MAX_NODE_RECORDS: usize = 8192;
+const MAX_INSTANCES: usize = 8192;
+/// Detail-noise cell sizes, metres (incommensurate so the pattern never visibly repeats).
+const NOISE_CELLS_M: [f64; 3] = [2.7, 19.3, 151.0];
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct Globals {
+    view_proj: [[f32; 4]; 4],
+    cam_forward: [f32; 4],
+    cam_right: [f32; 4],
+    cam_up: [f32; 4],
+    tangents: [f32; 4],
+    eye_up: [f32; 4],
+    sun_dir: [f32; 4],
+    sun_colour: [f32; 4],
+    ambient: [f32; 4],
+    sky_zenith: [f32; 4],
+    sky_horizon: [f32; 4],
+    fog_colour: [f32; 4],
+    fog: [f32; 4],
+    noise0: [f32; 4],
+    noise1: [f32; 4],
+    noise2: [f32; 4],
+    flags: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct InstanceRecord {
+    col0: [f32; 4],
+    col1: [f32; 4],
+    col2: [f32; 4],
+    origin: [f32; 4],
+}
+
+struct GpuModel {
+    /// Per level: first index, index count, base vertex, triangles.
+    lods: Vec<(u32, u32, i32, u32)>,
+    model: Model,
+}
+
+struct Targets {
+    size: (u32, u32),
+    msaa_colour: wgpu::TextureView,
+    depth: wgpu::TextureView,
+}
+
+/// Renders views of one terrain database.
+pub struct Renderer {
+    gpu: Arc<Gpu>,
+    pub lod: TerrainLod,
+    terrain: TerrainGpu,
+    colour_format: wgpu::TextureFormat,
+    globals: wgpu::Buffer,
+    node_records: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    terrain_bind: wgpu::BindGroup,
+    model_bind: wgpu::BindGroup,
+    sky_bind: wgpu::BindGroup,
+    terrain_pipeline: wgpu::RenderPipeline,
+    terrain_wire_pipeline: Option<wgpu::RenderPipeline>,
+    model_pipeline: wgpu::RenderPipeline,
+    sky_pipeline: wgpu::RenderPipeline,
+    model_vertices: wgpu::Buffer,
+    model_indices: wgpu::Buffer,
+    models: HashMap<String, GpuModel>,
+    model_lod_memory: HashMap<u32, usize>,
+    targets: Option<Targets>,
+    timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
+    frame: u64,
+}
+
+fn shader(gpu: &Gpu, label: &str, body: &str) -> wgpu::ShaderModule {
+    let source = format!("{}\n{}", include_str!("shaders/common.wgsl"), body);
+    gpu.device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        })
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+struct PipelineSpec<'a> {
+    label: &'a str,
+    module: &'a wgpu::ShaderModule,
+    layout: &'a wgpu::BindGroupLayout,
+    buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    depth_write: bool,
+    depth_compare: wgpu::CompareFunction,
+    polygon_mode: wgpu::PolygonMode,
+    cull: Option<wgpu::Face>,
+}
+
+fn pipeline(
+    gpu: &Gpu,
+    format: wgpu::TextureFormat,
+    spec: &PipelineSpec<'_>,
+) -> wgpu::RenderPipeline {
+    let layout = gpu
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(spec.label),
+            bind_group_layouts: &[Some(spec.layout)],
+            immediate_size: 0,
+        });
+    gpu.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(spec.label),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: spec.module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: spec.buffers,
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                front_face: wgpu::FrontFace::Ccw,
+                cull_mode: spec.cull,
+                polygon_mode: spec.polygon_mode,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(spec.depth_write),
+                depth_compare: Some(spec.depth_compare),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState {
+                count: MSAA_SAMPLES,
+                mask: !0,
+                alpha_to_coverage_enabled: false,
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: spec.module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+}
+
+/// Options of one frame.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameOptions {
+    /// Node meshes built at most per frame (`usize::MAX` for one-off frames that must be
+    /// complete).
+    pub mesh_budget: usize,
+}
+
+impl Default for FrameOptions {
+    fn default() -> Self {
+        FrameOptions { mesh_budget: 48 }
+    }
+}
+
+impl Renderer {
+    /// A renderer for the database behind `cache`, drawing into `colour_format` targets.
+    pub fn new(gpu: Arc<Gpu>, cache: &TileCache, colour_format: wgpu::TextureFormat) -> Renderer {
+        let manifest = cache.database().manifest();
+        let layout = NodeLayout::new(manifest.layout);
+        let lod = TerrainLod::new(layout, GeoidLookup::new(&manifest.geoid));
+        let terrain = TerrainGpu::new(&gpu, layout.node_cells, 4096);
+        let device = &gpu.device;
+        let globals = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("globals"),
+            size: std::mem::size_of::<Globals>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let node_records = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("node records"),
+            size: (MAX_NODE_RECORDS * std::mem::size_of::<NodeRecord>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let instances = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("instances"),
+            size: (MAX_INSTANCES * std::mem::size_of::<InstanceRecord>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("atlas"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let terrain_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("terrain"),
+            entries: &[
+                uniform_entry(0),
+                storage_entry(1),
+                texture_entry(2),
+                texture_entry(3),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let model_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("model"),
+            entries: &[uniform_entry(0), storage_entry(1)],
+        });
+        let sky_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("sky"),
+            entries: &[uniform_entry(0)],
+        });
+        let normal_view = terrain.normal_atlas.create_view(&Default::default());
+        let colour_view = terrain.colour_atlas.create_view(&Default::default());
+        let terrain_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("terrain"),
+            layout: &terrain_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: globals.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: node_records.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&normal_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&colour_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+            ],
+        });
+        let model_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("model"),
+            layout: &model_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: globals.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: instances.as_entire_binding(),
+                },
+            ],
+        });
+        let sky_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("sky"),
+            layout: &sky_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals.as_entire_binding(),
+            }],
+        });
+        let terrain_module = shader(&gpu, "terrain", include_str!("shaders/terrain.wgsl"));
+        let model_module = shader(&gpu, "model", include_str!("shaders/model.wgsl"));
+        let sky_module = shader(&gpu, "sky", include_str!("shaders/sky.wgsl"));
+        let terrain_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<cig_scene::terrain_mesh::TerrainVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+        })];
+        let model_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<ModelVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4],
+        })];
+        let terrain_spec = PipelineSpec {
+            label: "terrain",
+            module: &terrain_module,
+            layout: &terrain_layout,
+            buffers: &terrain_buffers,
+            depth_write: true,
+            depth_compare: wgpu::CompareFunction::Greater,
+            polygon_mode: wgpu::PolygonMode::Fill,
+            cull: None,
+        };
+        let terrain_pipeline = pipeline(&gpu, colour_format, &terrain_spec);
+        let terrain_wire_pipeline = gpu
+            .device
+            .features()
+            .contains(wgpu::Features::POLYGON_MODE_LINE)
+            .then(|| {
+                pipeline(
+                    &gpu,
+                    colour_format,
+                    &PipelineSpec {
+                        label: "terrain wireframe",
+                        polygon_mode: wgpu::PolygonMode::Line,
+                        depth_compare: wgpu::CompareFunction::GreaterEqual,
+                        ..terrain_spec
+                    },
+                )
+            });
+        let model_pipeline = pipeline(
+            &gpu,
+            colour_format,
+            &PipelineSpec {
+                label: "model",
+                module: &model_module,
+                layout: &model_layout,
+                buffers: &model_buffers,
+                depth_write: true,
+                depth_compare: wgpu::CompareFunction::Greater,
+                polygon_mode: wgpu::PolygonMode::Fill,
+                cull: None,
+            },
+        );
+        let sky_pipeline = pipeline(
+            &gpu,
+            colour_format,
+            &PipelineSpec {
+                label: "sky",
+                module: &sky_module,
+                layout: &sky_layout,
+                buffers: &[],
+                depth_write: false,
+                depth_compare: wgpu::CompareFunction::Always,
+                polygon_mode: wgpu::PolygonMode::Fill,
+                cull: None,
+            },
+        );
+        let empty = |label, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 64,
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let timestamps = gpu.timestamps.then(|| {
+            (
+                device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("frame time"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                }),
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("timestamps"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                }),
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("timestamps readback"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+            )
+        });
+        let mut renderer = Renderer {
+            model_vertices: empty("model vertices", wgpu::BufferUsages::VERTEX),
+            model_indices: empty("model indices", wgpu::BufferUsages::INDEX),
+            gpu,
+            lod,
+            terrain,
+            colour_format,
+            globals,
+            node_records,
+            instances,
+            terrain_bind,
+            model_bind,
+            sky_bind,
+            terrain_pipeline,
+            terrain_wire_pipeline,
+            model_pipeline,
+            sky_pipeline,
+            models: HashMap::new(),
+            model_lod_memory: HashMap::new(),
+            targets: None,
+            timestamps,
+            frame: 0,
+        };
+        let builtins: Vec<Model> = cig_scene::models::BUILTIN_MODELS
+            .iter()
+            .filter_map(|name| cig_scene::models::builtin(name))
+            .collect();
+        renderer.set_models(builtins);
+        renderer
+    }
+
+    pub fn gpu(&self) -> &Arc<Gpu> {
+        &self.gpu
+    }
+
+    pub fn colour_format(&self) -> wgpu::TextureFormat {
+        self.colour_format
+    }
+
+    /// Adds or replaces models (by name) and uploads every model's levels in one buffer pair.
+    pub fn set_models(&mut self, new_models: Vec<Model>) {
+        let mut all: Vec<Model> = self.models.drain().map(|(_, m)| m.model).collect();
+        for m in new_models {
+            all.retain(|old| old.name != m.name);
+            all.push(m);
+        }
+        all.sort_by(|a, b| a.name.cmp(&b.name));
+        let mut vertices: Vec<ModelVertex> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        for model in all {
+            let mut lods = Vec::new();
+            for mesh in &model.lods {
+                let first = indices.len() as u32;
+                lods.push((
+                    first,
+                    mesh.indices.len() as u32,
+                    vertices.len() as i32,
+                    mesh.triangle_count() as u32,
+                ));
+                vertices.extend_from_slice(&mesh.vertices);
+                indices.extend_from_slice(&mesh.indices);
+            }
+            self.models
+                .insert(model.name.clone(), GpuModel { lods, model });
+        }
+        let device = &self.gpu.device;
+        let buffer = |label, bytes: &[u8], usage| {
+            let b = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (bytes.len() as u64).max(4).next_multiple_of(4),
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            self.gpu.queue.write_buffer(&b, 0, bytes);
+            b
+        };
+        self.model_vertices = buffer(
+            "model vertices",
+            bytemuck::cast_slice(&vertices),
+            wgpu::BufferUsages::VERTEX,
+        );
+        self.model_indices = buffer(
+            "model indices",
+            bytemuck::cast_slice(&indices),
+            wgpu::BufferUsages::INDEX,
+        );
+    }
+
+    /// Names of the models the renderer can draw.
+    pub fn model_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self.models.keys().cloned().collect();
+        names.sort();
+        names
+    }
+
+    fn targets(&mut self, size: (u32, u32)) {
+        if self.targets.as_ref().map(|t| t.size) != Some(size) {
+            let device = &self.gpu.device;
+            let make = |label, format| {
+                device
+                    .create_texture(&wgpu::TextureDescriptor {
+                        label: Some(label),
+                        size: wgpu::Extent3d {
+                            width: size.0,
+                            height: size.1,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: MSAA_SAMPLES,
+                        dimension: wgpu::TextureDimension::D2,
+                        format,
+                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                        view_formats: &[],
+                    })
+                    .create_view(&Default::default())
+            };
+            self.targets = Some(Targets {
+                size,
+                msaa_colour: make("msaa colour", self.colour_format),
+                depth: make("depth", DEPTH_FORMAT),
+            });
+        }
+    }
+
+    /// Selects terrain for `view_index` of `snapshot` and returns the tiles it would refine
+    /// into that are not resident (for callers that want a complete frame).
+    pub fn missing_tiles(
+        &mut self,
+        cache: &TileCache,
+        snapshot: &FrameSnapshot,
+        view_index: usize,
+    ) -> Result<Vec<cig_terrain::TileKey>, RenderError> {
+        let view = snapshot
+            .views
+            .get(view_index)
+            .ok_or_else(|| RenderError::Gpu(format!("no view {view_index}")))?;
+        view.validate()?;
+        let camera = view.camera();
+        let selection = self.lod.select(
+            cache,
+            &camera,
+            &LodSettings {
+                max_pixel_error: snapshot.max_pixel_error,
+            },
+        );
+        Ok(selection.wanted_tiles)
+    }
+
+    /// Draws view `view_index` of `snapshot` into `target` (a single-sample view of the
+    /// renderer's colour format and the view's size).
+    pub fn render(
+        &mut self,
+        cache: &TileCache,
+        snapshot: &FrameSnapshot,
+        view_index: usize,
+        target: &wgpu::TextureView,
+        options: FrameOptions,
+    ) -> Result<FrameStats, RenderError> {
+        let started = std::time::Instant::now();
+        let view = *snapshot
+            .views
+            .get(view_index)
+            .ok_or_else(|| RenderError::Gpu(format!("no view {view_index}")))?;
+        view.validate()?;
+        self.frame += 1;
+        let camera = view.camera();
+        let select_started = std::time::Instant::now();
+        let selection = self.lod.select(
+            cache,
+            &camera,
+            &LodSettings {
+                max_pixel_error: snapshot.max_pixel_error,
+            },
+        );
+        let cpu_select_ms = select_started.elapsed().as_secs_f64() * 1e3;
+        let nodes = &selection.nodes[..selection.nodes.len().min(MAX_NODE_RECORDS)];
+        let (records, mesh_stats): (Vec<NodeRecord>, MeshStats) = self.terrain.prepare(
+            &self.gpu,
+            &self.lod,
+            cache,
+            nodes,
+            camera.eye_ecef,
+            self.frame,
+            options.mesh_budget,
+        );
+        let lighting = Lighting::at(snapshot.unix_time_s, camera.local_up);
+        self.write_globals(&camera, &lighting, snapshot);
+        if !records.is_empty() {
+            self.gpu
+                .queue
+                .write_buffer(&self.node_records, 0, bytemuck::cast_slice(&records));
+        }
+        let draws = self.entity_draws(&camera, snapshot);
+        let instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
+        if !instance_records.is_empty() {
+            self.gpu.queue.write_buffer(
+                &self.instances,
+                0,
+                bytemuck::cast_slice(&instance_records),
+            );
+        }
+
+        let size = (view.width_px, view.height_px);
+        let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
+        let mut encoder = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame"),
+            });
+        let mut stats = FrameStats {
+            terrain_nodes: records.len() as u32,
+            nodes_visited: selection.visited as u32,
+            meshes_built: mesh_stats.built as u32,
+            meshes_deferred: mesh_stats.deferred as u32,
+            nodes_dropped: (mesh_stats.dropped + selection.nodes.len() - nodes.len()) as u32,
+            tiles_resident: cache.stats().resident_tiles as u32,
+            tiles_wanted: selection.wanted_tiles.len() as u32,
+            cpu_select_ms,
+            ..Default::default()
+        };
+        self.targets(size);
+        {
+            let timestamp_writes =
+                self.timestamps
+                    .as_ref()
+                    .map(|(set, _, _)| wgpu::RenderPassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    });
+            let terrain_pipeline = if wire {
+                self.terrain_wire_pipeline
+                    .as_ref()
+                    .unwrap_or(&self.terrain_pipeline)
+            } else {
+                &self.terrain_pipeline
+            };
+            let Some(targets) = self.targets.as_ref() else {
+                return Err(RenderError::Gpu("render targets missing".into()));
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("view"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &targets.msaa_colour,
+                    depth_slice: None,
+                    resolve_target: Some(target),
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Discard,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &targets.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes,
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.sky_pipeline);
+            pass.set_bind_group(0, &self.sky_bind, &[]);
+            pass.draw(0..3, 0..1);
+            stats.draw_calls += 1;
+
+            pass.set_pipeline(terrain_pipeline);
+            pass.set_bind_group(0, &self.terrain_bind, &[]);
+            pass.set_vertex_buffer(0, self.terrain.vertex_pool.slice(..));
+            pass.set_index_buffer(
+                self.terrain.index_buffer.slice(..),
+                wgpu::IndexFormat::Uint32,
+            );
+            for (i, record) in records.iter().enumerate() {
+                let base_vertex = record.offset[3] as i32;
+                pass.draw_indexed(
+                    0..self.terrain.index_count,
+                    base_vertex,
+                    i as u32..i as u32 + 1,
+                );
+            }
+            stats.draw_calls += records.len() as u32;
+            stats.terrain_triangles =
+                records.len() as u64 * u64::from(self.terrain.triangles_per_node());
+
+            if !draws.is_empty() {
+                pass.set_pipeline(&self.model_pipeline);
+                pass.set_bind_group(0, &self.model_bind, &[]);
+                pass.set_vertex_buffer(0, self.model_vertices.slice(..));
+                pass.set_index_buffer(self.model_indices.slice(..), wgpu::IndexFormat::Uint32);
+                for (i, (range, _)) in draws.iter().enumerate() {
+                    let (first, count, base, tris) = *range;
+                    pass.draw_indexed(first..first + count, base, i as u32..i as u32 + 1);
+                    stats.model_triangles += u64::from(tris);
+                }
+                stats.draw_calls += draws.len() as u32;
+                stats.entities_drawn = draws.len() as u32;
+            }
+        }
+        if let Some((set, resolve, readback)) = &self.timestamps {
+            encoder.resolve_query_set(set, 0..2, resolve, 0);
+            encoder.copy_buffer_to_buffer(resolve, 0, readback, 0, 16);
+        }
+        stats.triangles = stats.terrain_triangles + stats.model_triangles;
+        let submit_started = std::time::Instant::now();
+        self.gpu.queue.submit([encoder.finish()]);
+        stats.cpu_frame_ms = started.elapsed().as_secs_f64() * 1e3;
+        self.gpu
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| RenderError::Gpu(e.to_string()))?;
+        let wall_gpu_ms = submit_started.elapsed().as_secs_f64() * 1e3;
+        (stats.gpu_ms, stats.gpu_timed_by) = match self.read_timestamps() {
+            Some(ms) => (ms, "timestamp_query"),
+            None => (wall_gpu_ms, "submit_to_completion"),
+        };
+        Ok(stats)
+    }
+
+    fn read_timestamps(&self) -> Option<f64> {
+        let (_, _, readback) = self.timestamps.as_ref()?;
+        let slice = readback.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.gpu
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .ok()?;
+        rx.recv().ok()?.ok()?;
+        let ticks: [u64; 2] = {
+            let data = slice.get_mapped_range().ok()?;
+            let v: &[u64] = bytemuck::cast_slice(&data);
+            [v.first().copied()?, v.get(1).copied()?]
+        };
+        readback.unmap();
+        let period_ns = f64::from(self.gpu.queue.get_timestamp_period());
+        Some(ticks[1].saturating_sub(ticks[0]) as f64 * period_ns / 1e6)
+    }
+
+    fn write_globals(&self, camera: &Camera, lighting: &Lighting, snapshot: &FrameSnapshot) {
+        let v4 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+        let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
+        let [tl, tr, td, tu] = camera.view.fov.tangents();
+        let alt = camera.view.eye.alt_m.max(0.0);
+        let dip = (2.0 * alt / cig_geo::WGS84_A_M).sqrt();
+        let fog = snapshot.fog;
+        let mode = match fog.mode {
+            FogMode::Off => 0.0,
+            FogMode::Linear => 1.0,
+            FogMode::Exponential => 2.0,
+            FogMode::ExponentialSquared => 3.0,
+        };
+        let noise = |cell: f64| {
+            let p = camera.eye_ecef / cell;
+            let m = |x: f64| x.rem_euclid(256.0);
+            [m(p.x) as f32, m(p.y) as f32, m(p.z) as f32, cell as f32]
+        };
+        let globals = Globals {
+            view_proj: camera.view_projection().to_cols_array_2d(),
+            cam_forward: v4(camera.forward, 0.0),
+            cam_right: v4(camera.right, 0.0),
+            cam_up: v4(camera.up, 0.0),
+            tangents: [tl as f32, tr as f32, td as f32, tu as f32],
+            eye_up: v4(camera.local_up, dip),
+            sun_dir: v4(lighting.sun_direction, lighting.sun_elevation_deg),
+            sun_colour: c4(lighting.sun_colour),
+            ambient: c4(lighting.ambient_colour),
+            sky_zenith: c4(lighting.sky_zenith),
+            sky_horizon: c4(lighting.sky_horizon),
+            fog_colour: c4(lighting.fog_colour),
+            fog: [
+                mode,
+                fog.density_per_m as f32,
+                fog.start_m as f32,
+                fog.end_m as f32,
+            ],
+            noise0: noise(NOISE_CELLS_M[0]),
+            noise1: noise(NOISE_CELLS_M[1]),
+            noise2: noise(NOISE_CELLS_M[2]),
+            flags: [if snapshot.wireframe { 1.0 } else { 0.0 }, 1.0, 0.0, 0.0],
+        };
+        self.gpu
+            .queue
+            .write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
+    }
+
+    /// Index ranges and instance records of the entities to draw (culled, level chosen).
+    #[allow(
+        clippy::type_complexity,
+        reason = "a private (range, record) pair list"
+    )]
+    fn entity_draws(
+        &mut self,
+        camera: &Camera,
+        snapshot: &FrameSnapshot,
+    ) -> Vec<((u32, u32, i32, u32), InstanceRecord)> {
+        let mut out = Vec::new();
+        for entity in snapshot.entities.iter().take(MAX_INSTANCES) {
+            let Some(model) = self.models.get(&entity.model) else {
+                continue;
+            };
+            let origin = entity.position.to_ecef();
+            let rel = origin - camera.eye_ecef;
+            let radius = f64::from(model.model.bounding_radius_m);
+            let pts = [rel];
+            // Cull by the bounding sphere: outside any plane by more than the radius.
+            if camera
+                .planes
+                .iter()
+                .any(|p| p.normal.dot(pts[0]) < p.offset_m - radius)
+            {
+                continue;
+            }
+            let distance = rel.length().max(1.0);
+            let diameter_px = 2.0 * radius * camera.pixels_per_tangent / distance;
+            let previous = self.model_lod_memory.get(&entity.id).copied();
+            let lod = model.model.select_lod(diameter_px, previous);
+            self.model_lod_memory.insert(entity.id, lod);
+            let Some(range) = model.lods.get(lod).copied() else {
+                continue;
+            };
+            let enu = cig_geo::EnuFrame::new(Geodetic::new(
+                entity.position.lat_deg,
+                entity.position.lon_deg,
+                entity.position.alt_m,
+            ));
+            let (forward, right, up) = entity.orientation.axes_enu();
+            let col = |v: glam::DVec3| {
+                let e = enu.enu_vector_to_ecef(v);
+                [e.x as f32, e.y as f32, e.z as f32, 0.0]
+            };
+            out.push((
+                range,
+                InstanceRecord {
+                    col0: col(right),
+                    col1: col(forward),
+                    col2: col(up),
+                    origin: [rel.x as f32, rel.y as f32, rel.z as f32, 0.0],
+                },
+            ));
+        }
+        out
+    }
+
+    /// Nodes with a mesh on the GPU.
+    pub fn resident_nodes(&self) -> usize {
+        self.terrain.resident_nodes()
+    }
+
+    /// The selection a frame of `view` would draw (for tests and statistics).
+    pub fn select(
+        &mut self,
+        cache: &TileCache,
+        view: &cig_scene::View,
+        max_pixel_error: f64,
+    ) -> cig_scene::Selection {
+        self.lod
+            .select(cache, &view.camera(), &LodSettings { max_pixel_error })
+    }
+}

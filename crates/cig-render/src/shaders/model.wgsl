@@ -1,0 +1,43 @@
+struct Instance {
+    // Body to eye-relative ECEF: columns of the rotation (scaled), and the origin (w unused).
+    col0: vec4<f32>,
+    col1: vec4<f32>,
+    col2: vec4<f32>,
+    origin: vec4<f32>,
+};
+
+@group(0) @binding(1) var<storage, read> instances: array<Instance>;
+
+struct ModelOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) rel: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) colour: vec3<f32>,
+};
+
+@vertex
+fn vs_main(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) colour: vec4<f32>,
+    @builtin(instance_index) instance: u32,
+) -> ModelOut {
+    let m = instances[instance];
+    let rel = m.col0.xyz * position.x + m.col1.xyz * position.y + m.col2.xyz * position.z + m.origin.xyz;
+    var out: ModelOut;
+    out.clip = g.view_proj * vec4<f32>(rel, 1.0);
+    out.rel = rel;
+    out.normal = normalize(m.col0.xyz * normal.x + m.col1.xyz * normal.y + m.col2.xyz * normal.z);
+    out.colour = pow(colour.rgb, vec3<f32>(2.2));
+    return out;
+}
+
+@fragment
+fn fs_main(in: ModelOut) -> @location(0) vec4<f32> {
+    if (g.flags.x > 0.5) {
+        return vec4<f32>(1.0, 0.6, 0.2, 1.0);
+    }
+    var n = normalize(in.normal);
+    let colour = lit(in.colour, n);
+    return vec4<f32>(apply_fog(colour, length(in.rel)), 1.0);
+}

@@ -1,0 +1,117 @@
+struct Node {
+    // Node centre relative to the eye (metres, ECEF axes); w: base vertex of its slot.
+    offset: vec4<f32>,
+    axis_e: vec4<f32>,
+    axis_n: vec4<f32>,
+    axis_u: vec4<f32>,
+    // Morph start and end distances (m), cells per side, unused.
+    morph: vec4<f32>,
+    // Atlas rectangle of the node's texels: u0, v0, du, dv.
+    atlas: vec4<f32>,
+};
+
+@group(0) @binding(1) var<storage, read> nodes: array<Node>;
+@group(0) @binding(2) var normal_atlas: texture_2d<f32>;
+@group(0) @binding(3) var colour_atlas: texture_2d<f32>;
+@group(0) @binding(4) var atlas_sampler: sampler;
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) rel: vec3<f32>,
+    @location(1) uv: vec2<f32>,
+    @location(2) @interpolate(flat) node: u32,
+};
+
+@vertex
+fn vs_main(
+    @location(0) position: vec3<f32>,
+    @location(1) morph_target: vec3<f32>,
+    @builtin(vertex_index) vertex_index: u32,
+    @builtin(instance_index) instance: u32,
+) -> VertexOut {
+    let node = nodes[instance];
+    let n = u32(node.morph.z + 0.5);
+    let s = n + 1u;
+    let local = vertex_index - u32(node.offset.w + 0.5);
+    var uv: vec2<f32>;
+    if (local < s * s) {
+        uv = vec2<f32>(f32(local % s), f32(local / s)) / f32(n);
+    } else {
+        let k = local - s * s;
+        let edge = k / s;
+        let t = f32(k % s) / f32(n);
+        if (edge == 0u) { uv = vec2<f32>(t, 0.0); }
+        else if (edge == 1u) { uv = vec2<f32>(t, 1.0); }
+        else if (edge == 2u) { uv = vec2<f32>(0.0, t); }
+        else { uv = vec2<f32>(1.0, t); }
+    }
+    let target_rel = morph_target + node.offset.xyz;
+    let d = length(target_rel);
+    let m = clamp((d - node.morph.x) / max(node.morph.y - node.morph.x, 1e-3), 0.0, 1.0);
+    let rel = mix(position, morph_target, m) + node.offset.xyz;
+    var out: VertexOut;
+    out.clip = g.view_proj * vec4<f32>(rel, 1.0);
+    out.rel = rel;
+    out.uv = node.atlas.xy + uv * node.atlas.zw;
+    out.node = instance;
+    return out;
+}
+
+fn hash3(p: vec3<f32>) -> f32 {
+    let q = fract(p * vec3<f32>(0.1031, 0.1030, 0.0973));
+    let r = q + dot(q, q.yxz + 33.33);
+    return fract((r.x + r.y) * r.z);
+}
+
+// Value noise on a lattice of unit cells, periodic with 256 cells.
+fn value_noise(p: vec3<f32>) -> f32 {
+    let i = floor(p);
+    let f = fract(p);
+    let u = f * f * (3.0 - 2.0 * f);
+    let c = 256.0;
+    let a = hash3((i + vec3<f32>(0.0, 0.0, 0.0)) % c);
+    let b = hash3((i + vec3<f32>(1.0, 0.0, 0.0)) % c);
+    let cc = hash3((i + vec3<f32>(0.0, 1.0, 0.0)) % c);
+    let d = hash3((i + vec3<f32>(1.0, 1.0, 0.0)) % c);
+    let e = hash3((i + vec3<f32>(0.0, 0.0, 1.0)) % c);
+    let ff = hash3((i + vec3<f32>(1.0, 0.0, 1.0)) % c);
+    let gg = hash3((i + vec3<f32>(0.0, 1.0, 1.0)) % c);
+    let h = hash3((i + vec3<f32>(1.0, 1.0, 1.0)) % c);
+    return mix(
+        mix(mix(a, b, u.x), mix(cc, d, u.x), u.y),
+        mix(mix(e, ff, u.x), mix(gg, h, u.x), u.y),
+        u.z,
+    );
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    if (g.flags.x > 0.5) {
+        return vec4<f32>(0.9, 0.9, 0.9, 1.0);
+    }
+    let node = nodes[in.node];
+    let ne = textureSample(normal_atlas, atlas_sampler, in.uv).xyz * 2.0 - 1.0;
+    let n = normalize(node.axis_e.xyz * ne.x + node.axis_n.xyz * ne.y + node.axis_u.xyz * ne.z);
+    let base = textureSample(colour_atlas, atlas_sampler, in.uv);
+    let distance_m = length(in.rel);
+    // Detail: three octaves of value noise with incommensurate periods (no visible tiling),
+    // faded out with distance before they alias.
+    let p0 = in.rel / g.noise0.w + g.noise0.xyz;
+    let p1 = in.rel / g.noise1.w + g.noise1.xyz;
+    let p2 = in.rel / g.noise2.w + g.noise2.xyz;
+    let fade0 = clamp(1.0 - distance_m / (g.noise0.w * 400.0), 0.0, 1.0);
+    let fade1 = clamp(1.0 - distance_m / (g.noise1.w * 400.0), 0.0, 1.0);
+    let fade2 = clamp(1.0 - distance_m / (g.noise2.w * 400.0), 0.0, 1.0);
+    let detail = 1.0
+        + 0.18 * (value_noise(p0) - 0.5) * fade0
+        + 0.22 * (value_noise(p1) - 0.5) * fade1
+        + 0.25 * (value_noise(p2) - 0.5) * fade2;
+    let albedo = base.rgb * detail;
+    var colour = lit(albedo, n);
+    // Water and wet surfaces: a sun glint.
+    let view_dir = -in.rel / max(distance_m, 1e-3);
+    let h = normalize(view_dir + g.sun_dir.xyz);
+    let spec = pow(max(dot(n, h), 0.0), 80.0) * base.a;
+    colour += g.sun_colour.rgb * spec * 0.8;
+    return vec4<f32>(apply_fog(colour, distance_m), 1.0);
+}

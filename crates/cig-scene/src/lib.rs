@@ -1,0 +1,19 @@
+//! The renderer's plain data, computed on the CPU without touching the GPU: views and camera
+//! maths ([`view`]), terrain level-of-detail selection ([`lod`]) and node meshes
+//! ([`terrain_mesh`]), light, sky and fog ([`lighting`]), entity models ([`models`]) and the
+//! per-frame snapshot ([`snapshot`]).
+//!
+//! This crate is pure: it never opens files, sockets, the GPU or the terminal; `cig-render`
+//! turns what it computes into frames.
+
+pub mod lighting;
+pub mod lod;
+pub mod models;
+pub mod snapshot;
+pub mod terrain_mesh;
+pub mod view;
+
+pub use lighting::{Fog, FogMode, Lighting};
+pub use lod::{LodSettings, NodeKey, NodeLayout, Selection, TerrainLod};
+pub use snapshot::{EntityInstance, EntitySpec, FrameSnapshot};
+pub use view::{Camera, FovDeg, Hpr, View, ViewError};

@@ -1,0 +1,394 @@
+//! Entity models: a procedural library (tank, truck, ship, building, tree), each with three
+//! levels of detail, and the mesh form glTF models are converted to.
+//!
+//! Algorithm: models are assembled from boxes, prisms, cylinders and cones with flat-shaded
+//! faces (one normal per face), in a body frame with +X right, +Y forward and +Z up and the
+//! origin on the ground under the model's centre. Each level of detail is selected by the
+//! model's projected size in pixels with a 20 % hysteresis band so a model does not flicker
+//! between levels (GE study, source 004 section 4.7: the detail of an object follows its
+//! projected size; its Table 4 hysteresis for overload control).
+//!
+//! Limits: levels switch, they do not blend; the procedural models are recognisable shapes,
+//! not training-grade models.
+
+use glam::Vec3;
+
+/// One vertex of a model: body-frame position (metres), normal and sRGB colour.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ModelVertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub colour: [u8; 4],
+}
+
+/// A triangle list.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ModelMesh {
+    pub vertices: Vec<ModelVertex>,
+    pub indices: Vec<u32>,
+}
+
+impl ModelMesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    fn tri(&mut self, a: Vec3, b: Vec3, c: Vec3, colour: [u8; 4]) {
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        let base = self.vertices.len() as u32;
+        for p in [a, b, c] {
+            self.vertices.push(ModelVertex {
+                position: p.to_array(),
+                normal: n.to_array(),
+                colour,
+            });
+        }
+        self.indices.extend_from_slice(&[base, base + 1, base + 2]);
+    }
+
+    fn quad(&mut self, a: Vec3, b: Vec3, c: Vec3, d: Vec3, colour: [u8; 4]) {
+        self.tri(a, b, c, colour);
+        self.tri(a, c, d, colour);
+    }
+
+    /// An axis-aligned box from `min` to `max`.
+    pub fn add_box(&mut self, min: Vec3, max: Vec3, colour: [u8; 4]) {
+        let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+        let (a, b) = (min, max);
+        self.quad(
+            p(a.x, a.y, b.z),
+            p(b.x, a.y, b.z),
+            p(b.x, b.y, b.z),
+            p(a.x, b.y, b.z),
+            colour,
+        ); // top
+        self.quad(
+            p(a.x, b.y, a.z),
+            p(b.x, b.y, a.z),
+            p(b.x, a.y, a.z),
+            p(a.x, a.y, a.z),
+            colour,
+        ); // bottom
+        self.quad(
+            p(a.x, a.y, a.z),
+            p(b.x, a.y, a.z),
+            p(b.x, a.y, b.z),
+            p(a.x, a.y, b.z),
+            colour,
+        ); // back
+        self.quad(
+            p(b.x, b.y, a.z),
+            p(a.x, b.y, a.z),
+            p(a.x, b.y, b.z),
+            p(b.x, b.y, b.z),
+            colour,
+        ); // front
+        self.quad(
+            p(a.x, b.y, a.z),
+            p(a.x, a.y, a.z),
+            p(a.x, a.y, b.z),
+            p(a.x, b.y, b.z),
+            colour,
+        ); // left
+        self.quad(
+            p(b.x, a.y, a.z),
+            p(b.x, b.y, a.z),
+            p(b.x, b.y, b.z),
+            p(b.x, a.y, b.z),
+            colour,
+        ); // right
+    }
+
+    /// A frustum of a cone (a cylinder when the radii are equal; a cone when `r1` is 0) along
+    /// `axis` from `base`, with `segments` sides and caps.
+    pub fn add_cylinder(
+        &mut self,
+        base: Vec3,
+        axis: Vec3,
+        r0: f32,
+        r1: f32,
+        segments: u32,
+        colour: [u8; 4],
+    ) {
+        let dir = axis.normalize_or_zero();
+        let helper = if dir.z.abs() < 0.9 { Vec3::Z } else { Vec3::X };
+        let u = dir.cross(helper).normalize_or_zero();
+        let v = dir.cross(u);
+        let top = base + axis;
+        let ring = |r: f32, c: Vec3, k: u32| {
+            let a = k as f32 / segments as f32 * std::f32::consts::TAU;
+            c + (u * a.cos() + v * a.sin()) * r
+        };
+        for k in 0..segments {
+            let (b0, b1) = (ring(r0, base, k), ring(r0, base, k + 1));
+            let (t0, t1) = (ring(r1, top, k), ring(r1, top, k + 1));
+            if r1 > 0.0 {
+                self.quad(b0, b1, t1, t0, colour);
+                self.tri(top, t0, t1, colour);
+            } else {
+                self.tri(b0, b1, top, colour);
+            }
+            self.tri(base, b1, b0, colour);
+        }
+    }
+
+    /// Appends another mesh.
+    pub fn append(&mut self, other: &ModelMesh) {
+        let base = self.vertices.len() as u32;
+        self.vertices.extend_from_slice(&other.vertices);
+        self.indices.extend(other.indices.iter().map(|i| i + base));
+    }
+
+    /// Radius of the sphere around the body origin that holds every vertex.
+    pub fn bounding_radius_m(&self) -> f32 {
+        self.vertices
+            .iter()
+            .map(|v| Vec3::from(v.position).length())
+            .fold(0.0, f32::max)
+    }
+}
+
+/// A model with its levels of detail, finest first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Model {
+    pub name: String,
+    pub lods: Vec<ModelMesh>,
+    pub bounding_radius_m: f32,
+}
+
+/// Projected diameters (pixels) below which each coarser level takes over.
+pub const LOD_SWITCH_PX: [f64; 2] = [120.0, 24.0];
+
+impl Model {
+    pub fn new(name: &str, lods: Vec<ModelMesh>) -> Model {
+        let bounding_radius_m = lods
+            .iter()
+            .map(ModelMesh::bounding_radius_m)
+            .fold(0.0, f32::max);
+        Model {
+            name: name.to_string(),
+            lods,
+            bounding_radius_m,
+        }
+    }
+
+    /// The level to draw for a projected diameter, given the level drawn last frame (for
+    /// hysteresis).
+    pub fn select_lod(&self, projected_diameter_px: f64, previous: Option<usize>) -> usize {
+        let last = self.lods.len().saturating_sub(1);
+        let mut lod = LOD_SWITCH_PX
+            .iter()
+            .take(last)
+            .filter(|&&threshold| projected_diameter_px < threshold)
+            .count();
+        if let Some(prev) = previous {
+            // Keep the previous level while within 20 % of the switching size.
+            let keep = match prev.cmp(&lod) {
+                std::cmp::Ordering::Less => LOD_SWITCH_PX
+                    .get(prev)
+                    .is_some_and(|&t| projected_diameter_px > t * 0.8),
+                std::cmp::Ordering::Greater => LOD_SWITCH_PX
+                    .get(lod)
+                    .is_some_and(|&t| projected_diameter_px < t * 1.2),
+                std::cmp::Ordering::Equal => false,
+            };
+            if keep {
+                lod = prev;
+            }
+        }
+        lod.min(last)
+    }
+}
+
+const OLIVE: [u8; 4] = [86, 92, 58, 255];
+const DARK: [u8; 4] = [40, 40, 38, 255];
+const GREY: [u8; 4] = [118, 122, 128, 255];
+const HULL_RED: [u8; 4] = [110, 40, 36, 255];
+const WHITE: [u8; 4] = [220, 220, 215, 255];
+const WALL: [u8; 4] = [196, 184, 160, 255];
+const ROOF: [u8; 4] = [132, 60, 46, 255];
+const BARK: [u8; 4] = [84, 62, 40, 255];
+const LEAF: [u8; 4] = [46, 84, 40, 255];
+
+fn v(x: f32, y: f32, z: f32) -> Vec3 {
+    Vec3::new(x, y, z)
+}
+
+fn tank() -> Model {
+    let mut l2 = ModelMesh::default();
+    l2.add_box(v(-1.8, -3.5, 0.0), v(1.8, 3.5, 2.3), OLIVE);
+    let mut l1 = ModelMesh::default();
+    l1.add_box(v(-1.8, -3.5, 0.4), v(1.8, 3.5, 1.6), OLIVE);
+    l1.add_box(v(-1.2, -1.5, 1.6), v(1.2, 1.2, 2.4), OLIVE);
+    l1.add_box(v(-0.1, 1.2, 1.9), v(0.1, 5.8, 2.1), DARK);
+    let mut l0 = ModelMesh::default();
+    l0.add_box(v(-1.3, -3.5, 0.5), v(1.3, 3.3, 1.6), OLIVE);
+    l0.add_box(v(-1.9, -3.6, 0.0), v(-1.3, 3.6, 1.0), DARK);
+    l0.add_box(v(1.3, -3.6, 0.0), v(1.9, 3.6, 1.0), DARK);
+    l0.add_box(v(-1.9, -3.6, 1.0), v(1.9, 3.6, 1.15), OLIVE);
+    l0.add_box(v(-1.2, -1.6, 1.6), v(1.2, 1.3, 2.35), OLIVE);
+    l0.add_cylinder(v(0.0, 1.3, 2.0), v(0.0, 4.6, 0.0), 0.09, 0.08, 10, DARK);
+    l0.add_cylinder(v(0.5, -0.6, 2.35), v(0.0, 0.0, 0.3), 0.3, 0.3, 10, OLIVE);
+    Model::new("tank", vec![l0, l1, l2])
+}
+
+fn truck() -> Model {
+    let mut l2 = ModelMesh::default();
+    l2.add_box(v(-1.2, -3.5, 0.0), v(1.2, 3.5, 3.0), OLIVE);
+    let mut l1 = ModelMesh::default();
+    l1.add_box(v(-1.2, 1.5, 0.5), v(1.2, 3.5, 2.6), OLIVE);
+    l1.add_box(v(-1.2, -3.5, 0.5), v(1.2, 1.4, 3.0), OLIVE);
+    l1.add_box(v(-1.2, -3.5, 0.0), v(1.2, 3.5, 0.5), DARK);
+    let mut l0 = ModelMesh::default();
+    l0.add_box(v(-1.2, 1.5, 0.9), v(1.2, 3.5, 2.6), OLIVE);
+    l0.add_box(v(-1.15, 2.6, 1.9), v(1.15, 3.52, 2.4), DARK);
+    l0.add_box(v(-1.25, -3.5, 1.0), v(1.25, 1.4, 3.0), OLIVE);
+    l0.add_box(v(-1.0, -3.5, 0.6), v(1.0, 3.4, 0.9), DARK);
+    for y in [2.5_f32, -0.8, -2.4] {
+        for x in [-1.05_f32, 1.05] {
+            l0.add_cylinder(v(x - 0.15, y, 0.5), v(0.3, 0.0, 0.0), 0.5, 0.5, 12, DARK);
+        }
+    }
+    Model::new("truck", vec![l0, l1, l2])
+}
+
+fn ship() -> Model {
+    // A 90 m frigate-like hull: tall mast so curvature hides the hull first.
+    let hull = |m: &mut ModelMesh, detailed: bool| {
+        let (bow, stern, beam, deck, keel) = (45.0, -45.0, 6.0, 6.0, -3.0);
+        let p = [
+            v(-beam, stern, keel),
+            v(beam, stern, keel),
+            v(beam * 0.9, 30.0, keel),
+            v(0.0, bow, keel + 2.0),
+            v(-beam * 0.9, 30.0, keel),
+        ];
+        let q = p.map(|x| v(x.x * 1.05, x.y, deck));
+        for k in 0..5 {
+            let k1 = (k + 1) % 5;
+            m.quad(
+                p[k],
+                p[k1],
+                q[k1],
+                q[k],
+                HULL_RED.map(|c| if detailed { c } else { c / 2 + 60 }),
+            );
+        }
+        m.tri(q[0], q[1], q[2], GREY);
+        m.tri(q[0], q[2], q[3], GREY);
+        m.tri(q[0], q[3], q[4], GREY);
+    };
+    let mut l0 = ModelMesh::default();
+    hull(&mut l0, true);
+    l0.add_box(v(-4.5, -20.0, 6.0), v(4.5, 8.0, 13.0), GREY);
+    l0.add_box(v(-3.0, -12.0, 13.0), v(3.0, 2.0, 17.0), GREY);
+    l0.add_cylinder(v(0.0, -4.0, 17.0), v(0.0, 0.0, 20.0), 0.6, 0.25, 8, GREY);
+    l0.add_box(v(-4.0, -4.2, 29.0), v(4.0, -3.8, 29.4), GREY);
+    l0.add_cylinder(v(0.0, 20.0, 6.0), v(0.0, 0.0, 2.5), 2.0, 1.6, 12, GREY);
+    l0.add_cylinder(v(0.0, 20.0, 7.5), v(0.0, 8.0, 0.0), 0.15, 0.12, 8, DARK);
+    l0.add_box(v(-2.0, -30.0, 13.0), v(2.0, -25.0, 15.0), WHITE);
+    let mut l1 = ModelMesh::default();
+    hull(&mut l1, true);
+    l1.add_box(v(-4.5, -20.0, 6.0), v(4.5, 8.0, 13.0), GREY);
+    l1.add_box(v(-3.0, -12.0, 13.0), v(3.0, 2.0, 17.0), GREY);
+    l1.add_cylinder(v(0.0, -4.0, 17.0), v(0.0, 0.0, 20.0), 0.6, 0.25, 4, GREY);
+    let mut l2 = ModelMesh::default();
+    hull(&mut l2, false);
+    l2.add_box(v(-4.5, -20.0, 6.0), v(4.5, 8.0, 17.0), GREY);
+    l2.add_box(v(-0.5, -4.5, 17.0), v(0.5, -3.5, 37.0), GREY);
+    Model::new("ship", vec![l0, l1, l2])
+}
+
+fn building() -> Model {
+    let roof = |m: &mut ModelMesh| {
+        let (w, d, h, r) = (6.0, 8.0, 6.0, 9.0);
+        m.quad(v(-w, -d, h), v(w, -d, h), v(w, 0.0, r), v(-w, 0.0, r), ROOF);
+        m.quad(v(w, d, h), v(-w, d, h), v(-w, 0.0, r), v(w, 0.0, r), ROOF);
+        m.tri(v(-w, d, h), v(-w, -d, h), v(-w, 0.0, r), WALL);
+        m.tri(v(w, -d, h), v(w, d, h), v(w, 0.0, r), WALL);
+    };
+    let mut l0 = ModelMesh::default();
+    l0.add_box(v(-6.0, -8.0, 0.0), v(6.0, 8.0, 6.0), WALL);
+    roof(&mut l0);
+    for y in [-5.0_f32, 0.0, 5.0] {
+        for z in [1.2_f32, 4.0] {
+            l0.add_box(v(-6.05, y - 0.7, z), v(6.05, y + 0.7, z + 1.2), DARK);
+        }
+    }
+    l0.add_box(v(2.5, -8.6, 6.0), v(3.5, -7.6, 9.5), WALL);
+    let mut l1 = ModelMesh::default();
+    l1.add_box(v(-6.0, -8.0, 0.0), v(6.0, 8.0, 6.0), WALL);
+    roof(&mut l1);
+    let mut l2 = ModelMesh::default();
+    l2.add_box(v(-6.0, -8.0, 0.0), v(6.0, 8.0, 7.5), WALL);
+    Model::new("building", vec![l0, l1, l2])
+}
+
+fn tree() -> Model {
+    let mut l0 = ModelMesh::default();
+    l0.add_cylinder(v(0.0, 0.0, 0.0), v(0.0, 0.0, 3.0), 0.3, 0.22, 8, BARK);
+    l0.add_cylinder(v(0.0, 0.0, 2.0), v(0.0, 0.0, 5.0), 2.6, 0.0, 12, LEAF);
+    l0.add_cylinder(v(0.0, 0.0, 4.5), v(0.0, 0.0, 4.5), 2.0, 0.0, 12, LEAF);
+    let mut l1 = ModelMesh::default();
+    l1.add_cylinder(v(0.0, 0.0, 0.0), v(0.0, 0.0, 2.0), 0.3, 0.3, 4, BARK);
+    l1.add_cylinder(v(0.0, 0.0, 2.0), v(0.0, 0.0, 7.0), 2.6, 0.0, 6, LEAF);
+    let mut l2 = ModelMesh::default();
+    l2.add_cylinder(v(0.0, 0.0, 0.0), v(0.0, 0.0, 9.0), 2.4, 0.0, 3, LEAF);
+    Model::new("tree", vec![l0, l1, l2])
+}
+
+/// The names of the built-in models.
+pub const BUILTIN_MODELS: [&str; 5] = ["tank", "truck", "ship", "building", "tree"];
+
+/// A built-in model by name.
+pub fn builtin(name: &str) -> Option<Model> {
+    match name {
+        "tank" => Some(tank()),
+        "truck" => Some(truck()),
+        "ship" => Some(ship()),
+        "building" => Some(building()),
+        "tree" => Some(tree()),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_model_has_three_levels_getting_coarser() {
+        for name in BUILTIN_MODELS {
+            let m = builtin(name).expect("builtin");
+            assert_eq!(m.lods.len(), 3, "{name}");
+            let tris: Vec<usize> = m.lods.iter().map(ModelMesh::triangle_count).collect();
+            assert!(tris[0] > tris[1] && tris[1] > tris[2], "{name}: {tris:?}");
+            assert!(m.bounding_radius_m > 1.0);
+            for lod in &m.lods {
+                assert!(lod
+                    .indices
+                    .iter()
+                    .all(|&i| (i as usize) < lod.vertices.len()));
+                assert!(
+                    lod.vertices.iter().all(|v| v.position[2] >= -3.01),
+                    "{name} below keel"
+                );
+            }
+        }
+        assert!(builtin("zeppelin").is_none());
+    }
+
+    #[test]
+    fn lod_selection_follows_size_with_hysteresis() {
+        let m = builtin("tank").expect("tank");
+        assert_eq!(m.select_lod(500.0, None), 0);
+        assert_eq!(m.select_lod(60.0, None), 1);
+        assert_eq!(m.select_lod(5.0, None), 2);
+        // Just below the switch: stays at the finer level it had.
+        assert_eq!(m.select_lod(110.0, Some(0)), 0);
+        assert_eq!(m.select_lod(90.0, Some(0)), 1);
+        assert_eq!(m.select_lod(130.0, Some(1)), 1);
+        assert_eq!(m.select_lod(150.0, Some(1)), 0);
+    }
+}

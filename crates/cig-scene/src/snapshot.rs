@@ -1,0 +1,105 @@
+//! The plain per-frame snapshot of the world the renderer consumes, and entity placement.
+//!
+//! Algorithm: the world model (terrain cache, entities, time, atmosphere) is read once per frame
+//! into plain values; the renderer never reaches back into the world. Entities asked to sit on
+//! the ground are clamped with the database's HOT query on the finest triangulated surface —
+//! the surface the renderer draws at full detail — and may be pitched and rolled to its normal.
+//!
+//! Limits: clamping uses the finest surface; where a far entity's terrain is drawn coarser,
+//! it may float or sink by at most the terrain's allowed screen error (under a pixel).
+
+use crate::lighting::{Fog, FogMode};
+use crate::view::{Hpr, View};
+use cig_geo::Geodetic;
+use cig_terrain::{QueryError, QuerySession};
+use serde::{Deserialize, Serialize};
+
+/// How an entity meets the ground.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Clamp {
+    /// The altitude is used as given (above the ellipsoid).
+    #[default]
+    None,
+    /// The altitude becomes the terrain height plus `alt_m` (as an offset).
+    Height,
+    /// As `Height`, and pitch and roll follow the terrain's slope.
+    HeightAndAttitude,
+}
+
+/// An entity as the scenario or host states it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EntitySpec {
+    pub id: u32,
+    /// Model name (built-in or loaded).
+    pub model: String,
+    pub position: Geodetic,
+    #[serde(default)]
+    pub orientation: Hpr,
+    #[serde(default)]
+    pub clamp: Clamp,
+}
+
+/// An entity ready to draw.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EntityInstance {
+    pub id: u32,
+    pub model: String,
+    /// Body origin, altitude above the ellipsoid.
+    pub position: Geodetic,
+    pub orientation: Hpr,
+}
+
+/// Places an entity, clamping it to the terrain when asked.
+pub fn place_entity(
+    session: &mut QuerySession,
+    spec: &EntitySpec,
+) -> Result<EntityInstance, QueryError> {
+    let mut position = spec.position;
+    let mut orientation = spec.orientation;
+    if spec.clamp != Clamp::None {
+        let surface = session.hot(spec.position.lat_deg, spec.position.lon_deg)?;
+        position.alt_m = surface.height_ellipsoid_m() + spec.position.alt_m;
+        if spec.clamp == Clamp::HeightAndAttitude {
+            let [e, n, u] = surface.normal_enu;
+            let (sh, ch) = orientation.heading_deg.to_radians().sin_cos();
+            // Slope along the body's forward and right axes.
+            let forward_slope = -(e * sh + n * ch) / u.max(1e-6);
+            let right_slope = -(e * ch - n * sh) / u.max(1e-6);
+            orientation.pitch_deg = forward_slope.atan().to_degrees();
+            orientation.roll_deg = -right_slope.atan().to_degrees();
+        }
+    }
+    Ok(EntityInstance {
+        id: spec.id,
+        model: spec.model.clone(),
+        position,
+        orientation,
+    })
+}
+
+/// Everything the renderer needs for one frame.
+#[derive(Clone, Debug)]
+pub struct FrameSnapshot {
+    /// Simulation time, seconds since 1970-01-01 UTC.
+    pub unix_time_s: f64,
+    pub views: Vec<View>,
+    pub fog: Fog,
+    pub max_pixel_error: f64,
+    pub wireframe: bool,
+    pub entities: Vec<EntityInstance>,
+}
+
+impl FrameSnapshot {
+    /// A frame with default fog (exponential, 40 km visibility) and the default 1-pixel error.
+    pub fn new(unix_time_s: f64, views: Vec<View>) -> FrameSnapshot {
+        FrameSnapshot {
+            unix_time_s,
+            views,
+            fog: Fog::from_visibility(FogMode::Exponential, 40_000.0),
+            max_pixel_error: 1.0,
+            wireframe: false,
+            entities: Vec::new(),
+        }
+    }
+}
