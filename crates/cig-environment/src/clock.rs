@@ -245,17 +245,29 @@ mod tests {
     fn clock_runs_pauses_and_changes_rate() {
         let mut c = SimClock::new(start(), 60.0).unwrap();
         c.advance(1.0).unwrap();
-        assert_eq!(c.now().seconds_since_j2000() - start().seconds_since_j2000(), 60.0);
+        assert_eq!(
+            c.now().seconds_since_j2000() - start().seconds_since_j2000(),
+            60.0
+        );
         c.pause();
         c.advance(10.0).unwrap();
-        assert_eq!(c.now().seconds_since_j2000() - start().seconds_since_j2000(), 60.0);
+        assert_eq!(
+            c.now().seconds_since_j2000() - start().seconds_since_j2000(),
+            60.0
+        );
         c.resume();
         c.set_rate(0.0).unwrap();
         c.advance(10.0).unwrap();
-        assert_eq!(c.now().seconds_since_j2000() - start().seconds_since_j2000(), 60.0);
+        assert_eq!(
+            c.now().seconds_since_j2000() - start().seconds_since_j2000(),
+            60.0
+        );
         c.set_rate(1.0).unwrap();
         c.advance(0.5).unwrap();
-        assert_eq!(c.now().seconds_since_j2000() - start().seconds_since_j2000(), 60.5);
+        assert_eq!(
+            c.now().seconds_since_j2000() - start().seconds_since_j2000(),
+            60.5
+        );
         assert!(c.set_rate(-1.0).is_err());
         assert!(c.set_rate(f64::NAN).is_err());
         assert!(c.advance(-1.0).is_err());
@@ -296,15 +308,30 @@ mod tests {
     fn key_light_is_the_sun_by_day_and_the_moon_on_a_moonlit_night() {
         let obs = Observer::new(35.0, -120.0, 0.0).unwrap();
         // 2024-06-21T20:00Z is local noon-ish at 120° W.
-        let day = light_state(&obs, UtcTime::from_calendar(2024, 6, 21, 20, 0, 0.0).unwrap(), 0.0).unwrap();
+        let day = light_state(
+            &obs,
+            UtcTime::from_calendar(2024, 6, 21, 20, 0, 0.0).unwrap(),
+            0.0,
+        )
+        .unwrap();
         assert!(day.sun.direction_enu[2] > 0.9);
         assert!(std::ptr::eq(day.key_light(), &day.sun));
         // Full moon 2024-06-22 01:08Z; at 2024-06-22T09:00Z (01:00 local) the moon is up.
-        let night = light_state(&obs, UtcTime::from_calendar(2024, 6, 22, 9, 0, 0.0).unwrap(), 0.0).unwrap();
+        let night = light_state(
+            &obs,
+            UtcTime::from_calendar(2024, 6, 22, 9, 0, 0.0).unwrap(),
+            0.0,
+        )
+        .unwrap();
         assert!(night.moon.altitude_deg > 10.0, "{:?}", night.moon);
         assert!(std::ptr::eq(night.key_light(), &night.moon));
         assert!(night.moon_illuminated_fraction > 0.95);
-        let cloudy = light_state(&obs, UtcTime::from_calendar(2024, 6, 22, 9, 0, 0.0).unwrap(), 1.0).unwrap();
+        let cloudy = light_state(
+            &obs,
+            UtcTime::from_calendar(2024, 6, 22, 9, 0, 0.0).unwrap(),
+            1.0,
+        )
+        .unwrap();
         assert!((night.total_illuminance_lux / cloudy.total_illuminance_lux - 10.0).abs() < 1e-9);
     }
 

@@ -192,7 +192,9 @@ fn az_alt(enu: DVec3) -> (f64, f64) {
 }
 
 fn body_position(observer: &Observer, body_ecef_m: DVec3, radius_m: f64) -> BodyPosition {
-    let topo = observer.frame.ecef_vector_to_enu(body_ecef_m - observer.ecef_m);
+    let topo = observer
+        .frame
+        .ecef_vector_to_enu(body_ecef_m - observer.ecef_m);
     let distance_m = topo.length();
     let dir = topo / distance_m;
     let (az, alt) = az_alt(dir);

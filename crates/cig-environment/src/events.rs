@@ -166,7 +166,13 @@ fn hidden_vertex(samples: &[f64], i: usize, t0: f64) -> Option<f64> {
 }
 
 /// Illinois regula falsi on a bracket with a sign change, to 0.1 s.
-fn refine(mut ta: f64, mut fa: f64, mut tb: f64, mut fb: f64, f: &mut dyn FnMut(f64) -> f64) -> f64 {
+fn refine(
+    mut ta: f64,
+    mut fa: f64,
+    mut tb: f64,
+    mut fb: f64,
+    f: &mut dyn FnMut(f64) -> f64,
+) -> f64 {
     let mut side = 0i8;
     for _ in 0..60 {
         if tb - ta < 0.1 {

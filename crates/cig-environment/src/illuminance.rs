@@ -124,7 +124,11 @@ pub fn sun_illuminance_lux(altitude_deg: f64) -> f64 {
 /// geometric altitude of its centre (degrees), its phase angle (degrees, 0 at
 /// full) and its distance from the observer (metres).
 pub fn moon_illuminance_lux(altitude_deg: f64, phase_angle_deg: f64, distance_m: f64) -> f64 {
-    if !altitude_deg.is_finite() || !phase_angle_deg.is_finite() || !(distance_m > 0.0) {
+    if !altitude_deg.is_finite()
+        || !phase_angle_deg.is_finite()
+        || distance_m.is_nan()
+        || distance_m <= 0.0
+    {
         return 0.0;
     }
     let h = altitude_deg.min(90.0);
@@ -205,10 +209,16 @@ mod tests {
         let civil = sun_illuminance_lux(-6.0);
         assert!((3.2..3.6).contains(&civil), "civil {civil}");
         let full_zenith = moon_illuminance_lux(90.0, 0.0, MOON_MEAN_DISTANCE_M);
-        assert!((0.25..0.4).contains(&full_zenith), "full moon {full_zenith}");
+        assert!(
+            (0.25..0.4).contains(&full_zenith),
+            "full moon {full_zenith}"
+        );
         // A full moon high (70°) near perigee (357 000 km), phase angle 2°.
         let perigee = moon_illuminance_lux(70.0, 2.0, 357_000_000.0);
-        assert!((0.25..0.4).contains(&perigee), "perigee full moon {perigee}");
+        assert!(
+            (0.25..0.4).contains(&perigee),
+            "perigee full moon {perigee}"
+        );
         let night = sun_illuminance_lux(-30.0) + NIGHT_SKY_LUX;
         assert!((0.0019..0.0022).contains(&night), "moonless {night}");
         // Nautical twilight end about 0.008 lux, astronomical below 0.001 (Bond and Henderson).
@@ -244,7 +254,7 @@ mod tests {
         fn moon_illuminance_is_continuous_and_bounded(h in -1.5f64..89.9, f in 0.0f64..180.0) {
             let a = moon_illuminance_lux(h, f, MOON_MEAN_DISTANCE_M);
             let b = moon_illuminance_lux(h + 0.001, f, MOON_MEAN_DISTANCE_M);
-            prop_assert!(a >= 0.0 && a < 0.4);
+            prop_assert!((0.0..0.4).contains(&a));
             prop_assert!((b - a).abs() <= 0.001 * b.max(1e-6) + 5e-6, "{h}: {a} -> {b}");
         }
     }

@@ -121,7 +121,15 @@ fn validate(p: &BoltParams) -> Result<(), EnvironmentError> {
         .iter()
         .chain(p.bounds_min_enu_m.iter())
         .chain(p.bounds_max_enu_m.iter())
-        .chain([p.initial_tilt_deg, p.max_tilt_deg, p.min_segment_m, p.max_segment_m].iter())
+        .chain(
+            [
+                p.initial_tilt_deg,
+                p.max_tilt_deg,
+                p.min_segment_m,
+                p.max_segment_m,
+            ]
+            .iter(),
+        )
         .all(|v| v.is_finite());
     if !finite {
         return bad("lightning parameters must be finite numbers".into());
@@ -335,7 +343,10 @@ mod tests {
         let bolt = generate_bolt(&p).unwrap();
         assert_eq!(bolt.segments.len(), 5000);
         assert!(bolt.truncated);
-        assert!(bolt.reached_ground, "depth first: the leader is grown first");
+        assert!(
+            bolt.reached_ground,
+            "depth first: the leader is grown first"
+        );
     }
 
     #[test]
@@ -355,15 +366,42 @@ mod tests {
         let d = BoltParams::default();
         for p in [
             BoltParams { density: 1.5, ..d },
-            BoltParams { density: f64::NAN, ..d },
-            BoltParams { max_segments: 0, ..d },
-            BoltParams { max_segments: MAX_SEGMENTS_LIMIT + 1, ..d },
-            BoltParams { min_segment_m: 0.0, ..d },
-            BoltParams { min_segment_m: 200.0, ..d },
-            BoltParams { max_tilt_deg: 90.0, ..d },
-            BoltParams { root_enu_m: [0.0, 0.0, 5000.0], ..d },
-            BoltParams { root_enu_m: [f64::NAN, 0.0, 100.0], ..d },
-            BoltParams { bounds_min_enu_m: [1000.0, -1000.0, 0.0], ..d },
+            BoltParams {
+                density: f64::NAN,
+                ..d
+            },
+            BoltParams {
+                max_segments: 0,
+                ..d
+            },
+            BoltParams {
+                max_segments: MAX_SEGMENTS_LIMIT + 1,
+                ..d
+            },
+            BoltParams {
+                min_segment_m: 0.0,
+                ..d
+            },
+            BoltParams {
+                min_segment_m: 200.0,
+                ..d
+            },
+            BoltParams {
+                max_tilt_deg: 90.0,
+                ..d
+            },
+            BoltParams {
+                root_enu_m: [0.0, 0.0, 5000.0],
+                ..d
+            },
+            BoltParams {
+                root_enu_m: [f64::NAN, 0.0, 100.0],
+                ..d
+            },
+            BoltParams {
+                bounds_min_enu_m: [1000.0, -1000.0, 0.0],
+                ..d
+            },
         ] {
             assert!(generate_bolt(&p).is_err(), "{p:?}");
         }

@@ -268,7 +268,10 @@ mod tests {
         assert!((dist - 368_409_700.0).abs() < 100.0, "{dist}");
         let moon = moon_apparent(t, &nutation(t));
         assert!((moon.longitude_deg - 133.167_265).abs() < 2e-5, "{moon:?}");
-        assert!((moon.right_ascension_deg - 134.688_470).abs() < 5e-5, "{moon:?}");
+        assert!(
+            (moon.right_ascension_deg - 134.688_470).abs() < 5e-5,
+            "{moon:?}"
+        );
         assert!((moon.declination_deg - 13.768_368).abs() < 5e-5, "{moon:?}");
     }
 }

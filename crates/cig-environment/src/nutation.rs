@@ -111,7 +111,7 @@ pub fn nutation(t: f64) -> Nutation {
         cubic(357.527_72, 35_999.050_34, -0.000_160_3, -1.0 / 300_000.0, t),
         cubic(134.962_98, 477_198.867_398, 0.008_697_2, 1.0 / 56_250.0, t),
         cubic(93.271_91, 483_202.017_538, -0.003_682_5, 1.0 / 327_270.0, t),
-        cubic(125.044_52, -1934.136_261, 0.002_070_8, 1.0 / 450_000.0, t),
+        cubic(125.044_52, -1_934.136_261, 0.002_070_8, 1.0 / 450_000.0, t),
     ];
     let mut dpsi = 0.0;
     let mut deps = 0.0;
@@ -187,15 +187,24 @@ mod tests {
         let days = 2_446_895.5 - 2_451_545.0;
         let gmst = greenwich_mean_sidereal_time_deg(days);
         let expected = (13.0 + 10.0 / 60.0 + 46.3668 / 3600.0) * 15.0;
-        assert!((gmst - expected).abs() * 240.0 < 0.001, "{gmst} vs {expected}");
+        assert!(
+            (gmst - expected).abs() * 240.0 < 0.001,
+            "{gmst} vs {expected}"
+        );
         let n = nutation((2_446_895.5 - 2_451_545.0) / 36_525.0);
         let gast = greenwich_apparent_sidereal_time_deg(days, &n);
         let expected = (13.0 + 10.0 / 60.0 + 46.1351 / 3600.0) * 15.0;
-        assert!((gast - expected).abs() * 240.0 < 0.002, "{gast} vs {expected}");
+        assert!(
+            (gast - expected).abs() * 240.0 < 0.002,
+            "{gast} vs {expected}"
+        );
         // 1987 April 10, 19h21m00s UT: GMST 8h34m57.0896s.
         let days = 2_446_896.306_25 - 2_451_545.0;
         let gmst = greenwich_mean_sidereal_time_deg(days);
         let expected = (8.0 + 34.0 / 60.0 + 57.0896 / 3600.0) * 15.0;
-        assert!((gmst - expected).abs() * 240.0 < 0.001, "{gmst} vs {expected}");
+        assert!(
+            (gmst - expected).abs() * 240.0 < 0.001,
+            "{gmst} vs {expected}"
+        );
     }
 }

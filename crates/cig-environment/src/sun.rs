@@ -41,7 +41,10 @@ pub fn ecliptic_to_equatorial(
     let (sb, cb) = latitude_deg.to_radians().sin_cos();
     let (se, ce) = obliquity_deg.to_radians().sin_cos();
     let ra = (sl * ce * cb - sb * se).atan2(cl * cb).to_degrees();
-    let dec = (sb * ce + cb * se * sl).clamp(-1.0, 1.0).asin().to_degrees();
+    let dec = (sb * ce + cb * se * sl)
+        .clamp(-1.0, 1.0)
+        .asin()
+        .to_degrees();
     (ra.rem_euclid(360.0), dec)
 }
 
@@ -81,8 +84,14 @@ mod tests {
         let sun = sun_apparent(t, &nutation(t));
         assert!((sun.longitude_deg - 199.906_060).abs() < 0.0002, "{sun:?}");
         assert!((sun.latitude_deg * 3600.0 - 0.62).abs() < 0.01, "{sun:?}");
-        assert!((sun.right_ascension_deg - 198.378_178).abs() < 0.000_02, "{sun:?}");
-        assert!((sun.declination_deg - -7.783_871).abs() < 0.000_02, "{sun:?}");
+        assert!(
+            (sun.right_ascension_deg - 198.378_178).abs() < 0.000_02,
+            "{sun:?}"
+        );
+        assert!(
+            (sun.declination_deg - -7.783_871).abs() < 0.000_02,
+            "{sun:?}"
+        );
         assert!((sun.distance_m / AU_M - 0.997_607_75).abs() < 1e-7);
     }
 }

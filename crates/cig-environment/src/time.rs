@@ -146,7 +146,9 @@ impl UtcTime {
             )));
         }
         if hour > 23 || minute > 59 {
-            return Err(bad(&format!("time {hour:02}:{minute:02} is not a clock time")));
+            return Err(bad(&format!(
+                "time {hour:02}:{minute:02} is not a clock time"
+            )));
         }
         if !(0.0..60.0).contains(&second) {
             return Err(bad(&format!("second {second} is outside [0, 60)")));
@@ -372,7 +374,7 @@ mod tests {
         assert!((delta_t_s(1930.0) - 24.0).abs() < 0.5);
         assert!((delta_t_s(1950.0) - 29.07).abs() < 0.01);
         assert!((delta_t_s(1975.0) - 45.45).abs() < 0.01);
-        assert!((delta_t_s(2049.999_999) - delta_t_s(2050.0)).abs() < 0.1);
+        assert!((delta_t_s(2_049.999_999) - delta_t_s(2050.0)).abs() < 0.1);
     }
 
     #[test]

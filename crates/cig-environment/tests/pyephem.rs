@@ -26,14 +26,19 @@ struct Case {
 
 fn cases() -> Vec<Case> {
     let mut rng = ChaCha8Rng::seed_from_u64(20_240_621);
-    let first = UtcTime::from_calendar(1900, 1, 2, 0, 0, 0.0).unwrap().seconds_since_j2000();
-    let last = UtcTime::from_calendar(2100, 12, 30, 0, 0, 0.0).unwrap().seconds_since_j2000();
+    let first = UtcTime::from_calendar(1900, 1, 2, 0, 0, 0.0)
+        .expect("valid time")
+        .seconds_since_j2000();
+    let last = UtcTime::from_calendar(2100, 12, 30, 0, 0, 0.0)
+        .expect("valid time")
+        .seconds_since_j2000();
     let mut out: Vec<Case> = (0..60)
         .map(|_| Case {
             lat: rng.gen_range(-60.0..=60.0),
             lon: rng.gen_range(-180.0..=180.0),
             alt_m: rng.gen_range(0.0..3000.0),
-            time: UtcTime::from_seconds_since_j2000(rng.gen_range(first..last)).unwrap(),
+            time: UtcTime::from_seconds_since_j2000(rng.gen_range(first..last))
+                .expect("valid time"),
         })
         .collect();
     // Fixed extremes: the polar circles at the solstices.
@@ -42,7 +47,7 @@ fn cases() -> Vec<Case> {
             lat,
             lon: 15.0,
             alt_m: 0.0,
-            time: UtcTime::from_calendar(2021, month, 21, 12, 0, 0.0).unwrap(),
+            time: UtcTime::from_calendar(2021, month, 21, 12, 0, 0.0).expect("valid time"),
         });
     }
     out
@@ -60,7 +65,9 @@ fn run_peer(input: &str) -> Option<Vec<Value>> {
     let mut child = match child {
         Ok(c) => c,
         Err(e) => {
-            eprintln!("SKIPPED: python3 is not available ({e}); install python3 and `pip install ephem`");
+            eprintln!(
+                "SKIPPED: python3 is not available ({e}); install python3 and `pip install ephem`"
+            );
             return None;
         }
     };
@@ -148,7 +155,8 @@ fn agrees_with_pyephem() {
         return;
     };
     assert_eq!(theirs.len(), cases.len());
-    let (mut max_sun, mut max_moon, mut max_frac, mut max_event_s) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let (mut max_sun, mut max_moon, mut max_frac, mut max_event_s) =
+        (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut events_compared = 0;
     let mut events_none_both = 0;
     for ((c, (obs, e, ev)), p) in cases.iter().zip(ours.iter()).zip(theirs.iter()) {
@@ -158,13 +166,33 @@ fn agrees_with_pyephem() {
         let frac = (e.moon_illuminated_fraction - f("moon_fraction_topocentric")).abs();
         let geocentric = (1.0 + geocentric_moon_phase_angle_deg(c.time).to_radians().cos()) / 2.0;
         let frac_geo = (geocentric - f("moon_fraction_geocentric")).abs();
-        let ctx = format!("lat {} lon {} at {}", c.lat, c.lon, c.time.to_iso8601_seconds());
+        let ctx = format!(
+            "lat {} lon {} at {}",
+            c.lat,
+            c.lon,
+            c.time.to_iso8601_seconds()
+        );
         assert!(sun_sep < 0.01, "sun {sun_sep} deg apart, {ctx}");
-        assert!((e.sun.altitude_deg - f("sun_alt")).abs() < 0.01, "sun altitude, {ctx}");
+        assert!(
+            (e.sun.altitude_deg - f("sun_alt")).abs() < 0.01,
+            "sun altitude, {ctx}"
+        );
         assert!(moon_sep < 0.05, "moon {moon_sep} deg apart, {ctx}");
-        assert!((e.moon.altitude_deg - f("moon_alt")).abs() < 0.05, "moon altitude, {ctx}");
-        assert!(frac < 0.005, "illuminated fraction {} vs {}, {ctx}", e.moon_illuminated_fraction, f("moon_fraction_topocentric"));
-        assert!(frac_geo < 0.005, "geocentric illuminated fraction {geocentric} vs {}, {ctx}", f("moon_fraction_geocentric"));
+        assert!(
+            (e.moon.altitude_deg - f("moon_alt")).abs() < 0.05,
+            "moon altitude, {ctx}"
+        );
+        assert!(
+            frac < 0.005,
+            "illuminated fraction {} vs {}, {ctx}",
+            e.moon_illuminated_fraction,
+            f("moon_fraction_topocentric")
+        );
+        assert!(
+            frac_geo < 0.005,
+            "geocentric illuminated fraction {geocentric} vs {}, {ctx}",
+            f("moon_fraction_geocentric")
+        );
         max_sun = max_sun.max(sun_sep);
         max_moon = max_moon.max(moon_sep);
         max_frac = max_frac.max(frac).max(frac_geo);
@@ -180,12 +208,18 @@ fn agrees_with_pyephem() {
             continue;
         }
         for (name, mine, is_moon) in event_list(ev) {
-            let other = p["events"][name].as_f64().map(|jd| UtcTime::from_julian_date(jd).unwrap());
+            let other = p["events"][name]
+                .as_f64()
+                .map(|jd| UtcTime::from_julian_date(jd).unwrap());
             match (mine, other) {
                 (Some(a), Some(b)) => {
                     let dt = (a.seconds_since_j2000() - b.seconds_since_j2000()).abs();
-                    assert!(dt < 60.0, "{name}: ours {} theirs {} ({dt:.1} s), {ctx}",
-                        a.to_iso8601_seconds(), b.to_iso8601_seconds());
+                    assert!(
+                        dt < 60.0,
+                        "{name}: ours {} theirs {} ({dt:.1} s), {ctx}",
+                        a.to_iso8601_seconds(),
+                        b.to_iso8601_seconds()
+                    );
                     max_event_s = max_event_s.max(dt);
                     events_compared += 1;
                 }
@@ -197,7 +231,10 @@ fn agrees_with_pyephem() {
                     let start = ev.day_start.unwrap().seconds_since_j2000();
                     let s = t.seconds_since_j2000();
                     let near_edge = (s - start).abs() < 60.0 || (s - start - 86_400.0).abs() < 60.0;
-                    assert!(near_edge, "{name}: ours {a:?} theirs {b:?}, {ctx} (moon: {is_moon})");
+                    assert!(
+                        near_edge,
+                        "{name}: ours {a:?} theirs {b:?}, {ctx} (moon: {is_moon})"
+                    );
                 }
             }
         }
@@ -209,5 +246,8 @@ fn agrees_with_pyephem() {
          {events_none_both} absent on both sides",
         cases.len()
     );
-    assert!(events_compared > 300, "too few events compared: {events_compared}");
+    assert!(
+        events_compared > 300,
+        "too few events compared: {events_compared}"
+    );
 }
