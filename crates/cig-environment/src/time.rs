@@ -31,9 +31,25 @@ pub const MIN_YEAR: i32 = 1900;
 pub const MAX_YEAR: i32 = 2100;
 
 /// A UTC instant, seconds since J2000.0 (2000-01-01T12:00:00 UTC), 86 400 s a day.
+/// Serialised as that number of seconds; deserialising checks the range.
 #[derive(Clone, Copy, Debug, PartialEq, PartialOrd, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "f64", into = "f64")]
 pub struct UtcTime {
     seconds_since_j2000: f64,
+}
+
+impl TryFrom<f64> for UtcTime {
+    type Error = EnvironmentError;
+
+    fn try_from(seconds_since_j2000: f64) -> Result<Self, Self::Error> {
+        UtcTime::from_seconds_since_j2000(seconds_since_j2000)
+    }
+}
+
+impl From<UtcTime> for f64 {
+    fn from(t: UtcTime) -> f64 {
+        t.seconds_since_j2000
+    }
 }
 
 /// A broken-down UTC calendar time.
@@ -254,8 +270,10 @@ impl UtcTime {
 
     /// The UTC calendar time of this instant.
     pub fn to_calendar(&self) -> CalendarTime {
+        // Instants made by `plus_seconds` may lie outside the supported range: keep the
+        // day count small enough for exact integer arithmetic (NaN becomes 1970).
         let unix = self.unix_seconds();
-        let days = (unix / SECONDS_PER_DAY).floor();
+        let days = (unix / SECONDS_PER_DAY).floor().clamp(-1e9, 1e9);
         let sod = unix - days * SECONDS_PER_DAY;
         // `days` is a whole number of the supported range (|days| < 2^31).
         #[allow(
@@ -383,6 +401,20 @@ mod tests {
         assert_eq!(t.to_iso8601_seconds(), "2025-01-01T00:00:00Z");
         let t = UtcTime::from_calendar(1903, 3, 4, 5, 6, 7.2).unwrap();
         assert_eq!(t.to_iso8601_seconds(), "1903-03-04T05:06:07Z");
+    }
+
+    #[test]
+    fn odd_instants_never_panic() {
+        let t = UtcTime::from_calendar(2000, 1, 1, 0, 0, 0.0).unwrap();
+        for s in [f64::NAN, f64::INFINITY, -f64::INFINITY, 1e300, -1e300] {
+            let odd = t.plus_seconds(s);
+            let _ = odd.to_calendar();
+            let _ = odd.to_iso8601_seconds();
+            let _ = odd.delta_t_s();
+        }
+        let json = serde_json::to_string(&t).unwrap();
+        assert_eq!(serde_json::from_str::<UtcTime>(&json).unwrap(), t);
+        assert!(serde_json::from_str::<UtcTime>("1e300").is_err());
     }
 
     proptest! {
