@@ -39,6 +39,9 @@ pub enum Command {
     /// Configuration helpers.
     #[command(subcommand)]
     Config(ConfigCommand),
+    /// Sun and moon positions, the moon's phase, rise/set and twilight times of the local
+    /// day, and the natural illuminance, for a place and a UTC time (1900-2100).
+    Ephem(EphemArgs),
 }
 
 #[derive(Subcommand)]
@@ -221,4 +224,33 @@ pub struct DemoArgs {
 pub enum ConfigCommand {
     /// Print the default configuration as TOML.
     Default,
+}
+
+#[derive(Args)]
+pub struct EphemArgs {
+    /// Geodetic latitude, degrees, north positive (-90..90).
+    #[arg(long, allow_negative_numbers = true)]
+    pub lat: f64,
+    /// Longitude, degrees, east positive (-180..180).
+    #[arg(long, allow_negative_numbers = true)]
+    pub lon: f64,
+    /// Height above the WGS84 ellipsoid, metres.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub alt: f64,
+    /// The instant, ISO 8601: "2024-06-21T12:00:00Z"; an offset such as "+02:00" is
+    /// converted to UTC; no offset means UTC; a date alone means its midnight UTC.
+    #[arg(long, value_name = "ISO8601")]
+    pub time: String,
+    /// Cloud cover fraction 0..1: divides the natural illuminance by the sky-condition
+    /// factor 10^(cover^2) (1 clear, 10 overcast).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "FRACTION",
+        allow_negative_numbers = true
+    )]
+    pub cloud_cover: f64,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
 }

@@ -6,6 +6,7 @@ mod cli;
 mod config;
 mod db;
 mod demo;
+mod ephem;
 mod output;
 mod query;
 mod render;
@@ -47,6 +48,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),
         cli::Command::Render(args) => render::run(&args, &config),
         cli::Command::Demo(args) => demo::run(&args, &config),
+        cli::Command::Ephem(args) => ephem::run(&args),
         cli::Command::Config(cli::ConfigCommand::Default) => {
             print!("{}", config::Config::default_toml()?);
             Ok(())

@@ -1,0 +1,67 @@
+//! The cig environment model: where the sun and the moon are, when they rise
+//! and set, how much natural light reaches the ground, the passage of
+//! simulated time, and lightning. Pure maths: no GPU, files, sockets or
+//! terminal.
+//!
+//! Algorithms, sources and limits, by module:
+//!
+//! - [`time`]: UTC instants as seconds since J2000.0, Gregorian calendar
+//!   (Hinnant's day-count formulas), ΔT by the Espenak–Meeus polynomials
+//!   (NASA TP-2006-214141). 1900–2100; UTC used as UT1 (< 0.9 s).
+//! - [`vsop87`], [`nutation`], [`sun`], [`moon`]: J. Meeus, *Astronomical
+//!   Algorithms* (2nd ed., 1998) chapters 12, 22, 25 (VSOP87 truncated,
+//!   Appendix III) and 47 (ELP-2000/82 truncated). Sun about 1″, moon about
+//!   10″ in longitude.
+//! - [`ephemeris`]: topocentric azimuth and altitude by subtracting the WGS84
+//!   observer (`cig-geo`) from the Earth-fixed body vector, Sæmundsson
+//!   refraction, the moon's topocentric phase angle and illuminated fraction.
+//!   Checked against Meeus's worked examples, the NREL SPA test case and
+//!   PyEphem (tests): sun within 0.01°, moon within 0.05°.
+//! - [`events`]: sunrise/sunset (−0.833°), civil/nautical/astronomical
+//!   twilight (−6°, −12°, −18°), moonrise/moonset (upper limb on the refracted
+//!   horizon) within the local mean day; `None` when an event does not happen.
+//! - [`illuminance`]: the USNO/Brown (1952) cubic fits of sun and moon
+//!   illuminance in altitude, the moon's phase law and distance, 0.002 lux of
+//!   night sky, a cloud-cover divisor.
+//! - [`clock`]: the simulation clock (start, rate, pause) and the light state
+//!   (directions, colours, illuminance) that the renderer reads every frame.
+//! - [`lightning`]: the NPS thesis's branching bolt (V.A.4, appendix F), made
+//!   iterative with a hard segment cap and seeded, and the flash envelope.
+//!
+//! Conventions: degrees at every interface, metres, UTC; azimuth from true
+//! north through east; directions in the observer's east-north-up frame.
+
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
+
+pub mod clock;
+pub mod ephemeris;
+pub mod events;
+pub mod illuminance;
+pub mod lightning;
+pub mod moon;
+pub mod nutation;
+pub mod sun;
+pub mod time;
+pub mod vsop87;
+
+pub use clock::{light_state, BodyLight, LightState, SimClock};
+pub use ephemeris::{ephemeris, BodyPosition, Ephemeris, Observer};
+pub use events::{day_events, DayEvents};
+pub use illuminance::{natural_illuminance, Illuminance};
+pub use lightning::{generate_bolt, Bolt, BoltParams, BoltSegment, FlashEnvelope};
+pub use time::{CalendarTime, UtcTime};
+
+/// Errors from the environment model: every one names the bad value.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum EnvironmentError {
+    /// A time that is not a valid UTC calendar time in 1900..=2100.
+    #[error("invalid time: {0}")]
+    InvalidTime(String),
+    /// A latitude, longitude or height out of range.
+    #[error("invalid location: {0}")]
+    InvalidLocation(String),
+    /// An environment setting out of range (cloud cover, clock rate, lightning).
+    #[error("invalid setting: {0}")]
+    InvalidSetting(String),
+}

@@ -1,0 +1,132 @@
+//! `cig ephem`: sun, moon, events and natural illuminance for a place and time.
+
+use crate::cli::EphemArgs;
+use anyhow::{anyhow, Context};
+use cig_environment::{
+    day_events, ephemeris, natural_illuminance, DayEvents, Ephemeris, Illuminance, Observer,
+    UtcTime,
+};
+use time::format_description::well_known::{Iso8601, Rfc3339};
+use time::{Date, OffsetDateTime, PrimitiveDateTime, UtcOffset};
+
+/// Parses an ISO 8601 instant (RFC 3339, or ISO 8601 with or without an offset; no
+/// offset means UTC; a date alone means its midnight UTC) into a UTC instant of 1900..=2100.
+pub fn parse_time(text: &str) -> anyhow::Result<UtcTime> {
+    let parsed = OffsetDateTime::parse(text, &Rfc3339)
+        .or_else(|_| OffsetDateTime::parse(text, &Iso8601::DEFAULT))
+        .or_else(|_| PrimitiveDateTime::parse(text, &Iso8601::DEFAULT).map(|p| p.assume_utc()))
+        .or_else(|_| Date::parse(text, &Iso8601::DEFAULT).map(|d| d.midnight().assume_utc()))
+        .map_err(|e| anyhow!("--time {text:?} is not an ISO 8601 date and time ({e})"))?;
+    let utc = parsed
+        .checked_to_offset(UtcOffset::UTC)
+        .ok_or_else(|| anyhow!("--time {text:?} is out of range"))?;
+    let second = f64::from(utc.second()) + f64::from(utc.nanosecond()) * 1e-9;
+    UtcTime::from_calendar(
+        utc.year(),
+        u32::from(u8::from(utc.month())),
+        u32::from(utc.day()),
+        u32::from(utc.hour()),
+        u32::from(utc.minute()),
+        second,
+    )
+    .with_context(|| format!("--time {text:?}"))
+}
+
+fn event_list(e: &DayEvents) -> [(&'static str, Option<UtcTime>); 10] {
+    [
+        ("sunrise", e.sunrise),
+        ("sunset", e.sunset),
+        ("civil_dawn", e.civil_dawn),
+        ("civil_dusk", e.civil_dusk),
+        ("nautical_dawn", e.nautical_dawn),
+        ("nautical_dusk", e.nautical_dusk),
+        ("astronomical_dawn", e.astronomical_dawn),
+        ("astronomical_dusk", e.astronomical_dusk),
+        ("moonrise", e.moonrise),
+        ("moonset", e.moonset),
+    ]
+}
+
+/// The JSON shape: sun, moon, illuminance_lux, events.
+pub fn ephem_json(e: &Ephemeris, lux: &Illuminance, events: &DayEvents) -> serde_json::Value {
+    let mut ev = serde_json::Map::new();
+    for (name, t) in event_list(events) {
+        ev.insert(
+            name.to_string(),
+            t.map_or(serde_json::Value::Null, |t| t.to_iso8601_seconds().into()),
+        );
+    }
+    serde_json::json!({
+        "sun": {
+            "azimuth_deg": e.sun.azimuth_deg,
+            "altitude_deg": e.sun.altitude_deg,
+            "apparent_altitude_deg": e.sun.apparent_altitude_deg,
+        },
+        "moon": {
+            "azimuth_deg": e.moon.azimuth_deg,
+            "altitude_deg": e.moon.altitude_deg,
+            "apparent_altitude_deg": e.moon.apparent_altitude_deg,
+            "illuminated_fraction": e.moon_illuminated_fraction,
+            "phase_angle_deg": e.moon_phase_angle_deg,
+        },
+        "illuminance_lux": {
+            "sun": lux.sun_lux,
+            "moon": lux.moon_lux,
+            "sky": lux.sky_lux,
+            "total": lux.total_lux,
+        },
+        "events": ev,
+    })
+}
+
+pub fn run(args: &EphemArgs) -> anyhow::Result<()> {
+    let time = parse_time(&args.time)?;
+    let observer = Observer::new(args.lat, args.lon, args.alt)?;
+    let e = ephemeris(&observer, time);
+    let lux = natural_illuminance(&e, args.cloud_cover).context("--cloud-cover")?;
+    let events = day_events(&observer, time);
+    if args.json {
+        println!("{}", ephem_json(&e, &lux, &events));
+        return Ok(());
+    }
+    println!(
+        "{} at {:.6}, {:.6}, {:.1} m",
+        time.to_iso8601_seconds(),
+        args.lat,
+        args.lon,
+        args.alt
+    );
+    println!(
+        "sun          azimuth {:8.3} deg   altitude {:8.3} deg (apparent {:8.3} deg)",
+        e.sun.azimuth_deg, e.sun.altitude_deg, e.sun.apparent_altitude_deg
+    );
+    println!(
+        "moon         azimuth {:8.3} deg   altitude {:8.3} deg (apparent {:8.3} deg)",
+        e.moon.azimuth_deg, e.moon.altitude_deg, e.moon.apparent_altitude_deg
+    );
+    println!(
+        "moon phase   {:.1} % lit, phase angle {:.2} deg, {}",
+        e.moon_illuminated_fraction * 100.0,
+        e.moon_phase_angle_deg,
+        if e.moon_waxing { "waxing" } else { "waning" }
+    );
+    println!(
+        "illuminance  {:.4e} lux total (sun {:.4e}, moon {:.4e}, night sky {:.4e}; cloud cover {})",
+        lux.total_lux, lux.sun_lux, lux.moon_lux, lux.sky_lux, args.cloud_cover
+    );
+    if let Some(start) = events.day_start {
+        println!(
+            "local mean day from {} to {} (UTC)",
+            start.to_iso8601_seconds(),
+            start.plus_seconds(86_400.0).to_iso8601_seconds()
+        );
+    }
+    for (name, t) in event_list(&events) {
+        println!(
+            "  {:<18} {}",
+            name.replace('_', " "),
+            t.map_or_else(|| "none".to_string(), |t| t.to_iso8601_seconds())
+        );
+    }
+    Ok(())
+}
