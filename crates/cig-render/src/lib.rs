@@ -11,6 +11,6 @@ pub mod renderer;
 pub mod terrain;
 
 pub use gpu::{Gpu, RenderError};
-pub use offscreen::{load_for_view, render_image, Image};
+pub use offscreen::{load_for_view, render_image, render_image_with, Image};
 pub use renderer::serde_like::FrameStats;
 pub use renderer::{FrameOptions, Renderer, FRAME_FORMAT, MSAA_SAMPLES};

@@ -49,6 +49,26 @@ pub fn render_image(
     snapshot: &FrameSnapshot,
     view_index: usize,
 ) -> Result<(Image, FrameStats), RenderError> {
+    render_image_with(
+        renderer,
+        cache,
+        snapshot,
+        view_index,
+        FrameOptions {
+            mesh_budget: usize::MAX,
+            key_background: false,
+        },
+    )
+}
+
+/// [`render_image`] with explicit frame options.
+pub fn render_image_with(
+    renderer: &mut Renderer,
+    cache: &TileCache,
+    snapshot: &FrameSnapshot,
+    view_index: usize,
+    options: FrameOptions,
+) -> Result<(Image, FrameStats), RenderError> {
     let view = snapshot
         .views
         .get(view_index)
@@ -76,9 +96,7 @@ pub fn render_image(
         snapshot,
         view_index,
         &target,
-        FrameOptions {
-            mesh_budget: usize::MAX,
-        },
+        options,
     )?;
     let bytes_per_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {

@@ -251,11 +251,16 @@ pub struct FrameOptions {
     /// Node meshes built at most per frame (`usize::MAX` for one-off frames that must be
     /// complete).
     pub mesh_budget: usize,
+    /// Paint the sky in pure magenta, so tests can see where the background shows through.
+    pub key_background: bool,
 }
 
 impl Default for FrameOptions {
     fn default() -> Self {
-        FrameOptions { mesh_budget: 48 }
+        FrameOptions {
+            mesh_budget: 48,
+            key_background: false,
+        }
     }
 }
 
@@ -647,7 +652,7 @@ impl Renderer {
             options.mesh_budget,
         );
         let lighting = Lighting::at(snapshot.unix_time_s, camera.local_up);
-        self.write_globals(&camera, &lighting, snapshot);
+        self.write_globals(&camera, &lighting, snapshot, options.key_background);
         if !records.is_empty() {
             self.gpu
                 .queue
@@ -804,7 +809,7 @@ impl Renderer {
         Some(ticks[1].saturating_sub(ticks[0]) as f64 * period_ns / 1e6)
     }
 
-    fn write_globals(&self, camera: &Camera, lighting: &Lighting, snapshot: &FrameSnapshot) {
+    fn write_globals(&self, camera: &Camera, lighting: &Lighting, snapshot: &FrameSnapshot, key_background: bool) {
         let v4 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
         let [tl, tr, td, tu] = camera.view.fov.tangents();
@@ -844,7 +849,12 @@ impl Renderer {
             noise0: noise(NOISE_CELLS_M[0]),
             noise1: noise(NOISE_CELLS_M[1]),
             noise2: noise(NOISE_CELLS_M[2]),
-            flags: [if snapshot.wireframe { 1.0 } else { 0.0 }, 1.0, 0.0, 0.0],
+            flags: [
+                if snapshot.wireframe { 1.0 } else { 0.0 },
+                1.0,
+                if key_background { 1.0 } else { 0.0 },
+                0.0,
+            ],
         };
         self.gpu
             .queue

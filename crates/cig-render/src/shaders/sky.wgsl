@@ -14,6 +14,9 @@ fn vs_main(@builtin(vertex_index) i: u32) -> SkyOut {
 
 @fragment
 fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
+    if (g.flags.z > 0.5) {
+        return vec4<f32>(1.0, 0.0, 1.0, 1.0);
+    }
     let t = g.tangents;
     let x_tan = mix(-t.x, t.y, in.ndc.x * 0.5 + 0.5);
     let y_tan = mix(-t.z, t.w, in.ndc.y * 0.5 + 0.5);

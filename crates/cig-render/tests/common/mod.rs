@@ -1,0 +1,183 @@
+//! Shared helpers of the renderer tests: in-memory databases, one GPU, images.
+#![allow(dead_code, reason = "each test file uses a different subset")]
+
+use cig_geo::Geodetic;
+use cig_render::{Gpu, Image, Renderer};
+use cig_scene::{FovDeg, FrameSnapshot, Hpr, View};
+use cig_terrain::build::build_pyramid;
+use cig_terrain::database::{GeoidGrid, Manifest, MemoryTileStore, TerrainDatabase};
+use cig_terrain::raster::{GeoGrid, Raster};
+use cig_terrain::{Material, PagingConfig, TileCache};
+use std::sync::{Arc, OnceLock};
+
+/// The one GPU device of the test process (lavapipe when there is no GPU). A machine with no
+/// adapter at all fails here, loudly: scripts/setup.sh installs Mesa's lavapipe.
+pub fn gpu() -> Arc<Gpu> {
+    static GPU: OnceLock<Arc<Gpu>> = OnceLock::new();
+    GPU.get_or_init(|| Gpu::headless().expect("a GPU adapter (install mesa-vulkan-drivers)"))
+        .clone()
+}
+
+pub fn database_from(raster: &Raster, geoid_m: f32) -> Arc<TerrainDatabase> {
+    let store = Arc::new(MemoryTileStore::new());
+    let summary = build_pyramid::<cig_terrain::build::BuildError>(raster, 128, &mut |t| {
+        store.insert(t.key, t.encode());
+        Ok(())
+    })
+    .expect("build");
+    let mut geoid = GeoidGrid::zero();
+    geoid.undulation_m.iter_mut().for_each(|v| *v = geoid_m);
+    let manifest = Manifest::from_build(&summary, geoid, 0, vec!["test".into()]);
+    Arc::new(TerrainDatabase::new(manifest, store as Arc<dyn cig_terrain::TileStore>).expect("db"))
+}
+
+/// A synthetic 8 km hilly database at 30 m posts, south-west corner 35.98 N 121.23 W.
+pub fn hills() -> Arc<TerrainDatabase> {
+    static DB: OnceLock<Arc<TerrainDatabase>> = OnceLock::new();
+    DB.get_or_init(|| {
+        let params = cig_synth::SynthParams {
+            origin_lat_deg: 35.98,
+            origin_lon_deg: -121.23,
+            size_km: 8.0,
+            spacing_m: 30.0,
+            seed: 7,
+        };
+        let mut raster = cig_synth::synthesize(&params, &mut |_, _| {}).expect("synth");
+        cig_terrain::build::prepare_raster(&mut raster).expect("prepare");
+        database_from(&raster, -33.0)
+    })
+    .clone()
+}
+
+/// A flat sea at mean sea level, 80 km x 80 km at 500 m posts, centred on 36 N 122 W.
+pub fn sea() -> Arc<TerrainDatabase> {
+    let (n, e) = cig_geo::metres_per_degree(36.0);
+    let posts = 161;
+    let grid = GeoGrid {
+        south_lat_deg: 36.0 - 40_000.0 / n,
+        west_lon_deg: -122.0 - 40_000.0 / e,
+        dlat_deg: 500.0 / n,
+        dlon_deg: 500.0 / e,
+        rows: posts,
+        cols: posts,
+    };
+    let raster = Raster {
+        grid,
+        elevation_m: vec![0.0; posts * posts],
+        material: Some(vec![Material::Water; posts * posts]),
+    };
+    database_from(&raster, 0.0)
+}
+
+pub fn cache(db: &Arc<TerrainDatabase>) -> Arc<TileCache> {
+    Arc::new(TileCache::new(Arc::clone(db), PagingConfig::default()).expect("cache"))
+}
+
+pub fn renderer(cache: &TileCache) -> Renderer {
+    Renderer::new(gpu(), cache, cig_render::FRAME_FORMAT)
+}
+
+pub fn view(eye: Geodetic, hpr: (f64, f64, f64), fov_deg: f64, size: (u32, u32)) -> View {
+    View {
+        eye,
+        orientation: Hpr {
+            heading_deg: hpr.0,
+            pitch_deg: hpr.1,
+            roll_deg: hpr.2,
+        },
+        fov: FovDeg::from_horizontal(fov_deg, size.0, size.1),
+        width_px: size.0,
+        height_px: size.1,
+    }
+}
+
+/// 2026-06-21 19:00 UTC: mid-morning sun over California.
+pub const MORNING_UNIX_S: f64 = 1_782_068_400.0;
+
+/// Renders one complete frame (all tiles it wants loaded first).
+pub fn render(
+    renderer: &mut Renderer,
+    cache: &TileCache,
+    snapshot: &FrameSnapshot,
+    key_background: bool,
+) -> (Image, cig_render::FrameStats) {
+    cache.update(&[snapshot.views[0].eye]);
+    cache.wait_idle();
+    cig_render::load_for_view(renderer, cache, snapshot, 0, 64).expect("load");
+    cig_render::render_image_with(
+        renderer,
+        cache,
+        snapshot,
+        0,
+        cig_render::FrameOptions {
+            mesh_budget: usize::MAX,
+            key_background,
+        },
+    )
+    .expect("render")
+}
+
+pub fn is_key(px: &[u8]) -> bool {
+    px[0] > 250 && px[1] < 5 && px[2] > 250
+}
+
+/// Mean absolute difference of two images, in 0..255 units per channel.
+pub fn mean_abs_diff(a: &Image, b: &Image) -> f64 {
+    let sum: u64 = a
+        .rgba
+        .iter()
+        .zip(&b.rgba)
+        .map(|(x, y)| u64::from(x.abs_diff(*y)))
+        .sum();
+    sum as f64 / a.rgba.len() as f64
+}
+
+/// Mean FLIP error (0 identical .. 1) of two images.
+pub fn flip_mean(reference: &Image, test: &Image) -> f32 {
+    let rgb = |img: &Image| -> Vec<u8> {
+        img.rgba
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect()
+    };
+    let r = nv_flip::FlipImageRgb8::with_data(reference.width, reference.height, &rgb(reference));
+    let t = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &rgb(test));
+    let error = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    let pool = nv_flip::FlipPool::from_image(&error);
+    pool.mean()
+}
+
+pub fn write_png(image: &Image, path: &std::path::Path) {
+    let file = std::fs::File::create(path).expect("create png");
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), image.width, image.height);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder
+        .write_header()
+        .expect("png header")
+        .write_image_data(&image.rgba)
+        .expect("png data");
+}
+
+pub fn read_png(path: &std::path::Path) -> Option<Image> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).ok()?));
+    let mut reader = decoder.read_info().ok()?;
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).ok()?;
+    if info.color_type != png::ColorType::Rgba || info.bit_depth != png::BitDepth::Eight {
+        return None;
+    }
+    buf.truncate(info.buffer_size());
+    Some(Image {
+        width: info.width,
+        height: info.height,
+        rgba: buf,
+    })
+}
+
+/// Where tests write the images they made, for a human to look at after a failure.
+pub fn out_dir() -> std::path::PathBuf {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render-tests");
+    std::fs::create_dir_all(&dir).expect("out dir");
+    dir
+}

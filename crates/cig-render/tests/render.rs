@@ -1,0 +1,362 @@
+//! Renderer behaviour on lavapipe (or any GPU): golden images, cracks, popping, earth
+//! curvature, precision far from the origin, and bad views.
+
+mod common;
+
+use cig_geo::{EnuFrame, Geodetic};
+use cig_render::Image;
+use cig_scene::lighting::{Fog, FogMode};
+use cig_scene::models::{Model, ModelMesh};
+use cig_scene::{EntityInstance, FrameSnapshot, Hpr};
+use common::*;
+use glam::{DVec3, Vec3};
+
+fn hills_eye(north_m: f64, east_m: f64, agl_m: f64) -> Geodetic {
+    let base = Geodetic::new(36.0159, -121.1854, 0.0);
+    let frame = EnuFrame::new(base);
+    let g = frame.enu_to_geodetic(DVec3::new(east_m, north_m, 0.0));
+    let cache = cache(&hills());
+    let mut q = cig_terrain::QuerySession::new(cache);
+    let ground = q.hot(g.lat_deg, g.lon_deg).expect("inside the test database");
+    Geodetic::new(g.lat_deg, g.lon_deg, ground.height_ellipsoid_m() + agl_m)
+}
+
+fn check_golden(name: &str, image: &Image) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden")
+        .join(format!("{name}.png"));
+    write_png(image, &out_dir().join(format!("{name}.png")));
+    if std::env::var_os("CIG_UPDATE_GOLDENS").is_some() {
+        write_png(image, &path);
+        return;
+    }
+    let golden = read_png(&path).unwrap_or_else(|| panic!("missing golden {}", path.display()));
+    assert_eq!((golden.width, golden.height), (image.width, image.height));
+    let flip = flip_mean(&golden, image);
+    assert!(
+        flip < 0.05,
+        "{name}: mean FLIP error {flip:.4} against {} (image written to {})",
+        path.display(),
+        out_dir().display()
+    );
+}
+
+#[test]
+fn golden_images_match_in_daylight_and_at_dusk_with_fog_and_models() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let eye = hills_eye(-1500.0, -1500.0, 250.0);
+    let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![view(eye, (40.0, -10.0, 0.0), 60.0, (192, 128))]);
+    let (day, stats) = render(&mut renderer, &cache, &snapshot, false);
+    assert!(stats.terrain_nodes > 0 && stats.triangles > 0);
+    check_golden("hills_day", &day);
+
+    // Dusk, exponential-squared fog at 3 km, a tank and a building on the ground.
+    snapshot.unix_time_s = MORNING_UNIX_S + 10.0 * 3600.0 + 1800.0;
+    snapshot.fog = Fog::from_visibility(FogMode::ExponentialSquared, 3000.0);
+    let tank_at = hills_eye(-1400.0, -1420.0, 0.0);
+    let house_at = hills_eye(-1380.0, -1460.0, 0.0);
+    snapshot.entities = vec![
+        EntityInstance {
+            id: 1,
+            model: "tank".into(),
+            position: tank_at,
+            orientation: Hpr::default(),
+        },
+        EntityInstance {
+            id: 2,
+            model: "building".into(),
+            position: house_at,
+            orientation: Hpr {
+                heading_deg: 30.0,
+                ..Default::default()
+            },
+        },
+    ];
+    let (dusk, stats) = render(&mut renderer, &cache, &snapshot, false);
+    assert_eq!(stats.entities_drawn, 2);
+    check_golden("hills_dusk_fog_models", &dusk);
+    // Dusk is darker than day.
+    let mean = |i: &Image| i.rgba.iter().map(|&v| f64::from(v)).sum::<f64>() / i.rgba.len() as f64;
+    assert!(mean(&dusk) < mean(&day) * 0.8);
+}
+
+fn key_pixels(image: &Image) -> usize {
+    image.rgba.chunks_exact(4).filter(|p| is_key(p)).count()
+}
+
+#[test]
+fn no_background_shows_through_between_terrain_nodes() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let size = (256, 192);
+    let mut checked = 0;
+    for (k, (n, e, agl, heading, pitch)) in [
+        (0.0, 0.0, 400.0, 0.0, -60.0),
+        (500.0, -800.0, 250.0, 45.0, -40.0),
+        (-900.0, 600.0, 600.0, 200.0, -55.0),
+        (1200.0, 1200.0, 150.0, 300.0, -35.0),
+        (-1500.0, -300.0, 900.0, 120.0, -75.0),
+        (300.0, 1700.0, 350.0, 260.0, -45.0),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let snapshot_view = view(hills_eye(n, e, agl), (heading, pitch, 0.0), 50.0, size);
+        for max_pixel_error in [0.0, 1.0, 4.0] {
+            let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![snapshot_view]);
+            snapshot.max_pixel_error = max_pixel_error;
+            let (image, _) = render(&mut renderer, &cache, &snapshot, true);
+            let holes = key_pixels(&image);
+            if holes > 0 {
+                write_png(&image, &out_dir().join(format!("crack_{k}_{max_pixel_error}.png")));
+            }
+            assert_eq!(holes, 0, "view {k} at {max_pixel_error} px: background shows through");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 18);
+}
+
+#[test]
+fn no_cracks_while_finer_tiles_are_still_loading() {
+    let db = hills();
+    let layout = *db.layout();
+    // Only the two coarsest levels and a scattering of finer tiles are resident.
+    let cache = cache(&db);
+    for level in 0..layout.levels {
+        for key in layout.keys_at(level) {
+            if level + 2 >= layout.levels || (key.row + key.col + u32::from(level)) % 3 == 0 {
+                cache.load_now(key).expect("tile");
+            }
+        }
+    }
+    let mut renderer = renderer(&cache);
+    for (n, e, agl, heading, pitch) in [(0.0, 0.0, 300.0, 30.0, -50.0), (800.0, -600.0, 500.0, 210.0, -60.0)] {
+        let snapshot = FrameSnapshot::new(
+            MORNING_UNIX_S,
+            vec![view(hills_eye(n, e, agl), (heading, pitch, 0.0), 50.0, (256, 192))],
+        );
+        let (image, _) = cig_render::render_image_with(
+            &mut renderer,
+            &cache,
+            &snapshot,
+            0,
+            cig_render::FrameOptions {
+                mesh_budget: usize::MAX,
+                key_background: true,
+            },
+        )
+        .expect("render");
+        assert_eq!(key_pixels(&image), 0, "background shows through mixed-level terrain");
+    }
+}
+
+#[test]
+fn level_of_detail_changes_frame_to_frame_no_more_than_full_detail_does() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let size = (200, 150);
+    let frames = 10;
+    let sequence = |renderer: &mut cig_render::Renderer, max_pixel_error: f64| -> Vec<Image> {
+        (0..frames)
+            .map(|i| {
+                let eye = hills_eye(-2000.0 + 40.0 * i as f64, -1800.0 + 30.0 * i as f64, 180.0);
+                let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![view(eye, (37.0, -6.0, 0.0), 60.0, size)]);
+                snapshot.max_pixel_error = max_pixel_error;
+                render(renderer, &cache, &snapshot, false).0
+            })
+            .collect()
+    };
+    let full = sequence(&mut renderer, 0.0);
+    let lod = sequence(&mut renderer, 1.0);
+    let change = |images: &[Image]| -> Vec<f64> {
+        images.windows(2).map(|w| mean_abs_diff(&w[0], &w[1])).collect()
+    };
+    let (full_change, lod_change) = (change(&full), change(&lod));
+    for (i, (f, l)) in full_change.iter().zip(&lod_change).enumerate() {
+        assert!(
+            *l <= f * 1.25 + 0.5,
+            "step {i}: level-of-detail frames change by {l:.2} where full detail changes by {f:.2}"
+        );
+    }
+    // And the level-of-detail frames stay close to the full-detail ones.
+    for (i, (f, l)) in full.iter().zip(&lod).enumerate() {
+        let flip = flip_mean(f, l);
+        assert!(flip < 0.06, "frame {i}: FLIP {flip:.4} between full detail and 1 px");
+    }
+}
+
+/// Local radius of curvature (Gaussian mean) of the WGS84 ellipsoid at `lat_deg`.
+fn gaussian_radius_m(lat_deg: f64) -> f64 {
+    let (a, e2) = (cig_geo::WGS84_A_M, cig_geo::WGS84_E2);
+    let s2 = lat_deg.to_radians().sin().powi(2);
+    let w = (1.0 - e2 * s2).sqrt();
+    let m = a * (1.0 - e2) / (w * w * w);
+    let n = a / w;
+    (m * n).sqrt()
+}
+
+#[test]
+fn a_ship_thirty_km_away_sinks_hull_first_below_the_horizon() {
+    let db = sea();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let eye_height_m = 10.0;
+    let eye = Geodetic::new(36.0, -122.0, eye_height_m);
+    let frame = EnuFrame::new(Geodetic::new(36.0, -122.0, 0.0));
+    let distance_m = 30_000.0;
+    let ship_ground = frame.enu_to_geodetic(DVec3::new(0.0, distance_m, 0.0));
+    // Put it on the ellipsoid (the sea here is at 0 m with no geoid).
+    let ship_at = Geodetic::new(ship_ground.lat_deg, ship_ground.lon_deg, 0.0);
+    let ship_view = view(eye, (0.0, -0.1, 0.0), 0.6, (240, 240));
+    let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![ship_view]);
+    snapshot.fog = Fog::from_visibility(FogMode::Off, 1e6);
+    snapshot.max_pixel_error = 0.5;
+    let (empty, _) = render(&mut renderer, &cache, &snapshot, true);
+    snapshot.entities = vec![EntityInstance {
+        id: 1,
+        model: "ship".into(),
+        position: ship_at,
+        orientation: Hpr::default(),
+    }];
+    let (with_ship, stats) = render(&mut renderer, &cache, &snapshot, true);
+    assert_eq!(stats.entities_drawn, 1);
+    let changed_rows: Vec<u32> = (0..with_ship.height)
+        .filter(|&y| {
+            (0..with_ship.width).any(|x| {
+                let i = ((y * with_ship.width + x) * 4) as usize;
+                (0..3).any(|c| empty.rgba[i + c].abs_diff(with_ship.rgba[i + c]) > 12)
+            })
+        })
+        .collect();
+    let (Some(&top), Some(&bottom)) = (changed_rows.first(), changed_rows.last()) else {
+        panic!("the ship's mast should show above the horizon at 30 km");
+    };
+    // Geometry: the horizon is sqrt(2 R h) away; beyond it, (d - d_h)^2 / 2R is hidden.
+    let r = gaussian_radius_m(36.0);
+    let horizon_m = (2.0 * r * eye_height_m).sqrt();
+    let hidden_m = (distance_m - horizon_m).powi(2) / (2.0 * r);
+    assert!((26.0..29.0).contains(&hidden_m), "hidden height {hidden_m}");
+    let camera = ship_view.camera();
+    let up = frame.enu_vector_to_ecef(DVec3::Z);
+    let row_of = |height_m: f64| {
+        let p = ship_at.to_ecef() + up * height_m;
+        camera.project_ecef(p).expect("in front").1
+    };
+    let mast_top_row = row_of(37.0);
+    let hidden_row = row_of(hidden_m);
+    write_png(&with_ship, &out_dir().join("ship_30km.png"));
+    assert!(
+        (f64::from(top) - mast_top_row).abs() < 2.5,
+        "mast top at row {top}, geometry says {mast_top_row:.1}"
+    );
+    assert!(
+        (f64::from(bottom) - hidden_row).abs() < 3.0,
+        "the ship disappears below row {bottom}; the horizon should hide it below row {hidden_row:.1} ({hidden_m:.1} m)"
+    );
+    // The hull (keel to deck, 9 m) and the superstructure (to 17 m) are all hidden.
+    assert!(f64::from(bottom) < row_of(17.0) - 5.0);
+}
+
+fn test_box() -> Model {
+    let mut mesh = ModelMesh::default();
+    mesh.add_box(Vec3::new(-6.0, -8.0, 0.0), Vec3::new(6.0, 8.0, 7.5), [200, 200, 200, 255]);
+    Model::new("test_box", vec![mesh.clone(), mesh.clone(), mesh])
+}
+
+#[test]
+fn geometry_lands_on_its_pixel_far_from_the_database_origin() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    renderer.set_models(vec![test_box()]);
+    let size = (320, 240);
+    // Far away (about 9000 km from the database) and near it: sub-pixel placement in both.
+    for base in [Geodetic::new(61.2, 149.9, 35.0), Geodetic::new(36.01, -121.2, 1500.0)] {
+        let frame = EnuFrame::new(base);
+        let box_at = frame.enu_to_geodetic(DVec3::new(0.0, 60.0, -3.75));
+        let box_view = view(base, (0.0, 0.0, 0.0), 30.0, size);
+        let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
+        let (empty, _) = render(&mut renderer, &cache, &snapshot, true);
+        snapshot.entities = vec![EntityInstance {
+            id: 7,
+            model: "test_box".into(),
+            position: box_at,
+            orientation: Hpr::default(),
+        }];
+        let (image, _) = render(&mut renderer, &cache, &snapshot, true);
+        let (mut sum_x, mut sum_y, mut count) = (0.0, 0.0, 0.0);
+        let (mut min_x, mut max_x) = (u32::MAX, 0);
+        for y in 0..size.1 {
+            for x in 0..size.0 {
+                let i = ((y * size.0 + x) * 4) as usize;
+                let diff: u32 = (0..3).map(|c| u32::from(empty.rgba[i + c].abs_diff(image.rgba[i + c]))).sum();
+                if diff > 30 {
+                    let w = 1.0;
+                    sum_x += (f64::from(x) + 0.5) * w;
+                    sum_y += (f64::from(y) + 0.5) * w;
+                    count += w;
+                    min_x = min_x.min(x);
+                    max_x = max_x.max(x);
+                }
+            }
+        }
+        assert!(count > 100.0, "box not drawn at {base:?}");
+        let (cx, cy) = (sum_x / count, sum_y / count);
+        assert!((cx - 160.0).abs() < 0.35, "centroid x {cx} at {base:?}");
+        assert!((cy - 120.0).abs() < 0.35, "centroid y {cy} at {base:?}");
+        // The front face is 12 m wide at 52 m.
+        let expected_px = 12.0 / 52.0 * box_view.camera().pixels_per_tangent;
+        let width_px = f64::from(max_x - min_x + 1);
+        assert!((width_px - expected_px).abs() < 1.5, "width {width_px} px, expected {expected_px:.1}");
+    }
+}
+
+#[test]
+fn level_of_detail_draws_far_fewer_triangles_than_full_detail() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let eye = hills_eye(-3000.0, -3000.0, 300.0);
+    let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![view(eye, (45.0, -5.0, 0.0), 60.0, (160, 120))]);
+    snapshot.max_pixel_error = 0.0;
+    let (_, full) = render(&mut renderer, &cache, &snapshot, false);
+    snapshot.max_pixel_error = 1.0;
+    let (_, lod) = render(&mut renderer, &cache, &snapshot, false);
+    assert!(
+        lod.terrain_triangles * 3 < full.terrain_triangles,
+        "{} vs {}",
+        lod.terrain_triangles,
+        full.terrain_triangles
+    );
+    // A narrow (6x) view of the same frame size refines further than a wide one.
+    let narrow = view(eye, (45.0, -5.0, 0.0), 10.0, (160, 120));
+    let wide = view(eye, (45.0, -5.0, 0.0), 60.0, (160, 120));
+    let level = |sel: &cig_scene::Selection| {
+        sel.nodes.iter().map(|n| f64::from(n.key.level)).sum::<f64>() / sel.nodes.len().max(1) as f64
+    };
+    let narrow_sel = renderer.select(&cache, &narrow, 1.0);
+    let wide_sel = renderer.select(&cache, &wide, 1.0);
+    assert!(level(&narrow_sel) < level(&wide_sel), "{} vs {}", level(&narrow_sel), level(&wide_sel));
+}
+
+#[test]
+fn bad_views_are_errors_not_panics() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let mut bad = view(hills_eye(0.0, 0.0, 100.0), (0.0, 0.0, 0.0), 60.0, (64, 48));
+    bad.width_px = 0;
+    let snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![bad]);
+    let err = cig_render::render_image(&mut renderer, &cache, &snapshot, 0).expect_err("zero size");
+    assert!(err.to_string().contains("frame size"), "{err}");
+    let mut bad = view(hills_eye(0.0, 0.0, 100.0), (0.0, 0.0, 0.0), 60.0, (64, 48));
+    bad.eye.alt_m = -5000.0;
+    let snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![bad]);
+    let err = cig_render::render_image(&mut renderer, &cache, &snapshot, 0).expect_err("below");
+    assert!(err.to_string().contains("below the ellipsoid"), "{err}");
+}
