@@ -153,13 +153,17 @@ impl McMullen {
         if x_km <= 0.0 {
             return 0.0;
         }
-        let end = x_km.clamp(FIT_MIN_KM, FIT_MAX_KM);
-        if end == x_km {
-            return self.eq6_m(x_km);
-        }
-        let l_end = libm::log(end);
-        let slope = self.j + 2.0 * self.k * l_end;
-        self.eq6_m(end) * libm::exp(slope * (libm::log(x_km) - l_end))
+        self.sigma_from_ln_km(libm::log(x_km))
+    }
+
+    /// [`Self::sigma_m`] from `ln(x_km)` (one logarithm serves sigma_y and sigma_z).
+    pub fn sigma_from_ln_km(self, l: f64) -> f64 {
+        // ln 0.1 and ln 100.
+        const LN_MIN: f64 = -2.302_585_092_994_045_7;
+        const LN_MAX: f64 = 4.605_170_185_988_091;
+        let e = l.clamp(LN_MIN, LN_MAX);
+        // Inside the fit the last term is 0 and this is Eq 6 as written.
+        libm::exp(self.i + self.j * e + self.k * e * e + (self.j + 2.0 * self.k * e) * (l - e))
     }
 }
 
@@ -181,11 +185,14 @@ pub fn sigmas(class: StabilityClass, downwind_m: f64) -> Result<Sigmas, EffectsE
 
 /// [`sigmas`] for a distance already known to be finite and >= 0.
 pub(crate) fn sigmas_unchecked(class: StabilityClass, downwind_m: f64) -> Sigmas {
+    if downwind_m <= 0.0 {
+        return Sigmas { y_m: 0.0, z_m: 0.0 };
+    }
     let (y, z) = class.mcmullen_constants();
-    let x_km = downwind_m / 1000.0;
+    let l = libm::log(downwind_m / 1000.0);
     Sigmas {
-        y_m: y.sigma_m(x_km),
-        z_m: z.sigma_m(x_km).min(SIGMA_Z_CAP_M),
+        y_m: y.sigma_from_ln_km(l),
+        z_m: z.sigma_from_ln_km(l).min(SIGMA_Z_CAP_M),
     }
 }
 

@@ -8,6 +8,8 @@
 //! machine draws the same sequence (source 000 chapter VII.A: the thesis's plumes differed on
 //! every node because each drew its own random numbers).
 //!
+//! Epoch `e > 0` of an effect mixes `e * 0xD1B54A32D192ED03` into the SplitMix64 state.
+//!
 //! Limits: ChaCha8 is used for reproducibility, not secrecy.
 
 use rand_chacha::rand_core::{RngCore, SeedableRng};
@@ -34,7 +36,14 @@ fn splitmix64(state: &mut u64) -> u64 {
 
 /// The generator of the effect `id` started at `start_time_s`.
 pub fn effect_rng(id: EffectId, start_time_s: f64) -> EffectRng {
-    let mut state = id.0 ^ start_time_s.to_bits().rotate_left(29);
+    effect_epoch_rng(id, start_time_s, 0)
+}
+
+/// The generator of epoch `epoch` of the effect (the particle engine re-keys its generator
+/// every epoch, so a late joiner can start at an epoch instead of replaying the whole effect).
+pub fn effect_epoch_rng(id: EffectId, start_time_s: f64, epoch: u64) -> EffectRng {
+    let mut state =
+        id.0 ^ start_time_s.to_bits().rotate_left(29) ^ epoch.wrapping_mul(0xD1B5_4A32_D192_ED03);
     let mut seed = [0u8; 32];
     for chunk in seed.chunks_exact_mut(8) {
         chunk.copy_from_slice(&splitmix64(&mut state).to_le_bytes());

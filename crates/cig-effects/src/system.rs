@@ -54,13 +54,18 @@ use crate::dispersion::{sigmas_unchecked, StabilityClass};
 use crate::dust::DustSurface;
 use crate::error::{finite, non_negative, positive, EffectsError};
 use crate::optics::{self, ObscurantKind, Transmittance};
-use crate::seed::{effect_rng, EffectId, EffectRng};
+use crate::seed::{effect_epoch_rng, EffectId, EffectRng};
 use cig_geo::{EnuFrame, Geodetic};
 use cig_terrain::Material;
 use glam::DVec3;
 
 /// The fixed simulation step, s.
 pub const STEP_S: f64 = 1.0 / 60.0;
+/// An effect re-keys its generator every this many seconds of its own time (longer than any
+/// puff lives), so an IG that starts an effect late replays at most one epoch and a puff life.
+pub const EPOCH_S: f64 = 120.0;
+/// Simulation times beyond this (in size) are refused, s (about 31 years).
+pub const MAX_SIM_TIME_S: f64 = 1.0e9;
 /// Columns of a plume (Figure 9).
 pub const PLUME_COLUMNS: usize = 5;
 /// Gravity for the Newtonian puffs, m/s^2.
@@ -291,6 +296,12 @@ struct Puff {
     floor_z: f64,
     sigma0_m: f64,
     mass0_kg: f64,
+    /// `e^(-delta age)` of Eq 4 and the flame's `e^(-age / cooling time)`, kept by multiplying
+    /// by their one-step factors.
+    decay: f64,
+    cool: f64,
+    /// Born in an odd epoch: draws from that epoch's generator.
+    odd_epoch: bool,
     /// Derived each step.
     centre: DVec3,
     sigma_m: f64,
@@ -306,8 +317,10 @@ struct Column {
     active: Vec<u16>,
     /// The unused queue.
     free: Vec<u16>,
-    /// Effect-local time of the next spawn, s.
-    next_spawn_s: f64,
+    /// Effect-local time of the column's first spawn, s.
+    phase_s: f64,
+    /// Puffs the column has spawned (spawn `k` is at `phase + k * interval`).
+    spawned: u64,
     /// Footprint offset of the column (unit vector in the footprint's own axes: x downwind).
     footprint: [f64; 2],
 }
@@ -320,7 +333,8 @@ impl Column {
             puffs: vec![Puff::default(); capacity],
             active: Vec::with_capacity(capacity),
             free,
-            next_spawn_s: 0.0,
+            phase_s: 0.0,
+            spawned: 0,
             footprint: [0.0, 0.0],
         }
     }
@@ -360,7 +374,12 @@ struct Slot {
     duration_s: f64,
     /// Last grid step applied (`None`: not yet stepped).
     last_step: Option<i64>,
-    rng: EffectRng,
+    id: EffectId,
+    /// Epoch of the generator (see [`EPOCH_S`]).
+    epoch: u64,
+    /// Generators of the current and the previous epoch (index `epoch % 2`): a puff draws from
+    /// the generator of the epoch it was born in.
+    rngs: [EffectRng; 2],
     columns: Vec<Column>,
     life_s: f64,
     size_m: f64,
@@ -455,8 +474,19 @@ const DUST_TURBULENCE_MPS2: f64 = 0.6;
 /// Dust-laden air is this fraction denser than air (slow settling).
 const DUST_EXCESS_DENSITY: f64 = 0.01;
 
-fn mass_decay(fd: f64, delta: f64, age_s: f64) -> f64 {
-    fd + (1.0 - fd) * libm::exp(-delta * age_s)
+/// Eq 4's long-term fraction and decay rate of a kind.
+fn mass_law(kind: ObscurantKind) -> (f64, f64) {
+    match kind {
+        ObscurantKind::Smoke => (SMOKE_FD, SMOKE_DELTA_PER_S),
+        ObscurantKind::Flame => (FLAME_FD, FLAME_DELTA_PER_S),
+        ObscurantKind::Dust => (DUST_FD, DUST_DELTA_PER_S),
+    }
+}
+
+/// Eq 4 from the kept decay factor.
+fn mass_kg(kind: ObscurantKind, p: &Puff) -> f64 {
+    let (fd, _) = mass_law(kind);
+    p.mass0_kg * (fd + (1.0 - fd) * p.decay)
 }
 
 fn opacity(kind: ObscurantKind, mass_kg: f64, sigma_m: f64, age_s: f64, life_s: f64) -> f64 {
@@ -517,7 +547,12 @@ impl EffectSystem {
                 start_s: 0.0,
                 duration_s: 0.0,
                 last_step: None,
-                rng: effect_rng(EffectId(0), 0.0),
+                id: EffectId(0),
+                epoch: 0,
+                rngs: [
+                    effect_epoch_rng(EffectId(0), 0.0, 0),
+                    effect_epoch_rng(EffectId(0), 0.0, 1),
+                ],
                 columns: (0..columns).map(|_| Column::new(per_column)).collect(),
                 life_s: 1.0,
                 size_m: 1.0,
@@ -604,7 +639,9 @@ impl EffectSystem {
         slot.live = true;
         slot.start_s = start_s;
         slot.last_step = None;
-        slot.rng = effect_rng(id, start_s);
+        slot.id = id;
+        slot.epoch = 0;
+        slot.rngs[0] = effect_epoch_rng(id, start_s, 0);
         slot.rise = None;
         slot.atmosphere_version = version.wrapping_sub(1);
         slot.vehicle = None;
@@ -658,7 +695,8 @@ impl EffectSystem {
                     let a = turn + (i - 1) as f64 * std::f64::consts::FRAC_PI_2;
                     [libm::cos(a), libm::sin(a)]
                 };
-                c.next_spawn_s = interval * i as f64 / PLUME_COLUMNS as f64;
+                c.phase_s = interval * i as f64 / PLUME_COLUMNS as f64;
+                c.spawned = 0;
             }
         }
         self.catch_up(index);
@@ -706,7 +744,8 @@ impl EffectSystem {
             slot.vehicle = Some(vehicle);
             slot.vehicle_length_m = length;
             for c in &mut slot.columns {
-                c.next_spawn_s = 0.0;
+                c.phase_s = 0.0;
+                c.spawned = 0;
             }
         }
         self.catch_up(index);
@@ -779,6 +818,13 @@ impl EffectSystem {
     /// than the last step do nothing (no rewind).
     pub fn advance_to(&mut self, sim_time_s: f64) -> Result<(), EffectsError> {
         let t = finite("simulation time (s)", sim_time_s)?;
+        if t.abs() > MAX_SIM_TIME_S {
+            return Err(EffectsError::OutOfRange {
+                name: "simulation time (s)",
+                value: t,
+                expected: "between -1e9 and 1e9",
+            });
+        }
         let target = libm::floor(t / STEP_S + 1e-9) as i64;
         match self.step {
             Some(n) if target <= n => return Ok(()),
@@ -806,6 +852,7 @@ impl EffectSystem {
         }
         let first = libm::floor(slot.start_s / STEP_S + 1e-9) as i64;
         let mut n = slot.last_step.unwrap_or(first).max(first);
+        slot.skip_ahead(&mut n, target);
         let mut counts = (0u64, 0u64);
         while n < target && slot.live {
             n += 1;
@@ -1007,6 +1054,13 @@ impl Slot {
     /// One fixed step ending at effect-local time `t_local`. Returns (spawned, starved).
     fn step(&mut self, t_local: f64, atmosphere: &Atmosphere, version: u64) -> (u64, u64) {
         self.now_local_s = t_local;
+        let epoch = libm::floor(t_local / EPOCH_S) as u64;
+        if epoch != self.epoch {
+            self.epoch = epoch;
+            if let Some(r) = self.rngs.get_mut((epoch % 2) as usize) {
+                *r = effect_epoch_rng(self.id, self.start_s, epoch);
+            }
+        }
         let wind = atmosphere.wind.velocity_enu();
         let u = atmosphere.wind.speed_mps.max(briggs::MIN_WIND_MPS);
         if self.kind == ObscurantKind::Smoke && self.atmosphere_version != version {
@@ -1020,6 +1074,9 @@ impl Slot {
         }
         self.atmosphere_version = version;
         let life = self.life_s;
+        let (_, delta) = mass_law(self.kind);
+        let decay_step = libm::exp(-delta * STEP_S);
+        let cool_step = libm::exp(-STEP_S / FLAME_COOLING_S);
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         // Update and retire.
@@ -1035,17 +1092,18 @@ impl Slot {
                     c.free.push(i);
                     continue;
                 }
+                p.decay *= decay_step;
+                p.cool *= cool_step;
                 match self.kind {
                     ObscurantKind::Smoke => {
                         p.pos += wind * STEP_S;
                         p.travel_m += u * STEP_S;
                         smoke_derive(p, self.rise, atmosphere, age, life, self.size_m);
                     }
-                    ObscurantKind::Flame => {
-                        newtonian_step(p, &mut self.rng, wind, atmosphere, age, life, self.kind);
-                    }
-                    ObscurantKind::Dust => {
-                        newtonian_step(p, &mut self.rng, wind, atmosphere, age, life, self.kind);
+                    ObscurantKind::Flame | ObscurantKind::Dust => {
+                        let [even, odd] = &mut self.rngs;
+                        let rng = if p.odd_epoch { odd } else { even };
+                        newtonian_step(p, rng, wind, atmosphere, age, life, self.kind);
                     }
                 }
                 let reach = DVec3::splat(optics::CUTOFF_SIGMAS * p.sigma_m);
@@ -1067,17 +1125,20 @@ impl Slot {
                 continue;
             };
             let interval = life / c.puffs.len() as f64;
-            while c.next_spawn_s <= t_local + 1e-9 {
-                let spawn_s = c.next_spawn_s;
-                c.next_spawn_s += interval;
-                if spawn_s >= self.duration_s {
-                    c.next_spawn_s = f64::INFINITY;
+            loop {
+                let spawn_s = c.phase_s + c.spawned as f64 * interval;
+                if spawn_s > t_local + 1e-9 || spawn_s >= self.duration_s {
                     break;
                 }
+                c.spawned += 1;
                 let age = t_local - spawn_s;
                 let Some(emitted) = emit(
                     self.kind,
-                    &mut self.rng,
+                    if self.epoch % 2 == 1 {
+                        &mut self.rngs[1]
+                    } else {
+                        &mut self.rngs[0]
+                    },
                     source,
                     self.size_m,
                     c.footprint,
@@ -1095,6 +1156,9 @@ impl Slot {
                 };
                 *p = emitted;
                 p.spawn_s = spawn_s;
+                p.odd_epoch = self.epoch % 2 == 1;
+                p.decay = libm::exp(-delta * age);
+                p.cool = libm::exp(-age / FLAME_COOLING_S);
                 match self.kind {
                     ObscurantKind::Smoke => {
                         smoke_derive(p, self.rise, atmosphere, age, life, self.size_m)
@@ -1117,6 +1181,57 @@ impl Slot {
             }
         }
         (spawned, starved)
+    }
+
+    /// When the slot is far behind `target`, jumps `n` to the last step before the latest epoch
+    /// boundary that is at least a puff life (and a second) before the target, with no puffs
+    /// and the spawn counters where a stepped run has them. Every puff alive at the target was
+    /// born after that boundary, and the generator is re-keyed there, so the state at the
+    /// target is the same as that of a run stepped all the way.
+    fn skip_ahead(&mut self, n: &mut i64, target: i64) {
+        let local = |step: i64| step as f64 * STEP_S - self.start_s;
+        let lead = self.life_s + 1.0;
+        let (t_now, t_target) = (local(*n), local(target));
+        if t_target - t_now <= EPOCH_S + lead {
+            return;
+        }
+        let boundary = libm::floor((t_target - lead) / EPOCH_S) * EPOCH_S;
+        if boundary <= t_now {
+            return;
+        }
+        // The last step whose local time is before the boundary.
+        let mut m = libm::floor((self.start_s + boundary) / STEP_S) as i64;
+        while local(m) >= boundary {
+            m -= 1;
+        }
+        while local(m + 1) < boundary {
+            m += 1;
+        }
+        let t_m = local(m);
+        for c in &mut self.columns {
+            c.reset();
+            let interval = self.life_s / c.puffs.len() as f64;
+            let spawned_by = |k: u64| {
+                let s = c.phase_s + k as f64 * interval;
+                s <= t_m + 1e-9 && s < self.duration_s
+            };
+            // The first k whose spawn is not due by t_m (the spawn loop's own test).
+            let mut k = if t_m < c.phase_s {
+                0
+            } else {
+                libm::floor((t_m - c.phase_s) / interval) as u64
+            };
+            while k > 0 && !spawned_by(k - 1) {
+                k -= 1;
+            }
+            while spawned_by(k) {
+                k += 1;
+            }
+            c.spawned = k;
+        }
+        self.epoch = libm::floor(t_m / EPOCH_S) as u64;
+        self.bounds = (DVec3::ZERO, DVec3::ZERO);
+        *n = m;
     }
 
     /// The source of new puffs at effect-local time `t_local`: (position, velocity, surface).
@@ -1242,7 +1357,7 @@ fn smoke_derive(
         );
     p.centre.z = p.centre.z.max(p.floor_z);
     p.sigma_m = libm::sqrt(p.sigma0_m * p.sigma0_m + 0.36 * s.y_m * s.z_m);
-    p.mass_kg = p.mass0_kg * mass_decay(SMOKE_FD, SMOKE_DELTA_PER_S, age);
+    p.mass_kg = mass_kg(ObscurantKind::Smoke, p);
     p.opacity = opacity(ObscurantKind::Smoke, p.mass_kg, p.sigma_m, age, life);
     p.temperature_k = atmosphere.air_temperature_k;
 }
@@ -1260,13 +1375,13 @@ fn derive_newtonian(
         ObscurantKind::Flame => {
             // Flame puffs swell as they entrain air.
             p.sigma_m = p.sigma0_m * (1.0 + 1.2 * age / life);
-            p.temperature_k = ta + (FLAME_TEMPERATURE_K - ta) * libm::exp(-age / FLAME_COOLING_S);
-            p.mass_kg = p.mass0_kg * mass_decay(FLAME_FD, FLAME_DELTA_PER_S, age);
+            p.temperature_k = ta + (FLAME_TEMPERATURE_K - ta) * p.cool;
+            p.mass_kg = mass_kg(ObscurantKind::Flame, p);
         }
         _ => {
             p.sigma_m = p.sigma0_m * (1.0 + 3.0 * age / life);
             p.temperature_k = ta;
-            p.mass_kg = p.mass0_kg * mass_decay(DUST_FD, DUST_DELTA_PER_S, age);
+            p.mass_kg = mass_kg(ObscurantKind::Dust, p);
         }
     }
     p.opacity = opacity(kind, p.mass_kg, p.sigma_m, age, life);

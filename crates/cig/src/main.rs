@@ -2,11 +2,13 @@
 //! configuration, calls the library crates, prints results. See `ARCHITECTURE.md`.
 
 mod bench;
+mod bench_particles;
 mod cli;
 mod config;
 mod db;
 mod demo;
 mod output;
+mod plume;
 mod query;
 
 use clap::Parser;
@@ -44,6 +46,8 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Query(cli::QueryCommand::Hat(args)) => query::hat(&args, &config),
         cli::Command::Query(cli::QueryCommand::Los(args)) => query::los(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Particles(args)) => bench_particles::run(&args),
+        cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Config(cli::ConfigCommand::Default) => {
             print!("{}", config::Config::default_toml()?);
