@@ -159,8 +159,8 @@ impl McMullen {
     /// [`Self::sigma_m`] from `ln(x_km)` (one logarithm serves sigma_y and sigma_z).
     pub fn sigma_from_ln_km(self, l: f64) -> f64 {
         // ln 0.1 and ln 100.
-        const LN_MIN: f64 = -2.302_585_092_994_045_7;
-        const LN_MAX: f64 = 4.605_170_185_988_091;
+        const LN_MIN: f64 = -std::f64::consts::LN_10;
+        const LN_MAX: f64 = 2.0 * std::f64::consts::LN_10;
         let e = l.clamp(LN_MIN, LN_MAX);
         // Inside the fit the last term is 0 and this is Eq 6 as written.
         libm::exp(self.i + self.j * e + self.k * e * e + (self.j + 2.0 * self.k * e) * (l - e))

@@ -70,13 +70,13 @@ pub fn gaussian_path_integral_kg_m2(
     mass_kg: f64,
     sigma_m: f64,
 ) -> f64 {
-    if !(sigma_m > 0.0) || !(mass_kg > 0.0) {
+    if sigma_m.is_nan() || sigma_m <= 0.0 || mass_kg.is_nan() || mass_kg <= 0.0 {
         return 0.0;
     }
     let ab = b - a;
     let length = ab.length();
     let ac = centre - a;
-    if !(length > 0.0) {
+    if length.is_nan() || length <= 0.0 {
         return 0.0;
     }
     let d = ab / length;
@@ -93,7 +93,7 @@ pub fn gaussian_path_integral_kg_m2(
 
 /// Peak optical depth of a puff seen through its centre: `alpha M / (2 pi sigma^2)`.
 pub fn centre_optical_depth(kind: ObscurantKind, mass_kg: f64, sigma_m: f64) -> f64 {
-    if !(sigma_m > 0.0) {
+    if sigma_m.is_nan() || sigma_m <= 0.0 {
         return 0.0;
     }
     kind.mass_extinction_m2_per_kg() * mass_kg / (2.0 * std::f64::consts::PI * sigma_m * sigma_m)

@@ -530,9 +530,8 @@ impl EffectSystem {
         }
         let mut slots = Vec::with_capacity(config.plume_slots + config.dust_slots);
         let origin = EnuFrame::new(Geodetic::new(0.0, 0.0, 0.0));
-        for group in std::iter::repeat(Group::Plume)
-            .take(config.plume_slots)
-            .chain(std::iter::repeat(Group::Dust).take(config.dust_slots))
+        for group in std::iter::repeat_n(Group::Plume, config.plume_slots)
+            .chain(std::iter::repeat_n(Group::Dust, config.dust_slots))
         {
             let (columns, per_column) = match group {
                 Group::Plume => (PLUME_COLUMNS, config.puffs_per_column),

@@ -162,34 +162,34 @@ fn a_plume_ends_after_its_duration_and_returns_its_puffs() {
 /// A scenario: a fire (smoke and flame), a second smoke plume started later, a dust trail, a
 /// wind change. `frames` are the times at which the IG happens to advance.
 fn run_scenario(frames: &[f64], seed_offset: u64) -> EffectSystem {
-    let mut sys = EffectSystem::new(small_config()).unwrap();
+    let mut sys = EffectSystem::new(small_config()).expect("scenario");
     sys.set_atmosphere(atmosphere(4.0, 250.0, StabilityClass::D))
-        .unwrap();
+        .expect("scenario");
     let mut started_late = false;
     let mut wind_changed = false;
-    sys.advance_to(0.0).unwrap();
+    sys.advance_to(0.0).expect("scenario");
     sys.start_plume(&plume(10 + seed_offset, PlumeKind::Smoke, 0.0, 60.0))
-        .unwrap();
+        .expect("scenario");
     sys.start_plume(&plume(11 + seed_offset, PlumeKind::Flame, 0.0, 60.0))
-        .unwrap();
+        .expect("scenario");
     sys.start_dust_trail(&trail(12 + seed_offset, 0.0, Material::DryClay, 12.0))
-        .unwrap();
+        .expect("scenario");
     for &t in frames {
         // The scenario's events happen at scenario times; an IG applies them on the first frame
         // at or after them (the late plume is stepped through what it missed).
         if !wind_changed && t >= 8.0 {
             // Applied between grid steps 480 and 481 on every IG.
-            sys.advance_to(8.0).unwrap();
+            sys.advance_to(8.0).expect("scenario");
             sys.set_atmosphere(atmosphere(6.0, 200.0, StabilityClass::C))
-                .unwrap();
+                .expect("scenario");
             wind_changed = true;
         }
         if !started_late && t >= 3.3 {
             sys.start_plume(&plume(13 + seed_offset, PlumeKind::Smoke, 3.3, 60.0))
-                .unwrap();
+                .expect("scenario");
             started_late = true;
         }
-        sys.advance_to(t).unwrap();
+        sys.advance_to(t).expect("scenario");
     }
     sys
 }

@@ -177,10 +177,19 @@ fn one_line_error(args: &[&str]) -> String {
 
 #[test]
 fn bad_values_give_one_line_errors() {
-    let base = ["plume", "--class", "D", "--wind", "5", "--x", "100"];
+    // The base command with one flag replaced or added.
     let with = |extra: &[&str]| {
-        let mut v: Vec<&str> = base.to_vec();
-        v.extend_from_slice(extra);
+        let mut pairs = vec![("--class", "D"), ("--wind", "5"), ("--x", "100")];
+        for flag_value in extra.chunks(2) {
+            let (flag, value) = (flag_value[0], flag_value[1]);
+            pairs.retain(|(f, _)| *f != flag);
+            pairs.push((flag, value));
+        }
+        let mut v = vec!["plume"];
+        for (f, value) in pairs {
+            v.push(f);
+            v.push(value);
+        }
         one_line_error(&v)
     };
     assert!(with(&["--wind", "-1"]).contains("wind"));
