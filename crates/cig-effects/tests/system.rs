@@ -578,6 +578,14 @@ fn bad_input_is_refused_with_a_message() {
     let mut a = Atmosphere::default();
     a.wind.speed_mps = -2.0;
     assert!(sys.set_atmosphere(a).is_err());
+    let calm_night = Wind {
+        speed_mps: 1.0,
+        from_deg: 0.0,
+    };
+    let night = Atmosphere::from_weather(calm_night, 285.0, -20.0, 0.0, f64::INFINITY).unwrap();
+    assert_eq!(night.stability, StabilityClass::F);
+    assert!(Atmosphere::from_weather(calm_night, -1.0, -20.0, 0.0, f64::INFINITY).is_err());
+    assert!(Atmosphere::from_weather(calm_night, 285.0, f64::NAN, 0.0, f64::INFINITY).is_err());
     assert!("H".parse::<StabilityClass>().is_err());
     assert!("quicksand".parse::<cig_effects::Soil>().is_err());
     // Slots run out with a message, never a panic.
