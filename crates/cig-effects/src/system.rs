@@ -35,10 +35,15 @@
 //!   soil and road under it ([`crate::dust`]).
 //! - Determinism (chapter VII.A, issue item 4): the system steps at a fixed `STEP_S` = 1/60 s on
 //!   a grid of simulation time shared by every IG (step `n` is at `n * STEP_S`); an effect
-//!   draws all its randomness from its own ChaCha8 generator seeded by its identity and start
-//!   time ([`crate::seed`]), and an effect started late is stepped through the steps it missed.
-//!   State at simulation time `t` is therefore a function of the scenario (effects, wind and
-//!   vehicle updates with their times), the seeds and `t`, whatever the frame times were.
+//!   draws all its randomness from ChaCha8 generators seeded by its identity and start time
+//!   ([`crate::seed`]), one per `EPOCH_S` = 120 s epoch of its own time, and a puff draws from
+//!   the generator of the epoch it was born in. An effect started late (an IG joining an
+//!   exercise, a jump in simulation time) is stepped through the steps it missed; when that is
+//!   more than an epoch and a puff life, it starts instead from an empty state at the last epoch
+//!   boundary a puff life before the target, which gives the same puffs (none born before that
+//!   boundary is still alive, and the boundary's generator is fresh). State at simulation time
+//!   `t` is therefore a function of the scenario (effects, wind and vehicle updates with their
+//!   times), the seeds and `t`, whatever the frame times were.
 //!
 //! Positions: each effect has its own east-north-up frame (`cig_geo::EnuFrame`) at its source,
 //! f64 metres; the snapshot gives the renderer ECEF positions relative to the eye (f32).
@@ -50,7 +55,7 @@
 //!
 //! Limits: the wind is one vector for the whole area; smoke puffs keep the footprint direction
 //! they were born with when the wind turns; an effect stepped through missed steps uses the
-//! current wind for them; flame and dust physics are visual models with invented constants
+//! current wind for them (identical on every IG only if the wind was constant meanwhile); flame and dust physics are visual models with invented constants
 //! (documented at each), not measurements; geodetic conversions (`cig_geo`, std trigonometry)
 //! may differ in the last bit across platforms, the effect-local state does not.
 

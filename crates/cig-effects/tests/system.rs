@@ -682,3 +682,10 @@ fn an_ig_that_joins_late_or_jumps_in_time_draws_the_same_effects() {
     // Absurd times are refused, not ground through.
     assert!(b.advance_to(1.0e12).is_err());
 }
+
+#[test]
+fn the_system_can_be_shared_between_threads() {
+    fn shareable<T: Send + Sync>() {}
+    shareable::<EffectSystem>();
+    shareable::<PuffInstance>();
+}
