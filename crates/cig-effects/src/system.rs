@@ -23,7 +23,10 @@
 //!   dust-laden air slightly heavier than air), `a = F / m` (Eq 9-10), Euler steps for velocity
 //!   (Eq 11) and the constant-acceleration position step `r += v dt + a dt^2 / 2` (Eq 12 with the
 //!   velocity at the start of the step), plus a small random acceleration each step for
-//!   turbulence. Flame gas cools exponentially toward the air temperature.
+//!   turbulence. Flame gas cools exponentially (2 s) from 1400 K toward the air temperature; it
+//!   glows from 1300 K down to 600 K ([`flame_glow`]) and is as opaque as it glows. A dust
+//!   cloud rests on the ground (its centre at least one sigma up) and grows to four times its
+//!   first size over its life.
 //! - A plume's smoke mass comes from its heat release `Q` (given, or `F pi rho c_p T_a / g` from
 //!   a buoyancy flux): fuel burnt `Q / 42 MJ/kg` (diesel) times a soot yield of 0.1 (heavy
 //!   black smoke); flame puffs carry the same soot.
@@ -504,7 +507,7 @@ const FLAME_DELTA_PER_S: f64 = 1.0;
 const DUST_FD: f64 = 0.3;
 const DUST_DELTA_PER_S: f64 = 1.0 / 15.0;
 const FLAME_TEMPERATURE_K: f64 = 1400.0;
-const FLAME_COOLING_S: f64 = 0.8;
+const FLAME_COOLING_S: f64 = 2.0;
 /// Random acceleration amplitude for turbulence, m/s^2.
 const FLAME_TURBULENCE_MPS2: f64 = 3.0;
 const DUST_TURBULENCE_MPS2: f64 = 0.6;
@@ -972,7 +975,7 @@ impl EffectSystem {
                     let (colour, emissive, temperature) = match slot.kind {
                         ObscurantKind::Smoke => ([0.12, 0.12, 0.12], 0.0, air_k),
                         ObscurantKind::Flame => {
-                            let glow = ((p.temperature_k - 800.0) / 600.0).clamp(0.0, 1.0);
+                            let glow = flame_glow(p.temperature_k);
                             (flame_colour(p.temperature_k), glow, p.temperature_k)
                         }
                         ObscurantKind::Dust => (dust_colour, 0.0, air_k),
@@ -1481,12 +1484,24 @@ fn derive_newtonian(
             p.mass_kg = mass_kg(ObscurantKind::Flame, p);
         }
         _ => {
+            // Dust clouds billow: four times their first radius by the end of their life.
             p.sigma_m = p.sigma0_m * (1.0 + 3.0 * age / life);
             p.temperature_k = ta;
             p.mass_kg = mass_kg(ObscurantKind::Dust, p);
         }
     }
     p.opacity = opacity(kind, p.mass_kg, p.sigma_m, age, life);
+    if kind == ObscurantKind::Flame {
+        // Flame gas is seen by its own light: as opaque as it glows.
+        let fade = (1.0 - age / life).clamp(0.0, 1.0);
+        p.opacity = p.opacity.max(0.85 * flame_glow(p.temperature_k) * fade);
+    }
+}
+
+/// Self-luminous fraction of flame gas at `temperature_k`: 0 at 600 K (no visible glow) to 1 at
+/// 1300 K and above.
+pub fn flame_glow(temperature_k: f64) -> f64 {
+    ((temperature_k - 600.0) / 700.0).clamp(0.0, 1.0)
 }
 
 /// One Newtonian step (Eq 7-12) of a flame or dust puff, then its derived attributes.
@@ -1529,8 +1544,13 @@ fn newtonian_step(
     let v0 = p.vel;
     p.vel = v0 + a * STEP_S;
     p.pos += v0 * STEP_S + a * (0.5 * STEP_S * STEP_S);
-    if p.pos.z < p.floor_z {
-        p.pos.z = p.floor_z;
+    // Flame gas leaves the ground; a dust cloud rests on it (its centre one sigma up).
+    let floor = match kind {
+        ObscurantKind::Dust => p.floor_z + p.sigma_m,
+        _ => p.floor_z,
+    };
+    if p.pos.z < floor {
+        p.pos.z = floor;
         p.vel.z = p.vel.z.max(0.0);
     }
     p.centre = p.pos;
