@@ -79,6 +79,8 @@ pub const STEP_S: f64 = 1.0 / 60.0;
 pub const EPOCH_S: f64 = 120.0;
 /// Simulation times beyond this (in size) are refused, s (about 31 years).
 pub const MAX_SIM_TIME_S: f64 = 1.0e9;
+/// Most puffs a system may be built with (about 1 GB of pools).
+pub const MAX_PUFFS: usize = 4_000_000;
 /// Columns of a plume (Figure 9).
 pub const PLUME_COLUMNS: usize = 5;
 /// Gravity for the Newtonian puffs, m/s^2.
@@ -551,6 +553,22 @@ impl EffectSystem {
                     expected: "between 1 and 65535",
                 });
             }
+        }
+        let total = config
+            .plume_slots
+            .saturating_mul(PLUME_COLUMNS)
+            .saturating_mul(config.puffs_per_column)
+            .saturating_add(
+                config
+                    .dust_slots
+                    .saturating_mul(config.puffs_per_dust_trail),
+            );
+        if total > MAX_PUFFS {
+            return Err(EffectsError::OutOfRange {
+                name: "puffs in all pools",
+                value: total as f64,
+                expected: "at most 4000000",
+            });
         }
         if let Some(a) = config.area {
             for (name, v) in [
