@@ -34,6 +34,9 @@ pub enum Command {
     /// Render one frame off-screen to a PNG file.
     #[command(allow_negative_numbers = true)]
     Render(RenderArgs),
+    /// Smoke plume model: Briggs/ISC3 rise and McMullen dispersion at one downwind distance.
+    #[command(allow_negative_numbers = true)]
+    Plume(PlumeArgs),
     /// Build the demo database if needed and show what cig does with it.
     Demo(DemoArgs),
     /// Configuration helpers.
@@ -140,6 +143,63 @@ pub struct LosArgs {
 pub enum BenchCommand {
     /// Terrain database benchmarks: HAT and LOS rates, tile loads, build and import times.
     Db(BenchDbArgs),
+    /// Obscurant particle update cost: 32 plumes of 5 x 75 puffs and 200 dust trails of 50.
+    Particles(BenchParticlesArgs),
+}
+
+#[derive(Args)]
+pub struct BenchParticlesArgs {
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Frames to time (each one fixed step of 1/60 s).
+    #[arg(long, default_value_t = 1200)]
+    pub frames: u32,
+    /// Simulation seconds run before timing (100 s fills every pool: smoke lives 90 s).
+    #[arg(long, default_value_t = 100)]
+    pub warm_seconds: u32,
+}
+
+#[derive(Args)]
+pub struct PlumeArgs {
+    /// Pasquill stability class A-F; derived from --sun-elevation-deg, --cloud-cover and
+    /// --ceiling-m with the wind (Turner's key) when omitted.
+    #[arg(long)]
+    pub class: Option<String>,
+    /// Wind speed at source height, m/s.
+    #[arg(long, value_name = "MPS")]
+    pub wind: f64,
+    /// Downwind distance, m.
+    #[arg(long, value_name = "M")]
+    pub x: f64,
+    /// Stack exit velocity, m/s.
+    #[arg(long, value_name = "MPS", default_value_t = 10.0)]
+    pub stack_velocity: f64,
+    /// Stack inside diameter, m.
+    #[arg(long, value_name = "M", default_value_t = 1.0)]
+    pub stack_diameter: f64,
+    /// Stack exit temperature, K.
+    #[arg(long, value_name = "K", default_value_t = 400.0)]
+    pub stack_temp: f64,
+    /// Ambient air temperature, K.
+    #[arg(long, value_name = "K", default_value_t = 293.15)]
+    pub air_temp: f64,
+    /// Potential temperature gradient for stable classes E and F, K/m (default 0.020 for E,
+    /// 0.035 for F).
+    #[arg(long, value_name = "K_PER_M")]
+    pub stable_dtheta_dz: Option<f64>,
+    /// Sun elevation, degrees (negative at night), to derive the class.
+    #[arg(long, value_name = "DEG")]
+    pub sun_elevation_deg: Option<f64>,
+    /// Total cloud cover 0-1, to derive the class.
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.0)]
+    pub cloud_cover: f64,
+    /// Cloud ceiling, m (default: no ceiling), to derive the class.
+    #[arg(long, value_name = "M")]
+    pub ceiling_m: Option<f64>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]

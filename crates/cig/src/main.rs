@@ -2,12 +2,14 @@
 //! configuration, calls the library crates, prints results. See `ARCHITECTURE.md`.
 
 mod bench;
+mod bench_particles;
 mod cli;
 mod config;
 mod db;
 mod demo;
 mod ephem;
 mod output;
+mod plume;
 mod query;
 mod render;
 
@@ -47,6 +49,8 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Query(cli::QueryCommand::Los(args)) => query::los(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),
         cli::Command::Render(args) => render::run(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Particles(args)) => bench_particles::run(&args),
+        cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),
         cli::Command::Config(cli::ConfigCommand::Default) => {
