@@ -91,13 +91,7 @@ pub fn render_image_with(
         view_formats: &[],
     });
     let target = texture.create_view(&Default::default());
-    let stats = renderer.render(
-        cache,
-        snapshot,
-        view_index,
-        &target,
-        options,
-    )?;
+    let stats = renderer.render(cache, snapshot, view_index, &target, options)?;
     let bytes_per_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("frame readback"),

@@ -809,7 +809,13 @@ impl Renderer {
         Some(ticks[1].saturating_sub(ticks[0]) as f64 * period_ns / 1e6)
     }
 
-    fn write_globals(&self, camera: &Camera, lighting: &Lighting, snapshot: &FrameSnapshot, key_background: bool) {
+    fn write_globals(
+        &self,
+        camera: &Camera,
+        lighting: &Lighting,
+        snapshot: &FrameSnapshot,
+        key_background: bool,
+    ) {
         let v4 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
         let [tl, tr, td, tu] = camera.view.fov.tangents();
@@ -853,7 +859,7 @@ impl Renderer {
                 if snapshot.wireframe { 1.0 } else { 0.0 },
                 1.0,
                 if key_background { 1.0 } else { 0.0 },
-                0.0,
+                camera.pixels_per_tangent as f32,
             ],
         };
         self.gpu

@@ -23,7 +23,7 @@ struct Globals {
     noise0: vec4<f32>,
     noise1: vec4<f32>,
     noise2: vec4<f32>,
-    // x: wireframe flag, y: exposure.
+    // x: wireframe flag, y: exposure, z: key the background, w: pixels per unit tangent.
     flags: vec4<f32>,
 };
 

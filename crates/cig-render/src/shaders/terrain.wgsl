@@ -99,9 +99,12 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let p0 = in.rel / g.noise0.w + g.noise0.xyz;
     let p1 = in.rel / g.noise1.w + g.noise1.xyz;
     let p2 = in.rel / g.noise2.w + g.noise2.xyz;
-    let fade0 = clamp(1.0 - distance_m / (g.noise0.w * 400.0), 0.0, 1.0);
-    let fade1 = clamp(1.0 - distance_m / (g.noise1.w * 400.0), 0.0, 1.0);
-    let fade2 = clamp(1.0 - distance_m / (g.noise2.w * 400.0), 0.0, 1.0);
+    // Each octave fades out as its cells shrink below 6 pixels on screen (no aliasing, in
+    // narrow and wide views alike).
+    let px_per_m = g.flags.w / max(distance_m, 1.0);
+    let fade0 = clamp((g.noise0.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
+    let fade1 = clamp((g.noise1.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
+    let fade2 = clamp((g.noise2.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
     let detail = 1.0
         + 0.18 * (value_noise(p0) - 0.5) * fade0
         + 0.22 * (value_noise(p1) - 0.5) * fade1
