@@ -23,6 +23,30 @@
 //! [`Message`] in its version and byte order. Per-packet layouts live in
 //! `v3` and `v4`; `docs/cigi-conformance.md` lists what is supported how far.
 //!
+//! ```
+//! use cig_cigi::{decode_message, encode_message, ByteOrder, HatHotRequest, IgControl, Message, Packet, Version};
+//!
+//! let message = Message::new(
+//!     Version::V3_3,
+//!     ByteOrder::LittleEndian,
+//!     vec![
+//!         Packet::IgControl(IgControl { ig_mode: 1, host_frame_number: 7, ..IgControl::default() }),
+//!         Packet::HatHotRequest(HatHotRequest {
+//!             hat_hot_id: 1,
+//!             lat_deg_or_x_m: 51.0,
+//!             lon_deg_or_y_m: -1.0,
+//!             ..HatHotRequest::default()
+//!         }),
+//!     ],
+//! );
+//! let mut datagram = Vec::new();
+//! encode_message(&message, &mut datagram)?;
+//! let decoded = decode_message(&datagram)?;
+//! assert_eq!(decoded.byte_order, ByteOrder::LittleEndian);
+//! assert_eq!(decoded.packets, message.packets);
+//! # Ok::<(), cig_cigi::CigiError>(())
+//! ```
+//!
 //! Limits: 3.x messages whose minor version is not 3 are decoded with the 3.3
 //! layouts and a warning (3.0-3.2 differ in a few packets). Standard packets
 //! this codec does not type (surface/wave/terrestrial controls, motion

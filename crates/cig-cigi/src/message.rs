@@ -294,6 +294,10 @@ pub enum CigiError {
     },
 }
 
+/// Decoder of the fixed-size packets of one version: `None` for an ID not in
+/// its table, `Some(Err(needed))` for a packet shorter than its layout.
+type DecodeFixed = fn(u16, &[u8], ByteOrder) -> Option<Result<Packet, usize>>;
+
 /// Wire facts of one major version.
 struct Dialect {
     version_major: u8,
@@ -303,7 +307,7 @@ struct Dialect {
     ig_message_id_offset: usize,
     user_first: u16,
     user_last: u16,
-    decode_fixed: fn(u16, &[u8], ByteOrder) -> Option<Result<Packet, usize>>,
+    decode_fixed: DecodeFixed,
     encode_fixed: fn(&Packet, ByteOrder, &mut Vec<u8>) -> bool,
     packet_name: fn(u16) -> Option<&'static str>,
     write_header: fn(&mut [u8], u16, usize, ByteOrder),
@@ -477,7 +481,7 @@ fn walk(
         let name = (dialect.packet_name)(id).unwrap_or(if id == dialect.ig_message_id {
             "ImageGeneratorMessage"
         } else {
-            "packet"
+            "unknown packet"
         });
         if size < dialect.header_bytes {
             return Err(CigiError::InvalidSize {

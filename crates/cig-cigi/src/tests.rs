@@ -180,10 +180,17 @@ proptest! {
         let mut bytes = encode(&Message::new(version, order, vec![Packet::IgControl(IgControl::sample(&mut src))]));
         bytes.extend_from_slice(&tail);
         if let Ok(message) = decode_message(&bytes) {
-            // Whatever decoded must encode again (the typed fields are all
-            // representable).
-            let mut out = Vec::new();
-            prop_assert!(encode_message(&message, &mut out).is_ok());
+            // Whatever decoded encodes again, except text or user data the
+            // encoder refuses; re-encoding is then stable.
+            let mut once = Vec::new();
+            match encode_message(&message, &mut once) {
+                Ok(()) => {
+                    let mut twice = Vec::new();
+                    encode_message(&decode_message(&once).unwrap(), &mut twice).unwrap();
+                    prop_assert_eq!(once, twice);
+                }
+                Err(e) => prop_assert!(matches!(e, CigiError::FieldOutOfRange { .. }), "{}", e),
+            }
         }
     }
 }
@@ -677,4 +684,58 @@ fn ig_message_text_is_nul_terminated_and_padded_to_8() {
         &v4[24..],
         &[0, 16, 0x0F, 0xF0, 1, 2, 0, 0, b'h', b'e', b'l', b'l', b'o', 0, 0, 0]
     );
+}
+
+#[test]
+fn other_cigi_3_minor_versions_decode_with_a_warning() {
+    let mut bytes = hand_built_v3(true);
+    bytes[4] = (bytes[4] & 0x0f) | (2 << 4);
+    let message = decode_message(&bytes).unwrap();
+    assert_eq!(message.version, Version { major: 3, minor: 2 });
+    assert_eq!(message.packets.len(), 3);
+    assert_eq!(message.warnings.len(), 1);
+    assert_eq!(message.warnings[0].offset, 0);
+}
+
+#[test]
+fn v4_unknown_packets_are_skipped_and_cut_packets_are_errors() {
+    for big in [true, false] {
+        let (mut host, _) = hand_built_v4(big);
+        let u16b = |v: u16| {
+            if big {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            }
+        };
+        // Wave Control (0x0D, untyped) of 32 bytes appended.
+        let mut wave = Vec::new();
+        wave.extend(u16b(32));
+        wave.extend(u16b(0x000D));
+        wave.extend([0x55; 28]);
+        let at = host.len();
+        host.extend(&wave);
+        let message = decode_message(&host).unwrap();
+        assert_eq!(message.packets.len(), 3);
+        assert_eq!(
+            message
+                .warnings
+                .iter()
+                .map(|w| (w.offset, w.packet_id, w.size))
+                .collect::<Vec<_>>(),
+            vec![(at, 0x000D, 32)]
+        );
+        // The same packet claiming 40 bytes runs past the datagram.
+        host[at..at + 2].copy_from_slice(&u16b(40));
+        assert_eq!(
+            decode_message(&host),
+            Err(CigiError::Truncated {
+                packet: "unknown packet",
+                packet_id: 0x000D,
+                offset: at,
+                size: 40,
+                available: 32
+            })
+        );
+    }
 }

@@ -28,7 +28,7 @@ fn write_pcap(path: &Path, payloads: &[Vec<u8>]) {
     file.extend(65_535u32.to_le_bytes());
     file.extend(1u32.to_le_bytes());
     for (i, payload) in payloads.iter().enumerate() {
-        let udp_len = u16::try_from(8 + payload.len()).unwrap();
+        let udp_len = u16::try_from(8 + payload.len()).expect("datagram fits UDP");
         let ip_len = 20 + udp_len;
         let mut frame = vec![0u8; 12];
         frame.extend([0x08, 0x00]);
@@ -41,14 +41,18 @@ fn write_pcap(path: &Path, payloads: &[Vec<u8>]) {
         frame.extend(udp_len.to_be_bytes());
         frame.extend([0, 0]);
         frame.extend(payload);
-        let len = u32::try_from(frame.len()).unwrap();
-        file.extend(u32::try_from(i).unwrap().to_le_bytes());
+        let len = u32::try_from(frame.len()).expect("frame length fits u32");
+        file.extend(
+            u32::try_from(i)
+                .expect("frame index fits u32")
+                .to_le_bytes(),
+        );
         file.extend(0u32.to_le_bytes());
         file.extend(len.to_le_bytes());
         file.extend(len.to_le_bytes());
         file.extend(frame);
     }
-    std::fs::write(path, file).unwrap();
+    std::fs::write(path, file).expect("pcap written to the temp dir");
 }
 
 #[derive(Debug, Clone)]
@@ -85,7 +89,7 @@ fn matches(expected: &Exp, got: &str, order: ByteOrder) -> bool {
                 if i > 0 {
                     hex.push(':');
                 }
-                write!(hex, "{b:02x}").unwrap();
+                write!(hex, "{b:02x}").expect("writing to a String");
             }
             got == hex
         }
