@@ -12,9 +12,21 @@ fuzz_target!(|data: &[u8]| {
     };
     let mut input = Vec::new();
     if selector & 0x80 != 0 {
-        let version = if selector & 1 == 0 { Version::V3_3 } else { Version::V4_0 };
-        let order = if selector & 2 == 0 { ByteOrder::BigEndian } else { ByteOrder::LittleEndian };
-        let first = Message::new(version, order, vec![Packet::IgControl(IgControl::default())]);
+        let version = if selector & 1 == 0 {
+            Version::V3_3
+        } else {
+            Version::V4_0
+        };
+        let order = if selector & 2 == 0 {
+            ByteOrder::BigEndian
+        } else {
+            ByteOrder::LittleEndian
+        };
+        let first = Message::new(
+            version,
+            order,
+            vec![Packet::IgControl(IgControl::default())],
+        );
         if encode_message(&first, &mut input).is_err() {
             return;
         }
