@@ -49,9 +49,8 @@
 //!
 //! Limits: 3.x messages whose minor version is not 3 are decoded with the 3.3
 //! layouts and a warning (3.0-3.2 differ in a few packets). Standard packets
-//! this codec does not type (surface/wave/terrestrial controls, motion
-//! tracker, earth reference model, trajectory/acceleration, symbology) are
-//! skipped with a warning, like unknown IDs. User-defined packets pass
+//! this codec does not type (motion tracker, earth reference model,
+//! trajectory/acceleration, symbology) are skipped with a warning, like unknown IDs. User-defined packets pass
 //! through as raw bytes in the sender's byte order.
 
 macro_rules! codec_table {

@@ -98,6 +98,12 @@ packet_enum! {
     EnvironmentalRegionControl,
     /// Weather Control (3.x ID 12, 4.0 ID 0x0B).
     WeatherControl,
+    /// Maritime Surface Conditions Control (3.x ID 13, 4.0 ID 0x0C).
+    MaritimeSurfaceConditionsControl,
+    /// Wave Control (3.x ID 14, 4.0 ID 0x0D).
+    WaveControl,
+    /// Terrestrial Surface Conditions Control (3.x ID 15, 4.0 ID 0x0E).
+    TerrestrialSurfaceConditionsControl,
     /// View Control (3.x ID 16, 4.0 ID 0x0F).
     ViewControl,
     /// Sensor Control (3.x ID 17, 4.0 ID 0x10).

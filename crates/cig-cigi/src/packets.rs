@@ -497,6 +497,72 @@ packet_struct! {
 }
 
 packet_struct! {
+    /// Maritime Surface Conditions Control.
+    pub struct MaritimeSurfaceConditionsControl {
+        /// Entity ID (scope entity) or region ID (scope regional).
+        pub entity_or_region_id: u16,
+        /// Surface conditions enable.
+        pub surface_conditions_enable: bool,
+        /// Whitecaps enable.
+        pub whitecap_enable: bool,
+        /// 0 global, 1 regional, 2 entity.
+        pub scope: u8 => 2,
+        /// Sea surface height, metres.
+        pub sea_surface_height_m: f32,
+        /// Surface water temperature, degC.
+        pub surface_water_temperature_c: f32,
+        /// Surface clarity, percent.
+        pub surface_clarity_pct: f32,
+    }
+}
+
+packet_struct! {
+    /// Wave Control.
+    pub struct WaveControl {
+        /// Entity ID (scope entity) or region ID (scope regional).
+        pub entity_or_region_id: u16,
+        /// Wave.
+        pub wave_id: u8,
+        /// Wave enable.
+        pub wave_enable: bool,
+        /// 0 global, 1 regional, 2 entity.
+        pub scope: u8 => 2,
+        /// 0 plunging, 1 spilling, 2 surging.
+        pub breaker_type: u8 => 2,
+        /// Wave height, metres.
+        pub height_m: f32,
+        /// Wavelength, metres.
+        pub wavelength_m: f32,
+        /// Period, seconds.
+        pub period_s: f32,
+        /// Direction, degrees.
+        pub direction_deg: f32,
+        /// Phase offset, degrees.
+        pub phase_offset_deg: f32,
+        /// Leading (crest shape), degrees.
+        pub leading_deg: f32,
+    }
+}
+
+packet_struct! {
+    /// Terrestrial Surface Conditions Control.
+    pub struct TerrestrialSurfaceConditionsControl {
+        /// Entity ID (scope entity) or region ID (scope regional).
+        pub entity_or_region_id: u16,
+        /// Surface condition (IG defined).
+        pub surface_condition_id: u16,
+        /// Condition enable.
+        pub surface_condition_enable: bool,
+        /// 0 global, 1 regional, 2 entity.
+        pub scope: u8 => 2,
+        /// Severity 0..31.
+        pub severity: u8 => 5,
+        /// Coverage, percent.
+        pub coverage_pct: u8,
+    }
+}
+
+packet_struct! {
     /// View Control: places a view (eyepoint) relative to an entity.
     pub struct ViewControl {
         /// View.

@@ -43,6 +43,9 @@ fn host_packets(src: &mut SampleSource, version: Version) -> Vec<Packet> {
         Packet::AtmosphereControl(Sample::sample(src)),
         Packet::EnvironmentalRegionControl(Sample::sample(src)),
         Packet::WeatherControl(weather),
+        Packet::MaritimeSurfaceConditionsControl(Sample::sample(src)),
+        Packet::WaveControl(Sample::sample(src)),
+        Packet::TerrestrialSurfaceConditionsControl(Sample::sample(src)),
         Packet::ViewControl(Sample::sample(src)),
         Packet::SensorControl(Sample::sample(src)),
         Packet::ViewDefinition(Sample::sample(src)),
@@ -508,9 +511,9 @@ fn byte_order_shows_in_the_magic_number_and_fields() {
 fn unknown_and_untyped_packets_are_skipped_with_warnings() {
     let mut bytes = hand_built_v3(true);
     let after_ig_control = 24;
-    // Maritime Surface Conditions Control (13, standard but not typed here)
-    // and an unassigned ID 150, both 8 bytes, inserted after IG Control.
-    let mut extra = vec![13, 8, 0, 0, 0, 0, 0, 0, 150, 16];
+    // Motion Tracker Control (18, standard but not typed here, 8 bytes) and
+    // an unassigned ID 150 (16 bytes), inserted after IG Control.
+    let mut extra = vec![18, 8, 0, 0, 0, 0, 0, 0, 150, 16];
     extra.extend([0xAA; 14]);
     bytes.splice(after_ig_control..after_ig_control, extra);
     let message = decode_message(&bytes).unwrap();
@@ -521,7 +524,7 @@ fn unknown_and_untyped_packets_are_skipped_with_warnings() {
             .iter()
             .map(|w| (w.offset, w.packet_id, w.size))
             .collect::<Vec<_>>(),
-        vec![(24, 13, 8), (32, 150, 16)]
+        vec![(24, 18, 8), (32, 150, 16)]
     );
 }
 
@@ -708,10 +711,10 @@ fn v4_unknown_packets_are_skipped_and_cut_packets_are_errors() {
                 v.to_le_bytes()
             }
         };
-        // Wave Control (0x0D, untyped) of 32 bytes appended.
+        // Acceleration Control (0x13, untyped) of 32 bytes appended.
         let mut wave = Vec::new();
         wave.extend(u16b(32));
-        wave.extend(u16b(0x000D));
+        wave.extend(u16b(0x0013));
         wave.extend([0x55; 28]);
         let at = host.len();
         host.extend(&wave);
@@ -723,7 +726,7 @@ fn v4_unknown_packets_are_skipped_and_cut_packets_are_errors() {
                 .iter()
                 .map(|w| (w.offset, w.packet_id, w.size))
                 .collect::<Vec<_>>(),
-            vec![(at, 0x000D, 32)]
+            vec![(at, 0x0013, 32)]
         );
         // The same packet claiming 40 bytes runs past the datagram.
         host[at..at + 2].copy_from_slice(&u16b(40));
@@ -731,7 +734,7 @@ fn v4_unknown_packets_are_skipped_and_cut_packets_are_errors() {
             decode_message(&host),
             Err(CigiError::Truncated {
                 packet: "unknown packet",
-                packet_id: 0x000D,
+                packet_id: 0x0013,
                 offset: at,
                 size: 40,
                 available: 32

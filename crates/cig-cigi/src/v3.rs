@@ -7,9 +7,8 @@
 //! independent decoder, Wireshark's CIGI dissector (`tests/tshark.rs`).
 //!
 //! Limits: the IG Control / Start of Frame version fields and byte-swap magic
-//! number are written by the message layer; Maritime/Wave/Terrestrial Surface
-//! Control, Motion Tracker, Earth Reference Model, Trajectory and the symbol
-//! packets are not decoded here (the message layer skips them with a
+//! number are written by the message layer; Motion Tracker, Earth Reference
+//! Model, Trajectory and the symbol packets are not decoded here (the message layer skips them with a
 //! warning).
 
 use crate::packets::*;
@@ -194,6 +193,39 @@ fn weather(io: &mut impl FieldIo, p: &mut WeatherControl) {
     io.f32(44, &mut p.wind_direction_deg);
     io.f32(48, &mut p.barometric_pressure_mbar);
     io.f32(52, &mut p.aerosol_concentration_gpm3);
+}
+
+fn maritime_control(io: &mut impl FieldIo, p: &mut MaritimeSurfaceConditionsControl) {
+    io.u16(2, &mut p.entity_or_region_id);
+    io.flag(4, 0, &mut p.surface_conditions_enable);
+    io.flag(4, 1, &mut p.whitecap_enable);
+    io.bits(4, 2, 2, &mut p.scope);
+    io.f32(8, &mut p.sea_surface_height_m);
+    io.f32(12, &mut p.surface_water_temperature_c);
+    io.f32(16, &mut p.surface_clarity_pct);
+}
+
+fn wave_control(io: &mut impl FieldIo, p: &mut WaveControl) {
+    io.u16(2, &mut p.entity_or_region_id);
+    io.u8(4, &mut p.wave_id);
+    io.flag(5, 0, &mut p.wave_enable);
+    io.bits(5, 1, 2, &mut p.scope);
+    io.bits(5, 3, 2, &mut p.breaker_type);
+    io.f32(8, &mut p.height_m);
+    io.f32(12, &mut p.wavelength_m);
+    io.f32(16, &mut p.period_s);
+    io.f32(20, &mut p.direction_deg);
+    io.f32(24, &mut p.phase_offset_deg);
+    io.f32(28, &mut p.leading_deg);
+}
+
+fn terrestrial_control(io: &mut impl FieldIo, p: &mut TerrestrialSurfaceConditionsControl) {
+    io.u16(2, &mut p.entity_or_region_id);
+    io.u16(4, &mut p.surface_condition_id);
+    io.flag(6, 0, &mut p.surface_condition_enable);
+    io.bits(6, 1, 2, &mut p.scope);
+    io.bits(6, 3, 5, &mut p.severity);
+    io.u8(7, &mut p.coverage_pct);
 }
 
 fn view_control(io: &mut impl FieldIo, p: &mut ViewControl) {
@@ -519,6 +551,9 @@ codec_table! {
     AtmosphereControl => 10, 32, atmosphere;
     EnvironmentalRegionControl => 11, 48, environmental_region;
     WeatherControl => 12, 56, weather;
+    MaritimeSurfaceConditionsControl => 13, 24, maritime_control;
+    WaveControl => 14, 32, wave_control;
+    TerrestrialSurfaceConditionsControl => 15, 8, terrestrial_control;
     ViewControl => 16, 32, view_control;
     SensorControl => 17, 24, sensor_control;
     ViewDefinition => 21, 32, view_definition;

@@ -236,6 +236,39 @@ fn weather(io: &mut impl FieldIo, p: &mut WeatherControl) {
     io.f32(64, &mut p.top_transition_band_m);
 }
 
+fn maritime_control(io: &mut impl FieldIo, p: &mut MaritimeSurfaceConditionsControl) {
+    io.flag(4, 0, &mut p.surface_conditions_enable);
+    io.flag(4, 1, &mut p.whitecap_enable);
+    io.bits(4, 2, 2, &mut p.scope);
+    io.u16(6, &mut p.entity_or_region_id);
+    io.f32(8, &mut p.sea_surface_height_m);
+    io.f32(12, &mut p.surface_water_temperature_c);
+    io.f32(16, &mut p.surface_clarity_pct);
+}
+
+fn wave_control(io: &mut impl FieldIo, p: &mut WaveControl) {
+    io.u8(4, &mut p.wave_id);
+    io.flag(5, 0, &mut p.wave_enable);
+    io.bits(5, 1, 2, &mut p.scope);
+    io.bits(5, 3, 2, &mut p.breaker_type);
+    io.u16(6, &mut p.entity_or_region_id);
+    io.f32(8, &mut p.height_m);
+    io.f32(12, &mut p.wavelength_m);
+    io.f32(16, &mut p.period_s);
+    io.f32(20, &mut p.direction_deg);
+    io.f32(24, &mut p.phase_offset_deg);
+    io.f32(28, &mut p.leading_deg);
+}
+
+fn terrestrial_control(io: &mut impl FieldIo, p: &mut TerrestrialSurfaceConditionsControl) {
+    io.u16(4, &mut p.entity_or_region_id);
+    io.flag(6, 0, &mut p.surface_condition_enable);
+    io.bits(6, 1, 2, &mut p.scope);
+    io.bits(6, 3, 5, &mut p.severity);
+    io.u8(7, &mut p.coverage_pct);
+    io.u16(8, &mut p.surface_condition_id);
+}
+
 fn view_control(io: &mut impl FieldIo, p: &mut ViewControl) {
     io.u8(4, &mut p.group_id);
     io.flag(5, 0, &mut p.x_offset_enable);
@@ -558,6 +591,9 @@ codec_table! {
     AtmosphereControl => 0x09, 32, atmosphere;
     EnvironmentalRegionControl => 0x0A, 48, environmental_region;
     WeatherControl => 0x0B, 72, weather;
+    MaritimeSurfaceConditionsControl => 0x0C, 24, maritime_control;
+    WaveControl => 0x0D, 32, wave_control;
+    TerrestrialSurfaceConditionsControl => 0x0E, 16, terrestrial_control;
     ViewControl => 0x0F, 40, view_control;
     SensorControl => 0x10, 32, sensor_control;
     ViewDefinition => 0x14, 40, view_definition;

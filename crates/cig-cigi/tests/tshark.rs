@@ -184,6 +184,27 @@ fn expectations(packet: &Packet) -> Vec<(String, Exp)> {
             "vert_wind" => F32(p.vertical_wind_speed_mps), "wind_direction" => F32(p.wind_direction_deg),
             "barometric_pressure" => F32(p.barometric_pressure_mbar),
             "aerosol_concentration" => F32(p.aerosol_concentration_gpm3)),
+        Packet::MaritimeSurfaceConditionsControl(p) => {
+            fields!("maritime_surface_conditions_control";
+            "entity_region_id" => u(p.entity_or_region_id),
+            "surface_conditions_enable" => B(p.surface_conditions_enable),
+            "whitecap_enable" => B(p.whitecap_enable), "scope" => u(p.scope),
+            "sea_surface_height" => F32(p.sea_surface_height_m),
+            "surface_water_temp" => F32(p.surface_water_temperature_c),
+            "surface_clarity" => F32(p.surface_clarity_pct))
+        }
+        Packet::WaveControl(p) => fields!("wave_control";
+            "entity_region_id" => u(p.entity_or_region_id), "wave_id" => u(p.wave_id),
+            "wave_enable" => B(p.wave_enable), "scope" => u(p.scope), "breaker_type" => u(p.breaker_type),
+            "height" => F32(p.height_m), "wavelength" => F32(p.wavelength_m), "period" => F32(p.period_s),
+            "direction" => F32(p.direction_deg), "phase_offset" => F32(p.phase_offset_deg),
+            "leading" => F32(p.leading_deg)),
+        Packet::TerrestrialSurfaceConditionsControl(p) => {
+            fields!("terrestrial_surface_conditions_control";
+            "entity_region_id" => u(p.entity_or_region_id), "surface_condition_id" => u(p.surface_condition_id),
+            "surface_condition_enable" => B(p.surface_condition_enable), "scope" => u(p.scope),
+            "severity" => u(p.severity), "coverage" => u(p.coverage_pct))
+        }
         Packet::ViewControl(p) => fields!("view_control";
             "view_id" => u(p.view_id), "group_id" => u(p.group_id), "xoff_enable" => B(p.x_offset_enable),
             "yoff_enable" => B(p.y_offset_enable), "zoff_enable" => B(p.z_offset_enable), "roll_enable" => B(p.roll_enable),
@@ -346,6 +367,9 @@ fn sample_packets(src: &mut SampleSource) -> (Vec<Packet>, Vec<Packet>) {
         Packet::AtmosphereControl(Sample::sample(src)),
         Packet::EnvironmentalRegionControl(Sample::sample(src)),
         Packet::WeatherControl(weather),
+        Packet::MaritimeSurfaceConditionsControl(Sample::sample(src)),
+        Packet::WaveControl(Sample::sample(src)),
+        Packet::TerrestrialSurfaceConditionsControl(Sample::sample(src)),
         Packet::ViewControl(Sample::sample(src)),
         Packet::SensorControl(Sample::sample(src)),
         Packet::ViewDefinition(Sample::sample(src)),
