@@ -145,6 +145,33 @@ pub enum BenchCommand {
     Db(BenchDbArgs),
     /// Obscurant particle update cost: 32 plumes of 5 x 75 puffs and 200 dust trails of 50.
     Particles(BenchParticlesArgs),
+    /// Renderer: a 300 m/s low-level pass, level of detail against full detail in one run.
+    Render(BenchRenderArgs),
+}
+
+#[derive(Args)]
+pub struct BenchRenderArgs {
+    /// Terrain database directory.
+    #[arg(long)]
+    pub db: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Frame size.
+    #[arg(long, default_value = "640x480")]
+    pub size: String,
+    /// Horizontal field of view, degrees.
+    #[arg(long, default_value_t = 60.0)]
+    pub fov: f64,
+    /// Level-of-detail threshold, pixels.
+    #[arg(long, default_value_t = 1.0)]
+    pub max_pixel_error: f64,
+    /// Frames of the 60 Hz pass.
+    #[arg(long, default_value_t = 300)]
+    pub frames: usize,
+    /// Frames of the pass drawn both ways for the comparison.
+    #[arg(long, default_value_t = 6)]
+    pub compare_frames: usize,
 }
 
 #[derive(Args)]

@@ -3,9 +3,11 @@
 
 mod bench;
 mod bench_particles;
+mod bench_render;
 mod cli;
 mod config;
 mod db;
+mod flight;
 mod demo;
 mod ephem;
 mod output;
@@ -50,6 +52,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),
         cli::Command::Render(args) => render::run(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Particles(args)) => bench_particles::run(&args),
+        cli::Command::Bench(cli::BenchCommand::Render(args)) => bench_render::run(&args, &config),
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),

@@ -1,0 +1,224 @@
+//! `cig bench render`: a fixed low-level pass over a database, drawn with the level-of-detail
+//! renderer and at full detail in the same run.
+
+use crate::bench::{date_utc, machine};
+use crate::cli::BenchRenderArgs;
+use crate::config::Config;
+use crate::flight::{views_along, Leg};
+use anyhow::Context;
+use cig_geo::Geodetic;
+use cig_render::{FrameOptions, FrameStats, Renderer};
+use cig_scene::FrameSnapshot;
+use cig_terrain::{QuerySession, TileCache};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The benchmark's pass: south-west to north-east across the middle of the database.
+pub fn pass_leg(db: &cig_terrain::TerrainDatabase, speed_mps: f64, duration_s: f64) -> Leg {
+    let g = db.layout().grid;
+    let lat = g.south_lat_deg + 0.3 * (g.north_lat_deg() - g.south_lat_deg);
+    let lon = g.west_lon_deg + 0.3 * (g.east_lon_deg() - g.west_lon_deg);
+    Leg {
+        start: Geodetic::new(lat, lon, 0.0),
+        heading_deg: 45.0,
+        speed_mps,
+        duration_s,
+        agl_start_m: 120.0,
+        agl_end_m: 120.0,
+        pitch_deg: -3.0,
+    }
+}
+
+fn percentile(v: &[f64], p: f64) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s[((s.len() - 1) as f64 * p).round() as usize]
+}
+
+fn summary(times_ms: &[f64]) -> serde_json::Value {
+    serde_json::json!({
+        "median": percentile(times_ms, 0.5),
+        "p99": percentile(times_ms, 0.99),
+        "max": percentile(times_ms, 1.0),
+    })
+}
+
+struct Run {
+    frame_ms: Vec<f64>,
+    select_ms: Vec<f64>,
+    gpu_ms: Vec<f64>,
+    triangles: Vec<f64>,
+    draw_calls: Vec<f64>,
+}
+
+fn render_frames(
+    renderer: &mut Renderer,
+    cache: &TileCache,
+    snapshots: &[FrameSnapshot],
+    target: &wgpu::TextureView,
+    streaming: bool,
+) -> anyhow::Result<Run> {
+    let mut run = Run {
+        frame_ms: Vec::new(),
+        select_ms: Vec::new(),
+        gpu_ms: Vec::new(),
+        triangles: Vec::new(),
+        draw_calls: Vec::new(),
+    };
+    for snapshot in snapshots {
+        let started = Instant::now();
+        let stats: FrameStats = if streaming {
+            cache.update(&[snapshot.views[0].eye]);
+            renderer.render(cache, snapshot, 0, target, FrameOptions::default())?
+        } else {
+            renderer.render(
+                cache,
+                snapshot,
+                0,
+                target,
+                FrameOptions {
+                    mesh_budget: usize::MAX,
+                    key_background: false,
+                },
+            )?
+        };
+        run.frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
+        run.select_ms.push(stats.cpu_select_ms);
+        run.gpu_ms.push(stats.gpu_ms);
+        run.triangles.push(stats.triangles as f64);
+        run.draw_calls.push(f64::from(stats.draw_calls));
+    }
+    Ok(run)
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
+    let size = crate::render::parse_size(&args.size)?;
+    anyhow::ensure!(args.frames >= 4, "--frames {} must be at least 4", args.frames);
+    let database = Arc::new(cig_terrain_io::store::open_database(&args.db)?);
+    let gpu = cig_render::Gpu::headless()?;
+    let target_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("bench target"),
+        size: wgpu::Extent3d {
+            width: size.0,
+            height: size.1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: cig_render::FRAME_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let target = target_texture.create_view(&Default::default());
+    let dt_s = 1.0 / 60.0;
+    let leg = pass_leg(&database, 300.0, args.frames as f64 * dt_s);
+    let time = crate::render::parse_time("2026-06-21T19:00:00Z")?;
+
+    // 1. The streaming pass at 300 m/s, 60 Hz: a fresh cache, nothing preloaded.
+    let cache = Arc::new(TileCache::new(Arc::clone(&database), config.paging.clone())?);
+    let mut session = QuerySession::new(Arc::clone(&cache));
+    let views = views_along(&mut session, &leg, dt_s, args.fov, size).context("the benchmark path")?;
+    let snapshots: Vec<FrameSnapshot> = views
+        .iter()
+        .map(|v| {
+            let mut s = FrameSnapshot::new(time, vec![*v]);
+            s.max_pixel_error = args.max_pixel_error;
+            s
+        })
+        .collect();
+    let mut renderer = Renderer::new(Arc::clone(&gpu), &cache, cig_render::FRAME_FORMAT);
+    let streaming = render_frames(&mut renderer, &cache, &snapshots, &target, true)?;
+    // The first frames compile pipelines and fill the empty pool; the stall measure skips 10.
+    let settled = &streaming.frame_ms[10.min(streaming.frame_ms.len() / 2)..];
+    let stall_ratio = percentile(settled, 1.0) / percentile(settled, 0.5);
+
+    // 2. The same frames (every k-th), everything resident: level of detail against full detail.
+    let every = (snapshots.len() / args.compare_frames.max(1)).max(1);
+    let sample: Vec<FrameSnapshot> = snapshots.iter().step_by(every).cloned().collect();
+    let mut full_sample = sample.clone();
+    for s in &mut full_sample {
+        s.max_pixel_error = 0.0;
+    }
+    for (i, s) in full_sample.iter().enumerate() {
+        cig_render::load_for_view(&mut renderer, &cache, s, 0, 64)?;
+        cig_render::load_for_view(&mut renderer, &cache, &sample[i], 0, 64)?;
+    }
+    // Warm both (meshes built), then time.
+    render_frames(&mut renderer, &cache, &sample[..1], &target, false)?;
+    let lod = render_frames(&mut renderer, &cache, &sample, &target, false)?;
+    render_frames(&mut renderer, &cache, &full_sample[..1], &target, false)?;
+    let full = render_frames(&mut renderer, &cache, &full_sample, &target, false)?;
+    let lod_again = render_frames(&mut renderer, &cache, &sample, &target, false)?;
+
+    let lod_frame = percentile(&lod.frame_ms, 0.5).min(percentile(&lod_again.frame_ms, 0.5));
+    let report = serde_json::json!({
+        "machine": machine(),
+        "date_utc": date_utc(),
+        "commit": option_env!("CIG_GIT_COMMIT").unwrap_or("unknown"),
+        "adapter": gpu.describe(),
+        "database": args.db.display().to_string(),
+        "size": [size.0, size.1],
+        "fov_deg": args.fov,
+        "max_pixel_error": args.max_pixel_error,
+        "pass": {
+            "speed_mps": 300.0,
+            "height_above_terrain_m": 120.0,
+            "frames": snapshots.len(),
+            "frame_ms": summary(&streaming.frame_ms),
+            "frame_ms_after_warmup": summary(settled),
+            "max_over_median_after_warmup": stall_ratio,
+            "cpu_select_ms": summary(&streaming.select_ms),
+            "triangles_mean": mean(&streaming.triangles),
+            "draw_calls_mean": mean(&streaming.draw_calls),
+        },
+        "comparison_frames": sample.len(),
+        "lod": {
+            "triangles_mean": mean(&lod.triangles),
+            "frame_ms": summary(&lod.frame_ms),
+            "gpu_ms": summary(&lod.gpu_ms),
+            "cpu_select_ms": summary(&lod.select_ms),
+            "draw_calls_mean": mean(&lod.draw_calls),
+        },
+        "full_detail": {
+            "triangles_mean": mean(&full.triangles),
+            "frame_ms": summary(&full.frame_ms),
+            "gpu_ms": summary(&full.gpu_ms),
+            "cpu_select_ms": summary(&full.select_ms),
+            "draw_calls_mean": mean(&full.draw_calls),
+        },
+        "ratios": {
+            "triangles_full_over_lod": mean(&full.triangles) / mean(&lod.triangles).max(1.0),
+            "frame_time_full_over_lod": percentile(&full.frame_ms, 0.5) / lod_frame,
+        },
+        "targets": {
+            "triangles_full_over_lod_at_least": 20.0,
+            "frame_time_full_over_lod_at_least": 5.0,
+            "cpu_select_ms_at_most": 0.5,
+            "max_over_median_at_most": 2.0,
+        },
+    });
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "pass: {} frames at 300 m/s, median {:.1} ms, max/median after warm-up {:.2}, selection median {:.3} ms\n\
+             level of detail: {:.0} triangles, {:.1} ms; full detail: {:.0} triangles, {:.1} ms; ratios {:.1}x triangles, {:.1}x time",
+            snapshots.len(),
+            percentile(&streaming.frame_ms, 0.5),
+            stall_ratio,
+            percentile(&streaming.select_ms, 0.5),
+            mean(&lod.triangles),
+            lod_frame,
+            mean(&full.triangles),
+            percentile(&full.frame_ms, 0.5),
+            mean(&full.triangles) / mean(&lod.triangles).max(1.0),
+            percentile(&full.frame_ms, 0.5) / lod_frame,
+        );
+    }
+    Ok(())
+}
