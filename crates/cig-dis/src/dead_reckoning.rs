@@ -331,10 +331,17 @@ pub fn extrapolate(algorithm: DrAlgorithm, input: &DrInput, t_s: f64) -> DrPose 
     }
 }
 
-/// Angle of the rotation taking `a` to `b`, radians in [0, π].
+/// Angle of the rotation taking `a` to `b`, radians in [0, π], from
+/// atan2(|vee(M − Mᵀ)| / 2, (tr M − 1) / 2) with M = aᵀ b (accurate near 0 and π/2).
 #[must_use]
 pub fn rotation_angle_between(a: DMat3, b: DMat3) -> f64 {
-    let relative = a.transpose() * b;
-    let trace = relative.x_axis.x + relative.y_axis.y + relative.z_axis.z;
-    ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos()
+    let m = a.transpose() * b;
+    let trace = m.x_axis.x + m.y_axis.y + m.z_axis.z;
+    // vee(M - Mᵀ) = 2 sin(angle) · axis.
+    let vee = DVec3::new(
+        m.y_axis.z - m.z_axis.y,
+        m.z_axis.x - m.x_axis.z,
+        m.x_axis.y - m.y_axis.x,
+    );
+    (vee.length() / 2.0).atan2((trace - 1.0) / 2.0)
 }

@@ -16,11 +16,13 @@
 //! * Followers that hear no heartbeat for `master_timeout_s` (default 12 s, 2.4 heartbeats)
 //!   claim mastership with the time they have been extrapolating, so the world time continues
 //!   without a jump.
-//! * Election is deterministic: whenever two masters hear each other, the one with the higher
-//!   (site, application) yields and adopts the lower one's time; followers always follow the
-//!   lowest (site, application) master they hear. So after the old master leaves, the lowest
-//!   surviving node ends up master — this also settles the thesis's "several nodes join at
-//!   nearly the same time" case instead of leaving the exercise without a master.
+//! * Election is deterministic: the master is the node with the lowest (site, application)
+//!   among those alive. Whenever two masters hear each other, the higher one yields and adopts
+//!   the lower one's time; followers follow the lowest master they hear; a follower that ranks
+//!   before its master (a newcomer, or the survivors after a master left) claims mastership
+//!   right after adopting the master's time, so the time itself never jumps — only the role
+//!   moves. This also settles the thesis's "several nodes join at nearly the same time" case
+//!   instead of leaving the exercise with several masters or none.
 //! * A Set Data PDU carrying datum 52000 (e.g. from an instructor station) sets the time on
 //!   every node; the master re-announces it at once.
 //!
@@ -377,9 +379,12 @@ impl TimeSync {
             TimeRole::Joining if now_s - self.joined_s >= self.config.join_wait_s => {
                 self.become_master(now_s)
             }
-            TimeRole::Follower { .. }
-                if now_s - self.last_master_heard_s > self.config.master_timeout_s =>
+            TimeRole::Follower { master }
+                if self.me < master
+                    || now_s - self.last_master_heard_s > self.config.master_timeout_s =>
             {
+                // Either the master is gone, or this node ranks before it: claim, carrying on
+                // the time adopted from it.
                 self.become_master(now_s)
             }
             TimeRole::Master => {
