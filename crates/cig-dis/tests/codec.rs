@@ -174,7 +174,7 @@ fn without_dr_other_parameters(message: DisMessage) -> DisMessage {
 #[test]
 fn dr_other_parameters_stay_zero_on_the_wire() {
     let message = DisMessage::EntityState(Box::new(sample_entity_state()));
-    let bytes = encode_pdu(header(DisVersion::V7), &message).unwrap();
+    let bytes = encode_pdu(header(DisVersion::V7), &message).expect("valid in this test");
     // Header 12, id 6, force 1, count 1, types 16, velocity 12, location 24, orientation 12,
     // appearance 4, algorithm 1: the 15 other-parameter octets follow at 89.
     assert_eq!(bytes[88], 4);
@@ -293,16 +293,16 @@ fn bundled_datagram_yields_each_pdu() {
             header(DisVersion::V7),
             &DisMessage::Detonation(Box::new(sample_detonation())),
         )
-        .unwrap(),
+        .expect("valid in this test"),
     );
     let out = decode_datagram(&datagram);
     assert_eq!(out.len(), 2);
     assert!(matches!(
-        out[0].as_ref().unwrap().message,
+        out[0].as_ref().expect("valid in this test").message,
         DisMessage::EntityState(_)
     ));
     assert!(matches!(
-        out[1].as_ref().unwrap().message,
+        out[1].as_ref().expect("valid in this test").message,
         DisMessage::Detonation(_)
     ));
 }
@@ -344,9 +344,12 @@ fn bad_headers_are_reported() {
     // Unknown types keep their header.
     let mut other = good;
     other[2] = 200;
-    let pdu = decode_pdu(&other).unwrap();
+    let pdu = decode_pdu(&other).expect("valid in this test");
     assert_eq!(pdu.message, DisMessage::Unsupported);
-    assert_eq!(decode_header(&other).unwrap().pdu_type, 200);
+    assert_eq!(
+        decode_header(&other).expect("valid in this test").pdu_type,
+        200
+    );
 }
 
 #[test]
@@ -425,7 +428,7 @@ fn sample_process() -> EnvironmentalProcess {
 fn environmental_process_round_trips_in_both_versions() {
     let message = DisMessage::EnvironmentalProcess(sample_process());
     for version in [DisVersion::V6, DisVersion::V7] {
-        let bytes = encode_pdu(header(version), &message).unwrap();
+        let bytes = encode_pdu(header(version), &message).expect("valid in this test");
         // 12 header + 20 fixed + (8+76+4) plume + (8+112) puff + (8+24) point.
         assert_eq!(bytes.len(), 12 + 20 + 88 + 120 + 32);
         assert_eq!(bytes[2], 41);
@@ -464,7 +467,7 @@ fn hand_built_environmental_process() -> Vec<u8> {
 #[test]
 fn hand_built_environmental_process_decodes_and_re_encodes_identically() {
     let bytes = hand_built_environmental_process();
-    let pdu = decode_pdu(&bytes).unwrap();
+    let pdu = decode_pdu(&bytes).expect("valid in this test");
     let DisMessage::EnvironmentalProcess(p) = &pdu.message else {
         panic!("not an environmental process");
     };
@@ -493,7 +496,7 @@ fn hand_built_environmental_process_decodes_and_re_encodes_identically() {
         },
         &pdu.message,
     )
-    .unwrap();
+    .expect("valid in this test");
     assert_eq!(again, bytes);
 }
 
@@ -594,7 +597,7 @@ proptest! {
         };
         let body = environmental::encode_body(&process);
         prop_assert_eq!(body.len() % 4, 0);
-        prop_assert_eq!(environmental::decode_body(&body).unwrap(), process);
+        prop_assert_eq!(environmental::decode_body(&body).expect("valid in this test"), process);
     }
 
     #[test]
@@ -610,7 +613,7 @@ proptest! {
         body in prop::collection::vec(any::<u8>(), 0..300),
     ) {
         let mut bytes = vec![version, 1, pdu_type, 1, 0, 0, 0, 0];
-        let length = u16::try_from(12 + body.len()).unwrap();
+        let length = u16::try_from(12 + body.len()).expect("valid in this test");
         bytes.extend_from_slice(&length.to_be_bytes());
         bytes.extend_from_slice(&[0, 0]);
         bytes.extend_from_slice(&body);
@@ -627,7 +630,7 @@ proptest! {
         let mut bytes = match which {
             0 => hand_built_entity_state(7),
             1 => hand_built_environmental_process(),
-            _ => encode_pdu(header(DisVersion::V7), &DisMessage::Detonation(Box::new(sample_detonation()))).unwrap(),
+            _ => encode_pdu(header(DisVersion::V7), &DisMessage::Detonation(Box::new(sample_detonation()))).expect("valid in this test"),
         };
         for (at, value) in flips {
             if let Some(b) = bytes.get_mut(at) {
@@ -636,7 +639,7 @@ proptest! {
         }
         bytes.truncate(cut);
         if fix_length && bytes.len() >= 12 {
-            let length = u16::try_from(bytes.len()).unwrap();
+            let length = u16::try_from(bytes.len()).expect("valid in this test");
             bytes[8..10].copy_from_slice(&length.to_be_bytes());
         }
         let _ = decode_datagram(&bytes);

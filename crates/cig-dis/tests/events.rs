@@ -168,10 +168,11 @@ fn ground_and_building_impacts_start_effects_others_do_not() {
         header,
         &DisMessage::Detonation(Box::new(detonation(3, 901))),
     )
-    .unwrap();
+    .expect("valid in this test");
     let seeds: Vec<u64> = (0..2)
         .map(|_| {
-            let DisMessage::Detonation(d) = decode_pdu(&bytes).unwrap().message else {
+            let DisMessage::Detonation(d) = decode_pdu(&bytes).expect("valid in this test").message
+            else {
                 panic!("not a detonation");
             };
             let effect = impact_effect(&d).expect("ground impact");
@@ -193,7 +194,9 @@ fn ground_and_building_impacts_start_effects_others_do_not() {
         .collect();
     assert_eq!(seeds[0], seeds[1]);
     assert_ne!(
-        impact_effect(&detonation(3, 902)).unwrap().effect_seed,
+        impact_effect(&detonation(3, 902))
+            .expect("valid in this test")
+            .effect_seed,
         seeds[0]
     );
     assert!(impact_effect(&detonation(1, 901)).is_none());
@@ -217,8 +220,9 @@ fn over_the_wire(m: &TimeMessage) -> TimeMessage {
         },
         &m.to_message(),
     )
-    .unwrap();
-    TimeMessage::from_message(&decode_pdu(&bytes).unwrap().message).expect("a time message")
+    .expect("valid in this test");
+    TimeMessage::from_message(&decode_pdu(&bytes).expect("valid in this test").message)
+        .expect("a time message")
 }
 
 impl Net {
@@ -281,7 +285,7 @@ impl Net {
     }
 
     fn node(&self, i: usize) -> &TimeSync {
-        self.nodes[i].as_ref().unwrap()
+        self.nodes[i].as_ref().expect("valid in this test")
     }
 
     fn time(&self, i: usize) -> i64 {
@@ -431,8 +435,8 @@ fn lightning_round_trips_and_is_not_a_time_message() {
         },
         &strike.to_message(),
     )
-    .unwrap();
-    let message = decode_pdu(&bytes).unwrap().message;
+    .expect("valid in this test");
+    let message = decode_pdu(&bytes).expect("valid in this test").message;
     assert_eq!(LightningStrike::from_message(&message), Some(strike));
     assert_eq!(TimeMessage::from_message(&message), None);
     let time = TimeMessage::Announce {

@@ -329,9 +329,10 @@ fn deliver(
     now_s: f64,
     body: cig_dis::dis_rs::entity_state::model::EntityState,
 ) -> Vec<TableEvent> {
-    let bytes = encode_pdu(header(), &DisMessage::EntityState(Box::new(body))).unwrap();
-    let pdu = decode_pdu(&bytes).unwrap();
-    table.apply(now_s, &pdu).unwrap()
+    let bytes =
+        encode_pdu(header(), &DisMessage::EntityState(Box::new(body))).expect("valid in this test");
+    let pdu = decode_pdu(&bytes).expect("valid in this test");
+    table.apply(now_s, &pdu).expect("valid in this test")
 }
 
 const KEY: EntityKey = EntityKey {
@@ -412,13 +413,13 @@ fn published_turning_entity_is_reproduced_by_a_receiver() {
     truth.angular_velocity_body_radps = DVec3::new(0.0, 0.0, 0.05);
     truth.acceleration_ecef_mps2 = DVec3::new(0.0, 0.3, 0.0);
     truth.appearance = (1 << 6) | (1 << 7);
-    let (_, body) = p.update(0.0, &truth).unwrap();
+    let (_, body) = p.update(0.0, &truth).expect("valid in this test");
     let mut table = RemoteEntityTable::new(RemoteTableConfig::default());
     let events = deliver(&mut table, 100.0, body.clone());
     assert_eq!(events[0], TableEvent::Appeared(KEY));
     assert!(matches!(&events[1], TableEvent::EffectsChanged { diff, .. }
         if diff.start == vec![EntityEffect::EngineSmoke, EntityEffect::DustCloud(cig_dis::DustCloudSize::Small)]));
-    let received = table.pose(KEY, 103.0).unwrap();
+    let received = table.pose(KEY, 103.0).expect("valid in this test");
     let (algorithm, input) = cig_dis::remote::dr_input_from_entity_state(&body);
     let predicted = extrapolate(algorithm, &input, 3.0);
     assert_eq!(algorithm, DrAlgorithm::Rvb);
@@ -473,11 +474,11 @@ fn smoothing_blends_without_a_jump_and_then_follows_the_update() {
     deliver(&mut table, 0.0, es_for(KEY, p0, v, 0));
     // At 2 s the sender reports it is 5 m off the DR track and turned.
     let tu = 2.0;
-    let before = table.pose(KEY, tu - 1e-6).unwrap();
+    let before = table.pose(KEY, tu - 1e-6).expect("valid in this test");
     let mut update = es_for(KEY, p0 + v * tu + DVec3::new(0.0, 5.0, 0.0), v, 0);
     update.entity_orientation.psi = 0.5;
     deliver(&mut table, tu, update);
-    let at = table.pose(KEY, tu).unwrap();
+    let at = table.pose(KEY, tu).expect("valid in this test");
     assert!(
         close(before.position_ecef_m, at.position_ecef_m, 1e-4),
         "jump {}",
@@ -488,13 +489,13 @@ fn smoothing_blends_without_a_jump_and_then_follows_the_update() {
     let mut last = at.position_ecef_m;
     for i in 1..=100 {
         let t = tu + f64::from(i) * 0.01;
-        let pose = table.pose(KEY, t).unwrap();
+        let pose = table.pose(KEY, t).expect("valid in this test");
         let step = (pose.position_ecef_m - last).length();
         assert!(step < 10.0 * 0.01 + 0.09, "step {step} at {t}");
         last = pose.position_ecef_m;
     }
     // After the smoothing time the new track alone is shown.
-    let after = table.pose(KEY, tu + 1.5).unwrap();
+    let after = table.pose(KEY, tu + 1.5).expect("valid in this test");
     assert!(close(
         after.position_ecef_m,
         p0 + v * (tu + 1.5) + DVec3::new(0.0, 5.0, 0.0),
@@ -511,7 +512,10 @@ fn far_updates_snap() {
     let far = p0 + DVec3::new(1000.0, 0.0, 0.0);
     deliver(&mut table, 1.0, es_for(KEY, far, DVec3::ZERO, 0));
     assert!(close(
-        table.pose(KEY, 1.0).unwrap().position_ecef_m,
+        table
+            .pose(KEY, 1.0)
+            .expect("valid in this test")
+            .position_ecef_m,
         far,
         1e-6
     ));
@@ -569,8 +573,8 @@ fn exercise_site_and_own_filters() {
             },
             &DisMessage::EntityState(Box::new(es_for(key, p0, DVec3::ZERO, 0))),
         )
-        .unwrap();
-        table.apply(0.0, &decode_pdu(&bytes).unwrap())
+        .expect("valid in this test");
+        table.apply(0.0, &decode_pdu(&bytes).expect("valid in this test"))
     };
     use cig_dis::remote::Ignored;
     assert_eq!(send(&mut table, 2, KEY), Err(Ignored::Exercise));
