@@ -204,71 +204,59 @@ struct Coefficients {
     omega_squared: f64,
 }
 
-impl Coefficients {
-    fn matrix(self, omega: DMat3) -> DMat3 {
-        DMat3::IDENTITY * self.identity + omega * self.omega + omega * omega * self.omega_squared
-    }
-}
-
 /// Below this w·t the closed forms lose digits; Taylor series are used instead.
 const SMALL_ANGLE_RAD: f64 = 1e-3;
 
-/// e^{Ωt}: I + (sin wt / w) Ω + ((1 − cos wt)/w²) Ω².
-fn rotation_coefficients(w: f64, t: f64) -> Coefficients {
-    let wt = w * t;
-    if wt.abs() < SMALL_ANGLE_RAD {
-        let w2 = w * w;
-        Coefficients {
-            identity: 1.0,
-            omega: t - w2 * t.powi(3) / 6.0,
-            omega_squared: t * t / 2.0 - w2 * t.powi(4) / 24.0,
-        }
-    } else {
-        Coefficients {
-            identity: 1.0,
-            omega: wt.sin() / w,
-            omega_squared: (1.0 - wt.cos()) / (w * w),
-        }
-    }
-}
-
-/// R1 = ∫₀ᵗ e^{Ωτ} dτ = t I + ((1 − cos wt)/w²) Ω + ((wt − sin wt)/w³) Ω².
-fn r1_coefficients(w: f64, t: f64) -> Coefficients {
-    let wt = w * t;
-    if wt.abs() < SMALL_ANGLE_RAD {
-        let w2 = w * w;
-        Coefficients {
-            identity: t,
-            omega: t * t / 2.0 - w2 * t.powi(4) / 24.0,
-            omega_squared: t.powi(3) / 6.0 - w2 * t.powi(5) / 120.0,
-        }
-    } else {
-        Coefficients {
-            identity: t,
-            omega: (1.0 - wt.cos()) / (w * w),
-            omega_squared: (wt - wt.sin()) / w.powi(3),
-        }
-    }
-}
-
+/// The three series at once (one sin/cos):
+/// e^{Ωt} = I + (sin wt / w) Ω + ((1 − cos wt)/w²) Ω²;
+/// R1 = ∫₀ᵗ e^{Ωτ} dτ = t I + ((1 − cos wt)/w²) Ω + ((wt − sin wt)/w³) Ω²;
 /// R2 = ∫₀ᵗ τ e^{Ωτ} dτ = ½t² I + ((sin wt − wt cos wt)/w³) Ω +
 /// ((½w²t² + 1 − cos wt − wt sin wt)/w⁴) Ω².
-fn r2_coefficients(w: f64, t: f64) -> Coefficients {
+fn series(w: f64, t: f64) -> [Coefficients; 3] {
     let wt = w * t;
+    let (rot, r1, r2);
     if wt.abs() < SMALL_ANGLE_RAD {
         let w2 = w * w;
-        Coefficients {
-            identity: t * t / 2.0,
-            omega: t.powi(3) / 3.0 - w2 * t.powi(5) / 30.0,
-            omega_squared: t.powi(4) / 8.0 - w2 * t.powi(6) / 144.0,
-        }
+        rot = (
+            t - w2 * t.powi(3) / 6.0,
+            t * t / 2.0 - w2 * t.powi(4) / 24.0,
+        );
+        r1 = (
+            t * t / 2.0 - w2 * t.powi(4) / 24.0,
+            t.powi(3) / 6.0 - w2 * t.powi(5) / 120.0,
+        );
+        r2 = (
+            t.powi(3) / 3.0 - w2 * t.powi(5) / 30.0,
+            t.powi(4) / 8.0 - w2 * t.powi(6) / 144.0,
+        );
     } else {
+        let (sin, cos) = wt.sin_cos();
+        let w2 = w * w;
+        let w3 = w2 * w;
+        rot = (sin / w, (1.0 - cos) / w2);
+        r1 = ((1.0 - cos) / w2, (wt - sin) / w3);
+        r2 = (
+            (sin - wt * cos) / w3,
+            (0.5 * wt * wt + 1.0 - cos - wt * sin) / (w2 * w2),
+        );
+    }
+    [
+        Coefficients {
+            identity: 1.0,
+            omega: rot.0,
+            omega_squared: rot.1,
+        },
+        Coefficients {
+            identity: t,
+            omega: r1.0,
+            omega_squared: r1.1,
+        },
         Coefficients {
             identity: t * t / 2.0,
-            omega: (wt.sin() - wt * wt.cos()) / w.powi(3),
-            omega_squared: (0.5 * wt * wt + 1.0 - wt.cos() - wt * wt.sin()) / w.powi(4),
-        }
-    }
+            omega: r2.0,
+            omega_squared: r2.1,
+        },
+    ]
 }
 
 /// The standard's DR matrix for the world-to-body update over `t_s` seconds:
@@ -277,7 +265,7 @@ fn r2_coefficients(w: f64, t: f64) -> Coefficients {
 pub fn dr_matrix(angular_velocity_body_radps: DVec3, t_s: f64) -> DMat3 {
     let w = angular_velocity_body_radps.length();
     let omega = skew(angular_velocity_body_radps);
-    let c = rotation_coefficients(w, t_s);
+    let [c, _, _] = series(w, t_s);
     // e^{-Ωt}: flip the sign of the odd term.
     DMat3::IDENTITY + omega * (-c.omega) + omega * omega * c.omega_squared
 }
@@ -285,49 +273,101 @@ pub fn dr_matrix(angular_velocity_body_radps: DVec3, t_s: f64) -> DMat3 {
 /// Dead-reckons `input` forward by `t_s` seconds with `algorithm`.
 #[must_use]
 pub fn extrapolate(algorithm: DrAlgorithm, input: &DrInput, t_s: f64) -> DrPose {
-    let t = if t_s.is_finite() { t_s } else { 0.0 };
-    let r0 = input.orientation.body_to_world();
-    let p0 = input.position_ecef_m;
-    let v0 = input.velocity_ecef_mps;
-    let a = input.acceleration_mps2;
-    let omega_vec = input.angular_velocity_body_radps;
-    let w = omega_vec.length();
-    let omega = skew(omega_vec);
-    let turned = if algorithm.rotates() {
-        r0 * rotation_coefficients(w, t).matrix(omega)
-    } else {
-        r0
-    };
-    let (position, velocity) = match algorithm {
-        DrAlgorithm::Other | DrAlgorithm::Static => (p0, DVec3::ZERO),
-        DrAlgorithm::Fpw | DrAlgorithm::Rpw => (p0 + v0 * t, v0),
-        DrAlgorithm::Fvw | DrAlgorithm::Rvw => (p0 + v0 * t + a * (0.5 * t * t), v0 + a * t),
-        DrAlgorithm::Fpb => (p0 + v0 * t, v0),
-        DrAlgorithm::Fvb => {
-            let v_body = r0.transpose() * v0;
-            (
-                p0 + r0 * (v_body * t + a * (0.5 * t * t)),
-                r0 * (v_body + a * t),
-            )
+    DrModel::new(algorithm, *input).pose(t_s)
+}
+
+/// One update's dead-reckoning model with the per-update work done once, for extrapolating
+/// the same update every frame: R0, R0 Ω, R0 Ω², and the body velocity and acceleration with
+/// their ω× and ω×ω× images taken to world axes, so that each pose is one sin/cos and a few
+/// scaled vector sums (P = P0 + R0 (R1 v_b + R2 a_b) expands over the I, Ω, Ω² terms).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DrModel {
+    /// The algorithm.
+    pub algorithm: DrAlgorithm,
+    /// The update.
+    pub input: DrInput,
+    omega_rad_s: f64,
+    r0: DMat3,
+    r0_omega: DMat3,
+    r0_omega2: DMat3,
+    /// R0 v_b, R0 Ω v_b, R0 Ω² v_b.
+    velocity_terms: [DVec3; 3],
+    /// R0 a_b, R0 Ω a_b, R0 Ω² a_b (body-axis acceleration models).
+    acceleration_terms: [DVec3; 3],
+}
+
+impl DrModel {
+    /// Prepares a model.
+    #[must_use]
+    pub fn new(algorithm: DrAlgorithm, input: DrInput) -> DrModel {
+        let r0 = input.orientation.body_to_world();
+        let w = input.angular_velocity_body_radps;
+        let omega = skew(w);
+        let v_body = r0.transpose() * input.velocity_ecef_mps;
+        let a_body = input.acceleration_mps2;
+        let images = |v: DVec3| {
+            let wv = w.cross(v);
+            [r0 * v, r0 * wv, r0 * w.cross(wv)]
+        };
+        DrModel {
+            algorithm,
+            input,
+            omega_rad_s: w.length(),
+            r0,
+            r0_omega: r0 * omega,
+            r0_omega2: r0 * omega * omega,
+            velocity_terms: images(v_body),
+            acceleration_terms: images(a_body),
         }
-        DrAlgorithm::Rpb => {
-            let v_body = r0.transpose() * v0;
-            (
-                p0 + r0 * (r1_coefficients(w, t).matrix(omega) * v_body),
-                turned * v_body,
-            )
+    }
+
+    /// The pose `t_s` seconds after the update (non-finite times read as 0).
+    #[must_use]
+    pub fn pose(&self, t_s: f64) -> DrPose {
+        let t = if t_s.is_finite() { t_s } else { 0.0 };
+        let p0 = self.input.position_ecef_m;
+        let v0 = self.input.velocity_ecef_mps;
+        let a = self.input.acceleration_mps2;
+        // Only the rotating and the body-axis turning models need the series (and its sin/cos).
+        let [rot, r1, r2] = if self.algorithm.rotates() {
+            series(self.omega_rad_s, t)
+        } else {
+            [Coefficients {
+                identity: 1.0,
+                omega: 0.0,
+                omega_squared: 0.0,
+            }; 3]
+        };
+        let apply = |c: Coefficients, terms: &[DVec3; 3]| {
+            terms[0] * c.identity + terms[1] * c.omega + terms[2] * c.omega_squared
+        };
+        let turned = if self.algorithm.rotates() {
+            self.r0 + self.r0_omega * rot.omega + self.r0_omega2 * rot.omega_squared
+        } else {
+            self.r0
+        };
+        let (position, velocity) = match self.algorithm {
+            DrAlgorithm::Other | DrAlgorithm::Static => (p0, DVec3::ZERO),
+            DrAlgorithm::Fpw | DrAlgorithm::Rpw | DrAlgorithm::Fpb => (p0 + v0 * t, v0),
+            DrAlgorithm::Fvw | DrAlgorithm::Rvw => (p0 + v0 * t + a * (0.5 * t * t), v0 + a * t),
+            DrAlgorithm::Fvb => {
+                let a_world = self.acceleration_terms[0];
+                (p0 + v0 * t + a_world * (0.5 * t * t), v0 + a_world * t)
+            }
+            DrAlgorithm::Rpb => (
+                p0 + apply(r1, &self.velocity_terms),
+                apply(rot, &self.velocity_terms),
+            ),
+            DrAlgorithm::Rvb => (
+                p0 + apply(r1, &self.velocity_terms) + apply(r2, &self.acceleration_terms),
+                apply(rot, &self.velocity_terms) + apply(rot, &self.acceleration_terms) * t,
+            ),
+        };
+        DrPose {
+            position_ecef_m: position,
+            body_to_world: turned,
+            velocity_ecef_mps: velocity,
         }
-        DrAlgorithm::Rvb => {
-            let v_body = r0.transpose() * v0;
-            let r1 = r1_coefficients(w, t).matrix(omega);
-            let r2 = r2_coefficients(w, t).matrix(omega);
-            (p0 + r0 * (r1 * v_body + r2 * a), turned * (v_body + a * t))
-        }
-    };
-    DrPose {
-        position_ecef_m: position,
-        body_to_world: turned,
-        velocity_ecef_mps: velocity,
     }
 }
 

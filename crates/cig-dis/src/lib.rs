@@ -30,7 +30,7 @@ pub use codec::{
     decode_datagram, decode_header, decode_pdu, encode_pdu, DecodeError, DecodedPdu, DisMessage,
     DisVersion, EncodeError, EncodeHeader, PduHeaderInfo,
 };
-pub use dead_reckoning::{extrapolate, DrAlgorithm, DrInput, DrPose, EulerAngles};
+pub use dead_reckoning::{extrapolate, DrAlgorithm, DrInput, DrModel, DrPose, EulerAngles};
 pub use detonation::{impact_effect, EventIdentity, ImpactEffectStart, ImpactSize, ImpactSurface};
 pub use environmental::{
     EnvironmentGeometry, EnvironmentRecord, EnvironmentalProcess, GaussianPlume, GaussianPuff,

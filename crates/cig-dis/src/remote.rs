@@ -33,7 +33,7 @@ use glam::{DMat3, DQuat, DVec3};
 
 use crate::appearance::{EffectsDiff, EffectsRequested};
 use crate::codec::{DecodedPdu, DisMessage, PduHeaderInfo};
-use crate::dead_reckoning::{extrapolate, DrAlgorithm, DrInput, DrPose, EulerAngles};
+use crate::dead_reckoning::{DrAlgorithm, DrInput, DrModel, DrPose, EulerAngles};
 
 /// Entity ID: (site, application, entity).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -213,14 +213,20 @@ pub enum Ignored {
 
 #[derive(Clone, Copy, Debug)]
 struct Track {
-    algorithm: DrAlgorithm,
-    input: DrInput,
+    model: DrModel,
     start_s: f64,
 }
 
 impl Track {
+    fn new(algorithm: DrAlgorithm, input: DrInput, start_s: f64) -> Track {
+        Track {
+            model: DrModel::new(algorithm, input),
+            start_s,
+        }
+    }
+
     fn pose(&self, now_s: f64) -> DrPose {
-        extrapolate(self.algorithm, &self.input, now_s - self.start_s)
+        self.model.pose(now_s - self.start_s)
     }
 }
 
@@ -268,7 +274,10 @@ pub struct RemoteEntitySnapshot {
 /// Local heading, pitch and roll (degrees) of a body-to-ECEF rotation at an ECEF position.
 #[must_use]
 pub fn local_heading_pitch_roll_deg(body_to_world: DMat3, position_ecef_m: DVec3) -> [f64; 3] {
-    let g = Geodetic::from_ecef(position_ecef_m);
+    heading_pitch_roll_at(body_to_world, Geodetic::from_ecef(position_ecef_m))
+}
+
+fn heading_pitch_roll_at(body_to_world: DMat3, g: Geodetic) -> [f64; 3] {
     let (lat, lon) = (g.lat_deg.to_radians(), g.lon_deg.to_radians());
     let east = DVec3::new(-lon.sin(), lon.cos(), 0.0);
     let north = DVec3::new(-lat.sin() * lon.cos(), -lat.sin() * lon.sin(), lat.cos());
@@ -419,11 +428,7 @@ impl RemoteEntityTable {
             }
             return Ok(events);
         }
-        let new_track = Track {
-            algorithm,
-            input,
-            start_s: now_s,
-        };
+        let new_track = Track::new(algorithm, input, now_s);
         let smoothing_s = self.config.smoothing_s;
         let snap_distance_m = self.config.snap_distance_m;
         if let Some(entity) = self.entities.get_mut(&key) {
@@ -432,22 +437,22 @@ impl RemoteEntityTable {
                 .position_ecef_m
                 .distance(new_track.pose(now_s).position_ecef_m);
             entity.blend_from = if smoothing_s > 0.0 && jump_m <= snap_distance_m {
-                let angular = if entity.current.algorithm.rotates() {
-                    entity.current.input.angular_velocity_body_radps
+                let angular = if entity.current.model.algorithm.rotates() {
+                    entity.current.model.input.angular_velocity_body_radps
                 } else {
                     DVec3::ZERO
                 };
-                Some(Track {
-                    algorithm: DrAlgorithm::Rpw,
-                    input: DrInput {
+                Some(Track::new(
+                    DrAlgorithm::Rpw,
+                    DrInput {
                         position_ecef_m: shown.position_ecef_m,
                         orientation: EulerAngles::from_body_to_world(shown.body_to_world),
                         velocity_ecef_mps: shown.velocity_ecef_mps,
                         acceleration_mps2: DVec3::ZERO,
                         angular_velocity_body_radps: angular,
                     },
-                    start_s: now_s,
-                })
+                    now_s,
+                ))
             } else {
                 None
             };
@@ -530,18 +535,16 @@ impl RemoteEntityTable {
             .iter()
             .map(|(key, e)| {
                 let pose = e.pose(now_s, self.config.smoothing_s);
+                let geodetic = Geodetic::from_ecef(pose.position_ecef_m);
                 RemoteEntitySnapshot {
                     key: *key,
                     entity_type: e.entity_type,
                     position_ecef_m: pose.position_ecef_m,
-                    geodetic: Geodetic::from_ecef(pose.position_ecef_m),
+                    geodetic,
                     orientation: EulerAngles::from_body_to_world(pose.body_to_world),
-                    heading_pitch_roll_deg: local_heading_pitch_roll_deg(
-                        pose.body_to_world,
-                        pose.position_ecef_m,
-                    ),
+                    heading_pitch_roll_deg: heading_pitch_roll_at(pose.body_to_world, geodetic),
                     velocity_ecef_mps: pose.velocity_ecef_mps,
-                    algorithm: e.current.algorithm,
+                    algorithm: e.current.model.algorithm,
                     effects: e.effects,
                     appearance: e.appearance,
                     marking: e.marking.clone(),
