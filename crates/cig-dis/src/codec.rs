@@ -237,7 +237,16 @@ pub fn decode_pdu(bytes: &[u8]) -> Result<DecodedPdu, DecodeError> {
     };
     let message = match header.pdu_type {
         1 | 2 | 3 | 12 | 18 | 19 | 20 => {
-            let mut pdus = dis_rs::parse(pdu).map_err(|e| malformed(e.to_string()))?;
+            // dis-rs parses as many PDUs as the slice holds and its parsers for types cig does
+            // not use are not hardened, so it gets exactly the octets the body's own fields
+            // describe: nothing is left behind to be read as a second PDU.
+            let body = pdu.get(PDU_HEADER_OCTETS..).unwrap_or_default();
+            let needed = body_octets(header.pdu_type, body)
+                .ok_or_else(|| malformed("body shorter than its own fields say".to_string()))?;
+            let exact = pdu
+                .get(..PDU_HEADER_OCTETS + needed)
+                .ok_or_else(|| malformed("body shorter than its own fields say".to_string()))?;
+            let mut pdus = dis_rs::parse(exact).map_err(|e| malformed(e.to_string()))?;
             if pdus.is_empty() {
                 return Err(malformed("no PDU parsed".to_string()));
             }
@@ -262,6 +271,48 @@ pub fn decode_pdu(bytes: &[u8]) -> Result<DecodedPdu, DecodeError> {
         _ => DisMessage::Unsupported,
     };
     Ok(DecodedPdu { header, message })
+}
+
+/// The octets a body of a type cig hands to dis-rs occupies according to its own count and
+/// length fields (IEEE 1278.1-2012 §7.2.2, 7.3.2, 7.3.3, 7.5.3, 7.5.9-7.5.11); `None` when those
+/// fields point past the end of `body`.
+fn body_octets(pdu_type: u8, body: &[u8]) -> Option<usize> {
+    let u8_at = |i: usize| body.get(i).copied().map(usize::from);
+    let u32_at = |i: usize| -> Option<usize> {
+        let b: [u8; 4] = body.get(i..i + 4)?.try_into().ok()?;
+        usize::try_from(u32::from_be_bytes(b)).ok()
+    };
+    let needed = match pdu_type {
+        1 => 132 + 16 * u8_at(7)?,
+        2 => 84,
+        3 => 92 + 16 * u8_at(89)?,
+        12 => 16,
+        18 => {
+            let fixed = u32_at(20)?;
+            let variable = u32_at(24)?;
+            fixed
+                .checked_add(variable)?
+                .checked_mul(4)?
+                .checked_add(28)?
+        }
+        19 | 20 => {
+            let fixed = u32_at(20)?;
+            let variable = u32_at(24)?;
+            let mut at = fixed.checked_mul(8)?.checked_add(28)?;
+            for _ in 0..variable {
+                if at > body.len() {
+                    return None;
+                }
+                let value_octets = u32_at(at + 4)? / 8;
+                at = at
+                    .checked_add(8)?
+                    .checked_add(value_octets.div_ceil(8) * 8)?;
+            }
+            at
+        }
+        _ => return None,
+    };
+    (needed <= body.len()).then_some(needed)
 }
 
 /// Decodes every PDU bundled in a datagram, in order. A PDU that fails is reported and the walk
@@ -305,7 +356,20 @@ pub struct EncodeHeader {
 /// [`DisMessage::Unsupported`].
 pub fn encode_pdu(header: EncodeHeader, message: &DisMessage) -> Result<Vec<u8>, EncodeError> {
     let body: PduBody = match message {
-        DisMessage::EntityState(b) => PduBody::EntityState((**b).clone()),
+        DisMessage::EntityState(b) => {
+            // dis-rs pads the marking with `11 - len` octets and underflows (a panic, or a
+            // multi-GB allocation in release builds) on longer strings, which a received
+            // non-ASCII marking becomes after its lossy UTF-8 decoding: keep 11 ASCII chars.
+            let mut body = (**b).clone();
+            body.entity_marking.marking_string = body
+                .entity_marking
+                .marking_string
+                .chars()
+                .filter(char::is_ascii)
+                .take(11)
+                .collect();
+            PduBody::EntityState(body)
+        }
         DisMessage::Fire(b) => PduBody::Fire((**b).clone()),
         DisMessage::Detonation(b) => PduBody::Detonation((**b).clone()),
         DisMessage::RemoveEntity(b) => PduBody::RemoveEntity(b.clone()),
@@ -333,6 +397,10 @@ pub fn encode_pdu(header: EncodeHeader, message: &DisMessage) -> Result<Vec<u8>,
     let mut buf = BytesMut::with_capacity(length);
     pdu.serialize(&mut buf)
         .map_err(|e| EncodeError::Serialise(e.to_string()))?;
+    // dis-rs computes lengths in 16 bits; a body beyond that wraps the header's length field.
+    if buf.len() != length {
+        return Err(EncodeError::TooLong(buf.len()));
+    }
     Ok(buf.to_vec())
 }
 
