@@ -17,8 +17,8 @@
 //!   ((sin wt − wt cos wt)/w³) Ω. FPB (6) and FVB (9) do not rotate (R1 = t I, R2 = ½t² I);
 //!   RPB (7) uses R1 v_b and RVB (8) R1 v_b + R2 a_b.
 //! * Orientation of the rotating models (RPW, RVW, RPB, RVB): the standard's DR matrix
-//!   [DR] = ((1 − cos wt)/w²) ωωᵀ + cos wt I − (sin wt / w) Ω updates the world-to-body matrix,
-//!   [R]w→b(t) = [DR] [R]w→b(0); equivalently body-to-world R(t) = R0 e^{Ωt}
+//!   \[DR\] = ((1 − cos wt)/w²) ωωᵀ + cos wt I − (sin wt / w) Ω updates the world-to-body matrix,
+//!   \[R\]w→b(t) = \[DR\] \[R\]w→b(0); equivalently body-to-world R(t) = R0 e^{Ωt}
 //!   (Rodrigues: e^{Ωt} = I + (sin wt / w) Ω + ((1 − cos wt)/w²) Ω²).
 //!
 //! Here the coefficients are written in the Ω, Ω² basis (Ω² = ωωᵀ − w² I, the same matrices)
@@ -260,7 +260,7 @@ fn series(w: f64, t: f64) -> [Coefficients; 3] {
 }
 
 /// The standard's DR matrix for the world-to-body update over `t_s` seconds:
-/// [DR] = ((1 − cos wt)/w²) ωωᵀ + cos wt I − (sin wt / w) Ω (equal to e^{−Ωt}).
+/// \[DR\] = ((1 − cos wt)/w²) ωωᵀ + cos wt I − (sin wt / w) Ω (equal to e^{−Ωt}).
 #[must_use]
 pub fn dr_matrix(angular_velocity_body_radps: DVec3, t_s: f64) -> DMat3 {
     let w = angular_velocity_body_radps.length();

@@ -20,8 +20,8 @@
 //! [`crate::codec::encode_pdu`].
 
 use dis_rs::entity_state::model::{DrParameters, EntityAppearance, EntityMarking, EntityState};
-use dis_rs::enumerations::{Country, DeadReckoningAlgorithm, EntityKind, ForceId, PlatformDomain};
-use dis_rs::model::{EntityId, EntityType, Location, Orientation, VectorF32};
+use dis_rs::enumerations::{DeadReckoningAlgorithm, ForceId};
+use dis_rs::model::{EntityId, Location, Orientation, VectorF32};
 use dis_rs::BodyRaw;
 use glam::DVec3;
 
@@ -29,22 +29,6 @@ use crate::dead_reckoning::{
     extrapolate, rotation_angle_between, DrAlgorithm, DrInput, EulerAngles,
 };
 use crate::remote::{EntityKey, EntityTypeCode};
-
-impl EntityTypeCode {
-    /// As a `dis-rs` entity type.
-    #[must_use]
-    pub fn to_dis(self) -> EntityType {
-        EntityType {
-            kind: EntityKind::from(self.kind),
-            domain: PlatformDomain::from(self.domain),
-            country: Country::from(self.country),
-            category: self.category,
-            subcategory: self.subcategory,
-            specific: self.specific,
-            extra: self.extra,
-        }
-    }
-}
 
 /// Thresholds and heartbeat.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -28,6 +28,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use cig_geo::Geodetic;
 use dis_rs::entity_state::model::EntityState;
+use dis_rs::enumerations::{Country, EntityKind, PlatformDomain};
 use dis_rs::model::EntityType;
 use glam::{DMat3, DQuat, DVec3};
 
@@ -77,6 +78,20 @@ impl EntityTypeCode {
             subcategory: t.subcategory,
             specific: t.specific,
             extra: t.extra,
+        }
+    }
+
+    /// As a `dis-rs` entity type.
+    #[must_use]
+    pub fn to_dis(self) -> EntityType {
+        EntityType {
+            kind: EntityKind::from(self.kind),
+            domain: PlatformDomain::from(self.domain),
+            country: Country::from(self.country),
+            category: self.category,
+            subcategory: self.subcategory,
+            specific: self.specific,
+            extra: self.extra,
         }
     }
 }
