@@ -14,9 +14,14 @@ as_root() {
   else die "need root (or sudo) to run: $*"; fi
 }
 
-# Debian packages the demo needs. (The renderer will add mesa-vulkan-drivers here: Mesa's
-# lavapipe, the Vulkan driver for machines without a GPU.)
-packages=()
+# Debian packages the demo needs: Mesa's Vulkan drivers (lavapipe renders where there is no GPU).
+packages=(mesa-vulkan-drivers)
+if [ "${1:-}" = "--test" ]; then
+  # The tests' independent peers and display: Wireshark's CIGI/DIS dissectors (tshark), a
+  # virtual X server for the windowed viewer (xvfb), and Python's venv for the PyPI peers.
+  packages+=(tshark xvfb)
+  python3 -m venv --help >/dev/null 2>&1 || packages+=(python3-venv)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -24,7 +29,7 @@ done
 if [ "${#missing[@]}" -gt 0 ]; then
   command -v apt-get >/dev/null || die "apt-get not found: install ${missing[*]} by hand"
   as_root apt-get update -qq
-  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
 if [ "${1:-}" = "--test" ]; then
@@ -37,4 +42,10 @@ if [ "${1:-}" = "--test" ]; then
     fi
   done
   scripts/fetch-test-data.sh >/dev/null
+  # Independent implementations from PyPI used as test peers: PyEphem (sun and moon) and
+  # opendis (DIS PDUs), in a virtual environment under .cache (never the system Python).
+  if [ ! -x .cache/py/bin/python3 ] || ! .cache/py/bin/python3 -c "import ephem, opendis" 2>/dev/null; then
+    python3 -m venv .cache/py
+    .cache/py/bin/pip install --quiet --disable-pip-version-check ephem==4.2.1 opendis==1.0
+  fi
 fi

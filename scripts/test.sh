@@ -5,6 +5,9 @@ cd "$(dirname "$0")/.."
 scripts/setup.sh --test
 CIG_TEST_REAL_DEM="$(scripts/fetch-test-data.sh)"
 export CIG_TEST_REAL_DEM
+# The PyPI test peers live in .cache/py (see setup.sh): their python3 comes first.
+PATH="$PWD/.cache/py/bin:$PATH"
+export PATH
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
 cargo test --workspace --locked

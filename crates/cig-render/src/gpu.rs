@@ -34,9 +34,22 @@ impl Gpu {
     /// `WGPU_BACKEND` / `WGPU_ADAPTER_NAME` in the environment narrow the choice (wgpu's own
     /// variables).
     pub fn headless() -> Result<Arc<Gpu>, RenderError> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        Self::with_instance(instance, None)
+        let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if std::env::var_os("WGPU_BACKEND").is_some() {
+            return Self::with_instance(wgpu::Instance::new(desc), None);
+        }
+        // Vulkan, Metal or DX12 first; OpenGL only when none of them has an adapter (probing GL
+        // talks to the display server, which prints its own complaints on headless machines).
+        let mut primary = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        primary.backends = wgpu::Backends::PRIMARY;
+        match Self::with_instance(wgpu::Instance::new(primary), None) {
+            Ok(gpu) => Ok(gpu),
+            Err(first) => {
+                let mut gl = desc;
+                gl.backends = wgpu::Backends::GL;
+                Self::with_instance(wgpu::Instance::new(gl), None).map_err(|_| first)
+            }
+        }
     }
 
     /// A device that can present to `surface` (created from `instance`).

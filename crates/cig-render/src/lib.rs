@@ -5,11 +5,13 @@
 //! [`cig_scene::FrameSnapshot`] and the terrain [`cig_terrain::TileCache`]). Any wgpu backend
 //! works (Vulkan, Metal, DX12, GL); with no GPU, Mesa's lavapipe renders the same frames.
 
+pub mod gltf_model;
 pub mod gpu;
 pub mod offscreen;
 pub mod renderer;
 pub mod terrain;
 
+pub use gltf_model::{load_gltf_model, ModelError};
 pub use gpu::{Gpu, RenderError};
 pub use offscreen::{load_for_view, render_image, render_image_with, Image};
 pub use renderer::serde_like::FrameStats;

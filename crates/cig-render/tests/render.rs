@@ -455,3 +455,102 @@ fn print_selection() {
         );
     }
 }
+
+/// Writes a glTF 2.0 file (JSON with an embedded base64 buffer) of a red square pyramid, 4 m
+/// wide and 6 m tall, apex up (+Y in glTF).
+fn write_pyramid_gltf(path: &std::path::Path) {
+    let p: [[f32; 3]; 5] = [
+        [-2.0, 0.0, -2.0],
+        [2.0, 0.0, -2.0],
+        [2.0, 0.0, 2.0],
+        [-2.0, 0.0, 2.0],
+        [0.0, 6.0, 0.0],
+    ];
+    let idx: [u16; 18] = [0, 1, 2, 0, 2, 3, 0, 4, 1, 1, 4, 2, 2, 4, 3, 3, 4, 0];
+    let mut bytes: Vec<u8> = p.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    bytes.extend(idx.iter().flat_map(|i| i.to_le_bytes()));
+    const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut b64 = String::new();
+    for chunk in bytes.chunks(3) {
+        let n = chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |acc, (i, &b)| acc | (u32::from(b) << (16 - 8 * i)));
+        for k in 0..4 {
+            if k <= chunk.len() {
+                b64.push(B64[((n >> (18 - 6 * k)) & 63) as usize] as char);
+            } else {
+                b64.push('=');
+            }
+        }
+    }
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.02, 0.02, 1.0]}}],
+        "buffers": [{"byteLength": bytes.len(), "uri": format!("data:application/octet-stream;base64,{b64}")}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 60},
+            {"buffer": 0, "byteOffset": 60, "byteLength": 36}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 5, "type": "VEC3",
+             "min": [-2.0, 0.0, -2.0], "max": [2.0, 6.0, 2.0]},
+            {"bufferView": 1, "componentType": 5123, "count": 18, "type": "SCALAR"}
+        ]
+    });
+    std::fs::write(path, serde_json::to_vec_pretty(&json).expect("json")).expect("write gltf");
+}
+
+#[test]
+fn a_gltf_file_loads_with_three_levels_and_draws_where_placed() {
+    let dir = out_dir().join("gltf");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("pyramid.gltf");
+    write_pyramid_gltf(&path);
+    let model = cig_render::load_gltf_model(&path, "pyramid").expect("load");
+    assert_eq!(model.lods.len(), 3);
+    assert_eq!(model.lods[0].triangle_count(), 6);
+    // glTF +Y (up) became body +Z: the apex is 6 m up.
+    let top = model.lods[0]
+        .vertices
+        .iter()
+        .map(|v| v.position[2])
+        .fold(f32::MIN, f32::max);
+    assert!((top - 6.0).abs() < 1e-5);
+
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    renderer.set_models(vec![model]);
+    let base = Geodetic::new(50.0, 10.0, 500.0);
+    let frame = EnuFrame::new(base);
+    let at = frame.enu_to_geodetic(DVec3::new(0.0, 30.0, -3.0));
+    let mut snapshot = FrameSnapshot::new(
+        MORNING_UNIX_S,
+        vec![view(base, (0.0, 0.0, 0.0), 40.0, (160, 120))],
+    );
+    snapshot.entities = vec![EntityInstance {
+        id: 1,
+        model: "pyramid".into(),
+        position: at,
+        orientation: Hpr::default(),
+    }];
+    let (image, stats) = render(&mut renderer, &cache, &snapshot, true);
+    assert_eq!(stats.entities_drawn, 1);
+    let red = image
+        .rgba
+        .chunks_exact(4)
+        .filter(|p| !is_key(p) && p[0] > p[1] + 30 && p[0] > p[2] + 30)
+        .count();
+    assert!(red > 200, "{red} red pixels");
+
+    // Broken files are errors naming the file.
+    let broken = dir.join("broken.gltf");
+    std::fs::write(&broken, b"{ \"asset\": ").expect("write");
+    let err = cig_render::load_gltf_model(&broken, "x").expect_err("broken");
+    assert!(err.to_string().contains("broken.gltf"), "{err}");
+}

@@ -34,7 +34,8 @@ impl ModelMesh {
         self.indices.len() / 3
     }
 
-    fn tri(&mut self, a: Vec3, b: Vec3, c: Vec3, colour: [u8; 4]) {
+    /// Appends a flat-shaded triangle.
+    pub fn tri(&mut self, a: Vec3, b: Vec3, c: Vec3, colour: [u8; 4]) {
         let n = (b - a).cross(c - a).normalize_or_zero();
         let base = self.vertices.len() as u32;
         for p in [a, b, c] {
@@ -390,5 +391,109 @@ mod tests {
         assert_eq!(m.select_lod(90.0, Some(0)), 1);
         assert_eq!(m.select_lod(130.0, Some(1)), 1);
         assert_eq!(m.select_lod(150.0, Some(1)), 0);
+    }
+}
+
+/// A coarser version of `mesh` by vertex clustering (Rossignac and Borrel, 1993): vertices are
+/// snapped to a grid of `cells` cells along the mesh's largest extent, vertices of one cell
+/// merge at their mean, and triangles that collapse are dropped. Flat normals are recomputed.
+/// Limits: topology is not preserved (thin parts may vanish), which is what a distant level
+/// wants.
+pub fn simplify_by_clustering(mesh: &ModelMesh, cells: u32) -> ModelMesh {
+    let cells = cells.max(1);
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for v in &mesh.vertices {
+        lo = lo.min(Vec3::from(v.position));
+        hi = hi.max(Vec3::from(v.position));
+    }
+    let extent = (hi - lo).max_element().max(1e-6);
+    let cell = extent / cells as f32;
+    let key = |p: Vec3| {
+        let q = ((p - lo) / cell).floor();
+        (q.x as i32, q.y as i32, q.z as i32)
+    };
+    let mut clusters: std::collections::BTreeMap<(i32, i32, i32), (Vec3, u32, [u32; 4])> =
+        std::collections::BTreeMap::new();
+    for v in &mesh.vertices {
+        let e = clusters
+            .entry(key(Vec3::from(v.position)))
+            .or_insert((Vec3::ZERO, 0, [0; 4]));
+        e.0 += Vec3::from(v.position);
+        e.1 += 1;
+        for (acc, c) in e.2.iter_mut().zip(v.colour) {
+            *acc += u32::from(c);
+        }
+    }
+    let index_of: std::collections::BTreeMap<(i32, i32, i32), usize> =
+        clusters.keys().enumerate().map(|(i, k)| (*k, i)).collect();
+    let centres: Vec<(Vec3, [u8; 4])> = clusters
+        .values()
+        .map(|(sum, n, c)| (*sum / *n as f32, c.map(|x| (x / n) as u8)))
+        .collect();
+    let mut out = ModelMesh::default();
+    let mut seen = std::collections::BTreeSet::new();
+    for t in mesh.indices.chunks_exact(3) {
+        let Some(ids) = t
+            .iter()
+            .map(|&i| {
+                mesh.vertices
+                    .get(i as usize)
+                    .and_then(|v| index_of.get(&key(Vec3::from(v.position))).copied())
+            })
+            .collect::<Option<Vec<usize>>>()
+        else {
+            continue;
+        };
+        let (a, b, c) = (ids[0], ids[1], ids[2]);
+        if a == b || b == c || a == c {
+            continue;
+        }
+        // One triangle per cluster triple and winding.
+        let rot = if a <= b && a <= c {
+            (a, b, c)
+        } else if b <= a && b <= c {
+            (b, c, a)
+        } else {
+            (c, a, b)
+        };
+        if !seen.insert(rot) {
+            continue;
+        }
+        out.tri(centres[a].0, centres[b].0, centres[c].0, centres[a].1);
+    }
+    out
+}
+
+/// A model from one finest mesh, with two coarser levels made by vertex clustering.
+pub fn model_with_generated_lods(name: &str, mesh: ModelMesh) -> Model {
+    let lod1 = simplify_by_clustering(&mesh, 24);
+    let lod2 = simplify_by_clustering(&mesh, 6);
+    Model::new(name, vec![mesh, lod1, lod2])
+}
+
+#[cfg(test)]
+mod simplify_tests {
+    use super::*;
+
+    #[test]
+    fn clustering_reduces_triangles_and_keeps_the_extent() {
+        let mut mesh = ModelMesh::default();
+        mesh.add_cylinder(
+            Vec3::ZERO,
+            Vec3::new(0.0, 0.0, 10.0),
+            3.0,
+            1.0,
+            48,
+            [200, 100, 50, 255],
+        );
+        let model = model_with_generated_lods("cyl", mesh.clone());
+        let tris: Vec<usize> = model.lods.iter().map(ModelMesh::triangle_count).collect();
+        assert!(
+            tris[0] > tris[1] && tris[1] > tris[2] && tris[2] > 0,
+            "{tris:?}"
+        );
+        let r0 = mesh.bounding_radius_m();
+        let r2 = model.lods[2].bounding_radius_m();
+        assert!((r0 - r2).abs() < r0 * 0.3, "{r0} vs {r2}");
     }
 }

@@ -97,7 +97,11 @@ fn mean(v: &[f64]) -> f64 {
 
 pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     let size = crate::render::parse_size(&args.size)?;
-    anyhow::ensure!(args.frames >= 4, "--frames {} must be at least 4", args.frames);
+    anyhow::ensure!(
+        args.frames >= 4,
+        "--frames {} must be at least 4",
+        args.frames
+    );
     let database = Arc::new(cig_terrain_io::store::open_database(&args.db)?);
     let gpu = cig_render::Gpu::headless()?;
     let target_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
@@ -120,9 +124,13 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     let time = crate::render::parse_time("2026-06-21T19:00:00Z")?;
 
     // 1. The streaming pass at 300 m/s, 60 Hz: a fresh cache, nothing preloaded.
-    let cache = Arc::new(TileCache::new(Arc::clone(&database), config.paging.clone())?);
+    let cache = Arc::new(TileCache::new(
+        Arc::clone(&database),
+        config.paging.clone(),
+    )?);
     let mut session = QuerySession::new(Arc::clone(&cache));
-    let views = views_along(&mut session, &leg, dt_s, args.fov, size).context("the benchmark path")?;
+    let views =
+        views_along(&mut session, &leg, dt_s, args.fov, size).context("the benchmark path")?;
     let snapshots: Vec<FrameSnapshot> = views
         .iter()
         .map(|v| {

@@ -305,6 +305,9 @@ pub struct DemoArgs {
     /// Demo database directory (built when missing).
     #[arg(long, default_value = "demo-db")]
     pub db: PathBuf,
+    /// Where the flight's frames and contact sheet go.
+    #[arg(long, default_value = "demo-out")]
+    pub out: PathBuf,
 }
 
 #[derive(Subcommand)]

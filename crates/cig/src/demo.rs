@@ -1,8 +1,10 @@
-//! `cig demo`: builds the demo database when missing, then shows the terrain answers and paging
-//! a trainer relies on. (The renderer will extend it to draw the database.)
+//! `cig demo`: builds the demo database when missing, shows the terrain answers and paging a
+//! trainer relies on, then flies a scripted flight over it — a low pass along a valley, a climb,
+//! a view at dusk — rendered off-screen to PNG frames and a contact sheet.
 
 use crate::cli::DemoArgs;
 use crate::config::Config;
+use anyhow::Context;
 use cig_geo::Geodetic;
 use cig_terrain::{QuerySession, TileCache};
 use cig_terrain_io::store::open_database;
@@ -139,5 +141,153 @@ pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
         config.paging.budget_bytes as f64 / 1048576.0,
         started.elapsed().as_secs_f64()
     );
+    println!();
+    fly(args, config, &db, &mut q)
+}
+
+/// The heading from the centre whose first 10 km are lowest on average: along a valley.
+fn valley_heading(q: &mut QuerySession, centre: Geodetic) -> anyhow::Result<f64> {
+    let frame = cig_geo::EnuFrame::new(centre);
+    let mut best = (0.0, f64::INFINITY);
+    for k in 0..24 {
+        let heading = f64::from(k) * 15.0;
+        let (s, c) = heading.to_radians().sin_cos();
+        let mut sum = 0.0;
+        for step in 1..=20 {
+            let d = f64::from(step) * 500.0;
+            let p = frame.enu_to_geodetic(glam::DVec3::new(s * d, c * d, 0.0));
+            sum += q.height_msl_m(p.lat_deg, p.lon_deg).unwrap_or(1e9);
+        }
+        if sum < best.1 {
+            best = (heading, sum);
+        }
+    }
+    Ok(best.0)
+}
+
+/// Renders the scripted flight to PNG frames and a contact sheet.
+fn fly(
+    args: &DemoArgs,
+    config: &Config,
+    db: &Arc<cig_terrain::TerrainDatabase>,
+    q: &mut QuerySession,
+) -> anyhow::Result<()> {
+    use crate::flight::{views_along, Leg};
+    let g = db.layout().grid;
+    let centre = Geodetic::new(
+        0.5 * (g.south_lat_deg + g.north_lat_deg()),
+        0.5 * (g.west_lon_deg + g.east_lon_deg()),
+        0.0,
+    );
+    let heading = valley_heading(q, centre)?;
+    let size = (480, 270);
+    let noon = crate::render::parse_time("2026-06-21T19:30:00Z")?;
+    let dusk = crate::render::parse_time("2026-06-22T03:00:00Z")?;
+    let low = Leg {
+        start: centre,
+        heading_deg: heading,
+        speed_mps: 120.0,
+        duration_s: 40.0,
+        agl_start_m: 40.0,
+        agl_end_m: 40.0,
+        pitch_deg: -2.0,
+    };
+    let mut shots: Vec<(f64, cig_scene::View)> = Vec::new();
+    for v in views_along(q, &low, 40.0 / 10.0, 60.0, size)? {
+        shots.push((noon, v));
+    }
+    let end = shots.last().map(|s| s.1.eye).unwrap_or(centre);
+    let climb = Leg {
+        start: Geodetic::new(end.lat_deg, end.lon_deg, 0.0),
+        heading_deg: heading + 30.0,
+        speed_mps: 80.0,
+        duration_s: 60.0,
+        agl_start_m: 60.0,
+        agl_end_m: 1800.0,
+        pitch_deg: -12.0,
+    };
+    let climb_views = views_along(q, &climb, 60.0 / 8.0, 60.0, size)?;
+    for v in &climb_views {
+        shots.push((noon, *v));
+    }
+    let mut last = *climb_views.last().unwrap_or(&shots[0].1);
+    for k in 0..6 {
+        last.orientation.heading_deg = heading + 180.0 + f64::from(k) * 30.0;
+        last.orientation.pitch_deg = -4.0;
+        shots.push((dusk + f64::from(k) * 240.0, last));
+    }
+    let out_dir = args.out.clone();
+    std::fs::create_dir_all(&out_dir)
+        .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let cache = Arc::new(TileCache::new(Arc::clone(db), config.paging.clone())?);
+    let gpu = cig_render::Gpu::headless()?;
+    println!(
+        "flying: a low pass along the valley heading {heading:.0} deg, a climb to 1800 m, dusk ({} frames of {}x{} on {})",
+        shots.len(),
+        size.0,
+        size.1,
+        gpu.describe()
+    );
+    let mut renderer = cig_render::Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
+    let started = Instant::now();
+    let mut frames = Vec::new();
+    for (i, (time, view)) in shots.iter().enumerate() {
+        let mut snapshot = cig_scene::FrameSnapshot::new(*time, vec![*view]);
+        snapshot.fog = cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, 30_000.0);
+        cache.update(&[view.eye]);
+        cache.wait_idle();
+        cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;
+        let (image, stats) = cig_render::render_image(&mut renderer, &cache, &snapshot, 0)?;
+        let path = out_dir.join(format!("frame_{i:03}.png"));
+        crate::render::write_png(&image, &path)?;
+        println!(
+            "  {}: {:>8} triangles, {:>4} nodes, gpu {:6.1} ms",
+            path.display(),
+            stats.triangles,
+            stats.terrain_nodes,
+            stats.gpu_ms
+        );
+        frames.push(image);
+    }
+    let sheet = contact_sheet(&frames, 6);
+    let sheet_path = out_dir.join("contact-sheet.png");
+    crate::render::write_png(&sheet, &sheet_path)?;
+    println!(
+        "{} frames in {:.1} s; contact sheet: {}",
+        frames.len(),
+        started.elapsed().as_secs_f64(),
+        sheet_path.display()
+    );
     Ok(())
+}
+
+/// Frames side by side, `columns` to a row, each halved.
+fn contact_sheet(frames: &[cig_render::Image], columns: usize) -> cig_render::Image {
+    let (fw, fh) = frames
+        .first()
+        .map_or((1, 1), |f| ((f.width / 2).max(1), (f.height / 2).max(1)));
+    let rows = frames.len().div_ceil(columns).max(1);
+    let (w, h) = (fw * columns as u32, fh * rows as u32);
+    let mut rgba = vec![0u8; (w * h * 4) as usize];
+    for (k, frame) in frames.iter().enumerate() {
+        let (ox, oy) = ((k % columns) as u32 * fw, (k / columns) as u32 * fh);
+        for y in 0..fh {
+            for x in 0..fw {
+                let src = (((2 * y).min(frame.height - 1) * frame.width
+                    + (2 * x).min(frame.width - 1))
+                    * 4) as usize;
+                let dst = (((oy + y) * w + ox + x) * 4) as usize;
+                if let (Some(s), Some(d)) =
+                    (frame.rgba.get(src..src + 4), rgba.get_mut(dst..dst + 4))
+                {
+                    d.copy_from_slice(s);
+                }
+            }
+        }
+    }
+    cig_render::Image {
+        width: w,
+        height: h,
+        rgba,
+    }
 }

@@ -37,7 +37,8 @@ pub fn views_along(
         let t = i as f64 * dt_s;
         let along = leg.speed_mps * t;
         let mut ground = |ahead: f64| -> anyhow::Result<f64> {
-            let p = frame.enu_to_geodetic(DVec3::new(sh * (along + ahead), ch * (along + ahead), 0.0));
+            let p =
+                frame.enu_to_geodetic(DVec3::new(sh * (along + ahead), ch * (along + ahead), 0.0));
             Ok(session.hot(p.lat_deg, p.lon_deg)?.height_ellipsoid_m())
         };
         let mut highest = f64::NEG_INFINITY;
@@ -52,7 +53,8 @@ pub fn views_along(
         }
         let s = smoothed.map_or(highest, |prev| prev + (highest - prev) * 0.3);
         smoothed = Some(s.max(highest - 20.0));
-        let agl = leg.agl_start_m + (leg.agl_end_m - leg.agl_start_m) * (t / leg.duration_s).min(1.0);
+        let agl =
+            leg.agl_start_m + (leg.agl_end_m - leg.agl_start_m) * (t / leg.duration_s).min(1.0);
         let p = frame.enu_to_geodetic(DVec3::new(sh * along, ch * along, 0.0));
         views.push(View {
             eye: Geodetic::new(p.lat_deg, p.lon_deg, smoothed.unwrap_or(highest) + agl),

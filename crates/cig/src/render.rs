@@ -204,6 +204,15 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     let (cache, mut renderer) = open(&args.db, config)?;
     let mut session = QuerySession::new(Arc::clone(&cache));
     let mut entities = Vec::new();
+    let mut loaded = Vec::new();
+    for spec in &specs {
+        let lower = spec.model.to_ascii_lowercase();
+        if (lower.ends_with(".gltf") || lower.ends_with(".glb")) && !loaded.contains(&spec.model) {
+            let model = cig_render::load_gltf_model(Path::new(&spec.model), &spec.model)?;
+            renderer.set_models(vec![model]);
+            loaded.push(spec.model.clone());
+        }
+    }
     for spec in &specs {
         if !renderer.model_names().contains(&spec.model) {
             bail!(

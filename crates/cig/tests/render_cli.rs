@@ -1,0 +1,189 @@
+//! End-to-end runs of `cig render` and `cig bench render` (lavapipe when there is no GPU).
+
+use assert_cmd::Command;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn cig() -> Command {
+    let mut c = Command::cargo_bin("cig").expect("binary");
+    c.env_remove("CIG_LOG");
+    c
+}
+
+fn small_db(dir: &Path) -> PathBuf {
+    let db = dir.join("db");
+    cig()
+        .args(["db", "synth", "--out"])
+        .arg(&db)
+        .args([
+            "--origin",
+            "35.98,-121.23",
+            "--size-km",
+            "4",
+            "--spacing-m",
+            "30",
+        ])
+        .assert()
+        .success();
+    db
+}
+
+fn one_line_error(out: &assert_cmd::assert::Assert) -> String {
+    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    // Mesa's Vulkan drivers print their own complaint when there is no Wayland session; it is
+    // not cig's error line.
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("error:") && !l.contains("XDG_RUNTIME_DIR"))
+        .collect();
+    assert_eq!(lines.len(), 1, "one error line: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    lines[0].to_string()
+}
+
+fn render_args(db: &Path, out: &Path) -> Vec<String> {
+    [
+        "render",
+        "--db",
+        &db.display().to_string(),
+        "--eye",
+        "35.99,-121.22,900",
+        "--hpr",
+        "45,-20,0",
+        "--fov",
+        "60",
+        "--size",
+        "128x96",
+        "--time",
+        "2026-06-21T19:00:00Z",
+        "--out",
+        &out.display().to_string(),
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect()
+}
+
+#[test]
+fn render_writes_a_png_and_its_statistics() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let out = dir.path().join("frame.png");
+    let stats = dir.path().join("stats.json");
+    cig()
+        .args(render_args(&db, &out))
+        .args(["--stats", &stats.display().to_string()])
+        .args([
+            "--entity",
+            "tank,35.995,-121.215,0,30,clamp",
+            "--fog",
+            "exp2",
+            "--visibility",
+            "8000",
+        ])
+        .assert()
+        .success();
+    let png = std::fs::read(&out).expect("png");
+    assert_eq!(&png[1..4], b"PNG");
+    let json: Value = serde_json::from_slice(&std::fs::read(&stats).expect("stats")).expect("json");
+    for key in [
+        "triangles",
+        "tiles_resident",
+        "draw_calls",
+        "cpu_ms",
+        "gpu_ms",
+    ] {
+        assert!(json[key].is_number(), "{key} in {json}");
+    }
+    assert!(json["triangles"].as_u64().unwrap_or(0) > 1000);
+    assert!(json["draw_calls"].as_u64().unwrap_or(0) > 1);
+    // Full detail draws more triangles than the default 1 px.
+    let full = dir.path().join("full.json");
+    cig()
+        .args(render_args(&db, &dir.path().join("full.png")))
+        .args([
+            "--max-pixel-error",
+            "0",
+            "--stats",
+            &full.display().to_string(),
+        ])
+        .assert()
+        .success();
+    let full: Value = serde_json::from_slice(&std::fs::read(&full).expect("stats")).expect("json");
+    assert!(full["triangles"].as_u64() > json["triangles"].as_u64());
+}
+
+#[test]
+fn bad_render_input_gives_one_line_errors() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let out = dir.path().join("frame.png");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--size", "0x10"], "--size"),
+        (vec!["--fov", "180"], "field of view"),
+        (vec!["--eye", "35.99,-121.22,-2000"], "below the ellipsoid"),
+        (vec!["--eye", "95,-121.22,100"], "latitude"),
+        (vec!["--time", "yesterday"], "--time"),
+        (vec!["--fog", "soup"], "--fog"),
+        (vec!["--max-pixel-error", "-1"], "--max-pixel-error"),
+        (vec!["--entity", "zeppelin,35.99,-121.21,0"], "no model"),
+    ];
+    for (extra, expect) in cases {
+        let mut args = render_args(&db, &out);
+        // Later values of the same option win in clap only for repeated flags; rebuild instead.
+        for pair in extra.chunks(2) {
+            if let Some(i) = args.iter().position(|a| a == pair[0]) {
+                args[i + 1] = pair[1].to_string();
+            } else {
+                args.push(pair[0].to_string());
+                args.push(pair[1].to_string());
+            }
+        }
+        let line = one_line_error(&cig().args(&args).assert().failure());
+        assert!(line.contains(expect), "{extra:?}: {line}");
+    }
+    let missing = dir.path().join("nowhere");
+    let line = one_line_error(&cig().args(render_args(&missing, &out)).assert().failure());
+    assert!(line.contains("nowhere"), "{line}");
+    let broken = dir.path().join("broken.glb");
+    std::fs::write(&broken, b"glTF garbage").expect("write");
+    let mut args = render_args(&db, &out);
+    args.extend([
+        "--entity".to_string(),
+        format!("{},35.99,-121.21,0", broken.display()),
+    ]);
+    let line = one_line_error(&cig().args(&args).assert().failure());
+    assert!(line.contains("broken.glb"), "{line}");
+    assert!(!out.exists(), "no frame written after an error");
+}
+
+#[test]
+fn bench_render_reports_both_ways_and_their_ratios() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let out = cig()
+        .args([
+            "bench",
+            "render",
+            "--db",
+            &db.display().to_string(),
+            "--json",
+        ])
+        .args(["--size", "96x64", "--frames", "12", "--compare-frames", "2"])
+        .assert()
+        .success();
+    let json: Value = serde_json::from_slice(&out.get_output().stdout).expect("json");
+    for key in ["triangles_full_over_lod", "frame_time_full_over_lod"] {
+        assert!(
+            json["ratios"][key].as_f64().unwrap_or(0.0) > 0.0,
+            "{key}: {json}"
+        );
+    }
+    assert!(json["pass"]["max_over_median_after_warmup"]
+        .as_f64()
+        .is_some());
+    assert!(json["lod"]["cpu_select_ms"]["median"].as_f64().is_some());
+    assert!(
+        json["full_detail"]["triangles_mean"].as_f64() >= json["lod"]["triangles_mean"].as_f64()
+    );
+}
