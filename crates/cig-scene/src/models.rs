@@ -394,6 +394,11 @@ mod tests {
     }
 }
 
+/// A cell of the clustering grid.
+type Cell = (i32, i32, i32);
+/// Sum of positions, count and sum of colours of the vertices of one cell.
+type ClusterSum = (Vec3, u32, [u32; 4]);
+
 /// A coarser version of `mesh` by vertex clustering (Rossignac and Borrel, 1993): vertices are
 /// snapped to a grid of `cells` cells along the mesh's largest extent, vertices of one cell
 /// merge at their mean, and triangles that collapse are dropped. Flat normals are recomputed.
@@ -412,7 +417,7 @@ pub fn simplify_by_clustering(mesh: &ModelMesh, cells: u32) -> ModelMesh {
         let q = ((p - lo) / cell).floor();
         (q.x as i32, q.y as i32, q.z as i32)
     };
-    let mut clusters: std::collections::BTreeMap<(i32, i32, i32), (Vec3, u32, [u32; 4])> =
+    let mut clusters: std::collections::BTreeMap<Cell, ClusterSum> =
         std::collections::BTreeMap::new();
     for v in &mesh.vertices {
         let e = clusters
@@ -424,7 +429,7 @@ pub fn simplify_by_clustering(mesh: &ModelMesh, cells: u32) -> ModelMesh {
             *acc += u32::from(c);
         }
     }
-    let index_of: std::collections::BTreeMap<(i32, i32, i32), usize> =
+    let index_of: std::collections::BTreeMap<Cell, usize> =
         clusters.keys().enumerate().map(|(i, k)| (*k, i)).collect();
     let centres: Vec<(Vec3, [u8; 4])> = clusters
         .values()
