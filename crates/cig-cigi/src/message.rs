@@ -660,7 +660,7 @@ fn encode_packet(
                     ),
                 });
             }
-            if size > max || size % 8 != 0 {
+            if size > max || !size.is_multiple_of(8) {
                 return Err(CigiError::FieldOutOfRange {
                     packet: "UserDefined",
                     field: "data",

@@ -22,7 +22,7 @@ pub fn field_m(lat_deg: f64, lon_deg: f64) -> f64 {
 
 /// Deterministic void pattern (about 4% of posts).
 pub fn is_void(row: usize, col: usize) -> bool {
-    (row * 7 + col * 3) % 23 == 0
+    (row * 7 + col * 3).is_multiple_of(23)
 }
 
 /// Asserts two floats agree within `tol` (for grid coordinates).
