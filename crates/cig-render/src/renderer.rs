@@ -57,7 +57,7 @@ pub const MSAA_SAMPLES: u32 = 4;
 /// Format of off-screen frames.
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-const MAX_NODE_RECORDS: usize = 8192;
+const MAX_NODE_RECORDS: usize = 16384;
 const MAX_INSTANCES: usize = 8192;
 /// Detail-noise cell sizes, metres (incommensurate so the pattern never visibly repeats).
 const NOISE_CELLS_M: [f64; 3] = [2.7, 19.3, 151.0];
@@ -270,7 +270,7 @@ impl Renderer {
         let manifest = cache.database().manifest();
         let layout = NodeLayout::new(manifest.layout);
         let lod = TerrainLod::new(layout, GeoidLookup::new(&manifest.geoid));
-        let terrain = TerrainGpu::new(&gpu, layout.node_cells, 4096);
+        let terrain = TerrainGpu::new(&gpu, layout.node_cells, 16384);
         let device = &gpu.device;
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("globals"),

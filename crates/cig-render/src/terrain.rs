@@ -7,7 +7,8 @@
 //! instance index from a storage buffer written once per view. Slots are recycled least
 //! recently used. Meshes are rebuilt when finer data becomes resident.
 //!
-//! Limits: the pool holds `capacity` nodes (4096 by default, about 130 MB with its atlases);
+//! Limits: the pool holds `capacity` nodes (16384 of 16 cells by default, about 270 MB with its
+//! atlases);
 //! a view that needs more (full detail over a very large database) draws the nearest ones and
 //! reports the rest as dropped in its statistics.
 

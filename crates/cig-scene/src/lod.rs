@@ -39,7 +39,7 @@ use std::collections::HashMap;
 pub const MORPH_SPAN: f64 = 1.5;
 
 /// Default cells along a node's side.
-pub const DEFAULT_NODE_CELLS: u32 = 32;
+pub const DEFAULT_NODE_CELLS: u32 = 16;
 
 /// One node of the level-of-detail quadtree: `node_cells` cells of pyramid level `level`,
 /// starting at node row `row` (south first) and column `col`.
