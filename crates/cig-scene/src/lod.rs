@@ -36,7 +36,7 @@ use std::collections::HashMap;
 
 /// Ratio between the distance where a node's children are fully morphed into it and the
 /// distance where they start to morph.
-pub const MORPH_SPAN: f64 = 1.5;
+pub const MORPH_SPAN: f64 = 1.3;
 
 /// Default cells along a node's side.
 pub const DEFAULT_NODE_CELLS: u32 = 16;
