@@ -73,7 +73,9 @@ impl FlyCamera {
     /// Multiplies the speed by [`SPEED_STEP_PER_NOTCH`] per wheel notch (negative: slower).
     pub fn scale_speed(&mut self, notches: f64) {
         if notches.is_finite() {
-            self.set_speed(self.speed_mps * SPEED_STEP_PER_NOTCH.powf(notches.clamp(-50.0, 50.0)));
+            self.set_speed(
+                self.speed_mps * SPEED_STEP_PER_NOTCH.powf(notches.clamp(-100.0, 100.0)),
+            );
         }
     }
 

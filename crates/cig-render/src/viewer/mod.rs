@@ -14,7 +14,8 @@
 //! reads it back, since reading a surface texture is not possible on every platform.
 //!
 //! Limits: one view per window; mouse look uses cursor positions (no pointer grab), so looking
-//! round stops at the window's edge until the button is pressed again. The event loop must run
+//! round stops at the window's edge until the button is pressed again. A frame time above 1 s
+//! (a stall, a dragged window) counts as 1 s, so the camera is not flung across the map. The event loop must run
 //! on the process's main thread (a winit rule on several platforms), and only once per process.
 
 pub mod camera;
@@ -419,7 +420,7 @@ impl App {
             return Ok(false);
         };
         let now = Instant::now();
-        let dt_s = (now - r.last_frame_at).as_secs_f64().min(0.25);
+        let dt_s = (now - r.last_frame_at).as_secs_f64().min(1.0);
         r.last_frame_at = now;
         let size = r.window.inner_size();
         if size.width == 0 || size.height == 0 {
@@ -795,14 +796,13 @@ impl ApplicationHandler for App {
                 r.cursor = Some(position);
             }
             WindowEvent::CursorLeft { .. } => r.cursor = None,
-            WindowEvent::MouseWheel { delta, .. } => {
-                if !r.egui_ctx.is_pointer_over_egui() {
-                    let notches = match delta {
-                        MouseScrollDelta::LineDelta(_, y) => f64::from(y),
-                        MouseScrollDelta::PixelDelta(p) => p.y / 40.0,
-                    };
-                    self.camera.scale_speed(notches);
-                }
+            WindowEvent::MouseWheel { delta, .. } if !r.egui_ctx.is_pointer_over_egui() => {
+                let notches = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => f64::from(y),
+                    MouseScrollDelta::PixelDelta(p) => p.y / 40.0,
+                };
+                self.camera.scale_speed(notches);
+                tracing::debug!(?delta, speed_mps = self.camera.speed_mps, "mouse wheel");
             }
             WindowEvent::RedrawRequested => {
                 let presented = self.frame();
