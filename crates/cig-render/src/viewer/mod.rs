@@ -822,8 +822,17 @@ impl ApplicationHandler for App {
         }
     }
 
-    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
         if let Some(r) = self.running.as_ref() {
+            let size = r.window.inner_size();
+            if size.width == 0 || size.height == 0 {
+                // Minimised: nothing to draw; look again a little later rather than spin.
+                event_loop.set_control_flow(ControlFlow::WaitUntil(
+                    Instant::now() + std::time::Duration::from_millis(100),
+                ));
+            } else {
+                event_loop.set_control_flow(ControlFlow::Poll);
+            }
             r.window.request_redraw();
         }
     }
