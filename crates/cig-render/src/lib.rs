@@ -10,9 +10,11 @@ pub mod gpu;
 pub mod offscreen;
 pub mod renderer;
 pub mod terrain;
+pub mod viewer;
 
 pub use gltf_model::{load_gltf_model, ModelError};
 pub use gpu::{Gpu, RenderError};
 pub use offscreen::{load_for_view, render_image, render_image_with, Image};
 pub use renderer::serde_like::FrameStats;
 pub use renderer::{FrameOptions, Renderer, FRAME_FORMAT, MSAA_SAMPLES};
+pub use viewer::{run_viewer, ViewerError, ViewerOptions, ViewerReport};

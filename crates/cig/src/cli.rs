@@ -34,6 +34,9 @@ pub enum Command {
     /// Render one frame off-screen to a PNG file.
     #[command(allow_negative_numbers = true)]
     Render(RenderArgs),
+    /// Fly over a database in a window, with an operator panel (needs a display).
+    #[command(allow_negative_numbers = true)]
+    View(ViewArgs),
     /// Smoke plume model: Briggs/ISC3 rise and McMullen dispersion at one downwind distance.
     #[command(allow_negative_numbers = true)]
     Plume(PlumeArgs),
@@ -298,6 +301,55 @@ pub struct RenderArgs {
     /// Write frame statistics (triangles, tiles, draw calls, CPU and GPU time) as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct ViewArgs {
+    /// Terrain database directory.
+    #[arg(long)]
+    pub db: PathBuf,
+    /// First eyepoint "LAT,LON,ALT": degrees, and metres above the WGS84 ellipsoid (default:
+    /// near the database's south edge, above its highest point, looking north).
+    #[arg(long, value_name = "LAT,LON,ALT", allow_hyphen_values = true)]
+    pub eye: Option<String>,
+    /// First heading, pitch, roll in degrees.
+    #[arg(
+        long,
+        value_name = "H,P,R",
+        default_value = "0,-10,0",
+        allow_hyphen_values = true
+    )]
+    pub hpr: String,
+    /// Horizontal field of view in degrees (the vertical one follows the window's shape).
+    #[arg(long, value_name = "DEG", default_value_t = 60.0)]
+    pub fov: f64,
+    /// First window size in pixels.
+    #[arg(long, value_name = "WxH", default_value = "1280x720")]
+    pub size: String,
+    /// First time of day (UTC, ISO 8601, e.g. 2026-06-21T18:00:00Z).
+    #[arg(long, default_value = "2026-06-21T19:00:00Z")]
+    pub time: String,
+    /// First meteorological visibility, metres.
+    #[arg(long, default_value_t = 40_000.0)]
+    pub visibility: f64,
+    /// First fog mode: off, linear, exp, exp2.
+    #[arg(long, default_value = "exp")]
+    pub fog: String,
+    /// First level-of-detail threshold: largest terrain error on screen, pixels (0..8).
+    #[arg(long, default_value_t = 1.0)]
+    pub max_pixel_error: f64,
+    /// Start with the terrain drawn as a wireframe.
+    #[arg(long)]
+    pub wireframe: bool,
+    /// First flying speed, metres per second (the mouse wheel changes it).
+    #[arg(long, default_value_t = 100.0)]
+    pub speed: f64,
+    /// Close the window after N frames (for automated checks).
+    #[arg(long, value_name = "N")]
+    pub frames: Option<u64>,
+    /// Save the last frame (terrain and panel, drawn again off-screen) as PNG on exit.
+    #[arg(long, value_name = "FILE.png")]
+    pub screenshot: Option<PathBuf>,
 }
 
 #[derive(Args)]

@@ -14,6 +14,7 @@ mod output;
 mod plume;
 mod query;
 mod render;
+mod view;
 
 use clap::Parser;
 
@@ -51,6 +52,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Query(cli::QueryCommand::Los(args)) => query::los(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),
         cli::Command::Render(args) => render::run(&args, &config),
+        cli::Command::View(args) => view::run(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Particles(args)) => bench_particles::run(&args),
         cli::Command::Bench(cli::BenchCommand::Render(args)) => bench_render::run(&args, &config),
         cli::Command::Plume(args) => plume::run(&args),

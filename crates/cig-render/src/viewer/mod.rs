@@ -1,0 +1,884 @@
+//! The interactive viewer: a window (winit) showing one view of the terrain from a free-flying
+//! camera, with an operator panel (egui) drawn over the frame.
+//!
+//! Algorithm: one winit event loop drives the frame loop (`ControlFlow::Poll`, a redraw asked
+//! after every batch of events). Each frame: acquire the surface texture, fly the camera by the
+//! held keys over the frame time ([`camera`]), advance the simulation clock ([`panel`]), call
+//! the paging cache's non-blocking `update` with the eye, run the panel, draw the terrain view
+//! with [`Renderer::render`] (multisampled and resolved into the surface texture), then draw
+//! egui in a second render pass that loads, rather than clears, the same texture, and present.
+//! The surface is configured with an sRGB format from its capabilities (or an sRGB view of a
+//! linear one), so the renderer's linear-light output and egui's colours are encoded once.
+//! Resizes reconfigure the surface; zero-sized (minimised) windows draw nothing. A screenshot,
+//! when asked for, re-draws the last frame (terrain and panel) into an off-screen texture and
+//! reads it back, since reading a surface texture is not possible on every platform.
+//!
+//! Limits: one view per window; mouse look uses cursor positions (no pointer grab), so looking
+//! round stops at the window's edge until the button is pressed again. A frame time above 1 s
+//! (a stall, a dragged window) counts as 1 s, so the camera is not flung across the map. The event loop must run
+//! on the process's main thread (a winit rule on several platforms), and only once per process.
+
+pub mod camera;
+pub mod panel;
+
+use crate::gpu::{Gpu, RenderError};
+use crate::offscreen::Image;
+use crate::renderer::serde_like::FrameStats;
+use crate::renderer::{FrameOptions, Renderer};
+use camera::{FlyCamera, MoveInput};
+use cig_geo::Geodetic;
+use cig_scene::lighting::FogMode;
+use cig_scene::{FovDeg, FrameSnapshot, Hpr, View};
+use cig_terrain::TileCache;
+use panel::{FrameInfo, PanelState};
+use std::collections::HashSet;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::dpi::{PhysicalPosition, PhysicalSize};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+/// What the viewer shows first and how it behaves.
+#[derive(Clone, Debug)]
+pub struct ViewerOptions {
+    pub title: String,
+    /// First eyepoint, altitude above the WGS84 ellipsoid.
+    pub eye: Geodetic,
+    pub orientation: Hpr,
+    /// Horizontal field of view, degrees; the vertical one follows the window's shape.
+    pub horizontal_fov_deg: f64,
+    /// First window size (inner, physical pixels).
+    pub width_px: u32,
+    pub height_px: u32,
+    /// Simulation time, UTC seconds since 1970.
+    pub unix_time_s: f64,
+    pub visibility_m: f64,
+    pub fog_mode: FogMode,
+    pub max_pixel_error: f64,
+    pub wireframe: bool,
+    /// First flying speed, metres per second.
+    pub speed_mps: f64,
+    /// Node meshes built at most per frame.
+    pub mesh_budget: usize,
+    /// Close the window after this many frames have been presented (for tests).
+    pub exit_after_frames: Option<u64>,
+    /// Keep an image of the last frame (terrain and panel) in the report.
+    pub capture_last_frame: bool,
+}
+
+impl ViewerOptions {
+    /// Options with the defaults of `cig view` for a first eyepoint and orientation.
+    pub fn new(eye: Geodetic, orientation: Hpr) -> ViewerOptions {
+        ViewerOptions {
+            title: "cig view".into(),
+            eye,
+            orientation,
+            horizontal_fov_deg: 60.0,
+            width_px: 1280,
+            height_px: 720,
+            unix_time_s: 1_782_068_400.0, // 2026-06-21T19:00:00Z
+            visibility_m: 40_000.0,
+            fog_mode: FogMode::Exponential,
+            max_pixel_error: 1.0,
+            wireframe: false,
+            speed_mps: 100.0,
+            mesh_budget: FrameOptions::default().mesh_budget,
+            exit_after_frames: None,
+            capture_last_frame: false,
+        }
+    }
+
+    fn view(&self, width_px: u32, height_px: u32, camera: &FlyCamera) -> View {
+        View {
+            eye: camera.eye,
+            orientation: camera.orientation,
+            fov: FovDeg::from_horizontal(self.horizontal_fov_deg, width_px, height_px),
+            width_px,
+            height_px,
+        }
+    }
+}
+
+/// What a viewer session did.
+#[derive(Clone, Debug, Default)]
+pub struct ViewerReport {
+    /// Frames presented.
+    pub frames: u64,
+    /// Seconds from the first to the last frame presented.
+    pub seconds: f64,
+    /// The adapter, as [`Gpu::describe`] gives it.
+    pub adapter: String,
+    /// The format frames were drawn in.
+    pub colour_format: String,
+    pub last_stats: FrameStats,
+    /// The last frame, when [`ViewerOptions::capture_last_frame`] was set and a frame was drawn.
+    pub last_frame: Option<Image>,
+}
+
+/// Why the viewer could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewerError {
+    #[error("no display to open a window on ({0})")]
+    NoDisplay(String),
+    #[error("the window cannot be drawn into: {0}")]
+    Surface(String),
+    #[error("the window system failed: {0}")]
+    EventLoop(String),
+    #[error(transparent)]
+    Render(#[from] RenderError),
+}
+
+/// Opens a window on the database behind `cache` and runs until it is closed (Esc, the
+/// window's close button) or [`ViewerOptions::exit_after_frames`] frames have been shown.
+/// Must be called on the main thread.
+pub fn run_viewer(
+    cache: Arc<TileCache>,
+    options: ViewerOptions,
+) -> Result<ViewerReport, ViewerError> {
+    options
+        .view(
+            options.width_px,
+            options.height_px,
+            &FlyCamera::new(options.eye, options.orientation, options.speed_mps),
+        )
+        .validate()
+        .map_err(RenderError::from)?;
+    let event_loop =
+        EventLoop::new().map_err(|e| ViewerError::NoDisplay(plain_reason(&e.to_string())))?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    // Start with the eye's active area resident, so the first frames show terrain.
+    cache.update(&[options.eye]);
+    cache.wait_idle();
+    let mut app = App {
+        camera: FlyCamera::new(options.eye, options.orientation, options.speed_mps),
+        panel: PanelState::new(
+            options.unix_time_s,
+            options.visibility_m,
+            options.fog_mode,
+            options.max_pixel_error,
+            options.wireframe,
+        ),
+        cache,
+        options,
+        running: None,
+        error: None,
+        report: ViewerReport::default(),
+        first_frame: None,
+    };
+    let run = event_loop.run_app(&mut app);
+    if let Some(error) = app.error.take() {
+        return Err(error);
+    }
+    run.map_err(|e| ViewerError::EventLoop(e.to_string()))?;
+    if app.options.capture_last_frame {
+        if let Some(running) = app.running.as_mut() {
+            app.report.last_frame = running.capture()?;
+        }
+    }
+    Ok(app.report)
+}
+
+struct App {
+    cache: Arc<TileCache>,
+    options: ViewerOptions,
+    camera: FlyCamera,
+    panel: PanelState,
+    running: Option<Running>,
+    error: Option<ViewerError>,
+    report: ViewerReport,
+    first_frame: Option<Instant>,
+}
+
+/// What was drawn last, to re-draw it off-screen for a screenshot.
+struct LastFrame {
+    snapshot: FrameSnapshot,
+    paint_jobs: Vec<egui::ClippedPrimitive>,
+    pixels_per_point: f32,
+}
+
+struct Running {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    formats: Formats,
+    gpu: Arc<Gpu>,
+    renderer: Renderer,
+    cache: Arc<TileCache>,
+    mesh_budget: usize,
+    egui_ctx: egui::Context,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+    gpu_errors: Arc<Mutex<Option<String>>>,
+    keys: HashSet<KeyCode>,
+    dragging: Option<MouseButton>,
+    cursor: Option<PhysicalPosition<f64>>,
+    last_frame_at: Instant,
+    fps_window: (Instant, u32),
+    info: FrameInfo,
+    last: Option<LastFrame>,
+}
+
+/// A winit error without the source location winit puts in front ("os error at FILE:LINE: ").
+fn plain_reason(text: &str) -> String {
+    let reason = text
+        .find(".rs:")
+        .and_then(|i| text.get(i + 4..))
+        .and_then(|after| after.find(": ").and_then(|j| after.get(j + 2..)))
+        .unwrap_or(text);
+    reason.trim().trim_end_matches('.').to_string()
+}
+
+/// The formats of a window's frames.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Formats {
+    /// The surface's own format.
+    surface: wgpu::TextureFormat,
+    /// The view the terrain is drawn through: sRGB, so linear light is encoded on store.
+    scene: wgpu::TextureFormat,
+    /// The view egui draws through: the same texels without sRGB encoding where the surface
+    /// allows a second view format (egui blends in gamma space), else the scene's.
+    panel: wgpu::TextureFormat,
+}
+
+impl Formats {
+    /// An sRGB format the surface supports, else an sRGB view of its first format (when
+    /// `view_formats_supported`, the surface's texels can be seen through another format that
+    /// differs only in sRGB encoding).
+    fn choose(formats: &[wgpu::TextureFormat], view_formats_supported: bool) -> Option<Formats> {
+        let surface = formats
+            .iter()
+            .copied()
+            .find(|f| f.is_srgb())
+            .or_else(|| formats.first().copied())?;
+        let (scene, panel) = if view_formats_supported {
+            (surface.add_srgb_suffix(), surface.remove_srgb_suffix())
+        } else {
+            (surface, surface)
+        };
+        Some(Formats {
+            surface,
+            scene,
+            panel,
+        })
+    }
+
+    /// The (scene, panel) views of a texture of the surface's format.
+    fn views(&self, texture: &wgpu::Texture) -> (wgpu::TextureView, wgpu::TextureView) {
+        let view = |format| {
+            texture.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(format),
+                ..Default::default()
+            })
+        };
+        (view(self.scene), view(self.panel))
+    }
+
+    /// The formats other than the surface's that its textures are viewed through.
+    fn extra_view_formats(&self) -> Vec<wgpu::TextureFormat> {
+        let mut extra: Vec<wgpu::TextureFormat> = [self.scene, self.panel]
+            .into_iter()
+            .filter(|f| *f != self.surface)
+            .collect();
+        extra.dedup();
+        extra
+    }
+}
+
+impl App {
+    fn start(&mut self, event_loop: &ActiveEventLoop) -> Result<Running, ViewerError> {
+        let attributes = Window::default_attributes()
+            .with_title(self.options.title.clone())
+            .with_inner_size(PhysicalSize::new(
+                self.options.width_px,
+                self.options.height_px,
+            ));
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|e| ViewerError::NoDisplay(plain_reason(&e.to_string())))?,
+        );
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(event_loop.owned_display_handle()),
+            ));
+        let surface = instance
+            .create_surface(Arc::clone(&window))
+            .map_err(|e| ViewerError::Surface(e.to_string()))?;
+        let gpu = Gpu::with_instance(instance, Some(&surface))?;
+        let gpu_errors = Arc::new(Mutex::new(None));
+        {
+            let gpu_errors = Arc::clone(&gpu_errors);
+            gpu.device
+                .on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                    if let Ok(mut slot) = gpu_errors.lock() {
+                        slot.get_or_insert_with(|| e.to_string().replace('\n', " "));
+                    }
+                }));
+        }
+        let capabilities = surface.get_capabilities(&gpu.adapter);
+        let view_formats_supported = gpu
+            .adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::SURFACE_VIEW_FORMATS);
+        let formats =
+            Formats::choose(&capabilities.formats, view_formats_supported).ok_or_else(|| {
+                ViewerError::Surface(format!(
+                    "the adapter {} cannot present to this window",
+                    gpu.describe()
+                ))
+            })?;
+        let size = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format: formats.surface,
+            color_space: wgpu::SurfaceColorSpace::Auto,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::AutoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: capabilities
+                .alpha_modes
+                .first()
+                .copied()
+                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            view_formats: formats.extra_view_formats(),
+        };
+        surface.configure(&gpu.device, &config);
+        if !formats.scene.is_srgb() {
+            tracing::warn!(
+                format = ?formats.scene,
+                "the window has no sRGB format: colours will look too dark"
+            );
+        }
+        let renderer = Renderer::new(Arc::clone(&gpu), &self.cache, formats.scene);
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            window.theme(),
+            Some(gpu.device.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer =
+            egui_wgpu::Renderer::new(&gpu.device, formats.panel, Default::default());
+        self.report.adapter = gpu.describe();
+        self.report.colour_format = format!("{:?}", formats.scene);
+        let info = FrameInfo {
+            adapter: gpu.describe(),
+            wireframe_supported: gpu
+                .device
+                .features()
+                .contains(wgpu::Features::POLYGON_MODE_LINE),
+            ..Default::default()
+        };
+        tracing::info!(
+            adapter = %gpu.describe(),
+            formats = ?formats,
+            width = config.width,
+            height = config.height,
+            "viewer window ready"
+        );
+        let now = Instant::now();
+        Ok(Running {
+            window,
+            surface,
+            config,
+            formats,
+            gpu,
+            renderer,
+            cache: Arc::clone(&self.cache),
+            mesh_budget: self.options.mesh_budget,
+            egui_ctx,
+            egui_state,
+            egui_renderer,
+            gpu_errors,
+            keys: HashSet::new(),
+            dragging: None,
+            cursor: None,
+            last_frame_at: now,
+            fps_window: (now, 0),
+            info,
+            last: None,
+        })
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, error: ViewerError) {
+        if self.error.is_none() {
+            self.error = Some(error);
+        }
+        event_loop.exit();
+    }
+
+    /// One frame; `Ok(false)` when nothing was presented.
+    fn frame(&mut self) -> Result<bool, ViewerError> {
+        let Some(r) = self.running.as_mut() else {
+            return Ok(false);
+        };
+        let now = Instant::now();
+        let dt_s = (now - r.last_frame_at).as_secs_f64().min(1.0);
+        r.last_frame_at = now;
+        let size = r.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(false);
+        }
+        if (size.width, size.height) != (r.config.width, r.config.height) {
+            r.resize(size);
+        }
+        let held = |codes: &[KeyCode]| codes.iter().any(|c| r.keys.contains(c));
+        let axis = |plus: &[KeyCode], minus: &[KeyCode]| {
+            f64::from(u8::from(held(plus))) - f64::from(u8::from(held(minus)))
+        };
+        let input = MoveInput {
+            forward: axis(
+                &[KeyCode::KeyW, KeyCode::ArrowUp],
+                &[KeyCode::KeyS, KeyCode::ArrowDown],
+            ),
+            right: axis(
+                &[KeyCode::KeyD, KeyCode::ArrowRight],
+                &[KeyCode::KeyA, KeyCode::ArrowLeft],
+            ),
+            up: axis(
+                &[KeyCode::KeyE, KeyCode::PageUp],
+                &[KeyCode::KeyQ, KeyCode::PageDown],
+            ),
+            fast: held(&[KeyCode::ShiftLeft, KeyCode::ShiftRight]),
+        };
+        self.camera.fly(input, dt_s);
+        self.panel.advance(dt_s);
+        r.cache.update(&[self.camera.eye]);
+
+        let surface_texture = match r.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t) => t,
+            wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
+                // Draw this one; the next frame reconfigures.
+                r.config.width = 0;
+                t
+            }
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                return Ok(false)
+            }
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                r.resize(size);
+                return Ok(false);
+            }
+            wgpu::CurrentSurfaceTexture::Validation => {
+                return Err(r.gpu_error().unwrap_or_else(|| {
+                    ViewerError::Surface("the surface texture could not be acquired".into())
+                }))
+            }
+        };
+        let targets = r.formats.views(&surface_texture.texture);
+        let (width_px, height_px) = (
+            surface_texture.texture.width(),
+            surface_texture.texture.height(),
+        );
+
+        r.info.fast = input.fast;
+        let raw_input = r.egui_state.take_egui_input(&r.window);
+        let panel = &mut self.panel;
+        let camera = &mut self.camera;
+        let info = &r.info;
+        let output = r
+            .egui_ctx
+            .run_pass(raw_input, |ctx| panel.ui(ctx, camera, info));
+        r.egui_state
+            .handle_platform_output(&r.window, output.platform_output);
+        let paint_jobs = r
+            .egui_ctx
+            .tessellate(output.shapes, output.pixels_per_point);
+        // Take egui's texture changes out at once (a delta dropped unapplied is a bug to egui).
+        let mut textures_delta = output.textures_delta;
+        let texture_updates: Vec<_> = textures_delta.set.drain().collect();
+        let textures_to_free: Vec<egui::TextureId> = textures_delta.free.drain().collect();
+        textures_delta.clear();
+        for (id, deltas) in &texture_updates {
+            for delta in deltas {
+                r.egui_renderer
+                    .update_texture(&r.gpu.device, &r.gpu.queue, *id, delta);
+            }
+        }
+
+        let mut snapshot = FrameSnapshot::new(
+            self.panel.unix_time_s,
+            vec![self.options.view(width_px, height_px, &self.camera)],
+        );
+        snapshot.fog = self.panel.fog();
+        snapshot.max_pixel_error = self.panel.max_pixel_error;
+        snapshot.wireframe = self.panel.wireframe;
+        let last = LastFrame {
+            snapshot,
+            paint_jobs,
+            pixels_per_point: output.pixels_per_point,
+        };
+        let stats = r.draw(&last, &targets)?;
+        r.window.pre_present_notify();
+        r.gpu.queue.present(surface_texture);
+        for id in &textures_to_free {
+            r.egui_renderer.free_texture(id);
+        }
+        r.last = Some(last);
+        if let Some(e) = r.gpu_error() {
+            return Err(e);
+        }
+
+        r.fps_window.1 += 1;
+        let window_s = (now - r.fps_window.0).as_secs_f64();
+        if window_s >= 0.5 {
+            r.info.fps = f64::from(r.fps_window.1) / window_s;
+            r.fps_window = (now, 0);
+        }
+        r.info.width_px = width_px;
+        r.info.height_px = height_px;
+        r.info.stats = stats.clone();
+        self.report.last_stats = stats;
+        self.report.frames += 1;
+        let first = *self.first_frame.get_or_insert(now);
+        self.report.seconds = (now - first).as_secs_f64();
+        Ok(true)
+    }
+}
+
+impl Running {
+    fn resize(&mut self, size: PhysicalSize<u32>) {
+        if size.width == 0 || size.height == 0 {
+            return;
+        }
+        self.config.width = size.width;
+        self.config.height = size.height;
+        self.surface.configure(&self.gpu.device, &self.config);
+    }
+
+    fn gpu_error(&self) -> Option<ViewerError> {
+        let message = self.gpu_errors.lock().ok()?.take()?;
+        Some(ViewerError::Render(RenderError::Gpu(message)))
+    }
+
+    /// Draws the terrain view, then the panel over it, into the (scene, panel) views of one
+    /// texture.
+    fn draw(
+        &mut self,
+        frame: &LastFrame,
+        targets: &(wgpu::TextureView, wgpu::TextureView),
+    ) -> Result<FrameStats, ViewerError> {
+        let stats = self.renderer.render(
+            &self.cache,
+            &frame.snapshot,
+            0,
+            &targets.0,
+            FrameOptions {
+                mesh_budget: self.mesh_budget,
+                key_background: false,
+            },
+        )?;
+        let view = frame.snapshot.views.first().copied();
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: view.map_or([1, 1], |v| [v.width_px, v.height_px]),
+            pixels_per_point: frame.pixels_per_point,
+        };
+        let device = &self.gpu.device;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("panel"),
+        });
+        let mut commands = self.egui_renderer.update_buffers(
+            device,
+            &self.gpu.queue,
+            &mut encoder,
+            &frame.paint_jobs,
+            &screen,
+        );
+        {
+            let mut pass = encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("panel"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &targets.1,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    ..Default::default()
+                })
+                .forget_lifetime();
+            self.egui_renderer
+                .render(&mut pass, &frame.paint_jobs, &screen);
+        }
+        commands.push(encoder.finish());
+        self.gpu.queue.submit(commands);
+        Ok(stats)
+    }
+
+    /// Re-draws the last frame off-screen and reads it back (RGBA, sRGB).
+    fn capture(&mut self) -> Result<Option<Image>, ViewerError> {
+        let Some(last) = self.last.take() else {
+            return Ok(None);
+        };
+        let Some(view) = last.snapshot.views.first().copied() else {
+            return Ok(None);
+        };
+        let (width, height) = (view.width_px, view.height_px);
+        let device = &self.gpu.device;
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("screenshot"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: self.formats.surface,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &self.formats.extra_view_formats(),
+        });
+        let targets = self.formats.views(&texture);
+        self.draw(&last, &targets)?;
+        let image = read_rgba(&self.gpu, &texture)?;
+        if let Some(e) = self.gpu_error() {
+            return Err(e);
+        }
+        Ok(Some(image))
+    }
+}
+
+/// Reads an 8-bit RGBA or BGRA texture back as RGBA rows from the top.
+fn read_rgba(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Image, RenderError> {
+    let (width, height) = (texture.width(), texture.height());
+    let swap_red_blue = match texture.format().remove_srgb_suffix() {
+        wgpu::TextureFormat::Rgba8Unorm => false,
+        wgpu::TextureFormat::Bgra8Unorm => true,
+        other => {
+            return Err(RenderError::Readback(format!(
+                "screenshots of {other:?} frames are not supported (8-bit RGBA or BGRA only)"
+            )))
+        }
+    };
+    let bytes_per_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("screenshot readback"),
+        size: u64::from(bytes_per_row) * u64::from(height),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("screenshot readback"),
+        });
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(bytes_per_row),
+                rows_per_image: Some(height),
+            },
+        },
+        texture.size(),
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| RenderError::Readback(e.to_string()))?
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    let row_bytes = width as usize * 4;
+    let mut rgba = Vec::with_capacity(row_bytes * height as usize);
+    {
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        for row in data.chunks(bytes_per_row as usize).take(height as usize) {
+            let pixels = row.get(..row_bytes).ok_or_else(|| {
+                RenderError::Readback("the read-back buffer is shorter than the frame".into())
+            })?;
+            rgba.extend_from_slice(pixels);
+        }
+    }
+    buffer.unmap();
+    if swap_red_blue {
+        for pixel in rgba.chunks_exact_mut(4) {
+            pixel.swap(0, 2);
+        }
+    }
+    Ok(Image {
+        width,
+        height,
+        rgba,
+    })
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.running.is_some() || self.error.is_some() {
+            return;
+        }
+        match self.start(event_loop) {
+            Ok(running) => self.running = Some(running),
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(
+        &mut self,
+        event_loop: &ActiveEventLoop,
+        window_id: WindowId,
+        event: WindowEvent,
+    ) {
+        let Some(r) = self.running.as_mut() else {
+            return;
+        };
+        if window_id != r.window.id() {
+            return;
+        }
+        let response = r.egui_state.on_window_event(&r.window, &event);
+        let egui_has_keyboard = r.egui_ctx.egui_wants_keyboard_input();
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => r.resize(size),
+            WindowEvent::Focused(false) => {
+                r.keys.clear();
+                r.dragging = None;
+            }
+            WindowEvent::KeyboardInput { event, .. } => {
+                let PhysicalKey::Code(code) = event.physical_key else {
+                    return;
+                };
+                match event.state {
+                    ElementState::Pressed => {
+                        if code == KeyCode::Escape && !egui_has_keyboard {
+                            event_loop.exit();
+                        } else if !response.consumed && !egui_has_keyboard {
+                            r.keys.insert(code);
+                        }
+                    }
+                    ElementState::Released => {
+                        r.keys.remove(&code);
+                    }
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } => match state {
+                ElementState::Pressed
+                    if matches!(button, MouseButton::Left | MouseButton::Right)
+                        && !response.consumed
+                        && !r.egui_ctx.is_pointer_over_egui() =>
+                {
+                    r.dragging = Some(button);
+                }
+                ElementState::Released if r.dragging == Some(button) => r.dragging = None,
+                _ => {}
+            },
+            WindowEvent::CursorMoved { position, .. } => {
+                if let (Some(_), Some(previous)) = (r.dragging, r.cursor) {
+                    // Look the way the mouse moves, at the view's own angular scale.
+                    let degrees_per_pixel =
+                        self.options.horizontal_fov_deg / f64::from(r.config.width.max(1));
+                    self.camera.look(
+                        (position.x - previous.x) * degrees_per_pixel,
+                        -(position.y - previous.y) * degrees_per_pixel,
+                    );
+                }
+                r.cursor = Some(position);
+            }
+            WindowEvent::CursorLeft { .. } => r.cursor = None,
+            WindowEvent::MouseWheel { delta, .. } if !r.egui_ctx.is_pointer_over_egui() => {
+                let notches = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => f64::from(y),
+                    MouseScrollDelta::PixelDelta(p) => p.y / 40.0,
+                };
+                self.camera.scale_speed(notches);
+                tracing::debug!(?delta, speed_mps = self.camera.speed_mps, "mouse wheel");
+            }
+            WindowEvent::RedrawRequested => {
+                let presented = self.frame();
+                match presented {
+                    Ok(true) => {
+                        if let Some(limit) = self.options.exit_after_frames {
+                            if self.report.frames >= limit {
+                                event_loop.exit();
+                            }
+                        }
+                    }
+                    Ok(false) => {}
+                    Err(e) => self.fail(event_loop, e),
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if let Some(r) = self.running.as_ref() {
+            let size = r.window.inner_size();
+            if size.width == 0 || size.height == 0 {
+                // Minimised: nothing to draw; look again a little later rather than spin.
+                event_loop.set_control_flow(ControlFlow::WaitUntil(
+                    Instant::now() + std::time::Duration::from_millis(100),
+                ));
+            } else {
+                event_loop.set_control_flow(ControlFlow::Poll);
+            }
+            r.window.request_redraw();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_srgb_surface_format_is_preferred_and_egui_gets_a_linear_view() {
+        use wgpu::TextureFormat as F;
+        let formats = |surface, scene, panel| {
+            Some(Formats {
+                surface,
+                scene,
+                panel,
+            })
+        };
+        let f = Formats::choose(&[F::Bgra8Unorm, F::Bgra8UnormSrgb], true);
+        assert_eq!(
+            f,
+            formats(F::Bgra8UnormSrgb, F::Bgra8UnormSrgb, F::Bgra8Unorm)
+        );
+        assert_eq!(f.map(|f| f.extra_view_formats()), Some(vec![F::Bgra8Unorm]));
+        assert_eq!(
+            Formats::choose(&[F::Bgra8Unorm, F::Bgra8UnormSrgb], false),
+            formats(F::Bgra8UnormSrgb, F::Bgra8UnormSrgb, F::Bgra8UnormSrgb)
+        );
+        let f = Formats::choose(&[F::Rgba8Unorm], true);
+        assert_eq!(f, formats(F::Rgba8Unorm, F::Rgba8UnormSrgb, F::Rgba8Unorm));
+        assert_eq!(
+            f.map(|f| f.extra_view_formats()),
+            Some(vec![F::Rgba8UnormSrgb])
+        );
+        assert_eq!(Formats::choose(&[], true), None);
+    }
+
+    #[test]
+    fn winit_source_locations_are_dropped_from_reasons() {
+        assert_eq!(
+            plain_reason(
+                "os error at /src/linux/mod.rs:788: Failed to open connection to X server."
+            ),
+            "Failed to open connection to X server"
+        );
+        assert_eq!(plain_reason("no display"), "no display");
+    }
+}

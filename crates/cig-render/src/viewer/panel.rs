@@ -1,0 +1,443 @@
+//! The viewer's operator panel: time of day, visibility and fog, level of detail, wireframe and
+//! frame statistics, drawn with egui.
+//!
+//! Algorithm: the panel edits a plain [`PanelState`] that the frame loop turns into the
+//! [`cig_scene::FrameSnapshot`] of the next frame. Simulation time is UTC seconds since 1970; it
+//! advances by `rate` simulated minutes per real minute. The date shown and typed is the
+//! proleptic Gregorian calendar, converted with Howard Hinnant's `days_from_civil` /
+//! `civil_from_days` algorithms ("chrono-Compatible Low-Level Date Algorithms", 2013), exact for
+//! every day in the `i64` range the panel accepts (years 1..9999). Visibility sets the fog
+//! through Koschmieder's law ([`cig_scene::lighting::Fog::from_visibility`]).
+//!
+//! Limits: time zones are not shown (the slider is UTC); leap seconds are ignored, as in Unix
+//! time.
+
+use crate::renderer::serde_like::FrameStats;
+use crate::viewer::camera::FlyCamera;
+use cig_scene::lighting::{Fog, FogMode};
+
+/// Seconds in a day.
+pub const SECONDS_PER_DAY: f64 = 86_400.0;
+/// Visibility slider range, metres.
+pub const VISIBILITY_RANGE_M: (f64, f64) = (50.0, 500_000.0);
+/// Level-of-detail threshold range, pixels.
+pub const MAX_PIXEL_ERROR_RANGE_PX: (f64, f64) = (0.0, 8.0);
+/// Time rate range, simulated minutes per real minute.
+pub const RATE_RANGE: (f64, f64) = (0.0, 1440.0);
+
+/// Days since 1970-01-01 of a proleptic Gregorian date (Hinnant's `days_from_civil`).
+pub fn days_from_civil(year: i64, month: u32, day: u32) -> i64 {
+    let y = if month <= 2 { year - 1 } else { year };
+    let era = y.div_euclid(400);
+    let year_of_era = y - era * 400;
+    let m = i64::from(month);
+    let month_from_march = if m > 2 { m - 3 } else { m + 9 };
+    let day_of_year = (153 * month_from_march + 2) / 5 + i64::from(day) - 1;
+    let day_of_era = year_of_era * 365 + year_of_era / 4 - year_of_era / 100 + day_of_year;
+    era * 146_097 + day_of_era - 719_468
+}
+
+/// The proleptic Gregorian date (year, month, day) of a day count since 1970-01-01
+/// (Hinnant's `civil_from_days`).
+pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let day_of_era = z - era * 146_097;
+    let year_of_era =
+        (day_of_era - day_of_era / 1460 + day_of_era / 36_524 - day_of_era / 146_096) / 365;
+    let day_of_year = day_of_era - (365 * year_of_era + year_of_era / 4 - year_of_era / 100);
+    let mp = (5 * day_of_year + 2) / 153;
+    let day = (day_of_year - (153 * mp + 2) / 5 + 1) as u32;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    let year = year_of_era + era * 400 + i64::from(month <= 2);
+    (year, month, day)
+}
+
+fn days_in_month(year: i64, month: u32) -> u32 {
+    match month {
+        1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,
+        4 | 6 | 9 | 11 => 30,
+        _ if (year % 4 == 0 && year % 100 != 0) || year % 400 == 0 => 29,
+        _ => 28,
+    }
+}
+
+/// Parses "YYYY-MM-DD" (years 1..=9999) into days since 1970-01-01.
+pub fn parse_date(text: &str) -> Option<i64> {
+    let mut parts = text.trim().splitn(3, '-');
+    let year: i64 = parts.next()?.trim().parse().ok()?;
+    let month: u32 = parts.next()?.trim().parse().ok()?;
+    let day: u32 = parts.next()?.trim().parse().ok()?;
+    if !(1..=9999).contains(&year) || !(1..=12).contains(&month) {
+        return None;
+    }
+    if day == 0 || day > days_in_month(year, month) {
+        return None;
+    }
+    Some(days_from_civil(year, month, day))
+}
+
+/// "YYYY-MM-DD" of a day count since 1970-01-01.
+pub fn format_date(days: i64) -> String {
+    let (y, m, d) = civil_from_days(days);
+    format!("{y:04}-{m:02}-{d:02}")
+}
+
+/// "HH:MM:SS" of seconds into the day.
+pub fn format_time_of_day(seconds: f64) -> String {
+    let s = seconds.clamp(0.0, SECONDS_PER_DAY - 1.0) as u32;
+    format!("{:02}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+}
+
+/// What the operator has set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PanelState {
+    /// Simulation time, UTC seconds since 1970.
+    pub unix_time_s: f64,
+    /// Simulated minutes per real minute (0 stops the clock).
+    pub rate: f64,
+    pub visibility_m: f64,
+    pub fog_mode: FogMode,
+    pub max_pixel_error: f64,
+    pub wireframe: bool,
+    /// The date field being edited.
+    date_text: String,
+    date_error: bool,
+}
+
+/// Statistics the panel shows, besides the renderer's.
+#[derive(Clone, Debug, Default)]
+pub struct FrameInfo {
+    pub stats: FrameStats,
+    /// Frames per second, smoothed.
+    pub fps: f64,
+    pub width_px: u32,
+    pub height_px: u32,
+    pub adapter: String,
+    /// False when the GPU cannot draw lines (the wireframe toggle then does nothing).
+    pub wireframe_supported: bool,
+    pub fast: bool,
+}
+
+impl PanelState {
+    pub fn new(
+        unix_time_s: f64,
+        visibility_m: f64,
+        fog_mode: FogMode,
+        max_pixel_error: f64,
+        wireframe: bool,
+    ) -> PanelState {
+        let mut state = PanelState {
+            unix_time_s: if unix_time_s.is_finite() {
+                unix_time_s
+            } else {
+                0.0
+            },
+            rate: 1.0,
+            visibility_m: clamp_or(visibility_m, VISIBILITY_RANGE_M, 40_000.0),
+            fog_mode,
+            max_pixel_error: clamp_or(max_pixel_error, MAX_PIXEL_ERROR_RANGE_PX, 1.0),
+            wireframe,
+            date_text: String::new(),
+            date_error: false,
+        };
+        state.date_text = format_date(state.day());
+        state
+    }
+
+    /// Days since 1970-01-01 of the simulation time.
+    pub fn day(&self) -> i64 {
+        (self.unix_time_s / SECONDS_PER_DAY).floor() as i64
+    }
+
+    /// Seconds into the (UTC) day.
+    pub fn seconds_of_day(&self) -> f64 {
+        self.unix_time_s.rem_euclid(SECONDS_PER_DAY)
+    }
+
+    /// Advances the clock by `real_dt_s` real seconds at the panel's rate.
+    pub fn advance(&mut self, real_dt_s: f64) {
+        if real_dt_s.is_finite() && real_dt_s > 0.0 {
+            let before = self.day();
+            self.unix_time_s += real_dt_s * self.rate;
+            if self.day() != before && !self.date_error {
+                self.date_text = format_date(self.day());
+            }
+        }
+    }
+
+    /// The fog these settings ask for.
+    pub fn fog(&self) -> Fog {
+        Fog::from_visibility(self.fog_mode, self.visibility_m)
+    }
+
+    /// Draws the panel (a floating window) and applies the operator's changes.
+    pub fn ui(&mut self, ctx: &egui::Context, camera: &mut FlyCamera, info: &FrameInfo) {
+        egui::Window::new("cig view")
+            .default_pos([8.0, 8.0])
+            .resizable(false)
+            .vscroll(true)
+            .show(ctx, |ui| {
+                self.time_ui(ui);
+                ui.separator();
+                self.atmosphere_ui(ui);
+                ui.separator();
+                self.detail_ui(ui, info);
+                ui.separator();
+                camera_ui(ui, camera, info);
+            });
+        egui::Window::new("frame")
+            .anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0])
+            .auto_sized()
+            .show(ctx, |ui| stats_ui(ui, info));
+    }
+
+    fn time_ui(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Time (UTC)");
+        let mut seconds = self.seconds_of_day();
+        let slider = ui.add(
+            egui::Slider::new(&mut seconds, 0.0..=SECONDS_PER_DAY - 1.0)
+                .text("time of day")
+                .custom_formatter(|v, _| format_time_of_day(v))
+                .custom_parser(|text| {
+                    let mut parts = text.trim().split(':');
+                    let h: f64 = parts.next()?.trim().parse().ok()?;
+                    let m: f64 = parts.next().map_or(Some(0.0), |p| p.trim().parse().ok())?;
+                    let s: f64 = parts.next().map_or(Some(0.0), |p| p.trim().parse().ok())?;
+                    Some(h * 3600.0 + m * 60.0 + s)
+                }),
+        );
+        if slider.changed() {
+            self.unix_time_s = self.day() as f64 * SECONDS_PER_DAY + seconds;
+        }
+        ui.horizontal(|ui| {
+            ui.label("date");
+            let edit = ui.add(
+                egui::TextEdit::singleline(&mut self.date_text)
+                    .desired_width(90.0)
+                    .hint_text("YYYY-MM-DD"),
+            );
+            if edit.changed() {
+                match parse_date(&self.date_text) {
+                    Some(day) => {
+                        self.unix_time_s = day as f64 * SECONDS_PER_DAY + self.seconds_of_day();
+                        self.date_error = false;
+                    }
+                    None => self.date_error = true,
+                }
+            }
+            if edit.lost_focus() && self.date_error {
+                self.date_text = format_date(self.day());
+                self.date_error = false;
+            }
+            if self.date_error {
+                ui.colored_label(egui::Color32::LIGHT_RED, "not a date");
+            }
+        });
+        ui.add(
+            egui::Slider::new(&mut self.rate, RATE_RANGE.0..=RATE_RANGE.1)
+                .logarithmic(true)
+                .smallest_positive(0.1)
+                .text("min / min"),
+        );
+        ui.horizontal(|ui| {
+            for (label, rate) in [("stop", 0.0), ("real time", 1.0), ("1 h / min", 60.0)] {
+                if ui.button(label).clicked() {
+                    self.rate = rate;
+                }
+            }
+        });
+    }
+
+    fn atmosphere_ui(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Atmosphere");
+        ui.add(
+            egui::Slider::new(
+                &mut self.visibility_m,
+                VISIBILITY_RANGE_M.0..=VISIBILITY_RANGE_M.1,
+            )
+            .logarithmic(true)
+            .text("visibility")
+            .suffix(" m"),
+        );
+        ui.horizontal(|ui| {
+            ui.label("fog");
+            for mode in [
+                FogMode::Off,
+                FogMode::Linear,
+                FogMode::Exponential,
+                FogMode::ExponentialSquared,
+            ] {
+                ui.selectable_value(&mut self.fog_mode, mode, mode.name());
+            }
+        });
+    }
+
+    fn detail_ui(&mut self, ui: &mut egui::Ui, info: &FrameInfo) {
+        ui.strong("Terrain");
+        ui.add(
+            egui::Slider::new(
+                &mut self.max_pixel_error,
+                MAX_PIXEL_ERROR_RANGE_PX.0..=MAX_PIXEL_ERROR_RANGE_PX.1,
+            )
+            .text("max pixel error")
+            .suffix(" px"),
+        )
+        .on_hover_text("0 = full detail everywhere");
+        ui.add_enabled(
+            info.wireframe_supported,
+            egui::Checkbox::new(&mut self.wireframe, "wireframe"),
+        )
+        .on_disabled_hover_text("this GPU cannot draw lines");
+    }
+}
+
+fn clamp_or(value: f64, range: (f64, f64), fallback: f64) -> f64 {
+    if value.is_finite() {
+        value.clamp(range.0, range.1)
+    } else {
+        fallback
+    }
+}
+
+fn camera_ui(ui: &mut egui::Ui, camera: &mut FlyCamera, info: &FrameInfo) {
+    ui.strong("Camera");
+    let e = camera.eye;
+    let o = camera.orientation;
+    ui.monospace(format!(
+        "{:.5}, {:.5}, {:.0} m\nheading {:.1}  pitch {:.1}",
+        e.lat_deg, e.lon_deg, e.alt_m, o.heading_deg, o.pitch_deg
+    ));
+    let mut speed = camera.speed_mps;
+    let response = ui.add(
+        egui::Slider::new(
+            &mut speed,
+            super::camera::SPEED_RANGE_MPS.0..=super::camera::SPEED_RANGE_MPS.1,
+        )
+        .logarithmic(true)
+        .text("speed")
+        .suffix(" m/s"),
+    );
+    if response.changed() {
+        camera.set_speed(speed);
+    }
+    if info.fast {
+        ui.label(format!(
+            "shift: {:.0} m/s",
+            camera.effective_speed_mps(true)
+        ));
+    }
+    ui.small(
+        "drag: look    WASD / arrows: fly\nQ/E, PgDn/PgUp: down/up    shift: fast\nwheel: speed    Esc: quit",
+    );
+}
+
+fn stats_ui(ui: &mut egui::Ui, info: &FrameInfo) {
+    let s = &info.stats;
+    egui::Grid::new("frame statistics")
+        .num_columns(2)
+        .striped(true)
+        .show(ui, |ui| {
+            let mut row = |name: &str, value: String| {
+                ui.label(name);
+                ui.monospace(value);
+                ui.end_row();
+            };
+            row("fps", format!("{:.1}", info.fps));
+            row("size", format!("{} x {}", info.width_px, info.height_px));
+            row("triangles", s.triangles.to_string());
+            row("nodes", s.terrain_nodes.to_string());
+            row("draw calls", s.draw_calls.to_string());
+            row("cpu select", format!("{:.2} ms", s.cpu_select_ms));
+            row("cpu frame", format!("{:.2} ms", s.cpu_frame_ms));
+            row("gpu", format!("{:.2} ms", s.gpu_ms));
+            row(
+                "tiles",
+                format!("{} resident, {} wanted", s.tiles_resident, s.tiles_wanted),
+            );
+            row(
+                "meshes",
+                format!("{} built, {} deferred", s.meshes_built, s.meshes_deferred),
+            );
+        });
+    ui.small(&info.adapter);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn known_dates() {
+        assert_eq!(days_from_civil(1970, 1, 1), 0);
+        assert_eq!(days_from_civil(2000, 3, 1), 11_017);
+        assert_eq!(civil_from_days(-1), (1969, 12, 31));
+        assert_eq!(parse_date("2026-06-21"), Some(20_625));
+        assert_eq!(format_date(20_625), "2026-06-21");
+        assert_eq!(parse_date("2024-02-29"), Some(days_from_civil(2024, 2, 29)));
+        for bad in [
+            "2023-02-29",
+            "1900-02-29",
+            "2026-13-01",
+            "2026-04-31",
+            "x",
+            "",
+            "0-1-1",
+        ] {
+            assert_eq!(parse_date(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn time_of_day_formatting() {
+        assert_eq!(format_time_of_day(0.0), "00:00:00");
+        assert_eq!(format_time_of_day(19.0 * 3600.0 + 61.5), "19:01:01");
+        assert_eq!(format_time_of_day(1e9), "23:59:59");
+    }
+
+    #[test]
+    fn the_clock_runs_at_the_rate_and_the_date_follows() {
+        let mut p = PanelState::new(
+            days_from_civil(2026, 6, 21) as f64 * SECONDS_PER_DAY + 86_000.0,
+            1000.0,
+            FogMode::Linear,
+            1.0,
+            false,
+        );
+        p.rate = 60.0;
+        p.advance(10.0);
+        assert!((p.seconds_of_day() - 200.0).abs() < 1e-6);
+        assert_eq!(p.date_text, "2026-06-22");
+        p.rate = 0.0;
+        p.advance(100.0);
+        assert!((p.seconds_of_day() - 200.0).abs() < 1e-6);
+        let fog = p.fog();
+        assert_eq!(fog.mode, FogMode::Linear);
+        assert!((fog.factor(1000.0) - 0.02).abs() < 1e-3);
+    }
+
+    #[test]
+    fn out_of_range_settings_are_clamped() {
+        let p = PanelState::new(f64::NAN, 1e9, FogMode::Off, -3.0, true);
+        assert_eq!(p.unix_time_s, 0.0);
+        assert_eq!(p.visibility_m, VISIBILITY_RANGE_M.1);
+        assert_eq!(p.max_pixel_error, 0.0);
+    }
+
+    proptest! {
+        #[test]
+        fn civil_dates_match_the_time_crate(days in -719_162i64..2_932_896) {
+            // 0001-01-01 ..= 9999-12-31, against an independent implementation.
+            let (y, m, d) = civil_from_days(days);
+            let reference = time::Date::from_julian_day((days + 2_440_588) as i32)
+                .expect("in range");
+            prop_assert_eq!(
+                (y, m, d),
+                (i64::from(reference.year()), u32::from(u8::from(reference.month())), u32::from(reference.day()))
+            );
+            prop_assert_eq!(days_from_civil(y, m, d), days);
+            prop_assert_eq!(parse_date(&format_date(days)), Some(days));
+        }
+    }
+}
