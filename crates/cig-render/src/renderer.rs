@@ -651,7 +651,7 @@ impl Renderer {
             self.frame,
             options.mesh_budget,
         );
-        let lighting = Lighting::at(snapshot.unix_time_s, camera.local_up);
+        let lighting = Lighting::at(snapshot.unix_time_s, view.eye);
         self.write_globals(&camera, &lighting, snapshot, options.key_background);
         if !records.is_empty() {
             self.gpu

@@ -1,10 +1,8 @@
 //! Sun direction, light colours, sky gradient and fog of a frame.
 //!
-//! Algorithm: the sun's direction comes from the Astronomical Almanac's low-precision solar
-//! coordinates (mean longitude and anomaly, ecliptic longitude with the two-term equation of
-//! centre, obliquity, right ascension and declination, Greenwich mean sidereal time), good to
-//! about 0.01 degree between 1950 and 2050 — a stand-in until the environment's ephemeris drives
-//! the light. Sun and sky colours are interpolated in the sun's elevation between day, golden
+//! Algorithm: the sun's direction comes from `cig-environment`'s ephemeris (Meeus: truncated
+//! VSOP87, nutation, aberration, topocentric at the eye), good to 0.01 degree from 1900 to 2100;
+//! outside those years the light stays at the nearest year's. Sun and sky colours are interpolated in the sun's elevation between day, golden
 //! hour, dusk and night palettes. Fog follows the classic fixed-function factors of the NPSNET
 //! thesis (source 000, Eq 13-16, as restored in INDEX.md): linear `f = (end - z)/(end - start)`,
 //! exponential `f = exp(-d z)`, exponential-squared `f = exp(-(d z)^2)`, with the final colour
@@ -12,8 +10,10 @@
 //! Koschmieder's law (2 % contrast at `V`): `d = 3.912 / V` for exponential,
 //! `d = sqrt(3.912) / V` for exponential-squared, `end = V / 0.98` with `start = 0` for linear.
 //!
-//! Limits: no atmosphere model — the sky is a gradient and the sun's colour a palette; no moon.
+//! Limits: no atmosphere model — the sky is a gradient and the sun's colour a palette; no moon
+//! light (the environment issue brings the physical sky, the moon and exposure).
 
+use cig_geo::{EnuFrame, Geodetic};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -92,25 +92,29 @@ impl Fog {
     }
 }
 
-/// Unit vector from the earth's centre towards the sun (ECEF), at `unix_time_s` (UTC).
-pub fn sun_direction_ecef(unix_time_s: f64) -> DVec3 {
-    let days = unix_time_s / 86_400.0 + 2_440_587.5 - 2_451_545.0;
-    let mean_longitude = (280.460 + 0.985_647_4 * days).to_radians();
-    let anomaly = (357.528 + 0.985_600_3 * days).to_radians();
-    let ecliptic_longitude = mean_longitude
-        + (1.915_f64.to_radians()) * anomaly.sin()
-        + (0.020_f64.to_radians()) * (2.0 * anomaly).sin();
-    let obliquity = (23.439 - 0.000_000_4 * days).to_radians();
-    let right_ascension =
-        (obliquity.cos() * ecliptic_longitude.sin()).atan2(ecliptic_longitude.cos());
-    let declination = (obliquity.sin() * ecliptic_longitude.sin()).asin();
-    let gmst = (280.460_618_37 + 360.985_647_366_29 * days).to_radians();
-    let subsolar_longitude = right_ascension - gmst;
-    DVec3::new(
-        declination.cos() * subsolar_longitude.cos(),
-        declination.cos() * subsolar_longitude.sin(),
-        declination.sin(),
-    )
+/// Unit vector from `eye` towards the sun (ECEF), at `unix_time_s` (UTC), topocentric.
+pub fn sun_direction_ecef(unix_time_s: f64, eye: Geodetic) -> DVec3 {
+    // The ephemeris covers 1900..=2100; clamp into it rather than fail a frame.
+    let lo =
+        cig_environment::UtcTime::from_calendar(1900, 1, 1, 0, 0, 0.0).map(|t| t.unix_seconds());
+    let hi = cig_environment::UtcTime::from_calendar(2100, 12, 31, 23, 59, 59.0)
+        .map(|t| t.unix_seconds());
+    let t = match (lo, hi) {
+        (Ok(lo), Ok(hi)) => unix_time_s.clamp(lo, hi),
+        _ => unix_time_s,
+    };
+    let lat = eye.lat_deg.clamp(-90.0, 90.0);
+    let alt = eye.alt_m.clamp(-1000.0, 1.0e7);
+    let (Ok(time), Ok(observer)) = (
+        cig_environment::UtcTime::from_unix_seconds(t),
+        cig_environment::Observer::new(lat, eye.lon_deg, alt),
+    ) else {
+        return EnuFrame::new(eye).enu_vector_to_ecef(DVec3::Z);
+    };
+    let sun = cig_environment::ephemeris(&observer, time).sun;
+    EnuFrame::new(eye)
+        .enu_vector_to_ecef(DVec3::from_array(sun.direction_enu))
+        .normalize()
 }
 
 /// Light and sky of one frame, in linear RGB (not sRGB), scene-referred (1.0 = white paper in
@@ -179,9 +183,10 @@ const PALETTE: [PaletteKey; 5] = [
 ];
 
 impl Lighting {
-    /// The light at `unix_time_s` seen from an eye whose local up (ECEF) is `local_up`.
-    pub fn at(unix_time_s: f64, local_up: DVec3) -> Lighting {
-        let sun_direction = sun_direction_ecef(unix_time_s);
+    /// The light at `unix_time_s` seen from `eye`.
+    pub fn at(unix_time_s: f64, eye: Geodetic) -> Lighting {
+        let local_up = EnuFrame::new(eye).enu_vector_to_ecef(DVec3::Z);
+        let sun_direction = sun_direction_ecef(unix_time_s, eye);
         let sun_elevation_deg = sun_direction
             .dot(local_up)
             .clamp(-1.0, 1.0)
@@ -218,7 +223,6 @@ impl Lighting {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use cig_geo::{EnuFrame, Geodetic};
 
     fn unix(y: i32, m: u32, d: u32, h: f64) -> f64 {
         // Days from civil (Howard Hinnant's algorithm).
@@ -235,7 +239,7 @@ mod tests {
     #[test]
     fn sun_is_high_at_local_noon_in_june_and_down_at_midnight() {
         let site = Geodetic::new(36.0, -121.0, 0.0);
-        let up = EnuFrame::new(site).enu_vector_to_ecef(DVec3::Z);
+        let up = site;
         // Local solar noon near 20:04 UTC at 121 W; declination +23.4 on 21 June.
         let noon = Lighting::at(unix(2026, 6, 21, 20.07), up);
         assert!(

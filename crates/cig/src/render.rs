@@ -45,16 +45,9 @@ pub fn parse_size(text: &str) -> anyhow::Result<(u32, u32)> {
     Ok((w, h))
 }
 
-/// Parses an ISO 8601 / RFC 3339 UTC time ("Z" or an offset; no offset means UTC) into
-/// seconds since 1970.
+/// Parses an ISO 8601 time (see `cig ephem`) into seconds since 1970 UTC.
 pub fn parse_time(text: &str) -> anyhow::Result<f64> {
-    use time::format_description::well_known::Rfc3339;
-    let t = time::OffsetDateTime::parse(text, &Rfc3339)
-        .or_else(|_| time::OffsetDateTime::parse(&format!("{text}Z"), &Rfc3339))
-        .with_context(|| {
-            format!("--time \"{text}\" is not an ISO 8601 time such as 2026-06-21T18:00:00Z")
-        })?;
-    Ok(t.unix_timestamp_nanos() as f64 / 1e9)
+    Ok(crate::ephem::parse_time(text)?.unix_seconds())
 }
 
 /// Builds a view from the command line's strings.
