@@ -30,22 +30,50 @@ fn to_body(p: Vec3) -> Vec3 {
 /// Loads a glTF model under `name`, with three levels of detail.
 pub fn load_gltf_model(path: &Path, name: &str) -> Result<Model, ModelError> {
     let shown = path.display().to_string();
-    let (document, buffers, _images) = gltf::import(path).map_err(|e| ModelError::Gltf {
+    let gltf_error = |e: gltf::Error| ModelError::Gltf {
         reason: e.to_string(),
         path: shown.clone(),
-    })?;
+    };
+    // Buffers only: textures are not used, so a missing image file does not matter.
+    let gltf::Gltf { document, blob } = gltf::Gltf::open(path).map_err(gltf_error)?;
+    let buffers = gltf::import_buffers(&document, path.parent(), blob).map_err(gltf_error)?;
     let mut mesh = ModelMesh::default();
     let roots: Vec<gltf::Node> = match document
         .default_scene()
         .or_else(|| document.scenes().next())
     {
         Some(scene) => scene.nodes().collect(),
-        None => document.nodes().collect(),
+        // No scene: the nodes that are nobody's child.
+        None => {
+            let children: std::collections::HashSet<usize> = document
+                .nodes()
+                .flat_map(|n| n.children().map(|c| c.index()).collect::<Vec<_>>())
+                .collect();
+            document
+                .nodes()
+                .filter(|n| !children.contains(&n.index()))
+                .collect()
+        }
     };
+    let mut visited = vec![false; document.nodes().len()];
     let mut stack: Vec<(gltf::Node, Mat4)> =
         roots.into_iter().map(|n| (n, Mat4::IDENTITY)).collect();
     while let Some((node, parent)) = stack.pop() {
+        // A node reached twice means a cycle or a shared child: the file is not a tree.
+        match visited.get_mut(node.index()) {
+            Some(seen) if !*seen => *seen = true,
+            _ => {
+                return Err(ModelError::Gltf {
+                    reason: format!(
+                        "node {} is reached twice (the node graph is not a tree)",
+                        node.index()
+                    ),
+                    path: shown,
+                })
+            }
+        }
         let transform = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let mirrored = transform.determinant() < 0.0;
         if let Some(m) = node.mesh() {
             for primitive in m.primitives() {
                 if primitive.mode() != gltf::mesh::Mode::Triangles {
@@ -94,6 +122,8 @@ pub fn load_gltf_model(path: &Path, name: &str) -> Result<Model, ModelError> {
                         srgb(base[2] * k[2]),
                         255,
                     ];
+                    // A mirroring transform reverses the winding: restore it.
+                    let (b, c) = if mirrored { (c, b) } else { (b, c) };
                     let n = (*b - *a).cross(*c - *a).normalize_or_zero();
                     let first = mesh.vertices.len() as u32;
                     for p in [a, b, c] {

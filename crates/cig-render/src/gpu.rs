@@ -16,6 +16,25 @@ pub enum RenderError {
     View(#[from] cig_scene::ViewError),
     #[error("the GPU reported an error: {0}")]
     Gpu(String),
+    #[error("frame size {width_px}x{height_px} is larger than this GPU's {max_px} pixels a side")]
+    FrameTooLarge {
+        width_px: u32,
+        height_px: u32,
+        max_px: u32,
+    },
+}
+
+/// Refuses frames larger than the device's largest texture.
+pub fn check_frame_size(gpu: &Gpu, width_px: u32, height_px: u32) -> Result<(), RenderError> {
+    let max_px = gpu.device.limits().max_texture_dimension_2d;
+    if width_px > max_px || height_px > max_px {
+        return Err(RenderError::FrameTooLarge {
+            width_px,
+            height_px,
+            max_px,
+        });
+    }
+    Ok(())
 }
 
 /// An adapter, its device and queue.
@@ -84,14 +103,16 @@ impl Gpu {
         {
             required_features |= wgpu::Features::POLYGON_MODE_LINE;
         }
+        // Ask for what the adapter has (a GL or older adapter may have less than WebGPU's
+        // defaults), capped where more would only cost memory.
         let adapter_limits = adapter.limits();
         let required_limits = wgpu::Limits {
-            max_texture_dimension_2d: adapter_limits.max_texture_dimension_2d.min(8192),
+            max_texture_dimension_2d: adapter_limits.max_texture_dimension_2d.min(16384),
             max_buffer_size: adapter_limits.max_buffer_size.min(1 << 30),
             max_storage_buffer_binding_size: adapter_limits
                 .max_storage_buffer_binding_size
                 .min(1 << 27),
-            ..wgpu::Limits::default()
+            ..adapter_limits
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("cig"),
@@ -103,6 +124,10 @@ impl Gpu {
             adapter: info.name.clone(),
             reason: e.to_string(),
         })?;
+        // wgpu's default handler panics on a validation error; a frame that fails is logged.
+        device.on_uncaptured_error(std::sync::Arc::new(|error| {
+            tracing::error!("GPU error: {error}");
+        }));
         tracing::info!(adapter = %info.name, backend = ?info.backend, "GPU device ready");
         Ok(Arc::new(Gpu {
             instance,

@@ -57,6 +57,7 @@ pub fn render_image(
         FrameOptions {
             mesh_budget: usize::MAX,
             key_background: false,
+            fade_in_s: 0.0,
         },
     )
 }
@@ -74,6 +75,7 @@ pub fn render_image_with(
         .get(view_index)
         .ok_or_else(|| RenderError::Gpu(format!("no view {view_index}")))?;
     view.validate()?;
+    crate::gpu::check_frame_size(renderer.gpu(), view.width_px, view.height_px)?;
     let (width, height) = (view.width_px, view.height_px);
     let gpu = renderer.gpu().clone();
     let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {

@@ -37,6 +37,8 @@ pub mod serde_like {
         pub nodes_visited: u32,
         pub meshes_built: u32,
         pub meshes_deferred: u32,
+        /// Ancestors drawn in place of nodes whose meshes were not built yet.
+        pub node_stand_ins: u32,
         pub nodes_dropped: u32,
         pub entities_drawn: u32,
         pub tiles_resident: u32,
@@ -124,7 +126,10 @@ pub struct Renderer {
     model_vertices: wgpu::Buffer,
     model_indices: wgpu::Buffer,
     models: HashMap<String, GpuModel>,
-    model_lod_memory: HashMap<u32, usize>,
+    /// Level each entity had last frame, per view (hysteresis).
+    model_lod_memory: HashMap<(usize, u32), usize>,
+    /// When each drawn node of each view first appeared, and the frame it was last drawn.
+    node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: u64,
@@ -253,6 +258,9 @@ pub struct FrameOptions {
     pub mesh_budget: usize,
     /// Paint the sky in pure magenta, so tests can see where the background shows through.
     pub key_background: bool,
+    /// Seconds over which a node that newly replaces its parent morphs from the parent's shape
+    /// into its own (finer data fades in rather than pops); 0 for one-off frames.
+    pub fade_in_s: f32,
 }
 
 impl Default for FrameOptions {
@@ -260,6 +268,7 @@ impl Default for FrameOptions {
         FrameOptions {
             mesh_budget: 48,
             key_background: false,
+            fade_in_s: 0.5,
         }
     }
 }
@@ -485,6 +494,7 @@ impl Renderer {
             sky_pipeline,
             models: HashMap::new(),
             model_lod_memory: HashMap::new(),
+            node_first_seen: HashMap::new(),
             targets: None,
             timestamps,
             frame: 0,
@@ -630,6 +640,7 @@ impl Renderer {
             .get(view_index)
             .ok_or_else(|| RenderError::Gpu(format!("no view {view_index}")))?;
         view.validate()?;
+        crate::gpu::check_frame_size(&self.gpu, view.width_px, view.height_px)?;
         self.frame += 1;
         let camera = view.camera();
         let select_started = std::time::Instant::now();
@@ -642,23 +653,26 @@ impl Renderer {
         );
         let cpu_select_ms = select_started.elapsed().as_secs_f64() * 1e3;
         let nodes = &selection.nodes[..selection.nodes.len().min(MAX_NODE_RECORDS)];
+        let min_morph = self.fade_in(view_index, nodes, options.fade_in_s);
         let (records, mesh_stats): (Vec<NodeRecord>, MeshStats) = self.terrain.prepare(
             &self.gpu,
             &self.lod,
             cache,
             nodes,
+            &min_morph,
             camera.eye_ecef,
             self.frame,
             options.mesh_budget,
         );
         let lighting = Lighting::at(snapshot.unix_time_s, view.eye);
-        self.write_globals(&camera, &lighting, snapshot, options.key_background);
+        let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
+        self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
         if !records.is_empty() {
             self.gpu
                 .queue
                 .write_buffer(&self.node_records, 0, bytemuck::cast_slice(&records));
         }
-        let draws = self.entity_draws(&camera, snapshot);
+        let draws = self.entity_draws(&camera, snapshot, view_index);
         let instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
         if !instance_records.is_empty() {
             self.gpu.queue.write_buffer(
@@ -669,7 +683,6 @@ impl Renderer {
         }
 
         let size = (view.width_px, view.height_px);
-        let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
         let mut encoder = self
             .gpu
             .device
@@ -681,6 +694,7 @@ impl Renderer {
             nodes_visited: selection.visited as u32,
             meshes_built: mesh_stats.built as u32,
             meshes_deferred: mesh_stats.deferred as u32,
+            node_stand_ins: mesh_stats.stand_ins as u32,
             nodes_dropped: (mesh_stats.dropped + selection.nodes.len() - nodes.len()) as u32,
             tiles_resident: cache.stats().resident_tiles as u32,
             tiles_wanted: selection.wanted_tiles.len() as u32,
@@ -815,6 +829,7 @@ impl Renderer {
         lighting: &Lighting,
         snapshot: &FrameSnapshot,
         key_background: bool,
+        wire: bool,
     ) {
         let v4 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
@@ -856,7 +871,7 @@ impl Renderer {
             noise1: noise(NOISE_CELLS_M[1]),
             noise2: noise(NOISE_CELLS_M[2]),
             flags: [
-                if snapshot.wireframe { 1.0 } else { 0.0 },
+                if wire { 1.0 } else { 0.0 },
                 1.0,
                 if key_background { 1.0 } else { 0.0 },
                 camera.pixels_per_tangent as f32,
@@ -876,8 +891,14 @@ impl Renderer {
         &mut self,
         camera: &Camera,
         snapshot: &FrameSnapshot,
+        view_index: usize,
     ) -> Vec<((u32, u32, i32, u32), InstanceRecord)> {
         let mut out = Vec::new();
+        // Forget entities this view no longer has.
+        let present: std::collections::HashSet<u32> =
+            snapshot.entities.iter().map(|e| e.id).collect();
+        self.model_lod_memory
+            .retain(|(v, id), _| *v != view_index || present.contains(id));
         for entity in snapshot.entities.iter().take(MAX_INSTANCES) {
             let Some(model) = self.models.get(&entity.model) else {
                 continue;
@@ -896,9 +917,9 @@ impl Renderer {
             }
             let distance = rel.length().max(1.0);
             let diameter_px = 2.0 * radius * camera.pixels_per_tangent / distance;
-            let previous = self.model_lod_memory.get(&entity.id).copied();
+            let previous = self.model_lod_memory.get(&(view_index, entity.id)).copied();
             let lod = model.model.select_lod(diameter_px, previous);
-            self.model_lod_memory.insert(entity.id, lod);
+            self.model_lod_memory.insert((view_index, entity.id), lod);
             let Some(range) = model.lods.get(lod).copied() else {
                 continue;
             };
@@ -922,6 +943,39 @@ impl Renderer {
                 },
             ));
         }
+        out
+    }
+
+    /// Least morph of each node: 1 when it first replaces its parent, falling to 0 over
+    /// `fade_in_s` (root nodes and one-off frames: 0).
+    fn fade_in(
+        &mut self,
+        view_index: usize,
+        nodes: &[cig_scene::lod::SelectedNode],
+        fade_in_s: f32,
+    ) -> Vec<f32> {
+        let now = std::time::Instant::now();
+        let frame = self.frame;
+        let mut out = Vec::with_capacity(nodes.len());
+        for node in nodes {
+            let entry = self
+                .node_first_seen
+                .entry((view_index, node.key))
+                .or_insert((now, frame));
+            // Not drawn last frame: it appears now.
+            if entry.1 + 1 < frame {
+                entry.0 = now;
+            }
+            entry.1 = frame;
+            let least = if fade_in_s > 0.0 && node.morph_start_m.is_finite() {
+                (1.0 - now.duration_since(entry.0).as_secs_f32() / fade_in_s).max(0.0)
+            } else {
+                0.0
+            };
+            out.push(least);
+        }
+        self.node_first_seen
+            .retain(|(v, _), (_, last)| *v != view_index || *last == frame);
         out
     }
 

@@ -64,6 +64,8 @@ pub struct MeshStats {
     pub built: usize,
     pub deferred: usize,
     pub dropped: usize,
+    /// Ancestors drawn in place of nodes whose meshes are not built yet.
+    pub stand_ins: usize,
 }
 
 impl TerrainGpu {
@@ -153,8 +155,10 @@ impl TerrainGpu {
     }
 
     /// Makes sure each selected node has a mesh built from the best data resident, building at
-    /// most `build_budget` meshes (nodes beyond it keep an older mesh, or are not drawn when
-    /// they have none), and returns the records to draw with the slots they use.
+    /// most `build_budget` meshes, and returns the records to draw. A node beyond the budget
+    /// keeps an older mesh; one with none is replaced by its nearest ancestor that has a mesh,
+    /// which then stands in for every selected node below it (no holes while meshes build).
+    /// `min_morph[i]` is the least morph of `nodes[i]` (fading finer data in).
     #[allow(clippy::too_many_arguments, reason = "one frame's inputs, all needed")]
     pub fn prepare(
         &mut self,
@@ -162,12 +166,14 @@ impl TerrainGpu {
         lod: &TerrainLod,
         cache: &TileCache,
         nodes: &[SelectedNode],
+        min_morph: &[f32],
         eye_ecef: glam::DVec3,
         frame: u64,
         build_budget: usize,
     ) -> (Vec<NodeRecord>, MeshStats) {
         let mut stats = MeshStats::default();
-        let mut records = Vec::with_capacity(nodes.len());
+        // Pass 1: a slot for every node that can have one this frame.
+        let mut slot_of: Vec<Option<usize>> = Vec::with_capacity(nodes.len());
         for node in nodes {
             let existing = self.by_key.get(&node.key).copied();
             let detail_key = (node.key.level > 0)
@@ -221,50 +227,104 @@ impl TerrainGpu {
                 stats.deferred += 1;
                 existing
             };
-            let Some(index) = slot_index else {
-                continue;
-            };
-            let Some(slot) = self.slots[index].as_mut() else {
-                continue;
-            };
-            slot.last_used_frame = frame;
-            let offset = (slot.centre_ecef - eye_ecef).as_vec3();
-            let (sx, sy) = (
-                index as u32 % self.slots_per_row,
-                index as u32 / self.slots_per_row,
-            );
-            let size = self.atlas_size as f32;
-            let texel = 1.0 / size;
-            let axis = |v: glam::DVec3| {
-                let v = v.as_vec3();
-                [v.x, v.y, v.z, 0.0]
-            };
-            records.push(NodeRecord {
-                offset: [
-                    offset.x,
-                    offset.y,
-                    offset.z,
-                    (index as u32 * self.vertices_per_node) as f32,
-                ],
-                axis_e: axis(slot.axes[0]),
-                axis_n: axis(slot.axes[1]),
-                axis_u: axis(slot.axes[2]),
-                morph: [
-                    node.morph_start_m.min(1e30),
-                    node.morph_end_m.min(1.5e30),
-                    self.node_cells as f32,
-                    0.0,
-                ],
-                // Texel centres of the slot's first and last texel span the node.
-                atlas: [
-                    (sx * self.texels) as f32 * texel + 0.5 * texel,
-                    (sy * self.texels) as f32 * texel + 0.5 * texel,
-                    (self.texels - 1) as f32 * texel,
-                    (self.texels - 1) as f32 * texel,
-                ],
-            });
+            if let Some(slot) = slot_index.and_then(|i| self.slots[i].as_mut()) {
+                slot.last_used_frame = frame;
+            }
+            slot_of.push(slot_index);
         }
+        // Pass 2: ancestors stand in for nodes that have no mesh yet.
+        let mut stand_ins: Vec<(NodeKey, usize)> = Vec::new();
+        for (node, slot) in nodes.iter().zip(&slot_of) {
+            if slot.is_some() {
+                continue;
+            }
+            let mut key = node.key;
+            while key.level + 1 < lod.layout.pyramid.levels {
+                key = key.parent();
+                if let Some(&index) = self.by_key.get(&key) {
+                    if !stand_ins.iter().any(|(k, _)| *k == key) {
+                        stand_ins.push((key, index));
+                    }
+                    break;
+                }
+            }
+        }
+        let covered = |key: NodeKey| {
+            stand_ins.iter().any(|(a, _)| {
+                a.level > key.level
+                    && key.row >> (a.level - key.level) == a.row
+                    && key.col >> (a.level - key.level) == a.col
+            })
+        };
+        let mut records = Vec::with_capacity(nodes.len() + stand_ins.len());
+        for (i, (node, slot)) in nodes.iter().zip(&slot_of).enumerate() {
+            if let Some(index) = slot {
+                if !covered(node.key) {
+                    let least = min_morph.get(i).copied().unwrap_or(0.0);
+                    records.extend(self.record(
+                        *index,
+                        node.morph_start_m,
+                        node.morph_end_m,
+                        least,
+                        eye_ecef,
+                    ));
+                }
+            }
+        }
+        for (_, index) in &stand_ins {
+            if let Some(slot) = self.slots[*index].as_mut() {
+                slot.last_used_frame = frame;
+            }
+            records.extend(self.record(*index, f32::INFINITY, f32::INFINITY, 0.0, eye_ecef));
+        }
+        stats.stand_ins = stand_ins.len();
         (records, stats)
+    }
+
+    /// The shader record of the mesh in slot `index`.
+    fn record(
+        &self,
+        index: usize,
+        morph_start_m: f32,
+        morph_end_m: f32,
+        least_morph: f32,
+        eye_ecef: glam::DVec3,
+    ) -> Option<NodeRecord> {
+        let slot = self.slots.get(index)?.as_ref()?;
+        let offset = (slot.centre_ecef - eye_ecef).as_vec3();
+        let (sx, sy) = (
+            index as u32 % self.slots_per_row,
+            index as u32 / self.slots_per_row,
+        );
+        let texel = 1.0 / self.atlas_size as f32;
+        let axis = |v: glam::DVec3| {
+            let v = v.as_vec3();
+            [v.x, v.y, v.z, 0.0]
+        };
+        Some(NodeRecord {
+            offset: [
+                offset.x,
+                offset.y,
+                offset.z,
+                (index as u32 * self.vertices_per_node) as f32,
+            ],
+            axis_e: axis(slot.axes[0]),
+            axis_n: axis(slot.axes[1]),
+            axis_u: axis(slot.axes[2]),
+            morph: [
+                morph_start_m.min(1e30),
+                morph_end_m.min(1.5e30),
+                self.node_cells as f32,
+                least_morph.clamp(0.0, 1.0),
+            ],
+            // Texel centres of the slot's first and last texel span the node.
+            atlas: [
+                (sx * self.texels) as f32 * texel + 0.5 * texel,
+                (sy * self.texels) as f32 * texel + 0.5 * texel,
+                (self.texels - 1) as f32 * texel,
+                (self.texels - 1) as f32 * texel,
+            ],
+        })
     }
 
     fn upload(&self, gpu: &Gpu, index: usize, mesh: &terrain_mesh::NodeMesh) {

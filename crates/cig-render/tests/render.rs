@@ -172,6 +172,7 @@ fn no_cracks_while_finer_tiles_are_still_loading() {
             cig_render::FrameOptions {
                 mesh_budget: usize::MAX,
                 key_background: true,
+                fade_in_s: 0.0,
             },
         )
         .expect("render");
@@ -553,4 +554,55 @@ fn a_gltf_file_loads_with_three_levels_and_draws_where_placed() {
     std::fs::write(&broken, b"{ \"asset\": ").expect("write");
     let err = cig_render::load_gltf_model(&broken, "x").expect_err("broken");
     assert!(err.to_string().contains("broken.gltf"), "{err}");
+}
+
+#[test]
+fn a_gltf_node_graph_with_a_cycle_is_refused() {
+    let dir = out_dir().join("gltf-cycle");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("cycle.gltf");
+    write_pyramid_gltf(&path);
+    let mut json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&path).expect("read")).expect("json");
+    json["nodes"] = serde_json::json!([{"mesh": 0, "children": [0]}]);
+    std::fs::write(&path, serde_json::to_vec(&json).expect("json")).expect("write");
+    let err = cig_render::load_gltf_model(&path, "cycle").expect_err("cycle");
+    assert!(err.to_string().contains("not a tree"), "{err}");
+}
+
+#[test]
+fn ancestors_stand_in_while_finer_meshes_are_still_being_built() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let v = view(
+        hills_eye(-1500.0, -1500.0, 1500.0),
+        (45.0, -40.0, 0.0),
+        50.0,
+        (256, 192),
+    );
+    let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![v]);
+    // A coarse frame first: the coarse nodes get meshes.
+    snapshot.max_pixel_error = 16.0;
+    render(&mut renderer, &cache, &snapshot, true);
+    // Then full detail with only 4 new meshes allowed: the rest is drawn by their ancestors.
+    snapshot.max_pixel_error = 0.0;
+    cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64).expect("load");
+    let (image, stats) = cig_render::render_image_with(
+        &mut renderer,
+        &cache,
+        &snapshot,
+        0,
+        cig_render::FrameOptions {
+            mesh_budget: 4,
+            key_background: true,
+            fade_in_s: 0.5,
+        },
+    )
+    .expect("render");
+    assert!(
+        stats.meshes_deferred > 0 && stats.node_stand_ins > 0,
+        "{stats:?}"
+    );
+    assert_eq!(key_pixels(&image), 0, "holes while meshes build");
 }

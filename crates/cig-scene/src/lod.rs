@@ -17,12 +17,14 @@
 //! heights, in the node's local east-north-up frame, so curvature is included.
 //!
 //! Streaming: a node refines only when its children's tile is resident in the paging cache, so
-//! the renderer always draws what is in memory and finer data morphs in as it arrives; the
-//! selection lists the tiles it would have refined into, for the caller to request.
+//! the renderer always draws what is in memory; the renderer fades newly refined nodes in from
+//! their parent's shape over half a second (a floor on the morph factor), so finer data morphs
+//! in as it arrives. The selection lists the tiles it would have refined into.
 //!
-//! Limits: neighbours may differ by more than one level and a node may be drawn from coarser
-//! data than its level while its tile loads; the resulting T-junction gaps are hidden by
-//! skirts (see `terrain_mesh`). Node boxes sample 9 points per height, which is conservative
+//! Limits: morph ranges come from each node's own error, not one range per level, so
+//! neighbours may differ by more than one level or meet while one is still partly morphed, and a
+//! node may be drawn from coarser data than its level while its tile loads; the resulting
+//! T-junction gaps are hidden by skirts (see `terrain_mesh`). Node boxes sample 9 points per height, which is conservative
 //! for nodes up to about 1000 km across.
 
 use crate::view::Camera;
@@ -51,6 +53,15 @@ pub struct NodeKey {
 }
 
 impl NodeKey {
+    /// The node one level coarser that contains this one.
+    pub fn parent(self) -> NodeKey {
+        NodeKey {
+            level: self.level + 1,
+            row: self.row / 2,
+            col: self.col / 2,
+        }
+    }
+
     pub fn children(self) -> [NodeKey; 4] {
         let level = self.level.saturating_sub(1);
         let (r, c) = (self.row * 2, self.col * 2);
@@ -90,7 +101,8 @@ impl NodeLayout {
     pub fn new(pyramid: PyramidLayout) -> NodeLayout {
         NodeLayout {
             pyramid,
-            node_cells: DEFAULT_NODE_CELLS.min(pyramid.tile_cells),
+            // A node's four children must lie in one tile of the finer level.
+            node_cells: DEFAULT_NODE_CELLS.min(pyramid.tile_cells / 2).max(1),
         }
     }
 
@@ -288,6 +300,10 @@ impl TerrainLod {
         } else {
             (0.0, 0.0)
         };
+        // The surface bulges above the chords between the 9 sample points by up to
+        // D^2 / (32 R) for a node D across.
+        let span_m = span * self.layout.pyramid.grid.dlat_deg * 111_000.0;
+        let bulge_m = span_m * span_m / (32.0 * 6_356_000.0);
         let mut points = [DVec3::ZERO; 18];
         let mut k = 0;
         for (fr, fc) in [
@@ -305,7 +321,7 @@ impl TerrainLod {
                 .layout
                 .lat_lon_of_finest(r0 as f64 + fr * span, c0 as f64 + fc * span);
             let n = self.geoid.undulation_m(lat, lon);
-            for h in [lo - BOX_MARGIN_M, hi + BOX_MARGIN_M] {
+            for h in [lo - BOX_MARGIN_M, hi + BOX_MARGIN_M + bulge_m] {
                 points[k] = Geodetic::new(lat, lon, h + n).to_ecef();
                 k += 1;
             }
@@ -343,7 +359,7 @@ impl TerrainLod {
         settings: &LodSettings,
     ) -> Selection {
         let mut selection = Selection::default();
-        if self.geometry.len() > 200_000 {
+        if self.geometry.len() > 50_000 {
             self.geometry.clear();
         }
         let pixels_per_metre_at_1m = if settings.max_pixel_error > 0.0 {

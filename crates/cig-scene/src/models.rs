@@ -190,7 +190,7 @@ impl Model {
                     .get(prev)
                     .is_some_and(|&t| projected_diameter_px > t * 0.8),
                 std::cmp::Ordering::Greater => LOD_SWITCH_PX
-                    .get(lod)
+                    .get(prev - 1)
                     .is_some_and(|&t| projected_diameter_px < t * 1.2),
                 std::cmp::Ordering::Equal => false,
             };
@@ -391,6 +391,9 @@ mod tests {
         assert_eq!(m.select_lod(90.0, Some(0)), 1);
         assert_eq!(m.select_lod(130.0, Some(1)), 1);
         assert_eq!(m.select_lod(150.0, Some(1)), 0);
+        // A jump from the coarsest level to a large size goes straight to the finest.
+        assert_eq!(m.select_lod(130.0, Some(2)), 0);
+        assert_eq!(m.select_lod(26.0, Some(2)), 2);
     }
 }
 

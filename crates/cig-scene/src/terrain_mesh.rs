@@ -6,8 +6,8 @@
 //! carries a morph target: its position on the parent's grid, i.e. the midpoint of its even
 //! neighbours (along the south-west to north-east diagonal for cell centres, which is the
 //! diagonal every triangle of the database uses). At full morph the node's surface is exactly
-//! its parent's, so a node morphs continuously into its parent (CDLOD, Strugar 2010) and fine
-//! and coarse neighbours meet without cracks. Skirts (a strip hanging down from each edge) hide
+//! its parent's, so a node morphs continuously into its parent (CDLOD, Strugar 2010) and a fully
+//! morphed node meets its coarser neighbour exactly. Skirts (a strip hanging down from each edge) hide
 //! the gaps left where neighbours differ by more than one level or are drawn from different
 //! data while tiles load. Normals and colours are sampled at twice the vertex density, from the
 //! next finer level when it is resident, for per-pixel lighting.
@@ -143,6 +143,16 @@ impl<'a> Sampler<'a> {
         )
     }
 
+    /// Clamps a finest-grid row and column to this tile's extent.
+    fn clamp_to_tile(&self, row: f64, col: f64) -> (f64, f64) {
+        let r0 = f64::from(self.key.row) * self.tile_span;
+        let c0 = f64::from(self.key.col) * self.tile_span;
+        (
+            row.clamp(r0, r0 + self.max_index * self.scale),
+            col.clamp(c0, c0 + self.max_index * self.scale),
+        )
+    }
+
     fn height_msl_m(&self, row: f64, col: f64) -> f64 {
         let (fi, fj) = self.local(row, col);
         self.tile.surface_height(fi, fj)
@@ -250,14 +260,29 @@ pub fn build_node_mesh(
         let row = r0 + a as f64 * texel_step;
         for b in 0..t {
             let col = c0 + b as f64 * texel_step;
-            let h = |dr: f64, dc: f64| {
-                detail_sampler.height_msl_m(
+            // Central differences, one-sided where the tile or the database ends (divided by
+            // the distance actually sampled).
+            let at = |dr: f64, dc: f64| {
+                let (r, c) = detail_sampler.clamp_to_tile(
                     (row + dr).clamp(0.0, max_row),
                     (col + dc).clamp(0.0, max_col),
-                )
+                );
+                (r, c, detail_sampler.height_msl_m(r, c))
             };
-            let dzdx = (h(0.0, texel_step) - h(0.0, -texel_step)) / (2.0 * dx_m);
-            let dzdy = (h(texel_step, 0.0) - h(-texel_step, 0.0)) / (2.0 * dy_m);
+            let (_, ce, he) = at(0.0, texel_step);
+            let (_, cw, hw) = at(0.0, -texel_step);
+            let (rn, _, hn) = at(texel_step, 0.0);
+            let (rs, _, hs) = at(-texel_step, 0.0);
+            let dzdx = if ce > cw {
+                (he - hw) / ((ce - cw) / texel_step * dx_m)
+            } else {
+                0.0
+            };
+            let dzdy = if rn > rs {
+                (hn - hs) / ((rn - rs) / texel_step * dy_m)
+            } else {
+                0.0
+            };
             let normal = DVec3::new(-dzdx, -dzdy, 1.0).normalize();
             let enc = |v: f64| ((v * 0.5 + 0.5) * 255.0).round().clamp(0.0, 255.0) as u8;
             normals.push([enc(normal.x), enc(normal.y), enc(normal.z), 255]);

@@ -79,6 +79,7 @@ fn render_frames(
                 FrameOptions {
                     mesh_budget: usize::MAX,
                     key_background: false,
+                    fade_in_s: 0.0,
                 },
             )?
         };
@@ -98,9 +99,19 @@ fn mean(v: &[f64]) -> f64 {
 pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     let size = crate::render::parse_size(&args.size)?;
     anyhow::ensure!(
-        args.frames >= 4,
-        "--frames {} must be at least 4",
+        (4..=100_000).contains(&args.frames),
+        "--frames {} must be between 4 and 100000",
         args.frames
+    );
+    anyhow::ensure!(
+        args.max_pixel_error.is_finite() && args.max_pixel_error > 0.0,
+        "--max-pixel-error {} must be more than 0 (the comparison draws full detail itself)",
+        args.max_pixel_error
+    );
+    anyhow::ensure!(
+        args.fov.is_finite() && args.fov > 0.0 && args.fov < 180.0,
+        "--fov {} must lie between 0 and 180 degrees",
+        args.fov
     );
     let database = Arc::new(cig_terrain_io::store::open_database(&args.db)?);
     let gpu = cig_render::Gpu::headless()?;

@@ -343,3 +343,18 @@ fn config_default_round_trips() {
         .assert()
         .success();
 }
+
+#[test]
+fn a_closed_pipe_ends_the_command_quietly() {
+    // The reader goes away before cig writes (exec takes far longer than the drop).
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("cig"))
+        .args(["config", "default"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

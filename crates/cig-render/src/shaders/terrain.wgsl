@@ -4,7 +4,7 @@ struct Node {
     axis_e: vec4<f32>,
     axis_n: vec4<f32>,
     axis_u: vec4<f32>,
-    // Morph start and end distances (m), cells per side, unused.
+    // Morph start and end distances (m), cells per side, least morph (fade-in).
     morph: vec4<f32>,
     // Atlas rectangle of the node's texels: u0, v0, du, dv.
     atlas: vec4<f32>,
@@ -47,7 +47,8 @@ fn vs_main(
     }
     let target_rel = morph_target + node.offset.xyz;
     let d = length(target_rel);
-    let m = clamp((d - node.morph.x) / max(node.morph.y - node.morph.x, 1e-3), 0.0, 1.0);
+    // Morph by distance, and never less than the node's fade-in floor (finer data arriving).
+    let m = max(clamp((d - node.morph.x) / max(node.morph.y - node.morph.x, 1e-3), 0.0, 1.0), node.morph.w);
     let rel = mix(position, morph_target, m) + node.offset.xyz;
     var out: VertexOut;
     out.clip = g.view_proj * vec4<f32>(rel, 1.0);
@@ -55,6 +56,11 @@ fn vs_main(
     out.uv = node.atlas.xy + uv * node.atlas.zw;
     out.node = instance;
     return out;
+}
+
+// Euclidean modulo (WGSL's % truncates towards zero, which breaks the wrap for negative cells).
+fn wrap(i: vec3<f32>, c: f32) -> vec3<f32> {
+    return i - c * floor(i / c);
 }
 
 fn hash3(p: vec3<f32>) -> f32 {
@@ -69,14 +75,14 @@ fn value_noise(p: vec3<f32>) -> f32 {
     let f = fract(p);
     let u = f * f * (3.0 - 2.0 * f);
     let c = 256.0;
-    let a = hash3((i + vec3<f32>(0.0, 0.0, 0.0)) % c);
-    let b = hash3((i + vec3<f32>(1.0, 0.0, 0.0)) % c);
-    let cc = hash3((i + vec3<f32>(0.0, 1.0, 0.0)) % c);
-    let d = hash3((i + vec3<f32>(1.0, 1.0, 0.0)) % c);
-    let e = hash3((i + vec3<f32>(0.0, 0.0, 1.0)) % c);
-    let ff = hash3((i + vec3<f32>(1.0, 0.0, 1.0)) % c);
-    let gg = hash3((i + vec3<f32>(0.0, 1.0, 1.0)) % c);
-    let h = hash3((i + vec3<f32>(1.0, 1.0, 1.0)) % c);
+    let a = hash3(wrap(i + vec3<f32>(0.0, 0.0, 0.0), c));
+    let b = hash3(wrap(i + vec3<f32>(1.0, 0.0, 0.0), c));
+    let cc = hash3(wrap(i + vec3<f32>(0.0, 1.0, 0.0), c));
+    let d = hash3(wrap(i + vec3<f32>(1.0, 1.0, 0.0), c));
+    let e = hash3(wrap(i + vec3<f32>(0.0, 0.0, 1.0), c));
+    let ff = hash3(wrap(i + vec3<f32>(1.0, 0.0, 1.0), c));
+    let gg = hash3(wrap(i + vec3<f32>(0.0, 1.0, 1.0), c));
+    let h = hash3(wrap(i + vec3<f32>(1.0, 1.0, 1.0), c));
     return mix(
         mix(mix(a, b, u.x), mix(cc, d, u.x), u.y),
         mix(mix(e, ff, u.x), mix(gg, h, u.x), u.y),

@@ -573,6 +573,7 @@ impl Running {
             FrameOptions {
                 mesh_budget: self.mesh_budget,
                 key_background: false,
+                ..FrameOptions::default()
             },
         )?;
         let view = frame.snapshot.views.first().copied();

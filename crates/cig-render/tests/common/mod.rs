@@ -112,6 +112,7 @@ pub fn render(
         cig_render::FrameOptions {
             mesh_budget: usize::MAX,
             key_background,
+            fade_in_s: 0.0,
         },
     )
     .expect("render")
