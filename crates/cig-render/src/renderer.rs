@@ -61,6 +61,8 @@ pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrg
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const MAX_NODE_RECORDS: usize = 16384;
 const MAX_INSTANCES: usize = 8192;
+/// Tile loads a view may request per frame beyond the paging areas.
+const PREFETCH_PER_FRAME: usize = 8;
 /// Detail-noise cell sizes, metres (incommensurate so the pattern never visibly repeats).
 const NOISE_CELLS_M: [f64; 3] = [2.7, 19.3, 151.0];
 
@@ -652,6 +654,8 @@ impl Renderer {
             },
         );
         let cpu_select_ms = select_started.elapsed().as_secs_f64() * 1e3;
+        // Finer tiles the view resolves but the paging areas do not hold: ask for a few.
+        cache.prefetch(&selection.wanted_tiles, PREFETCH_PER_FRAME);
         let nodes = &selection.nodes[..selection.nodes.len().min(MAX_NODE_RECORDS)];
         let min_morph = self.fade_in(view_index, nodes, options.fade_in_s);
         let (records, mesh_stats): (Vec<NodeRecord>, MeshStats) = self.terrain.prepare(

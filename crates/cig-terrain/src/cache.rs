@@ -348,6 +348,38 @@ impl TileCache {
         }
     }
 
+    /// Requests tiles a renderer wants beyond the active areas (e.g. finer levels of distant
+    /// terrain a narrow view resolves), nearest first as given, at most `max` new loads. It
+    /// evicts only tiles no eyepoint wants and nobody used in the current paging step, and never
+    /// waits. Returns the number of loads requested.
+    pub fn prefetch(&self, keys: &[TileKey], max: usize) -> usize {
+        let mut s = self.state.lock();
+        let clock = s.clock;
+        let mut sent = 0;
+        for &key in keys {
+            if sent >= max {
+                break;
+            }
+            if !self.db.layout().contains_key(key)
+                || s.resident.contains_key(&key)
+                || s.in_flight.contains(&key)
+                || s.failed.contains_key(&key)
+            {
+                continue;
+            }
+            if !self.make_room_sparing(&mut s, self.tile_bytes, clock) {
+                break;
+            }
+            if let Some(tx) = &self.requests {
+                if tx.send(key).is_ok() {
+                    s.in_flight.insert(key);
+                    sent += 1;
+                }
+            }
+        }
+        sent
+    }
+
     /// Waits until no load is in flight (for tests, benchmarks and start-up), then takes them in.
     pub fn wait_idle(&self) {
         loop {
@@ -471,13 +503,18 @@ impl TileCache {
     /// Evicts least-recently-used tiles until `bytes` more fit under the budget (counting loads
     /// in flight). Only tiles no eyepoint wants are evicted.
     fn make_room(&self, s: &mut State, bytes: u64) -> bool {
+        self.make_room_sparing(s, bytes, u64::MAX)
+    }
+
+    /// [`TileCache::make_room`], also sparing tiles used at or after paging step `used_since`.
+    fn make_room_sparing(&self, s: &mut State, bytes: u64, used_since: u64) -> bool {
         let budget = self.config.budget_bytes;
         let in_flight = s.in_flight.len() as u64 * self.tile_bytes;
         while s.resident_bytes + in_flight + bytes > budget {
             let victim = s
                 .resident
                 .iter()
-                .filter(|(k, _)| !s.wanted.contains(k))
+                .filter(|(k, r)| !s.wanted.contains(k) && r.last_used < used_since)
                 .min_by_key(|(k, r)| (r.last_used, **k))
                 .map(|(k, _)| *k);
             let Some(victim) = victim else {

@@ -210,3 +210,72 @@ fn invalid_paging_configuration_is_refused() {
     let err = bad.validate().expect_err("box smaller than step");
     assert!(err.to_string().contains("hysteresis_box_m"));
 }
+
+#[test]
+fn prefetch_loads_tiles_beyond_the_area_without_evicting_what_is_in_use() {
+    // 60 km x 60 km at 60 m posts, 32-cell tiles; a budget that the active area nearly fills.
+    let g = grid(1001, 1001, 60.0);
+    let (db, _) = database(&raster(g, plain), 32, 0.0);
+    let probe = cache(&db, PagingConfig::default());
+    let tile_bytes = probe.tile_bytes();
+    drop(probe);
+    let config = PagingConfig {
+        budget_bytes: tile_bytes * 120,
+        ..PagingConfig::default()
+    };
+    let c = cache(&db, config);
+    let eye = Geodetic::new(g.south_lat_deg + 0.02, g.west_lon_deg + 0.02, 500.0);
+    c.update(&[eye]);
+    c.wait_idle();
+    // A level-0 tile in the far corner, well outside the 16 km active area.
+    let far = TileKey {
+        level: 0,
+        row: 30,
+        col: 30,
+    };
+    assert!(c.resident(far).is_none());
+    let in_use: Vec<TileKey> = (0..3u32)
+        .flat_map(|r| {
+            (0..3u32).map(move |col| TileKey {
+                level: 0,
+                row: r,
+                col,
+            })
+        })
+        .filter(|k| c.resident(*k).is_some())
+        .collect();
+    assert!(!in_use.is_empty());
+    let requested = c.prefetch(
+        &[
+            far,
+            far,
+            TileKey {
+                level: 0,
+                row: 9999,
+                col: 0,
+            },
+        ],
+        8,
+    );
+    assert_eq!(
+        requested, 1,
+        "one new load: duplicates and keys outside the pyramid are skipped"
+    );
+    c.wait_idle();
+    assert!(c.resident(far).is_some(), "prefetched tile arrives");
+    for k in &in_use {
+        assert!(c.resident(*k).is_some(), "{k} was in use and stays");
+    }
+    // At most `max` loads per call.
+    let many: Vec<TileKey> = (20..30u32)
+        .map(|col| TileKey {
+            level: 0,
+            row: 25,
+            col,
+        })
+        .collect();
+    assert!(c.prefetch(&many, 3) <= 3);
+    c.wait_idle();
+    let s = c.stats();
+    assert!(s.resident_bytes <= tile_bytes * 120);
+}
