@@ -357,9 +357,15 @@ pub struct DemoArgs {
     /// Demo database directory (built when missing).
     #[arg(long, default_value = "demo-db")]
     pub db: PathBuf,
-    /// Where the flight's frames and contact sheet go.
+    /// Where the flight's frames and contact sheet go (when there is no display).
     #[arg(long, default_value = "demo-out")]
     pub out: PathBuf,
+    /// Render the flight to PNG files even when there is a display.
+    #[arg(long)]
+    pub no_window: bool,
+    /// Close the window after this many frames (for tests).
+    #[arg(long, hide = true)]
+    pub exit_after_frames: Option<u64>,
 }
 
 #[derive(Subcommand)]

@@ -216,6 +216,50 @@ fn fly(
         last.orientation.pitch_deg = -4.0;
         shots.push((dusk + f64::from(k) * 240.0, last));
     }
+    let has_display =
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
+    if has_display && !args.no_window {
+        let cache = Arc::new(TileCache::new(Arc::clone(db), config.paging.clone())?);
+        // Play the flight faster than real time: a second per low-pass shot, 1.5 s per climb
+        // shot, 2 s per dusk view; then the camera is the user's (Esc closes).
+        let mut script = Vec::with_capacity(shots.len());
+        let mut at_s = 0.0;
+        for (i, (time, view)) in shots.iter().enumerate() {
+            script.push(cig_render::viewer::Shot {
+                at_s,
+                eye: view.eye,
+                orientation: view.orientation,
+                unix_time_s: *time,
+            });
+            at_s += if i < 10 {
+                1.0
+            } else if i < 18 {
+                1.5
+            } else {
+                2.0
+            };
+        }
+        let first = shots[0].1;
+        let mut options = cig_render::ViewerOptions::new(first.eye, first.orientation);
+        options.title = "cig demo".into();
+        options.unix_time_s = shots[0].0;
+        options.visibility_m = 30_000.0;
+        options.script = script;
+        options.exit_after_frames = args.exit_after_frames;
+        println!(
+            "flying in a window: a low pass along the valley heading {heading:.0} deg, a climb to 1800 m, dusk (Esc closes)"
+        );
+        match cig_render::run_viewer(cache, options) {
+            Ok(report) => {
+                println!("{} frames in {:.1} s", report.frames, report.seconds);
+                return Ok(());
+            }
+            Err(cig_render::ViewerError::NoDisplay(reason)) => {
+                println!("no usable display ({reason}): rendering to PNG files instead");
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
     let out_dir = args.out.clone();
     std::fs::create_dir_all(&out_dir)
         .with_context(|| format!("cannot create {}", out_dir.display()))?;

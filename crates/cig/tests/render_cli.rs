@@ -187,3 +187,78 @@ fn bench_render_reports_both_ways_and_their_ratios() {
         json["full_detail"]["triangles_mean"].as_f64() >= json["lod"]["triangles_mean"].as_f64()
     );
 }
+
+#[test]
+fn demo_flies_to_png_frames_without_a_display_and_in_a_window_with_one() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = dir.path().join("demo-db");
+    cig()
+        .args(["db", "synth", "--out"])
+        .arg(&db)
+        .args([
+            "--origin",
+            "35.98,-121.23",
+            "--size-km",
+            "50",
+            "--spacing-m",
+            "150",
+        ])
+        .assert()
+        .success();
+    let out = dir.path().join("frames");
+    cig()
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .args([
+            "demo",
+            "--db",
+            &db.display().to_string(),
+            "--out",
+            &out.display().to_string(),
+        ])
+        .assert()
+        .success();
+    let frames = std::fs::read_dir(&out)
+        .expect("frames dir")
+        .filter(|e| {
+            e.as_ref()
+                .map(|e| e.file_name().to_string_lossy().starts_with("frame_"))
+                .unwrap_or(false)
+        })
+        .count();
+    assert_eq!(frames, 24);
+    let sheet = std::fs::read(out.join("contact-sheet.png")).expect("contact sheet");
+    assert_eq!(&sheet[1..4], b"PNG");
+
+    if std::process::Command::new("xvfb-run")
+        .arg("--help")
+        .output()
+        .is_err()
+    {
+        eprintln!("SKIPPED the window half: xvfb-run is not installed (scripts/setup.sh --test installs xvfb)");
+        return;
+    }
+    let binary = assert_cmd::cargo::cargo_bin("cig");
+    let run = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(&binary)
+        .args([
+            "demo",
+            "--db",
+            &db.display().to_string(),
+            "--exit-after-frames",
+            "4",
+        ])
+        .output()
+        .expect("xvfb-run");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        stdout.contains("flying in a window") && stdout.contains("4 frames"),
+        "{stdout}"
+    );
+}

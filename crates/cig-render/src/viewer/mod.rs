@@ -67,6 +67,53 @@ pub struct ViewerOptions {
     pub exit_after_frames: Option<u64>,
     /// Keep an image of the last frame (terrain and panel) in the report.
     pub capture_last_frame: bool,
+    /// A scripted flight played from the first frame (eye, orientation and time interpolated
+    /// between shots); the camera is the user's once it ends.
+    pub script: Vec<Shot>,
+}
+
+/// One shot of a scripted flight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shot {
+    /// Seconds after the first frame.
+    pub at_s: f64,
+    pub eye: Geodetic,
+    pub orientation: Hpr,
+    /// Simulation time, UTC seconds since 1970.
+    pub unix_time_s: f64,
+}
+
+/// The script's pose at `t_s` seconds: linear between shots (headings the short way round),
+/// `None` before the first frame or after the last shot.
+pub fn scripted_pose(script: &[Shot], t_s: f64) -> Option<Shot> {
+    let last = script.last()?;
+    if t_s.is_nan() || t_s < 0.0 || t_s > last.at_s {
+        return None;
+    }
+    let i = script.iter().position(|s| s.at_s >= t_s)?;
+    let b = script[i];
+    let Some(a) = i.checked_sub(1).map(|j| script[j]) else {
+        return Some(b);
+    };
+    let span = (b.at_s - a.at_s).max(1e-9);
+    let k = ((t_s - a.at_s) / span).clamp(0.0, 1.0);
+    let lerp = |x: f64, y: f64| x + (y - x) * k;
+    let dh =
+        (b.orientation.heading_deg - a.orientation.heading_deg + 540.0).rem_euclid(360.0) - 180.0;
+    Some(Shot {
+        at_s: t_s,
+        eye: Geodetic::new(
+            lerp(a.eye.lat_deg, b.eye.lat_deg),
+            lerp(a.eye.lon_deg, b.eye.lon_deg),
+            lerp(a.eye.alt_m, b.eye.alt_m),
+        ),
+        orientation: Hpr {
+            heading_deg: (a.orientation.heading_deg + dh * k).rem_euclid(360.0),
+            pitch_deg: lerp(a.orientation.pitch_deg, b.orientation.pitch_deg),
+            roll_deg: lerp(a.orientation.roll_deg, b.orientation.roll_deg),
+        },
+        unix_time_s: lerp(a.unix_time_s, b.unix_time_s),
+    })
 }
 
 impl ViewerOptions {
@@ -88,6 +135,7 @@ impl ViewerOptions {
             mesh_budget: FrameOptions::default().mesh_budget,
             exit_after_frames: None,
             capture_last_frame: false,
+            script: Vec::new(),
         }
     }
 
@@ -450,6 +498,12 @@ impl App {
         };
         self.camera.fly(input, dt_s);
         self.panel.advance(dt_s);
+        let script_t_s = self.first_frame.map_or(0.0, |f| (now - f).as_secs_f64());
+        if let Some(shot) = scripted_pose(&self.options.script, script_t_s) {
+            self.camera.eye = shot.eye;
+            self.camera.orientation = shot.orientation;
+            self.panel.unix_time_s = shot.unix_time_s;
+        }
         r.cache.update(&[self.camera.eye]);
 
         let surface_texture = match r.surface.get_current_texture() {
@@ -881,5 +935,38 @@ mod tests {
             "Failed to open connection to X server"
         );
         assert_eq!(plain_reason("no display"), "no display");
+    }
+}
+
+#[cfg(test)]
+mod script_tests {
+    use super::*;
+
+    #[test]
+    fn the_script_interpolates_between_shots_and_ends_after_the_last() {
+        let shot = |at_s: f64, lat: f64, heading_deg: f64, t: f64| Shot {
+            at_s,
+            eye: Geodetic::new(lat, -121.0, 500.0),
+            orientation: Hpr {
+                heading_deg,
+                ..Default::default()
+            },
+            unix_time_s: t,
+        };
+        let script = [shot(0.0, 36.0, 350.0, 100.0), shot(2.0, 36.1, 10.0, 300.0)];
+        let mid = scripted_pose(&script, 1.0).expect("inside");
+        assert!((mid.eye.lat_deg - 36.05).abs() < 1e-12);
+        assert!(
+            (mid.orientation.heading_deg - 0.0).abs() < 1e-9
+                || (mid.orientation.heading_deg - 360.0).abs() < 1e-9
+        );
+        assert!((mid.unix_time_s - 200.0).abs() < 1e-9);
+        assert_eq!(
+            scripted_pose(&script, 0.0).map(|s| s.eye),
+            Some(script[0].eye)
+        );
+        assert!(scripted_pose(&script, 2.5).is_none());
+        assert!(scripted_pose(&[], 0.0).is_none());
+        assert!(scripted_pose(&script, f64::NAN).is_none());
     }
 }
