@@ -94,6 +94,22 @@ pub fn render_image_with(
     });
     let target = texture.create_view(&Default::default());
     let stats = renderer.render(cache, snapshot, view_index, &target, options)?;
+    let image = read_rgba(&gpu, &texture)?;
+    Ok((image, stats))
+}
+
+/// Reads an 8-bit RGBA or BGRA texture back as RGBA rows from the top.
+pub fn read_rgba(gpu: &crate::gpu::Gpu, texture: &wgpu::Texture) -> Result<Image, RenderError> {
+    let (width, height) = (texture.width(), texture.height());
+    let swap_red_blue = match texture.format().remove_srgb_suffix() {
+        wgpu::TextureFormat::Rgba8Unorm => false,
+        wgpu::TextureFormat::Bgra8Unorm => true,
+        other => {
+            return Err(RenderError::Readback(format!(
+                "screenshots of {other:?} frames are not supported (8-bit RGBA or BGRA only)"
+            )))
+        }
+    };
     let bytes_per_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("frame readback"),
@@ -104,15 +120,10 @@ pub fn render_image_with(
     let mut encoder = gpu
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("readback"),
+            label: Some("frame readback"),
         });
     encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture: &texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
+        texture.as_image_copy(),
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
             layout: wgpu::TexelCopyBufferLayout {
@@ -121,41 +132,33 @@ pub fn render_image_with(
                 rows_per_image: Some(height),
             },
         },
-        wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
+        texture.size(),
     );
     gpu.queue.submit([encoder.finish()]);
     let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| RenderError::Readback(e.to_string()))?;
-    rx.recv()
-        .map_err(|e| RenderError::Readback(e.to_string()))?
-        .map_err(|e| RenderError::Readback(e.to_string()))?;
-    let mut rgba = Vec::with_capacity((width * height * 4) as usize);
+    crate::gpu::map_for_reading(gpu, &slice)?;
+    let row_bytes = width as usize * 4;
+    let mut rgba = Vec::with_capacity(row_bytes * height as usize);
     {
         let data = slice
             .get_mapped_range()
             .map_err(|e| RenderError::Readback(e.to_string()))?;
-        for row in 0..height as usize {
-            let start = row * bytes_per_row as usize;
-            rgba.extend_from_slice(&data[start..start + width as usize * 4]);
+        for row in data.chunks(bytes_per_row as usize).take(height as usize) {
+            let pixels = row.get(..row_bytes).ok_or_else(|| {
+                RenderError::Readback("the read-back buffer is shorter than the frame".into())
+            })?;
+            rgba.extend_from_slice(pixels);
         }
     }
     buffer.unmap();
-    Ok((
-        Image {
-            width,
-            height,
-            rgba,
-        },
-        stats,
-    ))
+    if swap_red_blue {
+        for pixel in rgba.chunks_exact_mut(4) {
+            pixel.swap(0, 2);
+        }
+    }
+    Ok(Image {
+        width,
+        height,
+        rgba,
+    })
 }

@@ -60,6 +60,8 @@ pub const MSAA_SAMPLES: u32 = 4;
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const MAX_NODE_RECORDS: usize = 16384;
+/// Node meshes the GPU pool holds at most (about 280 MB with the atlases at 16 cells).
+const MAX_NODE_SLOTS: usize = 16384;
 const MAX_INSTANCES: usize = 8192;
 /// Tile loads a view may request per frame beyond the paging areas.
 const PREFETCH_PER_FRAME: usize = 8;
@@ -281,7 +283,9 @@ impl Renderer {
         let manifest = cache.database().manifest();
         let layout = NodeLayout::new(manifest.layout);
         let lod = TerrainLod::new(layout, GeoidLookup::new(&manifest.geoid));
-        let terrain = TerrainGpu::new(&gpu, layout.node_cells, 16384);
+        // No more slots than the database has nodes (a small database needs a small pool).
+        let capacity = layout.node_count().min(MAX_NODE_SLOTS as u64) as usize;
+        let terrain = TerrainGpu::new(&gpu, layout.node_cells, capacity);
         let device = &gpu.device;
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("globals"),
@@ -808,15 +812,7 @@ impl Renderer {
     fn read_timestamps(&self) -> Option<f64> {
         let (_, _, readback) = self.timestamps.as_ref()?;
         let slice = readback.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.gpu
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .ok()?;
-        rx.recv().ok()?.ok()?;
+        crate::gpu::map_for_reading(&self.gpu, &slice).ok()?;
         let ticks: [u64; 2] = {
             let data = slice.get_mapped_range().ok()?;
             let v: &[u64] = bytemuck::cast_slice(&data);

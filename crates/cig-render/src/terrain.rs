@@ -7,10 +7,9 @@
 //! instance index from a storage buffer written once per view. Slots are recycled least
 //! recently used. Meshes are rebuilt when finer data becomes resident.
 //!
-//! Limits: the pool holds `capacity` nodes (16384 of 16 cells by default, about 270 MB with its
-//! atlases);
-//! a view that needs more (full detail over a very large database) draws the nearest ones and
-//! reports the rest as dropped in its statistics.
+//! Limits: the pool holds `capacity` nodes (the database's node count, at most 16384 of 16 cells,
+//! about 270 MB with the atlases); a view that needs more (full detail over a very large
+//! database) draws the nearest ones and reports the rest as dropped in its statistics.
 
 use crate::gpu::Gpu;
 use cig_scene::lod::{NodeKey, SelectedNode, TerrainLod};

@@ -430,33 +430,6 @@ fn bad_views_are_errors_not_panics() {
     assert!(err.to_string().contains("below the ellipsoid"), "{err}");
 }
 
-#[test]
-#[ignore = "diagnostic"]
-fn print_selection() {
-    let db = hills();
-    let cache = cache(&db);
-    let mut renderer = renderer(&cache);
-    let eye = hills_eye(-3800.0, -3800.0, 1500.0);
-    let v = view(eye, (45.0, -12.0, 0.0), 60.0, (160, 120));
-    for key in db
-        .layout()
-        .keys_at(0)
-        .chain(db.layout().keys_at(1))
-        .chain(db.layout().keys_at(2))
-        .chain(db.layout().keys_at(3))
-    {
-        let _ = cache.load_now(key);
-    }
-    let sel = renderer.select(&cache, &v, 1.0);
-    println!("K = {}", v.camera().pixels_per_tangent);
-    for n in &sel.nodes {
-        println!(
-            "{:?} err {:.2} dist {:.0} morph {:.0}..{:.0} data {}",
-            n.key, n.error_m, n.distance_m, n.morph_start_m, n.morph_end_m, n.data_level
-        );
-    }
-}
-
 /// Writes a glTF 2.0 file (JSON with an embedded base64 buffer) of a red square pyramid, 4 m
 /// wide and 6 m tall, apex up (+Y in glTF).
 fn write_pyramid_gltf(path: &std::path::Path) {

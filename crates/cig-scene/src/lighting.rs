@@ -225,29 +225,23 @@ mod tests {
     use super::*;
 
     fn unix(y: i32, m: u32, d: u32, h: f64) -> f64 {
-        // Days from civil (Howard Hinnant's algorithm).
-        let y = if m <= 2 { y - 1 } else { y };
-        let era = y.div_euclid(400);
-        let yoe = y - era * 400;
-        let mp = (m as i32 + 9) % 12;
-        let doy = (153 * mp + 2) / 5 + d as i32 - 1;
-        let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-        let days = era * 146_097 + doe - 719_468;
-        f64::from(days) * 86_400.0 + h * 3600.0
+        cig_environment::UtcTime::from_calendar(y, m, d, 0, 0, 0.0)
+            .expect("a date in range")
+            .unix_seconds()
+            + h * 3600.0
     }
 
     #[test]
     fn sun_is_high_at_local_noon_in_june_and_down_at_midnight() {
         let site = Geodetic::new(36.0, -121.0, 0.0);
-        let up = site;
         // Local solar noon near 20:04 UTC at 121 W; declination +23.4 on 21 June.
-        let noon = Lighting::at(unix(2026, 6, 21, 20.07), up);
+        let noon = Lighting::at(unix(2026, 6, 21, 20.07), site);
         assert!(
             (noon.sun_elevation_deg - (90.0 - 36.0 + 23.44)).abs() < 0.3,
             "{}",
             noon.sun_elevation_deg
         );
-        let midnight = Lighting::at(unix(2026, 6, 21, 8.07), up);
+        let midnight = Lighting::at(unix(2026, 6, 21, 8.07), site);
         assert!(midnight.sun_elevation_deg < -25.0);
         assert!(noon.sky_zenith[2] > midnight.sky_zenith[2] * 10.0);
     }

@@ -136,6 +136,18 @@ impl NodeLayout {
         }
     }
 
+    /// Nodes of the whole quadtree, every level.
+    pub fn node_count(&self) -> u64 {
+        (0..self.pyramid.levels)
+            .map(|level| {
+                let span = self.finest_span(level);
+                let rows = ((self.pyramid.grid.rows.max(2) - 1) as u64).div_ceil(span);
+                let cols = ((self.pyramid.grid.cols.max(2) - 1) as u64).div_ceil(span);
+                rows * cols
+            })
+            .sum()
+    }
+
     /// The coarsest level's nodes: the roots of the quadtree.
     pub fn roots(&self) -> Vec<NodeKey> {
         let level = self.pyramid.levels - 1;

@@ -1,14 +1,10 @@
 //! End-to-end runs of the `cig` binary.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{cig, one_line_error};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-
-fn cig() -> Command {
-    let mut c = Command::cargo_bin("cig").expect("binary");
-    c.env_remove("CIG_LOG");
-    c
-}
 
 fn json(out: &[u8]) -> Value {
     serde_json::from_slice(out).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(out)))
@@ -137,14 +133,6 @@ fn hat_and_los_answer_in_json() {
     assert_eq!(los["visible"], Value::Bool(false));
     assert_eq!(los["hit"]["range_m"].as_f64(), Some(0.0));
     assert!(los["hit"]["material"].is_string());
-}
-
-fn one_line_error(out: &assert_cmd::assert::Assert) -> String {
-    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
-    let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
-    assert_eq!(lines.len(), 1, "one error line: {stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    lines[0].to_string()
 }
 
 /// Command-line arguments of mixed kinds (strings, paths).

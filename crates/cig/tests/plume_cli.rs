@@ -1,13 +1,9 @@
 //! End-to-end runs of `cig plume` and `cig bench particles`.
 
-use assert_cmd::Command;
-use serde_json::Value;
+mod common;
 
-fn cig() -> Command {
-    let mut c = Command::cargo_bin("cig").expect("binary");
-    c.env_remove("CIG_LOG");
-    c
-}
+use common::cig;
+use serde_json::Value;
 
 fn plume_json(args: &[&str]) -> Value {
     let out = cig()

@@ -1,14 +1,10 @@
 //! End-to-end runs of `cig render` and `cig bench render` (lavapipe when there is no GPU).
 
-use assert_cmd::Command;
+mod common;
+
+use common::{cig, one_line_error};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-
-fn cig() -> Command {
-    let mut c = Command::cargo_bin("cig").expect("binary");
-    c.env_remove("CIG_LOG");
-    c
-}
 
 fn small_db(dir: &Path) -> PathBuf {
     let db = dir.join("db");
@@ -26,19 +22,6 @@ fn small_db(dir: &Path) -> PathBuf {
         .assert()
         .success();
     db
-}
-
-fn one_line_error(out: &assert_cmd::assert::Assert) -> String {
-    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
-    // Mesa's Vulkan drivers print their own complaint when there is no Wayland session; it is
-    // not cig's error line.
-    let lines: Vec<&str> = stderr
-        .lines()
-        .filter(|l| l.starts_with("error:") && !l.contains("XDG_RUNTIME_DIR"))
-        .collect();
-    assert_eq!(lines.len(), 1, "one error line: {stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    lines[0].to_string()
 }
 
 fn render_args(db: &Path, out: &Path) -> Vec<String> {

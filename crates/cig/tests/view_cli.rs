@@ -1,14 +1,10 @@
 //! End-to-end runs of `cig view`: under a virtual X server (Xvfb, Debian package `xvfb`) when
 //! `xvfb-run` exists, and without any display.
 
-use assert_cmd::Command;
-use std::path::{Path, PathBuf};
+mod common;
 
-fn cig() -> Command {
-    let mut c = Command::cargo_bin("cig").expect("binary");
-    c.env_remove("CIG_LOG");
-    c
-}
+use common::cig;
+use std::path::{Path, PathBuf};
 
 fn synth(dir: &Path) -> PathBuf {
     let db = dir.join("db");
@@ -113,7 +109,7 @@ fn under_xvfb_view_opens_renders_frames_and_saves_a_screenshot() {
     let dir = tempfile::tempdir().expect("tmp");
     let db = synth(dir.path());
     let shot = dir.path().join("shot.png");
-    let out = Command::new(xvfb_run)
+    let out = assert_cmd::Command::new(xvfb_run)
         .env_remove("CIG_LOG")
         .env_remove("WAYLAND_DISPLAY")
         .args(["-a", "-s", "-screen 0 1024x768x24"])

@@ -696,86 +696,12 @@ impl Running {
         });
         let targets = self.formats.views(&texture);
         self.draw(&last, &targets)?;
-        let image = read_rgba(&self.gpu, &texture)?;
+        let image = crate::offscreen::read_rgba(&self.gpu, &texture)?;
         if let Some(e) = self.gpu_error() {
             return Err(e);
         }
         Ok(Some(image))
     }
-}
-
-/// Reads an 8-bit RGBA or BGRA texture back as RGBA rows from the top.
-fn read_rgba(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Image, RenderError> {
-    let (width, height) = (texture.width(), texture.height());
-    let swap_red_blue = match texture.format().remove_srgb_suffix() {
-        wgpu::TextureFormat::Rgba8Unorm => false,
-        wgpu::TextureFormat::Bgra8Unorm => true,
-        other => {
-            return Err(RenderError::Readback(format!(
-                "screenshots of {other:?} frames are not supported (8-bit RGBA or BGRA only)"
-            )))
-        }
-    };
-    let bytes_per_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("screenshot readback"),
-        size: u64::from(bytes_per_row) * u64::from(height),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("screenshot readback"),
-        });
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(bytes_per_row),
-                rows_per_image: Some(height),
-            },
-        },
-        texture.size(),
-    );
-    gpu.queue.submit([encoder.finish()]);
-    let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| RenderError::Readback(e.to_string()))?;
-    rx.recv()
-        .map_err(|e| RenderError::Readback(e.to_string()))?
-        .map_err(|e| RenderError::Readback(e.to_string()))?;
-    let row_bytes = width as usize * 4;
-    let mut rgba = Vec::with_capacity(row_bytes * height as usize);
-    {
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
-        for row in data.chunks(bytes_per_row as usize).take(height as usize) {
-            let pixels = row.get(..row_bytes).ok_or_else(|| {
-                RenderError::Readback("the read-back buffer is shorter than the frame".into())
-            })?;
-            rgba.extend_from_slice(pixels);
-        }
-    }
-    buffer.unmap();
-    if swap_red_blue {
-        for pixel in rgba.chunks_exact_mut(4) {
-            pixel.swap(0, 2);
-        }
-    }
-    Ok(Image {
-        width,
-        height,
-        rgba,
-    })
 }
 
 impl ApplicationHandler for App {

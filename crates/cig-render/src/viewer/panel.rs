@@ -4,9 +4,7 @@
 //! Algorithm: the panel edits a plain [`PanelState`] that the frame loop turns into the
 //! [`cig_scene::FrameSnapshot`] of the next frame. Simulation time is UTC seconds since 1970; it
 //! advances by `rate` simulated minutes per real minute. The date shown and typed is the
-//! proleptic Gregorian calendar, converted with Howard Hinnant's `days_from_civil` /
-//! `civil_from_days` algorithms ("chrono-Compatible Low-Level Date Algorithms", 2013), exact for
-//! every day in the `i64` range the panel accepts (years 1..9999). Visibility sets the fog
+//! proleptic Gregorian calendar of the `time` crate (years 1..9999 accepted). Visibility sets the fog
 //! through Koschmieder's law ([`cig_scene::lighting::Fog::from_visibility`]).
 //!
 //! Limits: time zones are not shown (the slider is UTC); leap seconds are ignored, as in Unix
@@ -25,41 +23,31 @@ pub const MAX_PIXEL_ERROR_RANGE_PX: (f64, f64) = (0.0, 8.0);
 /// Time rate range, simulated minutes per real minute.
 pub const RATE_RANGE: (f64, f64) = (0.0, 1440.0);
 
-/// Days since 1970-01-01 of a proleptic Gregorian date (Hinnant's `days_from_civil`).
-pub fn days_from_civil(year: i64, month: u32, day: u32) -> i64 {
-    let y = if month <= 2 { year - 1 } else { year };
-    let era = y.div_euclid(400);
-    let year_of_era = y - era * 400;
-    let m = i64::from(month);
-    let month_from_march = if m > 2 { m - 3 } else { m + 9 };
-    let day_of_year = (153 * month_from_march + 2) / 5 + i64::from(day) - 1;
-    let day_of_era = year_of_era * 365 + year_of_era / 4 - year_of_era / 100 + day_of_year;
-    era * 146_097 + day_of_era - 719_468
+/// The `time` crate's Julian day number of 1970-01-01.
+const UNIX_EPOCH_JULIAN_DAY: i64 = 2_440_588;
+
+/// Days since 1970-01-01 of a proleptic Gregorian date; `None` for a date that does not exist.
+pub fn days_from_civil(year: i64, month: u32, day: u32) -> Option<i64> {
+    let month = time::Month::try_from(u8::try_from(month).ok()?).ok()?;
+    let date =
+        time::Date::from_calendar_date(i32::try_from(year).ok()?, month, u8::try_from(day).ok()?)
+            .ok()?;
+    Some(i64::from(date.to_julian_day()) - UNIX_EPOCH_JULIAN_DAY)
 }
 
-/// The proleptic Gregorian date (year, month, day) of a day count since 1970-01-01
-/// (Hinnant's `civil_from_days`).
+/// The proleptic Gregorian date (year, month, day) of a day count since 1970-01-01, clamped
+/// to the `time` crate's range.
 pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let day_of_era = z - era * 146_097;
-    let year_of_era =
-        (day_of_era - day_of_era / 1460 + day_of_era / 36_524 - day_of_era / 146_096) / 365;
-    let day_of_year = day_of_era - (365 * year_of_era + year_of_era / 4 - year_of_era / 100);
-    let mp = (5 * day_of_year + 2) / 153;
-    let day = (day_of_year - (153 * mp + 2) / 5 + 1) as u32;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
-    let year = year_of_era + era * 400 + i64::from(month <= 2);
-    (year, month, day)
-}
-
-fn days_in_month(year: i64, month: u32) -> u32 {
-    match month {
-        1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,
-        4 | 6 | 9 | 11 => 30,
-        _ if (year % 4 == 0 && year % 100 != 0) || year % 400 == 0 => 29,
-        _ => 28,
-    }
+    let julian = (days + UNIX_EPOCH_JULIAN_DAY).clamp(
+        i64::from(time::Date::MIN.to_julian_day()),
+        i64::from(time::Date::MAX.to_julian_day()),
+    ) as i32;
+    let date = time::Date::from_julian_day(julian).unwrap_or(time::Date::MIN);
+    (
+        i64::from(date.year()),
+        u32::from(u8::from(date.month())),
+        u32::from(date.day()),
+    )
 }
 
 /// Parses "YYYY-MM-DD" (years 1..=9999) into days since 1970-01-01.
@@ -68,13 +56,10 @@ pub fn parse_date(text: &str) -> Option<i64> {
     let year: i64 = parts.next()?.trim().parse().ok()?;
     let month: u32 = parts.next()?.trim().parse().ok()?;
     let day: u32 = parts.next()?.trim().parse().ok()?;
-    if !(1..=9999).contains(&year) || !(1..=12).contains(&month) {
+    if !(1..=9999).contains(&year) {
         return None;
     }
-    if day == 0 || day > days_in_month(year, month) {
-        return None;
-    }
-    Some(days_from_civil(year, month, day))
+    days_from_civil(year, month, day)
 }
 
 /// "YYYY-MM-DD" of a day count since 1970-01-01.
@@ -370,12 +355,12 @@ mod tests {
 
     #[test]
     fn known_dates() {
-        assert_eq!(days_from_civil(1970, 1, 1), 0);
-        assert_eq!(days_from_civil(2000, 3, 1), 11_017);
+        assert_eq!(days_from_civil(1970, 1, 1), Some(0));
+        assert_eq!(days_from_civil(2000, 3, 1), Some(11_017));
         assert_eq!(civil_from_days(-1), (1969, 12, 31));
         assert_eq!(parse_date("2026-06-21"), Some(20_625));
         assert_eq!(format_date(20_625), "2026-06-21");
-        assert_eq!(parse_date("2024-02-29"), Some(days_from_civil(2024, 2, 29)));
+        assert_eq!(parse_date("2024-02-29"), days_from_civil(2024, 2, 29));
         for bad in [
             "2023-02-29",
             "1900-02-29",
@@ -399,7 +384,7 @@ mod tests {
     #[test]
     fn the_clock_runs_at_the_rate_and_the_date_follows() {
         let mut p = PanelState::new(
-            days_from_civil(2026, 6, 21) as f64 * SECONDS_PER_DAY + 86_000.0,
+            days_from_civil(2026, 6, 21).expect("a date") as f64 * SECONDS_PER_DAY + 86_000.0,
             1000.0,
             FogMode::Linear,
             1.0,
@@ -436,7 +421,7 @@ mod tests {
                 (y, m, d),
                 (i64::from(reference.year()), u32::from(u8::from(reference.month())), u32::from(reference.day()))
             );
-            prop_assert_eq!(days_from_civil(y, m, d), days);
+            prop_assert_eq!(days_from_civil(y, m, d), Some(days));
             prop_assert_eq!(parse_date(&format_date(days)), Some(days));
         }
     }
