@@ -133,6 +133,38 @@ fn seconds_of(year: i64, month: i64, day: i64) -> f64 {
 }
 
 impl UtcTime {
+    /// Parses an ISO 8601 instant: RFC 3339, or ISO 8601 with or without an offset (no offset
+    /// means UTC), or a date alone (its midnight UTC).
+    ///
+    /// # Errors
+    /// [`EnvironmentError::InvalidTime`] when the text is not such an instant or falls outside
+    /// 1900..=2100.
+    pub fn parse_iso8601(text: &str) -> Result<UtcTime, EnvironmentError> {
+        use ::time::format_description::well_known::{Iso8601, Rfc3339};
+        use ::time::{Date, OffsetDateTime, PrimitiveDateTime, UtcOffset};
+        let parsed = OffsetDateTime::parse(text, &Rfc3339)
+            .or_else(|_| OffsetDateTime::parse(text, &Iso8601::DEFAULT))
+            .or_else(|_| PrimitiveDateTime::parse(text, &Iso8601::DEFAULT).map(|p| p.assume_utc()))
+            .or_else(|_| Date::parse(text, &Iso8601::DEFAULT).map(|d| d.midnight().assume_utc()))
+            .map_err(|e| {
+                EnvironmentError::InvalidTime(format!(
+                    "{text:?} is not an ISO 8601 date and time ({e})"
+                ))
+            })?;
+        let utc = parsed
+            .checked_to_offset(UtcOffset::UTC)
+            .ok_or_else(|| EnvironmentError::InvalidTime(format!("{text:?} is out of range")))?;
+        let second = f64::from(utc.second()) + f64::from(utc.nanosecond()) * 1e-9;
+        UtcTime::from_calendar(
+            utc.year(),
+            u32::from(u8::from(utc.month())),
+            u32::from(utc.day()),
+            u32::from(utc.hour()),
+            u32::from(utc.minute()),
+            second,
+        )
+    }
+
     /// The instant of a UTC calendar time; `second` may carry a fraction.
     ///
     /// # Errors

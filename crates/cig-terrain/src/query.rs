@@ -263,6 +263,12 @@ impl QuerySession {
         }
     }
 
+    /// EGM96 geoid undulation (ellipsoid height minus MSL height) at a point, metres, from the
+    /// database's geoid grid: bilinear inside the database, the nearest edge value outside it.
+    pub fn geoid_undulation_m(&self, lat_deg: f64, lon_deg: f64) -> f64 {
+        self.geoid.undulation_m(lat_deg, lon_deg)
+    }
+
     /// Height above terrain of a geodetic point (altitude above the ellipsoid), height only.
     #[inline]
     pub fn hat_m(&mut self, point: Geodetic) -> Result<f64, QueryError> {

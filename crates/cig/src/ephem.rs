@@ -6,30 +6,10 @@ use cig_environment::{
     day_events, ephemeris, natural_illuminance, DayEvents, Ephemeris, Illuminance, Observer,
     UtcTime,
 };
-use time::format_description::well_known::{Iso8601, Rfc3339};
-use time::{Date, OffsetDateTime, PrimitiveDateTime, UtcOffset};
-
 /// Parses an ISO 8601 instant (RFC 3339, or ISO 8601 with or without an offset; no
 /// offset means UTC; a date alone means its midnight UTC) into a UTC instant of 1900..=2100.
 pub fn parse_time(text: &str) -> anyhow::Result<UtcTime> {
-    let parsed = OffsetDateTime::parse(text, &Rfc3339)
-        .or_else(|_| OffsetDateTime::parse(text, &Iso8601::DEFAULT))
-        .or_else(|_| PrimitiveDateTime::parse(text, &Iso8601::DEFAULT).map(|p| p.assume_utc()))
-        .or_else(|_| Date::parse(text, &Iso8601::DEFAULT).map(|d| d.midnight().assume_utc()))
-        .map_err(|e| anyhow!("--time {text:?} is not an ISO 8601 date and time ({e})"))?;
-    let utc = parsed
-        .checked_to_offset(UtcOffset::UTC)
-        .ok_or_else(|| anyhow!("--time {text:?} is out of range"))?;
-    let second = f64::from(utc.second()) + f64::from(utc.nanosecond()) * 1e-9;
-    UtcTime::from_calendar(
-        utc.year(),
-        u32::from(u8::from(utc.month())),
-        u32::from(utc.day()),
-        u32::from(utc.hour()),
-        u32::from(utc.minute()),
-        second,
-    )
-    .with_context(|| format!("--time {text:?}"))
+    UtcTime::parse_iso8601(text).map_err(|e| anyhow!("--time: {e}"))
 }
 
 fn event_list(e: &DayEvents) -> [(&'static str, Option<UtcTime>); 10] {

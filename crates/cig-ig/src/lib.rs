@@ -1,0 +1,31 @@
+//! cig's image-generator session, pure: the host's CIGI messages applied to the world and
+//! answered, the DIS exercise joined, and the scenario file read — no sockets, GPU, files or
+//! terminal (the `cig` binary owns those and hands bytes and text in).
+//!
+//! Modules, each opening with its algorithm and sources:
+//! - [`scenario`]: the scenario file (TOML): entity-type table, owned entities, default view,
+//!   DIS settings.
+//! - [`model_table`]: entity types (CIGI and DIS) to models.
+//! - [`pose`]: body-axis offsets, attachment and orientation composition, MSL altitudes.
+//! - [`session`]: the IG side of CIGI 3.3/4.0 (ICD 3.3 §2.3, §4): packets applied, requests
+//!   answered from the terrain query service, Start of Frame with the standard's counters.
+//! - [`exercise`]: DIS 7/6 participation (thesis 000 §VI.E): remote entities, owned entities,
+//!   detonation and appearance effects, shared world time.
+//! - [`world`]: the per-frame step that ties them to the clock and the effects and produces
+//!   the renderer's snapshot.
+//!
+//! Limits: see each module.
+
+pub mod exercise;
+pub mod model_table;
+pub mod pose;
+pub mod scenario;
+pub mod session;
+pub mod world;
+
+pub use exercise::{Exercise, ExerciseCounters, EFFECT_EPOCH_UNIX_S};
+pub use model_table::{CigiEntityType, ModelTable};
+pub use pose::{BodyOffset, Pose};
+pub use scenario::{DisSettings, Scenario, ScenarioError};
+pub use session::{IgSession, SessionConfig, SessionCounters};
+pub use world::{IgWorld, WorldConfig, WorldError};

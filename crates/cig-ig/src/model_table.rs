@@ -1,0 +1,151 @@
+//! The entity-type table: which model draws an entity of a given CIGI or DIS type.
+//!
+//! Algorithm: CIGI 3.3 entity types (and CIGI 4.0 short types) are looked up exactly; DIS
+//! entity types (and CIGI 4.0 extended types, which are DIS types) take the most specific
+//! matching pattern of the scenario's table (the one with the most fields given), the earlier
+//! row on a tie. Types no row matches get the scenario's default model, so an unknown vehicle
+//! is still seen.
+//!
+//! Limits: no substitution by country or by nearby categories beyond the patterns' wildcards.
+
+use crate::scenario::{DisTypePattern, Scenario};
+use cig_dis::EntityTypeCode;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// An entity type as CIGI gives it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CigiEntityType {
+    /// 16-bit type (CIGI 3.3 Entity Control; CIGI 4.0 without extended types).
+    Short(u16),
+    /// DIS-style type (CIGI 4.0 extended entity type).
+    Dis(EntityTypeCode),
+}
+
+/// The table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelTable {
+    cigi: BTreeMap<u16, String>,
+    dis: Vec<(DisTypePattern, String)>,
+    default_model: String,
+    gltf: Vec<(String, PathBuf)>,
+}
+
+impl Default for ModelTable {
+    fn default() -> Self {
+        ModelTable {
+            cigi: BTreeMap::new(),
+            dis: Vec::new(),
+            default_model: "truck".to_string(),
+            gltf: Vec::new(),
+        }
+    }
+}
+
+impl ModelTable {
+    /// The table a scenario defines.
+    pub fn from_scenario(scenario: &Scenario) -> ModelTable {
+        let mut table = ModelTable {
+            default_model: scenario.default_model.clone(),
+            ..ModelTable::default()
+        };
+        for row in &scenario.models {
+            if let Some(t) = row.cigi_type {
+                table.cigi.entry(t).or_insert_with(|| row.model.clone());
+            }
+            if let Some(p) = row.dis_type.as_deref().and_then(DisTypePattern::parse) {
+                table.dis.push((p, row.model.clone()));
+            }
+            if let Some(path) = &row.gltf {
+                if !table.gltf.iter().any(|(name, _)| *name == row.model) {
+                    table.gltf.push((row.model.clone(), path.clone()));
+                }
+            }
+        }
+        table
+    }
+
+    /// The model for a DIS entity type.
+    pub fn model_for_dis(&self, t: &EntityTypeCode) -> &str {
+        let mut best: Option<(usize, &str)> = None;
+        for (pattern, model) in &self.dis {
+            if let Some(score) = pattern.specificity(t) {
+                if best.is_none_or(|(s, _)| score > s) {
+                    best = Some((score, model));
+                }
+            }
+        }
+        best.map_or(self.default_model.as_str(), |(_, m)| m)
+    }
+
+    /// The model for a CIGI entity type.
+    pub fn model_for_cigi(&self, t: CigiEntityType) -> &str {
+        match t {
+            CigiEntityType::Short(code) => self
+                .cigi
+                .get(&code)
+                .map_or(self.default_model.as_str(), String::as_str),
+            CigiEntityType::Dis(code) => self.model_for_dis(&code),
+        }
+    }
+
+    /// glTF files to load: (model name, path relative to the scenario).
+    pub fn gltf_files(&self) -> &[(String, PathBuf)] {
+        &self.gltf
+    }
+
+    /// Every model name the table can give.
+    pub fn model_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self
+            .cigi
+            .values()
+            .chain(self.dis.iter().map(|(_, m)| m))
+            .cloned()
+            .chain(std::iter::once(self.default_model.clone()))
+            .collect();
+        names.sort();
+        names.dedup();
+        names
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_most_specific_row_wins_and_unknown_types_get_the_default() {
+        let scenario = Scenario::from_toml(
+            r#"
+default_model = "building"
+[[models]]
+model = "truck"
+dis_type = "1:1"
+[[models]]
+model = "tank"
+dis_type = "1:1:225:1"
+cigi_type = 7
+[[models]]
+model = "ship"
+dis_type = "1:3:*"
+"#,
+        )
+        .expect("scenario");
+        let table = ModelTable::from_scenario(&scenario);
+        let t = |k, d, c, cat| EntityTypeCode {
+            kind: k,
+            domain: d,
+            country: c,
+            category: cat,
+            subcategory: 0,
+            specific: 0,
+            extra: 0,
+        };
+        assert_eq!(table.model_for_dis(&t(1, 1, 225, 1)), "tank");
+        assert_eq!(table.model_for_dis(&t(1, 1, 222, 1)), "truck");
+        assert_eq!(table.model_for_dis(&t(1, 3, 225, 6)), "ship");
+        assert_eq!(table.model_for_dis(&t(2, 9, 0, 0)), "building");
+        assert_eq!(table.model_for_cigi(CigiEntityType::Short(7)), "tank");
+        assert_eq!(table.model_for_cigi(CigiEntityType::Short(8)), "building");
+    }
+}

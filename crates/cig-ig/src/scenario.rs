@@ -1,0 +1,626 @@
+//! The scenario file: what an IG shows when it starts, which model each entity type gets, which
+//! entities it owns and publishes, and how it joins the DIS exercise.
+//!
+//! Format: TOML (one document, unknown keys refused so a misspelt key is an error rather than a
+//! silent default). Parsing is pure: the binary reads the file and hands the text here; paths in
+//! it (glTF models) are returned as written, relative to the scenario's folder. Every number is
+//! checked (finite, in range) and every error is one line naming the key and the reason.
+//!
+//! ```toml
+//! name = "tank range"
+//! start_time = "2026-06-21T09:30:00Z"   # UTC
+//! time_rate = 1.0
+//! visibility_m = 20000
+//! fog = "exp"                          # off, linear, exp, exp2
+//! default_model = "truck"              # for entity types the table does not name
+//!
+//! [[models]]                           # the entity-type table
+//! model = "tank"
+//! cigi_type = 1                        # CIGI entity type (3.3 Entity Control, 4.0 short type)
+//! dis_type = "1:1:225:1"               # DIS kind:domain:country:category[:sub[:spec[:extra]]]
+//!
+//! [[models]]
+//! model = "frigate"
+//! gltf = "models/frigate.glb"          # relative to this file
+//! dis_type = "1:3:*:6"                 # "*" matches any value
+//!
+//! [[entities]]                         # entities this IG owns (drawn, and published on DIS)
+//! id = 1                               # CIGI entity id space (0 is the ownship)
+//! model = "tank"
+//! dis_id = "1:3001:1"                  # site:application:entity
+//! dis_type = "1:1:225:1:1:0:0"
+//! lat_deg = 51.02
+//! lon_deg = -1.48
+//! alt_m = 0.0                          # above the terrain when clamped, else above MSL
+//! heading_deg = 90
+//! clamp = "height_and_attitude"        # none, height, height_and_attitude
+//! speed_mps = 8.0                      # along `path`, from `lat_deg`/`lon_deg`
+//! path = [[51.02, -1.45], [51.03, -1.44]]
+//! loop_path = true
+//!
+//! [view]                               # the view when no host defines one
+//! entity = 1                           # attached to an entity (body offsets), or
+//! eye = [51.0, -1.5, 300.0]            # a fixed eye (lat, lon, alt MSL)
+//! offset_m = [-20.0, 0.0, -5.0]        # x forward, y right, z down
+//! hpr_deg = [90.0, -5.0, 0.0]
+//! fov_deg = 60.0
+//!
+//! [dis]
+//! exercise = 1
+//! site = 3001
+//! application = 1
+//! port = 3000
+//! delivery = "broadcast"               # unicast:HOST:PORT, broadcast, multicast:GROUP
+//! bind = "loopback"                    # loopback, any, an address or an interface name
+//! time_master = false                  # seed the exercise's world time from start_time
+//! accepted_sites = []                  # empty: all
+//! ```
+//!
+//! Limits: one database per scenario (given on the command line); owned entities move along
+//! straight geodesic-free segments at constant speed (enough for demos and tests, not a
+//! vehicle model).
+
+use cig_dis::EntityTypeCode;
+use cig_environment::UtcTime;
+use cig_scene::lighting::FogMode;
+use cig_scene::snapshot::Clamp;
+use serde::Deserialize;
+use std::path::PathBuf;
+
+/// Why a scenario cannot be used.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum ScenarioError {
+    #[error("not a valid scenario: {0}")]
+    Syntax(String),
+    #[error("{key}: {reason}")]
+    Value { key: String, reason: String },
+}
+
+fn value_error(key: impl Into<String>, reason: impl Into<String>) -> ScenarioError {
+    ScenarioError::Value {
+        key: key.into(),
+        reason: reason.into(),
+    }
+}
+
+/// A scenario, checked.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    #[serde(default)]
+    pub name: String,
+    /// Start of the simulation, ISO 8601 UTC (default: the command line's or now).
+    #[serde(default)]
+    pub start_time: Option<String>,
+    /// Simulation seconds per real second.
+    #[serde(default = "one")]
+    pub time_rate: f64,
+    #[serde(default)]
+    pub visibility_m: Option<f64>,
+    #[serde(default)]
+    pub fog: Option<String>,
+    /// Model for entity types the table does not name.
+    #[serde(default = "default_model")]
+    pub default_model: String,
+    #[serde(default)]
+    pub models: Vec<ModelMapping>,
+    #[serde(default)]
+    pub entities: Vec<ScenarioEntity>,
+    #[serde(default)]
+    pub view: Option<ScenarioView>,
+    #[serde(default)]
+    pub dis: Option<DisSettings>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn default_model() -> String {
+    "truck".to_string()
+}
+
+/// One row of the entity-type table.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelMapping {
+    /// Model name: a built-in one (tank, truck, ship, building, tree) or the name a glTF file
+    /// is loaded under.
+    pub model: String,
+    /// glTF 2.0 file, relative to the scenario's folder.
+    #[serde(default)]
+    pub gltf: Option<PathBuf>,
+    /// CIGI entity type.
+    #[serde(default)]
+    pub cigi_type: Option<u16>,
+    /// DIS entity type pattern.
+    #[serde(default)]
+    pub dis_type: Option<String>,
+}
+
+/// An entity the IG owns.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioEntity {
+    pub id: u16,
+    #[serde(default)]
+    pub model: Option<String>,
+    #[serde(default)]
+    pub dis_id: Option<String>,
+    #[serde(default)]
+    pub dis_type: Option<String>,
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    #[serde(default)]
+    pub alt_m: f64,
+    #[serde(default)]
+    pub heading_deg: f64,
+    #[serde(default)]
+    pub clamp: Clamp,
+    #[serde(default)]
+    pub speed_mps: f64,
+    #[serde(default)]
+    pub path: Vec<[f64; 2]>,
+    #[serde(default)]
+    pub loop_path: bool,
+    /// DIS appearance bits, hexadecimal ("0x..." or digits).
+    #[serde(default)]
+    pub appearance: Option<String>,
+}
+
+/// The view used when no host defines one.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioView {
+    #[serde(default)]
+    pub entity: Option<u16>,
+    #[serde(default)]
+    pub eye: Option<[f64; 3]>,
+    #[serde(default)]
+    pub offset_m: [f64; 3],
+    #[serde(default)]
+    pub hpr_deg: [f64; 3],
+    #[serde(default = "default_fov")]
+    pub fov_deg: f64,
+}
+
+fn default_fov() -> f64 {
+    60.0
+}
+
+/// How the IG joins a DIS exercise.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DisSettings {
+    #[serde(default = "one_u8")]
+    pub exercise: u8,
+    #[serde(default = "default_site")]
+    pub site: u16,
+    #[serde(default = "one_u16")]
+    pub application: u16,
+    #[serde(default = "default_dis_port")]
+    pub port: u16,
+    #[serde(default = "default_delivery")]
+    pub delivery: String,
+    #[serde(default = "default_bind")]
+    pub bind: String,
+    #[serde(default)]
+    pub time_master: bool,
+    #[serde(default)]
+    pub accepted_sites: Vec<u16>,
+    /// Protocol version written: 7 (default) or 6.
+    #[serde(default = "seven")]
+    pub version: u8,
+}
+
+fn one_u8() -> u8 {
+    1
+}
+fn one_u16() -> u16 {
+    1
+}
+fn seven() -> u8 {
+    7
+}
+fn default_site() -> u16 {
+    1
+}
+fn default_dis_port() -> u16 {
+    3000
+}
+fn default_delivery() -> String {
+    "broadcast".to_string()
+}
+fn default_bind() -> String {
+    "loopback".to_string()
+}
+
+impl Default for DisSettings {
+    fn default() -> Self {
+        DisSettings {
+            exercise: 1,
+            site: 1,
+            application: 1,
+            port: 3000,
+            delivery: default_delivery(),
+            bind: default_bind(),
+            time_master: false,
+            accepted_sites: Vec::new(),
+            version: 7,
+        }
+    }
+}
+
+/// A DIS entity type pattern: each of the seven fields a value or "any".
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct DisTypePattern {
+    /// kind, domain, country, category, subcategory, specific, extra; `None` matches any.
+    pub fields: [Option<u16>; 7],
+}
+
+impl DisTypePattern {
+    /// Parses "K:D:C:CAT[:SUB[:SPEC[:EXTRA]]]"; omitted trailing fields and "*" match any.
+    pub fn parse(text: &str) -> Option<DisTypePattern> {
+        let parts: Vec<&str> = text.split(':').map(str::trim).collect();
+        if parts.is_empty() || parts.len() > 7 {
+            return None;
+        }
+        let mut fields = [None; 7];
+        for (slot, part) in fields.iter_mut().zip(&parts) {
+            if *part != "*" {
+                *slot = Some(part.parse::<u16>().ok()?);
+            }
+        }
+        // Kind, domain, category, subcategory, specific and extra are octets.
+        for (i, field) in fields.iter().enumerate() {
+            if i != 2 && field.is_some_and(|v| v > 255) {
+                return None;
+            }
+        }
+        Some(DisTypePattern { fields })
+    }
+
+    /// The exact type, when every field is given.
+    pub fn exact(&self) -> Option<EntityTypeCode> {
+        let f = self.fields;
+        let octet = |i: usize| f[i].and_then(|v| u8::try_from(v).ok());
+        Some(EntityTypeCode {
+            kind: octet(0)?,
+            domain: octet(1)?,
+            country: f[2]?,
+            category: octet(3)?,
+            subcategory: octet(4).unwrap_or(0),
+            specific: octet(5).unwrap_or(0),
+            extra: octet(6).unwrap_or(0),
+        })
+    }
+
+    /// How many leading fields match (`None`: the pattern does not match).
+    pub fn specificity(&self, t: &EntityTypeCode) -> Option<usize> {
+        let values = [
+            u16::from(t.kind),
+            u16::from(t.domain),
+            t.country,
+            u16::from(t.category),
+            u16::from(t.subcategory),
+            u16::from(t.specific),
+            u16::from(t.extra),
+        ];
+        let mut score = 0;
+        for (pattern, value) in self.fields.iter().zip(values) {
+            match pattern {
+                Some(p) if *p != value => return None,
+                Some(_) => score += 1,
+                None => {}
+            }
+        }
+        Some(score)
+    }
+}
+
+/// Parses a DIS entity id "SITE:APP:ID".
+pub fn parse_dis_id(text: &str) -> Option<(u16, u16, u16)> {
+    let mut parts = text.split(':').map(|p| p.trim().parse::<u16>());
+    let site = parts.next()?.ok()?;
+    let application = parts.next()?.ok()?;
+    let entity = parts.next()?.ok()?;
+    if parts.next().is_some() {
+        return None;
+    }
+    Some((site, application, entity))
+}
+
+/// Parses hexadecimal appearance bits.
+pub fn parse_hex_u32(text: &str) -> Option<u32> {
+    let digits = text
+        .trim()
+        .trim_start_matches("0x")
+        .trim_start_matches("0X");
+    u32::from_str_radix(digits, 16).ok()
+}
+
+fn check_lat_lon(key: &str, lat_deg: f64, lon_deg: f64) -> Result<(), ScenarioError> {
+    if !(lat_deg.is_finite() && (-90.0..=90.0).contains(&lat_deg)) {
+        return Err(value_error(
+            format!("{key}.lat_deg"),
+            format!("{lat_deg} is outside -90..90"),
+        ));
+    }
+    if !(lon_deg.is_finite() && (-180.0..=360.0).contains(&lon_deg)) {
+        return Err(value_error(
+            format!("{key}.lon_deg"),
+            format!("{lon_deg} is outside -180..360"),
+        ));
+    }
+    Ok(())
+}
+
+fn check_finite(key: &str, value: f64, lo: f64, hi: f64) -> Result<(), ScenarioError> {
+    if value.is_finite() && (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(value_error(key, format!("{value} is outside {lo}..{hi}")))
+    }
+}
+
+impl Scenario {
+    /// Parses and checks a scenario.
+    pub fn from_toml(text: &str) -> Result<Scenario, ScenarioError> {
+        let scenario: Scenario = toml::from_str(text).map_err(|e| {
+            // toml's messages span lines (source excerpt); keep the first.
+            let message = e
+                .message()
+                .lines()
+                .next()
+                .unwrap_or("syntax error")
+                .to_string();
+            let at = e
+                .span()
+                .map(|s| {
+                    let line = text.get(..s.start).map_or(0, |t| t.lines().count().max(1));
+                    format!(" (line {line})")
+                })
+                .unwrap_or_default();
+            ScenarioError::Syntax(format!("{message}{at}"))
+        })?;
+        scenario.check()?;
+        Ok(scenario)
+    }
+
+    fn check(&self) -> Result<(), ScenarioError> {
+        if let Some(t) = &self.start_time {
+            UtcTime::parse_iso8601(t).map_err(|e| value_error("start_time", e.to_string()))?;
+        }
+        check_finite("time_rate", self.time_rate, -1000.0, 1000.0)?;
+        if let Some(v) = self.visibility_m {
+            check_finite("visibility_m", v, 1.0, 1.0e7)?;
+        }
+        if let Some(f) = &self.fog {
+            if FogMode::parse(f).is_none() {
+                return Err(value_error(
+                    "fog",
+                    format!("\"{f}\" is not off, linear, exp or exp2"),
+                ));
+            }
+        }
+        for (i, m) in self.models.iter().enumerate() {
+            let key = format!("models[{i}]");
+            if m.model.trim().is_empty() {
+                return Err(value_error(format!("{key}.model"), "is empty"));
+            }
+            if m.cigi_type.is_none() && m.dis_type.is_none() {
+                return Err(value_error(key, "names neither cigi_type nor dis_type"));
+            }
+            if let Some(t) = &m.dis_type {
+                if DisTypePattern::parse(t).is_none() {
+                    return Err(value_error(
+                        format!("{key}.dis_type"),
+                        format!("\"{t}\" is not KIND:DOMAIN:COUNTRY:CATEGORY[:SUB[:SPEC[:EXTRA]]]"),
+                    ));
+                }
+            }
+        }
+        let known_model = |name: &str| {
+            cig_scene::models::BUILTIN_MODELS.contains(&name)
+                || self
+                    .models
+                    .iter()
+                    .any(|m| m.model == name && m.gltf.is_some())
+        };
+        let mut names: Vec<(String, &str)> = self
+            .models
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (format!("models[{i}].model"), m.model.as_str()))
+            .collect();
+        names.push(("default_model".to_string(), self.default_model.as_str()));
+        for (i, e) in self.entities.iter().enumerate() {
+            if let Some(m) = &e.model {
+                names.push((format!("entities[{i}].model"), m.as_str()));
+            }
+        }
+        for (key, name) in names {
+            if !known_model(name) {
+                return Err(value_error(
+                    key,
+                    format!(
+                        "\"{name}\" is neither a built-in model ({}) nor a model given a gltf file",
+                        cig_scene::models::BUILTIN_MODELS.join(", ")
+                    ),
+                ));
+            }
+        }
+        let mut ids = std::collections::BTreeSet::new();
+        for (i, e) in self.entities.iter().enumerate() {
+            let key = format!("entities[{i}]");
+            if !ids.insert(e.id) {
+                return Err(value_error(
+                    format!("{key}.id"),
+                    format!("{} is used twice", e.id),
+                ));
+            }
+            check_lat_lon(&key, e.lat_deg, e.lon_deg)?;
+            check_finite(&format!("{key}.alt_m"), e.alt_m, -12_000.0, 1.0e6)?;
+            check_finite(&format!("{key}.heading_deg"), e.heading_deg, -720.0, 720.0)?;
+            check_finite(&format!("{key}.speed_mps"), e.speed_mps, 0.0, 10_000.0)?;
+            for (j, p) in e.path.iter().enumerate() {
+                check_lat_lon(&format!("{key}.path[{j}]"), p[0], p[1])?;
+            }
+            if let Some(id) = &e.dis_id {
+                if parse_dis_id(id).is_none() {
+                    return Err(value_error(
+                        format!("{key}.dis_id"),
+                        format!("\"{id}\" is not SITE:APPLICATION:ENTITY"),
+                    ));
+                }
+            }
+            if let Some(t) = &e.dis_type {
+                if DisTypePattern::parse(t).and_then(|p| p.exact()).is_none() {
+                    return Err(value_error(
+                        format!("{key}.dis_type"),
+                        format!("\"{t}\" is not KIND:DOMAIN:COUNTRY:CATEGORY[:SUB[:SPEC[:EXTRA]]]"),
+                    ));
+                }
+            }
+            if let Some(a) = &e.appearance {
+                if parse_hex_u32(a).is_none() {
+                    return Err(value_error(
+                        format!("{key}.appearance"),
+                        format!("\"{a}\" is not a hexadecimal 32-bit value"),
+                    ));
+                }
+            }
+        }
+        if let Some(v) = &self.view {
+            match (v.entity, v.eye) {
+                (Some(id), None) => {
+                    if !ids.contains(&id) {
+                        return Err(value_error(
+                            "view.entity",
+                            format!("{id} is not an entity of the scenario"),
+                        ));
+                    }
+                }
+                (None, Some(eye)) => {
+                    check_lat_lon("view.eye", eye[0], eye[1])?;
+                    check_finite("view.eye altitude", eye[2], -1000.0, 1.0e7)?;
+                }
+                _ => return Err(value_error("view", "needs exactly one of entity and eye")),
+            }
+            for (i, o) in v.offset_m.iter().enumerate() {
+                check_finite(&format!("view.offset_m[{i}]"), *o, -1.0e6, 1.0e6)?;
+            }
+            for (i, a) in v.hpr_deg.iter().enumerate() {
+                check_finite(&format!("view.hpr_deg[{i}]"), *a, -720.0, 720.0)?;
+            }
+            check_finite("view.fov_deg", v.fov_deg, 0.1, 179.0)?;
+        }
+        if let Some(d) = &self.dis {
+            if d.version != 6 && d.version != 7 {
+                return Err(value_error(
+                    "dis.version",
+                    format!("{} is not 6 or 7", d.version),
+                ));
+            }
+            if d.port == 0 {
+                return Err(value_error("dis.port", "must not be 0"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The start time, when the scenario gives one.
+    pub fn start(&self) -> Option<UtcTime> {
+        self.start_time
+            .as_deref()
+            .and_then(|t| UtcTime::parse_iso8601(t).ok())
+    }
+
+    /// The fog mode, when the scenario gives one.
+    pub fn fog_mode(&self) -> Option<FogMode> {
+        self.fog.as_deref().and_then(FogMode::parse)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FULL: &str = r#"
+name = "range"
+start_time = "2026-06-21T09:30:00Z"
+visibility_m = 15000
+fog = "exp2"
+[[models]]
+model = "tank"
+cigi_type = 1
+dis_type = "1:1:225:1"
+[[entities]]
+id = 1
+model = "tank"
+dis_id = "1:3001:1"
+dis_type = "1:1:225:1:1:0:0"
+lat_deg = 51.0
+lon_deg = -1.5
+clamp = "height_and_attitude"
+speed_mps = 5
+path = [[51.001, -1.5]]
+appearance = "0x8000"
+[view]
+entity = 1
+offset_m = [-20, 0, -5]
+[dis]
+exercise = 3
+delivery = "multicast:239.1.2.3"
+"#;
+
+    #[test]
+    fn a_full_scenario_parses() {
+        let s = Scenario::from_toml(FULL).expect("parses");
+        assert_eq!(s.entities.len(), 1);
+        assert_eq!(s.entities[0].clamp, Clamp::HeightAndAttitude);
+        assert_eq!(s.dis.as_ref().map(|d| d.exercise), Some(3));
+        assert_eq!(s.fog_mode(), Some(FogMode::ExponentialSquared));
+        assert!(s.start().is_some());
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        let bad = FULL.replace("lat_deg = 51.0", "lat_deg = 95.0");
+        let e = Scenario::from_toml(&bad).expect_err("refused").to_string();
+        assert_eq!(e, "entities[0].lat_deg: 95 is outside -90..90");
+        let bad = FULL.replace("fog = \"exp2\"", "fgo = \"exp2\"");
+        let e = Scenario::from_toml(&bad).expect_err("refused").to_string();
+        assert!(
+            e.contains("unknown field `fgo`") && e.contains("line"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
+        let bad = FULL.replace("dis_id = \"1:3001:1\"", "dis_id = \"1:3001\"");
+        assert!(Scenario::from_toml(&bad).is_err());
+        let bad = FULL.replace("entity = 1\n", "entity = 9\n");
+        let e = Scenario::from_toml(&bad).expect_err("refused").to_string();
+        assert!(e.starts_with("view.entity"), "{e}");
+    }
+
+    #[test]
+    fn dis_patterns_match_most_specific() {
+        let t = EntityTypeCode {
+            kind: 1,
+            domain: 1,
+            country: 225,
+            category: 1,
+            subcategory: 3,
+            specific: 0,
+            extra: 0,
+        };
+        let broad = DisTypePattern::parse("1:1:*").expect("pattern");
+        let narrow = DisTypePattern::parse("1:1:225:1:3").expect("pattern");
+        let other = DisTypePattern::parse("1:3").expect("pattern");
+        assert_eq!(broad.specificity(&t), Some(2));
+        assert_eq!(narrow.specificity(&t), Some(5));
+        assert_eq!(other.specificity(&t), None);
+        assert!(DisTypePattern::parse("1:300").is_none());
+        assert!(DisTypePattern::parse("1:1:70000").is_none());
+    }
+}

@@ -1,0 +1,1790 @@
+//! The IG side of a CIGI session: the host's messages applied to the IG's state, and each
+//! frame's message back (Start of Frame, then the answers).
+//!
+//! Algorithm (CIGI ICD 3.3 §2.3 and §4, ICD 4.0 the same with Entity Position / Entity Control
+//! / Velocity Control split): every IG frame the IG sends one message that opens with Start of
+//! Frame (IG frame number, IG mode, database, 10 µs timestamp, and the host frame number of the
+//! last IG Control it received, so the host can measure latency). It applies each host message
+//! as it arrives, in packet order:
+//!
+//! - IG Control: mode (reset clears every entity but the ownship and every standing request),
+//!   host frame number, database request (only the served database exists: any other number is
+//!   answered with -128, "not available").
+//! - Entity Control (3.3), Entity Position + Entity Control (4.0), Conformal Clamped Entity:
+//!   entities are created when first named active, moved, attached to a parent (body-axis
+//!   offsets), clamped to the terrain (non-conformal: altitude is an offset above the terrain;
+//!   conformal: pitch and roll also follow the slope), hidden (inactive) and deleted
+//!   (destroyed). The entity type picks the model through the scenario's table.
+//! - Rate Control / Velocity Control: the IG moves the entity by these rates every frame
+//!   between host updates (world or body axes, and yaw/pitch/roll rates).
+//! - Articulated Part, Short Articulated Part, Component, Short Component, Animation Control:
+//!   kept per entity and reported through Position Request (parts); the built-in models have no
+//!   articulated parts to move.
+//! - View Control and View Definition: views attach to entities with offsets and relative
+//!   orientation, and take asymmetric frusta (left, right, bottom, top half-angles).
+//! - Celestial Sphere: date and time of day set the simulation clock. Atmosphere, Weather
+//!   (global, regional and entity layers), Environmental Region, Maritime and Terrestrial
+//!   Surface Conditions, Wave Control: kept; visibility and fog come from them.
+//! - Sensor Control: sensor modes per view (on/off, polarity, gain, level, track mode).
+//! - HAT/HOT, LOS Segment and Vector, Position and Environmental Conditions requests and
+//!   Collision Detection Segment and Volume definitions: answered in the next frame's message
+//!   (standing requests with an update period every that many frames), from the terrain
+//!   database's query service, the surface the renderer draws at full detail.
+//! - User-defined packets: kept for the caller (`take_user_packets`).
+//!
+//! Limits: line-of-sight and collision segments test the terrain only (not entity geometry);
+//! collision volumes test other entities' volumes as bounding spheres; sensor tracking is not
+//! simulated (a sensor in a track mode reports "searching"); motion trackers and trajectory
+//! packets are not supported (the codec skips them with a warning). Answers that do not fit one
+//! message (over [`MAX_PACKETS_PER_MESSAGE`]) wait for the next frame.
+
+use crate::model_table::{CigiEntityType, ModelTable};
+use crate::pose::{
+    azimuth_elevation_deg, child_pose, direction_enu, displaced, offset_enu, offset_of, point_from,
+    relative, wrap_deg, BodyOffset, Pose,
+};
+use cig_cigi::{
+    AerosolConcentrationResponse, AnimationControl, ArticulatedPart, AtmosphereControl, ByteOrder,
+    CelestialSphereControl, CollisionSegmentDefinition, CollisionSegmentNotification,
+    CollisionVolumeDefinition, CollisionVolumeNotification, EntityControl, EntityControl4,
+    EntityPosition, EnvironmentalConditionsRequest, EnvironmentalRegionControl,
+    HatHotExtendedResponse, HatHotRequest, HatHotResponse, IgControl, ImageGeneratorMessage,
+    LosExtendedResponse, LosResponse, LosSegmentRequest, LosVectorRequest,
+    MaritimeSurfaceConditionsControl, MaritimeSurfaceConditionsResponse, Message, Packet,
+    PositionRequest, PositionResponse, RateControl, SensorControl, SensorExtendedResponse,
+    SensorResponse, StartOfFrame, TerrestrialSurfaceConditionsControl,
+    TerrestrialSurfaceConditionsResponse, UserDefined, Version, ViewControl, ViewDefinition,
+    WaveControl, WeatherConditionsResponse, WeatherControl,
+};
+use cig_environment::UtcTime;
+use cig_geo::Geodetic;
+use cig_scene::snapshot::Clamp;
+use cig_scene::{FovDeg, Hpr};
+use cig_terrain::{QuerySession, SurfacePoint};
+use glam::DVec3;
+use std::collections::{BTreeMap, VecDeque};
+
+/// At most this many packets (Start of Frame included) go in one IG message; a CIGI 3.3
+/// response is at most 64 bytes, so a message stays under 60 kB.
+pub const MAX_PACKETS_PER_MESSAGE: usize = 900;
+
+/// How deep attachment chains may go (longer chains, or cycles, leave the entity unplaced).
+pub const MAX_ATTACH_DEPTH: usize = 16;
+
+/// At most this many entities the host may create.
+pub const MAX_ENTITIES: usize = 65_536;
+
+/// At most this many standing requests of each kind.
+pub const MAX_STANDING_REQUESTS: usize = 4096;
+
+/// An entity's life state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EntityLife {
+    /// Kept but not drawn.
+    Inactive,
+    /// Drawn.
+    Active,
+}
+
+/// How an entity's position is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Placement {
+    /// Latitude, longitude (degrees), altitude above MSL (or above the terrain when clamped).
+    Geodetic {
+        lat_deg: f64,
+        lon_deg: f64,
+        alt_m: f64,
+    },
+    /// Attached to a parent: body-axis offset and orientation relative to the parent.
+    Attached { parent_id: u16, offset: BodyOffset },
+}
+
+/// Linear and angular rates the IG applies between host updates.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rates {
+    /// Linear rates, m/s: body axes (x forward, y right, z down) when `body_axes`, else world
+    /// (x north, y east, z down).
+    pub linear_mps: [f64; 3],
+    /// Roll, pitch, yaw rates, degrees per second.
+    pub angular_dps: [f64; 3],
+    pub body_axes: bool,
+}
+
+/// An articulated part's state.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PartState {
+    pub enabled: bool,
+    pub offset: BodyOffset,
+    pub orientation: Hpr,
+}
+
+/// An entity of the session.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IgEntity {
+    pub id: u16,
+    pub entity_type: CigiEntityType,
+    pub model: String,
+    pub life: EntityLife,
+    pub placement: Placement,
+    /// Orientation: local north-east-down (geodetic placement) or relative to the parent.
+    pub orientation: Hpr,
+    pub clamp: Clamp,
+    pub rates: Option<Rates>,
+    pub alpha: u8,
+    pub collision_detection: bool,
+    pub segments: BTreeMap<u8, CollisionSegmentDefinition>,
+    pub volumes: BTreeMap<u8, CollisionVolumeDefinition>,
+    pub parts: BTreeMap<u8, PartState>,
+    pub animations: BTreeMap<u16, AnimationControl>,
+    /// The host has never placed it (it came from the scenario and follows its script).
+    pub scripted: bool,
+}
+
+impl IgEntity {
+    /// A new active entity at a geodetic place.
+    pub fn new(id: u16, entity_type: CigiEntityType, model: String) -> IgEntity {
+        IgEntity {
+            id,
+            entity_type,
+            model,
+            life: EntityLife::Active,
+            placement: Placement::Geodetic {
+                lat_deg: 0.0,
+                lon_deg: 0.0,
+                alt_m: 0.0,
+            },
+            orientation: Hpr::default(),
+            clamp: Clamp::None,
+            rates: None,
+            alpha: 255,
+            collision_detection: false,
+            segments: BTreeMap::new(),
+            volumes: BTreeMap::new(),
+            parts: BTreeMap::new(),
+            animations: BTreeMap::new(),
+            scripted: false,
+        }
+    }
+}
+
+/// A view of the session.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IgView {
+    pub id: u16,
+    pub group_id: u8,
+    pub entity_id: u16,
+    pub offset: BodyOffset,
+    pub orientation: Hpr,
+    /// Frustum half-angles; `None` until a View Definition gives them.
+    pub fov: Option<FovDeg>,
+}
+
+/// A sensor's selected mode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorMode {
+    pub view_id: u16,
+    pub sensor_id: u8,
+    pub on: bool,
+    pub black_hot: bool,
+    pub gain: f64,
+    pub level: f64,
+    pub noise: f64,
+    pub track_mode: u8,
+    pub extended_response: bool,
+}
+
+/// The weather and surface state the host has set.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EnvironmentState {
+    pub atmosphere: Option<AtmosphereControl>,
+    pub celestial: Option<CelestialSphereControl>,
+    /// Weather layers by (scope, entity or region, layer).
+    pub weather: BTreeMap<(u8, u16, u8), WeatherControl>,
+    pub regions: BTreeMap<u16, EnvironmentalRegionControl>,
+    pub maritime: BTreeMap<(u8, u16), MaritimeSurfaceConditionsControl>,
+    pub waves: BTreeMap<(u8, u16, u8), WaveControl>,
+    pub terrestrial: BTreeMap<(u8, u16, u16), TerrestrialSurfaceConditionsControl>,
+}
+
+/// Weather scopes of CIGI's Weather Control.
+const SCOPE_GLOBAL: u8 = 0;
+const SCOPE_REGIONAL: u8 = 1;
+
+/// Standard atmosphere at sea level, used where the host set none.
+const DEFAULT_TEMPERATURE_C: f32 = 15.0;
+const DEFAULT_PRESSURE_MBAR: f32 = 1013.25;
+
+impl EnvironmentState {
+    /// Whether a point lies in a region (its rounded rectangle, rotation included).
+    fn region_contains(region: &EnvironmentalRegionControl, point: Geodetic) -> bool {
+        if region.region_state == 0 {
+            return false;
+        }
+        let centre = Geodetic::new(region.latitude_deg, region.longitude_deg, point.alt_m);
+        let enu = cig_geo::EnuFrame::new(centre).geodetic_to_enu(point);
+        let (s, c) = f64::from(region.rotation_deg).to_radians().sin_cos();
+        // Region X is along the rotated north axis' perpendicular (east at rotation 0).
+        let x = enu.x * c - enu.y * s;
+        let y = enu.x * s + enu.y * c;
+        x.abs() <= f64::from(region.size_x_m) / 2.0 && y.abs() <= f64::from(region.size_y_m) / 2.0
+    }
+
+    /// The weather layers that apply at a point: regional ones where the point is inside an
+    /// active region, else global ones (entity-scoped layers are not positional).
+    fn layers_at(&self, point: Geodetic) -> Vec<&WeatherControl> {
+        let regional: Vec<&WeatherControl> = self
+            .weather
+            .iter()
+            .filter(|((scope, region, _), w)| {
+                *scope == SCOPE_REGIONAL
+                    && w.weather_enable
+                    && self
+                        .regions
+                        .get(region)
+                        .is_some_and(|r| Self::region_contains(r, point))
+            })
+            .map(|(_, w)| w)
+            .collect();
+        if !regional.is_empty() {
+            return regional;
+        }
+        self.weather
+            .iter()
+            .filter(|((scope, _, _), w)| *scope == SCOPE_GLOBAL && w.weather_enable)
+            .map(|(_, w)| w)
+            .collect()
+    }
+
+    /// Visibility at a point (altitude above MSL): the global atmosphere's, reduced inside any
+    /// weather layer containing the point (ground fog, clouds) and below precipitation layers'
+    /// tops (rain, snow, sleet, hail, sand, dust: layers 4-9).
+    pub fn visibility_at_m(&self, point: Geodetic, default_m: f64) -> f64 {
+        let mut visibility = self
+            .atmosphere
+            .as_ref()
+            .map(|a| f64::from(a.visibility_range_m))
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .unwrap_or(default_m);
+        for layer in self.layers_at(point) {
+            let base = f64::from(layer.base_elevation_m);
+            let top = base + f64::from(layer.thickness_m);
+            let inside = match layer.layer_id {
+                0..=3 => point.alt_m >= base && point.alt_m <= top,
+                _ => point.alt_m <= top,
+            };
+            let v = f64::from(layer.visibility_range_m);
+            if inside && v.is_finite() && v > 0.0 {
+                visibility = visibility.min(v);
+            }
+        }
+        visibility
+    }
+
+    fn weather_response(
+        &self,
+        request_id: u8,
+        point: Geodetic,
+        default_vis_m: f64,
+    ) -> WeatherConditionsResponse {
+        let a = self.atmosphere.clone().unwrap_or(AtmosphereControl {
+            humidity_pct: 50,
+            air_temperature_c: DEFAULT_TEMPERATURE_C,
+            visibility_range_m: default_vis_m as f32,
+            barometric_pressure_mbar: DEFAULT_PRESSURE_MBAR,
+            ..AtmosphereControl::default()
+        });
+        let mut response = WeatherConditionsResponse {
+            request_id,
+            humidity_pct: a.humidity_pct,
+            air_temperature_c: a.air_temperature_c,
+            visibility_range_m: self.visibility_at_m(point, default_vis_m) as f32,
+            horizontal_wind_speed_mps: a.horizontal_wind_speed_mps,
+            vertical_wind_speed_mps: a.vertical_wind_speed_mps,
+            wind_direction_deg: a.wind_direction_deg,
+            barometric_pressure_mbar: a.barometric_pressure_mbar,
+        };
+        // A layer containing the point overrides the air it holds.
+        for layer in self.layers_at(point) {
+            let base = f64::from(layer.base_elevation_m);
+            if point.alt_m >= base && point.alt_m <= base + f64::from(layer.thickness_m) {
+                response.humidity_pct = layer.humidity_pct;
+                response.air_temperature_c = layer.air_temperature_c;
+                response.horizontal_wind_speed_mps = layer.horizontal_wind_speed_mps;
+                response.vertical_wind_speed_mps = layer.vertical_wind_speed_mps;
+                response.wind_direction_deg = layer.wind_direction_deg;
+                response.barometric_pressure_mbar = layer.barometric_pressure_mbar;
+            }
+        }
+        response
+    }
+}
+
+/// A request waiting for its answer (standing ones carry their period).
+#[derive(Clone, Debug)]
+struct Pending<T> {
+    request: T,
+    host_frame_lsn: u8,
+    /// Frames until the next answer (0: this frame).
+    countdown: u8,
+}
+
+/// Counters of what the session has done.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SessionCounters {
+    pub messages_applied: u64,
+    pub packets_applied: u64,
+    pub packets_ignored: u64,
+    pub hat_hot_answered: u64,
+    pub los_answered: u64,
+    pub position_answered: u64,
+    pub environment_answered: u64,
+    pub collisions_reported: u64,
+    pub answers_deferred: u64,
+}
+
+/// Configuration of a session.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SessionConfig {
+    /// The database number the IG reports (the one it serves).
+    pub database_number: i8,
+    /// Visibility where the host sets none, metres.
+    pub default_visibility_m: f64,
+}
+
+impl Default for SessionConfig {
+    fn default() -> Self {
+        SessionConfig {
+            database_number: 1,
+            default_visibility_m: 40_000.0,
+        }
+    }
+}
+
+/// The IG's CIGI state.
+pub struct IgSession {
+    config: SessionConfig,
+    models: ModelTable,
+    entities: BTreeMap<u16, IgEntity>,
+    views: BTreeMap<u16, IgView>,
+    sensors: BTreeMap<(u16, u8), SensorMode>,
+    environment: EnvironmentState,
+    hat_hot: BTreeMap<u16, Pending<HatHotRequest>>,
+    los_segment: BTreeMap<u16, Pending<LosSegmentRequest>>,
+    los_vector: BTreeMap<u16, Pending<LosVectorRequest>>,
+    position: BTreeMap<(u8, u16, u8), Pending<PositionRequest>>,
+    environment_requests: Vec<(EnvironmentalConditionsRequest, u8)>,
+    deferred: VecDeque<Packet>,
+    ig_messages: VecDeque<String>,
+    user_packets: Vec<UserDefined>,
+    /// Host version and byte order, from the last message.
+    host_format: Option<(Version, ByteOrder)>,
+    ig_mode: u8,
+    ig_frame_number: u32,
+    last_host_frame_number: u32,
+    requested_database: i8,
+    time_set: Option<UtcTime>,
+    poses: BTreeMap<u16, Pose>,
+    counters: SessionCounters,
+}
+
+fn geodetic_msl(lat_deg: f64, lon_deg: f64, alt_msl_m: f64, query: &QuerySession) -> Geodetic {
+    Geodetic::new(
+        lat_deg,
+        lon_deg,
+        alt_msl_m + query.geoid_undulation_m(lat_deg, lon_deg),
+    )
+}
+
+fn msl_altitude(point: Geodetic, query: &QuerySession) -> f64 {
+    point.alt_m - query.geoid_undulation_m(point.lat_deg, point.lon_deg)
+}
+
+fn finite3(a: f64, b: f64, c: f64) -> bool {
+    a.is_finite() && b.is_finite() && c.is_finite()
+}
+
+fn hpr_f32(yaw: f32, pitch: f32, roll: f32) -> Option<Hpr> {
+    let h = Hpr {
+        heading_deg: f64::from(yaw),
+        pitch_deg: f64::from(pitch),
+        roll_deg: f64::from(roll),
+    };
+    finite3(h.heading_deg, h.pitch_deg, h.roll_deg).then_some(h)
+}
+
+/// Azimuth and elevation of a surface normal, degrees.
+fn normal_az_el(surface: &SurfacePoint) -> (f32, f32) {
+    let [e, n, u] = surface.normal_enu;
+    let (az, el) = azimuth_elevation_deg(DVec3::new(e, n, u));
+    (az as f32, el as f32)
+}
+
+impl IgSession {
+    pub fn new(config: SessionConfig, models: ModelTable) -> IgSession {
+        IgSession {
+            requested_database: config.database_number,
+            config,
+            models,
+            entities: BTreeMap::new(),
+            views: BTreeMap::new(),
+            sensors: BTreeMap::new(),
+            environment: EnvironmentState::default(),
+            hat_hot: BTreeMap::new(),
+            los_segment: BTreeMap::new(),
+            los_vector: BTreeMap::new(),
+            position: BTreeMap::new(),
+            environment_requests: Vec::new(),
+            deferred: VecDeque::new(),
+            ig_messages: VecDeque::new(),
+            user_packets: Vec::new(),
+            host_format: None,
+            ig_mode: 1,
+            ig_frame_number: 0,
+            last_host_frame_number: 0,
+            time_set: None,
+            poses: BTreeMap::new(),
+            counters: SessionCounters::default(),
+        }
+    }
+
+    pub fn models(&self) -> &ModelTable {
+        &self.models
+    }
+    pub fn entities(&self) -> &BTreeMap<u16, IgEntity> {
+        &self.entities
+    }
+    pub fn views(&self) -> &BTreeMap<u16, IgView> {
+        &self.views
+    }
+    pub fn sensors(&self) -> &BTreeMap<(u16, u8), SensorMode> {
+        &self.sensors
+    }
+    pub fn environment(&self) -> &EnvironmentState {
+        &self.environment
+    }
+    pub fn counters(&self) -> SessionCounters {
+        self.counters
+    }
+    pub fn ig_frame_number(&self) -> u32 {
+        self.ig_frame_number
+    }
+    pub fn last_host_frame_number(&self) -> u32 {
+        self.last_host_frame_number
+    }
+    pub fn ig_mode(&self) -> u8 {
+        self.ig_mode
+    }
+    /// The version and byte order of the host's last message.
+    pub fn host_format(&self) -> Option<(Version, ByteOrder)> {
+        self.host_format
+    }
+    /// Poses resolved by the last [`IgSession::resolve_poses`], altitudes above the ellipsoid.
+    pub fn poses(&self) -> &BTreeMap<u16, Pose> {
+        &self.poses
+    }
+    /// A time the host set with Celestial Sphere Control since the last call.
+    pub fn take_time_set(&mut self) -> Option<UtcTime> {
+        self.time_set.take()
+    }
+    /// User-defined packets received since the last call.
+    pub fn take_user_packets(&mut self) -> Vec<UserDefined> {
+        std::mem::take(&mut self.user_packets)
+    }
+    /// Queues an IG Message for the host (deduplicated; at most 16 wait).
+    pub fn tell_host(&mut self, text: String) {
+        if !self.ig_messages.contains(&text) && self.ig_messages.len() < 16 {
+            self.ig_messages.push_back(text);
+        }
+    }
+
+    /// Adds or replaces an entity (the scenario's entities enter this way).
+    pub fn insert_entity(&mut self, entity: IgEntity) {
+        self.entities.insert(entity.id, entity);
+    }
+
+    /// Mutable access for the scenario's scripts (they move only entities still `scripted`).
+    pub fn entity_mut(&mut self, id: u16) -> Option<&mut IgEntity> {
+        self.entities.get_mut(&id)
+    }
+
+    /// Applies one host message.
+    pub fn apply(&mut self, message: &Message) {
+        self.host_format = Some((message.version, message.byte_order));
+        self.counters.messages_applied += 1;
+        let mut host_frame_lsn = (self.last_host_frame_number & 0xF) as u8;
+        for packet in &message.packets {
+            if let Packet::IgControl(c) = packet {
+                host_frame_lsn = (c.host_frame_number & 0xF) as u8;
+            }
+            if self.apply_packet(packet, host_frame_lsn) {
+                self.counters.packets_applied += 1;
+            } else {
+                self.counters.packets_ignored += 1;
+            }
+        }
+    }
+
+    fn entity_or_create(&mut self, id: u16, entity_type: CigiEntityType) -> Option<&mut IgEntity> {
+        if !self.entities.contains_key(&id) {
+            if self.entities.len() >= MAX_ENTITIES {
+                return None;
+            }
+            let model = self.models.model_for_cigi(entity_type).to_string();
+            self.entities
+                .insert(id, IgEntity::new(id, entity_type, model));
+        }
+        let entity = self.entities.get_mut(&id)?;
+        if entity.entity_type != entity_type {
+            entity.entity_type = entity_type;
+            entity.model = self.models.model_for_cigi(entity_type).to_string();
+        }
+        Some(entity)
+    }
+
+    fn reset(&mut self) {
+        self.entities.retain(|id, _| *id == 0);
+        self.hat_hot.clear();
+        self.los_segment.clear();
+        self.los_vector.clear();
+        self.position.clear();
+        self.environment_requests.clear();
+        self.deferred.clear();
+    }
+
+    /// Applies one packet; `false` when it was not applicable (counted as ignored).
+    fn apply_packet(&mut self, packet: &Packet, host_frame_lsn: u8) -> bool {
+        match packet {
+            Packet::IgControl(c) => self.apply_ig_control(c),
+            Packet::EntityControl(c) => self.apply_entity_control_3(c),
+            Packet::EntityPosition(p) => self.apply_entity_position(p),
+            Packet::EntityControl4(c) => self.apply_entity_control_4(c),
+            Packet::ConformalClampedEntity(c) => {
+                let Some(e) = self.entities.get_mut(&c.entity_id) else {
+                    return false;
+                };
+                if !(c.latitude_deg.is_finite()
+                    && c.longitude_deg.is_finite()
+                    && c.yaw_deg.is_finite())
+                {
+                    return false;
+                }
+                let alt_m = match e.placement {
+                    Placement::Geodetic { alt_m, .. } if e.clamp != Clamp::None => alt_m,
+                    _ => 0.0,
+                };
+                e.placement = Placement::Geodetic {
+                    lat_deg: c.latitude_deg,
+                    lon_deg: c.longitude_deg,
+                    alt_m,
+                };
+                e.orientation.heading_deg = f64::from(c.yaw_deg);
+                e.clamp = Clamp::HeightAndAttitude;
+                e.scripted = false;
+                true
+            }
+            Packet::RateControl(r) => self.apply_rates(r),
+            Packet::ArticulatedPart(p) => self.apply_part(p),
+            Packet::ShortArticulatedPart(p) => {
+                let Some(e) = self.entities.get_mut(&p.entity_id) else {
+                    return false;
+                };
+                for (id, dof, enable, value) in [
+                    (p.part_id_1, p.dof_select_1, p.part_enable_1, p.dof_1),
+                    (p.part_id_2, p.dof_select_2, p.part_enable_2, p.dof_2),
+                ] {
+                    if dof == 0 || !value.is_finite() {
+                        continue;
+                    }
+                    let part = e.parts.entry(id).or_default();
+                    part.enabled = enable;
+                    let v = f64::from(value);
+                    match dof {
+                        1 => part.offset.x_m = v,
+                        2 => part.offset.y_m = v,
+                        3 => part.offset.z_m = v,
+                        4 => part.orientation.heading_deg = v,
+                        5 => part.orientation.pitch_deg = v,
+                        _ => part.orientation.roll_deg = v,
+                    }
+                }
+                true
+            }
+            Packet::AnimationControl(a) => match self.entities.get_mut(&a.entity_id) {
+                Some(e) => {
+                    e.animations.insert(a.animation_id, a.clone());
+                    true
+                }
+                None => false,
+            },
+            Packet::ComponentControl(_) | Packet::ShortComponentControl(_) => {
+                // No component of the built-in models or the environment is defined yet.
+                false
+            }
+            Packet::CelestialSphereControl(c) => {
+                if c.date_time_valid {
+                    let month = c.date_mmddyyyy / 1_000_000;
+                    let day = (c.date_mmddyyyy / 10_000) % 100;
+                    let year = (c.date_mmddyyyy % 10_000) as i32;
+                    let seconds = if c.seconds.is_finite() {
+                        f64::from(c.seconds).clamp(0.0, 59.999)
+                    } else {
+                        0.0
+                    };
+                    match UtcTime::from_calendar(
+                        year,
+                        month,
+                        day,
+                        u32::from(c.hour),
+                        u32::from(c.minute),
+                        seconds,
+                    ) {
+                        Ok(t) => self.time_set = Some(t),
+                        Err(e) => {
+                            self.tell_host(format!("Celestial Sphere Control: {e}"));
+                            return false;
+                        }
+                    }
+                }
+                self.environment.celestial = Some(c.clone());
+                true
+            }
+            Packet::AtmosphereControl(a) => {
+                self.environment.atmosphere = Some(a.clone());
+                true
+            }
+            Packet::EnvironmentalRegionControl(r) => {
+                if r.region_state == 2 {
+                    self.environment.regions.remove(&r.region_id);
+                } else {
+                    self.environment.regions.insert(r.region_id, r.clone());
+                }
+                true
+            }
+            Packet::WeatherControl(w) => {
+                self.environment
+                    .weather
+                    .insert((w.scope, w.entity_or_region_id, w.layer_id), w.clone());
+                true
+            }
+            Packet::MaritimeSurfaceConditionsControl(m) => {
+                self.environment
+                    .maritime
+                    .insert((m.scope, m.entity_or_region_id), m.clone());
+                true
+            }
+            Packet::WaveControl(w) => {
+                self.environment
+                    .waves
+                    .insert((w.scope, w.entity_or_region_id, w.wave_id), w.clone());
+                true
+            }
+            Packet::TerrestrialSurfaceConditionsControl(t) => {
+                self.environment.terrestrial.insert(
+                    (t.scope, t.entity_or_region_id, t.surface_condition_id),
+                    t.clone(),
+                );
+                true
+            }
+            Packet::ViewControl(v) => self.apply_view_control(v),
+            Packet::ViewDefinition(d) => self.apply_view_definition(d),
+            Packet::SensorControl(s) => self.apply_sensor(s),
+            Packet::CollisionSegmentDefinition(s) => match self.entities.get_mut(&s.entity_id) {
+                Some(e) => {
+                    e.segments.insert(s.segment_id, s.clone());
+                    true
+                }
+                None => false,
+            },
+            Packet::CollisionVolumeDefinition(v) => match self.entities.get_mut(&v.entity_id) {
+                Some(e) => {
+                    e.volumes.insert(v.volume_id, v.clone());
+                    true
+                }
+                None => false,
+            },
+            Packet::HatHotRequest(r) => {
+                standing(&mut self.hat_hot, r.hat_hot_id, r.clone(), host_frame_lsn)
+            }
+            Packet::LosSegmentRequest(r) => {
+                standing(&mut self.los_segment, r.los_id, r.clone(), host_frame_lsn)
+            }
+            Packet::LosVectorRequest(r) => {
+                standing(&mut self.los_vector, r.los_id, r.clone(), host_frame_lsn)
+            }
+            Packet::PositionRequest(r) => {
+                let key = (r.object_class, r.object_id, r.part_id);
+                standing(&mut self.position, key, r.clone(), host_frame_lsn)
+            }
+            Packet::EnvironmentalConditionsRequest(r)
+                if self.environment_requests.len() < MAX_STANDING_REQUESTS =>
+            {
+                self.environment_requests.push((r.clone(), host_frame_lsn));
+                true
+            }
+            Packet::UserDefined(u) => {
+                if self.user_packets.len() < MAX_STANDING_REQUESTS {
+                    self.user_packets.push(u.clone());
+                }
+                true
+            }
+            // Packets an IG sends, not receives.
+            _ => false,
+        }
+    }
+
+    fn apply_ig_control(&mut self, c: &IgControl) -> bool {
+        if c.ig_mode == 0 && self.ig_mode != 0 {
+            self.reset();
+        }
+        self.ig_mode = c.ig_mode;
+        self.last_host_frame_number = c.host_frame_number;
+        if c.database_number != 0 {
+            self.requested_database = c.database_number;
+            if c.database_number != self.config.database_number {
+                self.tell_host(format!(
+                    "database {} is not available; this IG serves database {}",
+                    c.database_number, self.config.database_number
+                ));
+            }
+        }
+        true
+    }
+
+    fn apply_entity_control_3(&mut self, c: &EntityControl) -> bool {
+        if c.entity_state == 2 {
+            return self.entities.remove(&c.entity_id).is_some();
+        }
+        if !finite3(c.lat_deg_or_x_m, c.lon_deg_or_y_m, c.alt_m_or_z_m) {
+            return false;
+        }
+        let Some(orientation) = hpr_f32(c.yaw_deg, c.pitch_deg, c.roll_deg) else {
+            return false;
+        };
+        if !c.attach && (c.lat_deg_or_x_m.abs() > 90.0 || c.lon_deg_or_y_m.abs() > 360.0) {
+            return false;
+        }
+        let Some(e) = self.entity_or_create(c.entity_id, CigiEntityType::Short(c.entity_type))
+        else {
+            return false;
+        };
+        e.life = if c.entity_state == 1 {
+            EntityLife::Active
+        } else {
+            EntityLife::Inactive
+        };
+        e.alpha = c.alpha;
+        e.collision_detection = c.collision_detection_enable;
+        set_placement(
+            e,
+            c.attach,
+            c.parent_id,
+            [c.lat_deg_or_x_m, c.lon_deg_or_y_m, c.alt_m_or_z_m],
+            orientation,
+            c.ground_ocean_clamp,
+        );
+        true
+    }
+
+    fn apply_entity_position(&mut self, p: &EntityPosition) -> bool {
+        if !finite3(p.lat_deg_or_x_m, p.lon_deg_or_y_m, p.alt_m_or_z_m) {
+            return false;
+        }
+        let Some(orientation) = hpr_f32(p.yaw_deg, p.pitch_deg, p.roll_deg) else {
+            return false;
+        };
+        if !p.attach && (p.lat_deg_or_x_m.abs() > 90.0 || p.lon_deg_or_y_m.abs() > 360.0) {
+            return false;
+        }
+        let entity_type = self
+            .entities
+            .get(&p.entity_id)
+            .map_or(CigiEntityType::Short(0), |e| e.entity_type);
+        let Some(e) = self.entity_or_create(p.entity_id, entity_type) else {
+            return false;
+        };
+        set_placement(
+            e,
+            p.attach,
+            p.parent_id,
+            [p.lat_deg_or_x_m, p.lon_deg_or_y_m, p.alt_m_or_z_m],
+            orientation,
+            p.ground_ocean_clamp,
+        );
+        true
+    }
+
+    fn apply_entity_control_4(&mut self, c: &EntityControl4) -> bool {
+        if c.entity_state == 2 {
+            return self.entities.remove(&c.entity_id).is_some();
+        }
+        let entity_type = if c.extended_entity_type {
+            CigiEntityType::Dis(cig_dis::EntityTypeCode {
+                kind: c.entity_kind,
+                domain: c.entity_domain,
+                country: c.entity_type_or_country,
+                category: c.entity_category,
+                subcategory: c.entity_subcategory,
+                specific: c.entity_specific,
+                extra: c.entity_extra,
+            })
+        } else {
+            CigiEntityType::Short(c.entity_type_or_country)
+        };
+        let Some(e) = self.entity_or_create(c.entity_id, entity_type) else {
+            return false;
+        };
+        e.life = if c.entity_state == 1 {
+            EntityLife::Active
+        } else {
+            EntityLife::Inactive
+        };
+        e.alpha = c.alpha;
+        e.collision_detection = c.collision_detection_enable;
+        true
+    }
+
+    fn apply_rates(&mut self, r: &RateControl) -> bool {
+        let values = [
+            r.x_rate_mps,
+            r.y_rate_mps,
+            r.z_rate_mps,
+            r.roll_rate_dps,
+            r.pitch_rate_dps,
+            r.yaw_rate_dps,
+        ];
+        if values.iter().any(|v| !v.is_finite()) {
+            return false;
+        }
+        let Some(e) = self.entities.get_mut(&r.entity_id) else {
+            return false;
+        };
+        if r.apply_to_part {
+            // Part rates: the parts have no geometry to move; keep the part enabled.
+            e.parts.entry(r.part_id).or_default();
+            return true;
+        }
+        let rates = Rates {
+            linear_mps: [
+                f64::from(r.x_rate_mps),
+                f64::from(r.y_rate_mps),
+                f64::from(r.z_rate_mps),
+            ],
+            angular_dps: [
+                f64::from(r.roll_rate_dps),
+                f64::from(r.pitch_rate_dps),
+                f64::from(r.yaw_rate_dps),
+            ],
+            body_axes: r.coordinate_system_local,
+        };
+        e.rates = (rates
+            != Rates {
+                body_axes: rates.body_axes,
+                ..Rates::default()
+            })
+        .then_some(rates);
+        true
+    }
+
+    fn apply_part(&mut self, p: &ArticulatedPart) -> bool {
+        let Some(e) = self.entities.get_mut(&p.entity_id) else {
+            return false;
+        };
+        let part = e.parts.entry(p.part_id).or_default();
+        part.enabled = p.part_enable;
+        let set = |enable: bool, value: f32, slot: &mut f64| {
+            if enable && value.is_finite() {
+                *slot = f64::from(value);
+            }
+        };
+        set(p.x_offset_enable, p.x_offset_m, &mut part.offset.x_m);
+        set(p.y_offset_enable, p.y_offset_m, &mut part.offset.y_m);
+        set(p.z_offset_enable, p.z_offset_m, &mut part.offset.z_m);
+        set(p.roll_enable, p.roll_deg, &mut part.orientation.roll_deg);
+        set(p.pitch_enable, p.pitch_deg, &mut part.orientation.pitch_deg);
+        set(p.yaw_enable, p.yaw_deg, &mut part.orientation.heading_deg);
+        true
+    }
+
+    fn apply_view_control(&mut self, v: &ViewControl) -> bool {
+        let view = self.views.entry(v.view_id).or_insert(IgView {
+            id: v.view_id,
+            group_id: v.group_id,
+            entity_id: v.entity_id,
+            offset: BodyOffset::default(),
+            orientation: Hpr::default(),
+            fov: None,
+        });
+        view.group_id = v.group_id;
+        view.entity_id = v.entity_id;
+        let set = |enable: bool, value: f32, slot: &mut f64| {
+            if enable && value.is_finite() {
+                *slot = f64::from(value);
+            }
+        };
+        set(v.x_offset_enable, v.x_offset_m, &mut view.offset.x_m);
+        set(v.y_offset_enable, v.y_offset_m, &mut view.offset.y_m);
+        set(v.z_offset_enable, v.z_offset_m, &mut view.offset.z_m);
+        set(v.roll_enable, v.roll_deg, &mut view.orientation.roll_deg);
+        set(v.pitch_enable, v.pitch_deg, &mut view.orientation.pitch_deg);
+        set(v.yaw_enable, v.yaw_deg, &mut view.orientation.heading_deg);
+        true
+    }
+
+    fn apply_view_definition(&mut self, d: &ViewDefinition) -> bool {
+        let view = self.views.entry(d.view_id).or_insert(IgView {
+            id: d.view_id,
+            group_id: d.group_id,
+            entity_id: 0,
+            offset: BodyOffset::default(),
+            orientation: Hpr::default(),
+            fov: None,
+        });
+        let mut fov = view.fov.unwrap_or(FovDeg::symmetric(60.0, 45.0));
+        let set = |enable: bool, value: f32, slot: &mut f64| {
+            if enable && value.is_finite() {
+                *slot = f64::from(value).abs();
+            }
+        };
+        set(d.left_enable, d.left_deg, &mut fov.left_deg);
+        set(d.right_enable, d.right_deg, &mut fov.right_deg);
+        set(d.bottom_enable, d.bottom_deg, &mut fov.down_deg);
+        set(d.top_enable, d.top_deg, &mut fov.up_deg);
+        let ok = [fov.left_deg, fov.right_deg, fov.down_deg, fov.up_deg]
+            .iter()
+            .all(|a| *a < 89.9)
+            && fov.left_deg + fov.right_deg > 0.01
+            && fov.down_deg + fov.up_deg > 0.01;
+        if ok {
+            view.fov = Some(fov);
+            true
+        } else {
+            let id = d.view_id;
+            self.tell_host(format!(
+                "View Definition {id}: the frustum is empty or too wide"
+            ));
+            false
+        }
+    }
+
+    fn apply_sensor(&mut self, s: &SensorControl) -> bool {
+        let finite = [s.gain, s.level, s.noise].iter().all(|v| v.is_finite());
+        if !finite {
+            return false;
+        }
+        self.sensors.insert(
+            (s.view_id, s.sensor_id),
+            SensorMode {
+                view_id: s.view_id,
+                sensor_id: s.sensor_id,
+                on: s.sensor_on,
+                black_hot: s.polarity_black_hot,
+                gain: f64::from(s.gain).clamp(0.0, 1.0),
+                level: f64::from(s.level).clamp(0.0, 1.0),
+                noise: f64::from(s.noise).clamp(0.0, 1.0),
+                track_mode: s.track_mode,
+                extended_response: s.response_type_extended,
+            },
+        );
+        true
+    }
+
+    /// Moves entities by their rates over `dt_s` seconds (between host updates).
+    pub fn advance(&mut self, dt_s: f64, query: &QuerySession) {
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return;
+        }
+        for e in self.entities.values_mut() {
+            let Some(rates) = e.rates else { continue };
+            let [x, y, z] = rates.linear_mps;
+            let [roll, pitch, yaw] = rates.angular_dps;
+            match &mut e.placement {
+                Placement::Geodetic {
+                    lat_deg,
+                    lon_deg,
+                    alt_m,
+                } => {
+                    let enu = if rates.body_axes {
+                        offset_enu(
+                            e.orientation,
+                            BodyOffset {
+                                x_m: x * dt_s,
+                                y_m: y * dt_s,
+                                z_m: z * dt_s,
+                            },
+                        )
+                    } else {
+                        DVec3::new(y, x, -z) * dt_s
+                    };
+                    let here = geodetic_msl(*lat_deg, *lon_deg, *alt_m, query);
+                    let there = displaced(here, enu);
+                    *lat_deg = there.lat_deg;
+                    *lon_deg = there.lon_deg;
+                    *alt_m += enu.z;
+                }
+                Placement::Attached { offset, .. } => {
+                    offset.x_m += x * dt_s;
+                    offset.y_m += y * dt_s;
+                    offset.z_m += z * dt_s;
+                }
+            }
+            e.orientation.heading_deg = wrap_deg(e.orientation.heading_deg + yaw * dt_s);
+            e.orientation.pitch_deg = (e.orientation.pitch_deg + pitch * dt_s).clamp(-90.0, 90.0);
+            e.orientation.roll_deg =
+                (e.orientation.roll_deg + roll * dt_s + 180.0).rem_euclid(360.0) - 180.0;
+        }
+    }
+
+    /// Resolves every entity's pose (clamping through the terrain, attachments through their
+    /// parents). Entities whose chain is broken, cyclic or off the database are left out and
+    /// reported to the host once.
+    pub fn resolve_poses(&mut self, query: &mut QuerySession) {
+        let mut poses = BTreeMap::new();
+        let ids: Vec<u16> = self.entities.keys().copied().collect();
+        let mut problems = Vec::new();
+        for id in ids {
+            if let Err(problem) = self.resolve_one(id, query, &mut poses, 0) {
+                problems.push(problem);
+            }
+        }
+        for p in problems {
+            self.tell_host(p);
+        }
+        self.poses = poses;
+    }
+
+    fn resolve_one(
+        &self,
+        id: u16,
+        query: &mut QuerySession,
+        poses: &mut BTreeMap<u16, Pose>,
+        depth: usize,
+    ) -> Result<Pose, String> {
+        if let Some(p) = poses.get(&id) {
+            return Ok(*p);
+        }
+        if depth > MAX_ATTACH_DEPTH {
+            return Err(format!("entity {id}: attachment chain too deep or cyclic"));
+        }
+        let e = self
+            .entities
+            .get(&id)
+            .ok_or_else(|| format!("entity {id} does not exist"))?;
+        let pose = match e.placement {
+            Placement::Geodetic {
+                lat_deg,
+                lon_deg,
+                alt_m,
+            } => {
+                let mut orientation = e.orientation;
+                let position = if e.clamp == Clamp::None {
+                    geodetic_msl(lat_deg, lon_deg, alt_m, query)
+                } else {
+                    let spec = cig_scene::snapshot::EntitySpec {
+                        id: u32::from(id),
+                        model: String::new(),
+                        position: Geodetic::new(lat_deg, lon_deg, alt_m),
+                        orientation,
+                        clamp: e.clamp,
+                    };
+                    let placed = cig_scene::snapshot::place_entity(query, &spec)
+                        .map_err(|err| format!("entity {id} cannot be clamped: {err}"))?;
+                    orientation = placed.orientation;
+                    placed.position
+                };
+                Pose {
+                    position,
+                    orientation,
+                }
+            }
+            Placement::Attached { parent_id, offset } => {
+                let parent = self
+                    .resolve_one(parent_id, query, poses, depth + 1)
+                    .map_err(|err| {
+                        format!("entity {id} is attached to a parent that cannot be placed ({err})")
+                    })?;
+                child_pose(parent, offset, e.orientation)
+            }
+        };
+        poses.insert(id, pose);
+        Ok(pose)
+    }
+
+    /// The pose of a view: its entity's pose with the view's offset and orientation.
+    pub fn view_pose(&self, view: &IgView) -> Option<Pose> {
+        let parent = self.poses.get(&view.entity_id)?;
+        Some(child_pose(*parent, view.offset, view.orientation))
+    }
+
+    /// The point a request names: geodetic (MSL altitude) or an offset from an entity.
+    fn request_point(
+        &self,
+        entity_relative: bool,
+        entity_id: u16,
+        values: [f64; 3],
+        query: &QuerySession,
+    ) -> Option<Geodetic> {
+        if !finite3(values[0], values[1], values[2]) {
+            return None;
+        }
+        if entity_relative {
+            let pose = self.poses.get(&entity_id)?;
+            Some(point_from(
+                *pose,
+                BodyOffset {
+                    x_m: values[0],
+                    y_m: values[1],
+                    z_m: values[2],
+                },
+            ))
+        } else {
+            if values[0].abs() > 90.0 || values[1].abs() > 360.0 {
+                return None;
+            }
+            Some(geodetic_msl(values[0], values[1], values[2], query))
+        }
+    }
+
+    /// Ends the IG frame: Start of Frame, then the answers to every request due, collision
+    /// notifications, sensor responses and IG messages, in the host's version and byte order.
+    /// `timestamp_10us` is the IG's clock in 10 µs ticks (wrapping). Resolve poses first.
+    pub fn end_frame(&mut self, query: &mut QuerySession, timestamp_10us: u32) -> Message {
+        self.ig_frame_number = self.ig_frame_number.wrapping_add(1);
+        let (version, byte_order) = self
+            .host_format
+            .unwrap_or((Version::V3_3, ByteOrder::LittleEndian));
+        let database_number = if self.requested_database == self.config.database_number
+            || self.requested_database == 0
+        {
+            self.config.database_number
+        } else {
+            -128
+        };
+        let mut packets = vec![Packet::StartOfFrame(StartOfFrame {
+            database_number,
+            ig_status: 0,
+            ig_mode: self.ig_mode,
+            timestamp_valid: true,
+            earth_reference_model_host_defined: false,
+            ig_frame_number: self.ig_frame_number,
+            timestamp_10us,
+            last_host_frame_number: self.last_host_frame_number,
+            overframing: false,
+            paging: false,
+            excessive_variable_length_data: false,
+        })];
+        let mut answers: Vec<Packet> = self.deferred.drain(..).collect();
+        self.answer_hat_hot(query, &mut answers);
+        self.answer_los(query, &mut answers);
+        self.answer_positions(query, &mut answers);
+        self.answer_environment(&mut answers);
+        self.detect_collisions(query, &mut answers);
+        self.sensor_responses(&mut answers);
+        while let Some(text) = self.ig_messages.pop_front() {
+            let mut end = text.len().min(cig_cigi::MAX_IG_MESSAGE_TEXT_BYTES);
+            while !text.is_char_boundary(end) {
+                end -= 1;
+            }
+            answers.push(Packet::ImageGeneratorMessage(ImageGeneratorMessage {
+                message_id: 0,
+                text: text.get(..end).unwrap_or_default().to_string(),
+            }));
+        }
+        let room = MAX_PACKETS_PER_MESSAGE - 1;
+        if answers.len() > room {
+            let rest = answers.split_off(room);
+            self.counters.answers_deferred += rest.len() as u64;
+            self.deferred.extend(rest);
+        }
+        packets.extend(answers);
+        Message::new(version, byte_order, packets)
+    }
+
+    fn answer_hat_hot(&mut self, query: &mut QuerySession, out: &mut Vec<Packet>) {
+        for (r, lsn) in due(&mut self.hat_hot) {
+            self.counters.hat_hot_answered += 1;
+            let point = self.request_point(
+                r.coordinate_system_entity,
+                r.entity_id,
+                [r.lat_deg_or_x_m, r.lon_deg_or_y_m, r.alt_m_or_z_m],
+                query,
+            );
+            let answer = point.and_then(|p| query.hat(p).ok());
+            match (r.request_type, answer) {
+                (2, Some((hat, s))) => {
+                    let (az, el) = normal_az_el(&s);
+                    out.push(Packet::HatHotExtendedResponse(HatHotExtendedResponse {
+                        hat_hot_id: r.hat_hot_id,
+                        valid: true,
+                        host_frame_lsn: lsn,
+                        hat_m: hat,
+                        hot_m: s.height_msl_m,
+                        material_code: u32::from(s.material.to_byte()),
+                        normal_azimuth_deg: az,
+                        normal_elevation_deg: el,
+                    }));
+                }
+                (2, None) => out.push(Packet::HatHotExtendedResponse(HatHotExtendedResponse {
+                    hat_hot_id: r.hat_hot_id,
+                    valid: false,
+                    host_frame_lsn: lsn,
+                    ..HatHotExtendedResponse::default()
+                })),
+                (t, answer) => out.push(Packet::HatHotResponse(HatHotResponse {
+                    hat_hot_id: r.hat_hot_id,
+                    valid: answer.is_some(),
+                    response_type_hot: t == 1,
+                    host_frame_lsn: lsn,
+                    height_m: answer
+                        .map_or(0.0, |(hat, s)| if t == 1 { s.height_msl_m } else { hat }),
+                })),
+            }
+        }
+    }
+
+    fn answer_los(&mut self, query: &mut QuerySession, out: &mut Vec<Packet>) {
+        let mut jobs = Vec::new();
+        for (r, lsn) in due(&mut self.los_segment) {
+            let from = self.request_point(
+                r.source_coordinate_entity,
+                r.entity_id,
+                [
+                    r.source_lat_deg_or_x_m,
+                    r.source_lon_deg_or_y_m,
+                    r.source_alt_m_or_z_m,
+                ],
+                query,
+            );
+            let to = self.request_point(
+                r.destination_coordinate_entity,
+                if r.destination_entity_id_valid {
+                    r.destination_entity_id
+                } else {
+                    r.entity_id
+                },
+                [
+                    r.destination_lat_deg_or_x_m,
+                    r.destination_lon_deg_or_y_m,
+                    r.destination_alt_m_or_z_m,
+                ],
+                query,
+            );
+            jobs.push((
+                r.los_id,
+                r.request_type_extended,
+                r.response_coordinate_entity,
+                r.entity_id,
+                lsn,
+                from.zip(to),
+                0.0,
+            ));
+        }
+        for (r, lsn) in due(&mut self.los_vector) {
+            let from = self.request_point(
+                r.source_coordinate_entity,
+                r.entity_id,
+                [
+                    r.source_lat_deg_or_x_m,
+                    r.source_lon_deg_or_y_m,
+                    r.source_alt_m_or_z_m,
+                ],
+                query,
+            );
+            let ok = r.min_range_m.is_finite()
+                && r.max_range_m.is_finite()
+                && r.min_range_m >= 0.0
+                && r.max_range_m > r.min_range_m
+                && r.azimuth_deg.is_finite()
+                && r.elevation_deg.is_finite();
+            let segment = from.filter(|_| ok).map(|source| {
+                let d = direction_enu(f64::from(r.azimuth_deg), f64::from(r.elevation_deg));
+                (
+                    displaced(source, d * f64::from(r.min_range_m)),
+                    displaced(source, d * f64::from(r.max_range_m)),
+                )
+            });
+            jobs.push((
+                r.los_id,
+                r.request_type_extended,
+                r.response_coordinate_entity,
+                r.entity_id,
+                lsn,
+                segment,
+                f64::from(r.min_range_m),
+            ));
+        }
+        for (los_id, extended, entity_relative, entity_id, lsn, segment, range_offset_m) in jobs {
+            self.counters.los_answered += 1;
+            let result = segment.and_then(|(a, b)| query.los(a, b).ok());
+            let hit = result.and_then(|r| r.hit);
+            let visible = result.is_some_and(|r| r.visible);
+            if extended {
+                let mut response = LosExtendedResponse {
+                    los_id,
+                    valid: result.is_some(),
+                    visible,
+                    host_frame_lsn: lsn,
+                    response_count: 1,
+                    ..LosExtendedResponse::default()
+                };
+                if let Some(h) = hit {
+                    response.range_valid = true;
+                    response.range_m = h.range_m + range_offset_m;
+                    response.material_code = u32::from(h.material.to_byte());
+                    let position = match (entity_relative, self.poses.get(&entity_id)) {
+                        (true, Some(pose)) => {
+                            let o = offset_of(*pose, h.point);
+                            [o.x_m, o.y_m, o.z_m]
+                        }
+                        _ => [
+                            h.point.lat_deg,
+                            h.point.lon_deg,
+                            msl_altitude(h.point, query),
+                        ],
+                    };
+                    [
+                        response.lat_deg_or_x_m,
+                        response.lon_deg_or_y_m,
+                        response.alt_m_or_z_m,
+                    ] = position;
+                    if let Ok(s) = query.hot(h.point.lat_deg, h.point.lon_deg) {
+                        let (az, el) = normal_az_el(&s);
+                        response.normal_azimuth_deg = az;
+                        response.normal_elevation_deg = el;
+                    }
+                    response.alpha = 255;
+                }
+                out.push(Packet::LosExtendedResponse(response));
+            } else {
+                out.push(Packet::LosResponse(LosResponse {
+                    los_id,
+                    valid: result.is_some(),
+                    visible,
+                    host_frame_lsn: lsn,
+                    response_count: 1,
+                    range_m: hit.map_or(0.0, |h| h.range_m + range_offset_m),
+                    ..LosResponse::default()
+                }));
+            }
+        }
+    }
+
+    fn answer_positions(&mut self, query: &mut QuerySession, out: &mut Vec<Packet>) {
+        for (r, _lsn) in due(&mut self.position) {
+            self.counters.position_answered += 1;
+            let response = match r.object_class {
+                0 => self.entity_position(&r, query),
+                1 => self.entities.get(&r.object_id).and_then(|e| {
+                    e.parts.get(&r.part_id).map(|part| PositionResponse {
+                        object_id: r.object_id,
+                        part_id: r.part_id,
+                        object_class: 1,
+                        coordinate_system: 2,
+                        lat_deg_or_x_m: part.offset.x_m,
+                        lon_deg_or_y_m: part.offset.y_m,
+                        alt_m_or_z_m: part.offset.z_m,
+                        roll_deg: part.orientation.roll_deg as f32,
+                        pitch_deg: part.orientation.pitch_deg as f32,
+                        yaw_deg: part.orientation.heading_deg as f32,
+                    })
+                }),
+                2 | 3 => {
+                    let view = if r.object_class == 2 {
+                        self.views.get(&r.object_id)
+                    } else {
+                        self.views
+                            .values()
+                            .find(|v| u16::from(v.group_id) == r.object_id)
+                    };
+                    view.and_then(|v| self.view_pose(v))
+                        .map(|pose| PositionResponse {
+                            object_id: r.object_id,
+                            part_id: 0,
+                            object_class: r.object_class,
+                            coordinate_system: 0,
+                            lat_deg_or_x_m: pose.position.lat_deg,
+                            lon_deg_or_y_m: pose.position.lon_deg,
+                            alt_m_or_z_m: msl_altitude(pose.position, query),
+                            roll_deg: pose.orientation.roll_deg as f32,
+                            pitch_deg: pose.orientation.pitch_deg as f32,
+                            yaw_deg: pose.orientation.heading_deg as f32,
+                        })
+                }
+                _ => None,
+            };
+            match response {
+                Some(p) => out.push(Packet::PositionResponse(p)),
+                None => self.tell_host(format!(
+                    "Position Request: object {} of class {} is not known",
+                    r.object_id, r.object_class
+                )),
+            }
+        }
+    }
+
+    fn entity_position(
+        &self,
+        r: &PositionRequest,
+        query: &QuerySession,
+    ) -> Option<PositionResponse> {
+        let e = self.entities.get(&r.object_id)?;
+        let pose = self.poses.get(&r.object_id)?;
+        let mut response = PositionResponse {
+            object_id: r.object_id,
+            part_id: 0,
+            object_class: 0,
+            coordinate_system: 0,
+            lat_deg_or_x_m: pose.position.lat_deg,
+            lon_deg_or_y_m: pose.position.lon_deg,
+            alt_m_or_z_m: msl_altitude(pose.position, query),
+            roll_deg: pose.orientation.roll_deg as f32,
+            pitch_deg: pose.orientation.pitch_deg as f32,
+            yaw_deg: pose.orientation.heading_deg as f32,
+        };
+        if r.coordinate_system == 1 {
+            if let Placement::Attached { parent_id, .. } = e.placement {
+                if let Some(parent) = self.poses.get(&parent_id) {
+                    let o = offset_of(*parent, pose.position);
+                    let rel = relative(parent.orientation, pose.orientation);
+                    response.coordinate_system = 1;
+                    response.lat_deg_or_x_m = o.x_m;
+                    response.lon_deg_or_y_m = o.y_m;
+                    response.alt_m_or_z_m = o.z_m;
+                    response.roll_deg = rel.roll_deg as f32;
+                    response.pitch_deg = rel.pitch_deg as f32;
+                    response.yaw_deg = rel.heading_deg as f32;
+                }
+            }
+        }
+        Some(response)
+    }
+
+    fn answer_environment(&mut self, out: &mut Vec<Packet>) {
+        let requests = std::mem::take(&mut self.environment_requests);
+        for (r, _lsn) in requests {
+            self.counters.environment_answered += 1;
+            if !finite3(r.latitude_deg, r.longitude_deg, r.altitude_m)
+                || r.latitude_deg.abs() > 90.0
+            {
+                self.tell_host(format!(
+                    "Environmental Conditions Request {}: the point is not valid",
+                    r.request_id
+                ));
+                continue;
+            }
+            let point = Geodetic::new(r.latitude_deg, r.longitude_deg, r.altitude_m);
+            if r.request_type & 1 != 0 {
+                let m = self
+                    .environment
+                    .maritime
+                    .get(&(SCOPE_GLOBAL, 0))
+                    .filter(|m| m.surface_conditions_enable);
+                out.push(Packet::MaritimeSurfaceConditionsResponse(
+                    MaritimeSurfaceConditionsResponse {
+                        request_id: r.request_id,
+                        sea_surface_height_m: m.map_or(0.0, |m| m.sea_surface_height_m),
+                        surface_water_temperature_c: m
+                            .map_or(DEFAULT_TEMPERATURE_C, |m| m.surface_water_temperature_c),
+                        surface_clarity_pct: m.map_or(100.0, |m| m.surface_clarity_pct),
+                    },
+                ));
+            }
+            if r.request_type & 2 != 0 {
+                let conditions: Vec<u32> = self
+                    .environment
+                    .terrestrial
+                    .values()
+                    .filter(|t| t.surface_condition_enable && t.scope == SCOPE_GLOBAL)
+                    .map(|t| u32::from(t.surface_condition_id))
+                    .collect();
+                if conditions.is_empty() {
+                    out.push(Packet::TerrestrialSurfaceConditionsResponse(
+                        TerrestrialSurfaceConditionsResponse {
+                            request_id: r.request_id,
+                            surface_condition_id: 0,
+                        },
+                    ));
+                }
+                for id in conditions {
+                    out.push(Packet::TerrestrialSurfaceConditionsResponse(
+                        TerrestrialSurfaceConditionsResponse {
+                            request_id: r.request_id,
+                            surface_condition_id: id,
+                        },
+                    ));
+                }
+            }
+            if r.request_type & 4 != 0 {
+                out.push(Packet::WeatherConditionsResponse(
+                    self.environment.weather_response(
+                        r.request_id,
+                        point,
+                        self.config.default_visibility_m,
+                    ),
+                ));
+            }
+            if r.request_type & 8 != 0 {
+                let layers = self.environment.layers_at(point);
+                for layer in layers {
+                    out.push(Packet::AerosolConcentrationResponse(
+                        AerosolConcentrationResponse {
+                            request_id: r.request_id,
+                            layer_id: layer.layer_id,
+                            aerosol_concentration_gpm3: layer.aerosol_concentration_gpm3,
+                        },
+                    ));
+                }
+            }
+        }
+    }
+
+    fn detect_collisions(&mut self, query: &mut QuerySession, out: &mut Vec<Packet>) {
+        // Segments against the terrain.
+        let mut notes = Vec::new();
+        for e in self.entities.values() {
+            if !e.collision_detection || e.life != EntityLife::Active {
+                continue;
+            }
+            let Some(pose) = self.poses.get(&e.id) else {
+                continue;
+            };
+            for s in e.segments.values().filter(|s| s.segment_enable) {
+                let ends = [s.x1_m, s.y1_m, s.z1_m, s.x2_m, s.y2_m, s.z2_m];
+                if ends.iter().any(|v| !v.is_finite()) {
+                    continue;
+                }
+                let a = point_from(
+                    *pose,
+                    BodyOffset {
+                        x_m: f64::from(s.x1_m),
+                        y_m: f64::from(s.y1_m),
+                        z_m: f64::from(s.z1_m),
+                    },
+                );
+                let b = point_from(
+                    *pose,
+                    BodyOffset {
+                        x_m: f64::from(s.x2_m),
+                        y_m: f64::from(s.y2_m),
+                        z_m: f64::from(s.z2_m),
+                    },
+                );
+                let hit = query.los(a, b).ok().and_then(|r| r.hit);
+                // A segment whose start is already below the surface is in contact too.
+                let start_below = query
+                    .hat(a)
+                    .ok()
+                    .filter(|(hat, _)| *hat < 0.0)
+                    .map(|(_, s)| s.material);
+                let contact = hit
+                    .map(|h| (h.range_m, h.material))
+                    .or(start_below.map(|m| (0.0, m)));
+                if let Some((range_m, material)) = contact {
+                    if s.material_mask == 0
+                        || s.material_mask & (1 << (material.to_byte() % 32)) != 0
+                    {
+                        notes.push(Packet::CollisionSegmentNotification(
+                            CollisionSegmentNotification {
+                                entity_id: e.id,
+                                segment_id: s.segment_id,
+                                collision_with_entity: false,
+                                contacted_entity_id: 0,
+                                material_code: u32::from(material.to_byte()),
+                                intersection_distance_m: range_m as f32,
+                            },
+                        ));
+                    }
+                }
+            }
+        }
+        // Volumes against other entities' volumes, as bounding spheres.
+        let mut spheres = Vec::new();
+        for e in self.entities.values() {
+            if !e.collision_detection || e.life != EntityLife::Active {
+                continue;
+            }
+            let Some(pose) = self.poses.get(&e.id) else {
+                continue;
+            };
+            for v in e.volumes.values().filter(|v| v.volume_enable) {
+                let c = [
+                    v.x_m,
+                    v.y_m,
+                    v.z_m,
+                    v.height_or_radius_m,
+                    v.width_m,
+                    v.depth_m,
+                ];
+                if c.iter().any(|x| !x.is_finite()) {
+                    continue;
+                }
+                let centre = point_from(
+                    *pose,
+                    BodyOffset {
+                        x_m: f64::from(v.x_m),
+                        y_m: f64::from(v.y_m),
+                        z_m: f64::from(v.z_m),
+                    },
+                );
+                let radius = if v.volume_type_cuboid {
+                    0.5 * (f64::from(v.height_or_radius_m).powi(2)
+                        + f64::from(v.width_m).powi(2)
+                        + f64::from(v.depth_m).powi(2))
+                    .sqrt()
+                } else {
+                    f64::from(v.height_or_radius_m).abs()
+                };
+                spheres.push((e.id, v.volume_id, centre.to_ecef(), radius));
+            }
+        }
+        for (i, a) in spheres.iter().enumerate() {
+            for b in spheres.iter().skip(i + 1) {
+                if a.0 != b.0 && (a.2 - b.2).length() <= a.3 + b.3 {
+                    for (me, other) in [(a, b), (b, a)] {
+                        notes.push(Packet::CollisionVolumeNotification(
+                            CollisionVolumeNotification {
+                                entity_id: me.0,
+                                volume_id: me.1,
+                                collision_with_entity: true,
+                                contacted_entity_id: other.0,
+                                contacted_volume_id: other.1,
+                            },
+                        ));
+                    }
+                }
+            }
+        }
+        self.counters.collisions_reported += notes.len() as u64;
+        out.extend(notes);
+    }
+
+    fn sensor_responses(&self, out: &mut Vec<Packet>) {
+        for s in self.sensors.values().filter(|s| s.on && s.track_mode != 0) {
+            if s.extended_response {
+                out.push(Packet::SensorExtendedResponse(SensorExtendedResponse {
+                    view_id: s.view_id,
+                    sensor_id: s.sensor_id,
+                    sensor_status: 0,
+                    frame_counter: self.ig_frame_number,
+                    ..SensorExtendedResponse::default()
+                }));
+            } else {
+                out.push(Packet::SensorResponse(SensorResponse {
+                    view_id: s.view_id,
+                    sensor_id: s.sensor_id,
+                    sensor_status: 0,
+                    frame_counter: self.ig_frame_number,
+                    ..SensorResponse::default()
+                }));
+            }
+        }
+    }
+
+    /// Visibility at a point (altitude above the ellipsoid is close enough for layers).
+    pub fn visibility_at_m(&self, point: Geodetic) -> f64 {
+        self.environment
+            .visibility_at_m(point, self.config.default_visibility_m)
+    }
+}
+
+fn set_placement(
+    e: &mut IgEntity,
+    attach: bool,
+    parent_id: u16,
+    values: [f64; 3],
+    orientation: Hpr,
+    clamp_code: u8,
+) {
+    e.placement = if attach && parent_id != e.id {
+        Placement::Attached {
+            parent_id,
+            offset: BodyOffset {
+                x_m: values[0],
+                y_m: values[1],
+                z_m: values[2],
+            },
+        }
+    } else {
+        Placement::Geodetic {
+            lat_deg: values[0],
+            lon_deg: values[1],
+            alt_m: values[2],
+        }
+    };
+    e.orientation = orientation;
+    e.clamp = match clamp_code {
+        1 => Clamp::Height,
+        2 => Clamp::HeightAndAttitude,
+        _ => Clamp::None,
+    };
+    e.scripted = false;
+}
+
+/// Files a request: one-shot (period 0) or standing (answered every `period` frames); a
+/// request with the ID of a standing one replaces it.
+fn standing<K: Ord, T>(
+    map: &mut BTreeMap<K, Pending<T>>,
+    key: K,
+    request: T,
+    host_frame_lsn: u8,
+) -> bool {
+    if map.len() >= MAX_STANDING_REQUESTS && !map.contains_key(&key) {
+        return false;
+    }
+    map.insert(
+        key,
+        Pending {
+            request,
+            host_frame_lsn,
+            countdown: 0,
+        },
+    );
+    true
+}
+
+/// Requests due this frame; one-shot ones leave the map, standing ones restart their count.
+fn due<K: Ord + Clone, T: Clone + HasPeriod>(map: &mut BTreeMap<K, Pending<T>>) -> Vec<(T, u8)> {
+    let mut out = Vec::new();
+    let mut finished = Vec::new();
+    for (key, pending) in map.iter_mut() {
+        if pending.countdown > 0 {
+            pending.countdown -= 1;
+            continue;
+        }
+        out.push((pending.request.clone(), pending.host_frame_lsn));
+        let period = pending.request.period();
+        if period == 0 {
+            finished.push(key.clone());
+        } else {
+            pending.countdown = period - 1;
+        }
+    }
+    for key in finished {
+        map.remove(&key);
+    }
+    out
+}
+
+/// The update period of a standing request (0: one answer).
+trait HasPeriod {
+    fn period(&self) -> u8;
+}
+impl HasPeriod for HatHotRequest {
+    fn period(&self) -> u8 {
+        self.update_period
+    }
+}
+impl HasPeriod for LosSegmentRequest {
+    fn period(&self) -> u8 {
+        self.update_period
+    }
+}
+impl HasPeriod for LosVectorRequest {
+    fn period(&self) -> u8 {
+        self.update_period
+    }
+}
+impl HasPeriod for PositionRequest {
+    fn period(&self) -> u8 {
+        u8::from(self.update_mode_continuous)
+    }
+}

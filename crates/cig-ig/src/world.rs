@@ -1,0 +1,470 @@
+//! The IG's world for one run: the CIGI session, the scenario's scripted entities, the DIS
+//! exercise, the simulation clock and the obscurant effects, stepped once per frame and read
+//! into the renderer's plain snapshot.
+//!
+//! Algorithm, per frame (the order `cig serve` follows):
+//! 1. host messages and DIS datagrams received since the last frame are applied as they come
+//!    ([`IgWorld::receive_cigi`], [`IgWorld::receive_dis`]);
+//! 2. [`IgWorld::step`] advances the clock (the exercise's shared world time when the IG is in
+//!    one; a time the host set through Celestial Sphere Control wins and is announced), moves
+//!    scripted entities along their paths and host entities by their rates, resolves every
+//!    pose (clamping, attachments), advances the effects and publishes owned entities;
+//! 3. [`IgWorld::host_message`] is the frame's message to the host: Start of Frame and the
+//!    answers to the requests received in step 1;
+//! 4. [`IgWorld::snapshot`] is what the renderer draws.
+//!
+//! Limits: scripted entities follow straight segments at constant speed; a host entity with
+//! the same ID as a scripted one takes it over for good (it stops following its script).
+
+use crate::exercise::{Exercise, OwnedTruth, EFFECT_EPOCH_UNIX_S};
+use crate::model_table::{CigiEntityType, ModelTable};
+use crate::pose::{azimuth_elevation_deg, child_pose, wrap_deg, BodyOffset, Pose};
+use crate::scenario::{DisTypePattern, Scenario, ScenarioEntity};
+use crate::session::{EntityLife, IgEntity, IgSession, Placement, SessionConfig};
+use cig_cigi::{decode_message, CigiError, Message};
+use cig_effects::{EffectSystem, EffectsConfig, EffectsError};
+use cig_environment::{SimClock, UtcTime};
+use cig_geo::{EnuFrame, Geodetic};
+use cig_scene::lighting::{Fog, FogMode};
+use cig_scene::snapshot::EntityInstance;
+use cig_scene::{FovDeg, FrameSnapshot, Hpr, View};
+use cig_terrain::QuerySession;
+use glam::DVec3;
+use std::collections::BTreeMap;
+
+/// Why a world cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum WorldError {
+    #[error("clock: {0}")]
+    Clock(#[from] cig_environment::EnvironmentError),
+    #[error("effects: {0}")]
+    Effects(#[from] EffectsError),
+}
+
+/// How the world is set up.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldConfig {
+    pub session: SessionConfig,
+    /// Simulation start (the scenario's, else the caller's choice).
+    pub start: UtcTime,
+    pub fog_mode: FogMode,
+    pub effects: EffectsConfig,
+    /// Join the scenario's DIS exercise (the caller opens the sockets).
+    pub join_exercise: bool,
+}
+
+/// A scenario entity's path, in a tangent frame at its start.
+struct Script {
+    frame: EnuFrame,
+    /// Polyline vertices (east, north) and cumulative lengths.
+    points: Vec<DVec3>,
+    cumulative_m: Vec<f64>,
+    speed_mps: f64,
+    loop_path: bool,
+    heading_deg: f64,
+}
+
+impl Script {
+    fn new(e: &ScenarioEntity) -> Script {
+        let origin = Geodetic::new(e.lat_deg, e.lon_deg, 0.0);
+        let frame = EnuFrame::new(origin);
+        let mut points = vec![DVec3::ZERO];
+        for p in &e.path {
+            let v = frame.geodetic_to_enu(Geodetic::new(p[0], p[1], 0.0));
+            points.push(DVec3::new(v.x, v.y, 0.0));
+        }
+        if e.loop_path && points.len() > 1 {
+            points.push(DVec3::ZERO);
+        }
+        let mut cumulative_m = vec![0.0];
+        for w in points.windows(2) {
+            let last = cumulative_m.last().copied().unwrap_or(0.0);
+            cumulative_m.push(last + (w[1] - w[0]).length());
+        }
+        Script {
+            frame,
+            points,
+            cumulative_m,
+            speed_mps: e.speed_mps,
+            loop_path: e.loop_path,
+            heading_deg: e.heading_deg,
+        }
+    }
+
+    /// Latitude, longitude, heading and east-north velocity after `t_s` seconds.
+    fn at(&self, t_s: f64) -> (f64, f64, f64, DVec3) {
+        let total = self.cumulative_m.last().copied().unwrap_or(0.0);
+        if total <= 0.0 || self.speed_mps <= 0.0 {
+            let o = self.frame.origin();
+            return (o.lat_deg, o.lon_deg, self.heading_deg, DVec3::ZERO);
+        }
+        let mut s = self.speed_mps * t_s.max(0.0);
+        let moving = self.loop_path || s < total;
+        s = if self.loop_path {
+            s.rem_euclid(total)
+        } else {
+            s.min(total)
+        };
+        let i = self
+            .cumulative_m
+            .windows(2)
+            .position(|w| s <= w[1])
+            .unwrap_or(self.points.len().saturating_sub(2));
+        let (a, b) = (self.points[i], self.points[i + 1]);
+        let len = self.cumulative_m[i + 1] - self.cumulative_m[i];
+        let dir = if len > 0.0 {
+            (b - a) / len
+        } else {
+            DVec3::ZERO
+        };
+        let p = a + dir * (s - self.cumulative_m[i]);
+        let g = self.frame.enu_to_geodetic(p);
+        let heading = wrap_deg(dir.x.atan2(dir.y).to_degrees());
+        let velocity = if moving {
+            dir * self.speed_mps
+        } else {
+            DVec3::ZERO
+        };
+        (g.lat_deg, g.lon_deg, heading, velocity)
+    }
+}
+
+/// Everything the IG simulates.
+pub struct IgWorld {
+    session: IgSession,
+    scenario: Scenario,
+    clock: SimClock,
+    start_unix_s: f64,
+    exercise: Option<Exercise>,
+    effects: EffectSystem,
+    monotonic_s: f64,
+    scripts: BTreeMap<u16, Script>,
+    previous_owned: BTreeMap<u16, (f64, Geodetic)>,
+    fog_mode: FogMode,
+    cigi_rejected: u64,
+}
+
+fn model_for_scenario_entity(e: &ScenarioEntity, table: &ModelTable) -> String {
+    if let Some(m) = &e.model {
+        return m.clone();
+    }
+    match e
+        .dis_type
+        .as_deref()
+        .and_then(DisTypePattern::parse)
+        .and_then(|p| p.exact())
+    {
+        Some(t) => table.model_for_dis(&t).to_string(),
+        None => table.model_for_cigi(CigiEntityType::Short(0)).to_string(),
+    }
+}
+
+impl IgWorld {
+    pub fn new(scenario: Scenario, config: WorldConfig) -> Result<IgWorld, WorldError> {
+        let models = ModelTable::from_scenario(&scenario);
+        let mut session = IgSession::new(config.session.clone(), models.clone());
+        let mut scripts = BTreeMap::new();
+        for e in &scenario.entities {
+            let mut entity = IgEntity::new(
+                e.id,
+                CigiEntityType::Short(0),
+                model_for_scenario_entity(e, &models),
+            );
+            entity.placement = Placement::Geodetic {
+                lat_deg: e.lat_deg,
+                lon_deg: e.lon_deg,
+                alt_m: e.alt_m,
+            };
+            entity.orientation = Hpr {
+                heading_deg: e.heading_deg,
+                ..Hpr::default()
+            };
+            entity.clamp = e.clamp;
+            entity.scripted = true;
+            session.insert_entity(entity);
+            scripts.insert(e.id, Script::new(e));
+        }
+        let clock = SimClock::new(config.start, scenario.time_rate)?;
+        let start_unix_s = config.start.unix_seconds();
+        let exercise = match (&scenario.dis, config.join_exercise) {
+            (Some(settings), true) => Some(Exercise::join(
+                settings,
+                &scenario,
+                0.0,
+                start_unix_s,
+                scenario.time_rate,
+            )),
+            _ => None,
+        };
+        let mut effects = EffectSystem::new(config.effects)?;
+        effects.advance_to(start_unix_s - EFFECT_EPOCH_UNIX_S)?;
+        Ok(IgWorld {
+            session,
+            scenario,
+            clock,
+            start_unix_s,
+            exercise,
+            effects,
+            monotonic_s: 0.0,
+            scripts,
+            previous_owned: BTreeMap::new(),
+            fog_mode: config.fog_mode,
+            cigi_rejected: 0,
+        })
+    }
+
+    pub fn session(&self) -> &IgSession {
+        &self.session
+    }
+    pub fn session_mut(&mut self) -> &mut IgSession {
+        &mut self.session
+    }
+    pub fn exercise(&self) -> Option<&Exercise> {
+        self.exercise.as_ref()
+    }
+    pub fn effects(&self) -> &EffectSystem {
+        &self.effects
+    }
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+    /// Simulation time, seconds since 1970 UTC.
+    pub fn unix_time_s(&self) -> f64 {
+        self.clock.now().unix_seconds()
+    }
+    /// Seconds of the IG's own (monotonic) time since it started.
+    pub fn monotonic_s(&self) -> f64 {
+        self.monotonic_s
+    }
+    /// Host messages refused as a whole (not CIGI, wrong version, truncated).
+    pub fn cigi_rejected(&self) -> u64 {
+        self.cigi_rejected
+    }
+
+    /// Applies one datagram from the host.
+    pub fn receive_cigi(&mut self, datagram: &[u8]) -> Result<(), CigiError> {
+        match decode_message(datagram) {
+            Ok(message) => {
+                self.session.apply(&message);
+                Ok(())
+            }
+            Err(e) => {
+                self.cigi_rejected += 1;
+                Err(e)
+            }
+        }
+    }
+
+    /// Applies one DIS datagram.
+    pub fn receive_dis(&mut self, datagram: &[u8], query: &mut QuerySession) {
+        if let Some(x) = self.exercise.as_mut() {
+            x.receive(self.monotonic_s, datagram, &mut self.effects, query);
+        }
+    }
+
+    /// Advances the world by `real_dt_s` seconds of the IG's own time.
+    pub fn step(&mut self, real_dt_s: f64, query: &mut QuerySession) {
+        let dt = if real_dt_s.is_finite() {
+            real_dt_s.clamp(0.0, 10.0)
+        } else {
+            0.0
+        };
+        self.monotonic_s += dt;
+        let now = self.monotonic_s;
+        if let Some(t) = self.session.take_time_set() {
+            self.clock.set_time(t);
+            if let Some(x) = self.exercise.as_mut() {
+                x.set_time(now, t.unix_seconds(), self.clock.rate());
+            }
+        } else if let Some(x) = &self.exercise {
+            let t = UtcTime::clamped_from_seconds_since_j2000(
+                UtcTime::from_unix_seconds(x.world_time_unix_s(now))
+                    .map_or(self.clock.now().seconds_since_j2000(), |t| {
+                        t.seconds_since_j2000()
+                    }),
+            );
+            self.clock.set_time(t);
+        } else if let Err(e) = self.clock.advance(dt) {
+            tracing::warn!("the simulation clock stops: {e}");
+        }
+        let elapsed_s = self.clock.now().unix_seconds() - self.start_unix_s;
+        for (id, script) in &self.scripts {
+            let Some(e) = self.session.entity_mut(*id) else {
+                continue;
+            };
+            if !e.scripted {
+                continue;
+            }
+            let (lat_deg, lon_deg, heading_deg, _) = script.at(elapsed_s);
+            let alt_m = match e.placement {
+                Placement::Geodetic { alt_m, .. } => alt_m,
+                Placement::Attached { .. } => 0.0,
+            };
+            e.placement = Placement::Geodetic {
+                lat_deg,
+                lon_deg,
+                alt_m,
+            };
+            e.orientation.heading_deg = heading_deg;
+        }
+        self.session.advance(dt, query);
+        self.session.resolve_poses(query);
+        let effect_time_s = self.clock.now().unix_seconds() - EFFECT_EPOCH_UNIX_S;
+        if let Err(e) = self.effects.advance_to(effect_time_s) {
+            tracing::warn!("effects stop advancing: {e}");
+        }
+        if let Some(x) = self.exercise.as_mut() {
+            let mut truths = BTreeMap::new();
+            for (id, pose) in self.session.poses() {
+                let velocity = match self.previous_owned.get(id) {
+                    Some((t, p)) if now - t > 1e-6 => {
+                        EnuFrame::new(*p).geodetic_to_enu(pose.position) / (now - t)
+                    }
+                    _ => DVec3::ZERO,
+                };
+                self.previous_owned.insert(*id, (now, pose.position));
+                truths.insert(
+                    *id,
+                    OwnedTruth {
+                        position: pose.position,
+                        orientation: pose.orientation,
+                        velocity_enu_mps: velocity,
+                    },
+                );
+            }
+            x.tick(now, &truths, &mut self.effects, query);
+        }
+    }
+
+    /// The frame's message to the host (Start of Frame and answers).
+    pub fn host_message(&mut self, query: &mut QuerySession, timestamp_10us: u32) -> Message {
+        self.session.end_frame(query, timestamp_10us)
+    }
+
+    /// DIS PDUs to send, one datagram each.
+    pub fn take_dis_outgoing(&mut self) -> Vec<Vec<u8>> {
+        self.exercise
+            .as_mut()
+            .map(Exercise::take_outgoing)
+            .unwrap_or_default()
+    }
+
+    /// The views to draw: the host's, else the scenario's, else `fallback`.
+    pub fn views(&self, width_px: u32, height_px: u32, fallback: &View) -> Vec<View> {
+        let default_fov = FovDeg::from_horizontal(60.0, width_px, height_px);
+        let mut views: Vec<View> = self
+            .session
+            .views()
+            .values()
+            .filter_map(|v| {
+                let pose = self.session.view_pose(v)?;
+                Some(View {
+                    eye: pose.position,
+                    orientation: pose.orientation,
+                    fov: v.fov.unwrap_or(default_fov),
+                    width_px,
+                    height_px,
+                })
+            })
+            .collect();
+        if views.is_empty() {
+            if let Some(v) = &self.scenario.view {
+                let relative = Hpr {
+                    heading_deg: v.hpr_deg[0],
+                    pitch_deg: v.hpr_deg[1],
+                    roll_deg: v.hpr_deg[2],
+                };
+                let offset = BodyOffset {
+                    x_m: v.offset_m[0],
+                    y_m: v.offset_m[1],
+                    z_m: v.offset_m[2],
+                };
+                let pose = match (v.entity, v.eye) {
+                    (Some(id), _) => self
+                        .session
+                        .poses()
+                        .get(&id)
+                        .map(|p| child_pose(*p, offset, relative)),
+                    (None, Some(eye)) => Some(Pose {
+                        position: Geodetic::new(eye[0], eye[1], eye[2]),
+                        orientation: relative,
+                    }),
+                    _ => None,
+                };
+                if let Some(pose) = pose {
+                    views.push(View {
+                        eye: pose.position,
+                        orientation: pose.orientation,
+                        fov: FovDeg::from_horizontal(v.fov_deg, width_px, height_px),
+                        width_px,
+                        height_px,
+                    });
+                }
+            }
+        }
+        if views.is_empty() {
+            views.push(View {
+                width_px,
+                height_px,
+                ..*fallback
+            });
+        }
+        views
+    }
+
+    /// What the renderer draws this frame.
+    pub fn snapshot(&self, width_px: u32, height_px: u32, fallback: &View) -> FrameSnapshot {
+        let views = self.views(width_px, height_px, fallback);
+        let mut snapshot = FrameSnapshot::new(self.unix_time_s(), views.clone());
+        if let Some(first) = views.first() {
+            let default_vis = self.scenario.visibility_m;
+            let mut visibility = self.session.visibility_at_m(first.eye);
+            if let Some(v) = default_vis {
+                if self.session.environment().atmosphere.is_none() {
+                    visibility = visibility.min(v);
+                }
+            }
+            snapshot.fog = Fog::from_visibility(self.fog_mode, visibility);
+        }
+        for (id, e) in self.session.entities() {
+            if e.life != EntityLife::Active {
+                continue;
+            }
+            if let Some(pose) = self.session.poses().get(id) {
+                snapshot.entities.push(EntityInstance {
+                    id: u32::from(*id),
+                    model: e.model.clone(),
+                    position: pose.position,
+                    orientation: pose.orientation,
+                });
+            }
+        }
+        if let Some(x) = &self.exercise {
+            for (i, r) in x.remote_entities(self.monotonic_s).into_iter().enumerate() {
+                let [heading_deg, pitch_deg, roll_deg] = r.heading_pitch_roll_deg;
+                snapshot.entities.push(EntityInstance {
+                    // Remote entities live above the 16-bit CIGI id space.
+                    id: 0x1_0000 + i as u32,
+                    model: self
+                        .session
+                        .models()
+                        .model_for_dis(&r.entity_type)
+                        .to_string(),
+                    position: r.geodetic,
+                    orientation: Hpr {
+                        heading_deg,
+                        pitch_deg,
+                        roll_deg,
+                    },
+                });
+            }
+        }
+        snapshot
+    }
+
+    /// Azimuth and elevation of the sun at a point now, degrees (for the operator's display).
+    pub fn sun_az_el_deg(&self, at: Geodetic) -> (f64, f64) {
+        let d = cig_scene::lighting::sun_direction_ecef(self.unix_time_s(), at);
+        azimuth_elevation_deg(EnuFrame::new(at).ecef_vector_to_enu(d))
+    }
+}

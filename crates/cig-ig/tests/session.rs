@@ -1,0 +1,690 @@
+//! The IG's CIGI and DIS behaviour on an analytic terrain: answers compared with the database's
+//! own queries, both byte orders and both CIGI versions, attachments, rates, standing requests,
+//! reset, clamping, line of sight, views, and two IGs sharing a DIS exercise.
+
+use cig_cigi::{
+    decode_message, encode_message, ByteOrder, EntityControl, EntityControl4, EntityPosition,
+    HatHotRequest, IgControl, LosSegmentRequest, Message, Packet, PositionRequest, RateControl,
+    Version, ViewControl, ViewDefinition,
+};
+use cig_effects::EffectsConfig;
+use cig_environment::UtcTime;
+use cig_geo::Geodetic;
+use cig_ig::{IgWorld, Scenario, SessionConfig, WorldConfig};
+use cig_scene::lighting::FogMode;
+use cig_scene::{FovDeg, Hpr, View};
+use cig_terrain::build::build_pyramid;
+use cig_terrain::database::{GeoidGrid, Manifest, MemoryTileStore, TerrainDatabase};
+use cig_terrain::material::Material;
+use cig_terrain::raster::{GeoGrid, Raster};
+use cig_terrain::{PagingConfig, QuerySession, TileCache};
+use std::sync::Arc;
+
+const SOUTH: f64 = 36.0;
+const WEST: f64 = -121.0;
+const GEOID_M: f32 = 12.0;
+
+/// 129 x 129 posts, 30 m apart: a plane at 100 m MSL with a 60 m ridge along column 64.
+fn query() -> QuerySession {
+    let (n, e) = cig_geo::metres_per_degree(SOUTH);
+    let grid = GeoGrid {
+        south_lat_deg: SOUTH,
+        west_lon_deg: WEST,
+        dlat_deg: 30.0 / n,
+        dlon_deg: 30.0 / e,
+        rows: 129,
+        cols: 129,
+    };
+    let elevation_m = (0..grid.len())
+        .map(|k| {
+            let col = (k % grid.cols) as f32;
+            100.0 + 60.0 * (-((col - 64.0) / 3.0).powi(2)).exp()
+        })
+        .collect();
+    let raster = Raster {
+        grid,
+        elevation_m,
+        material: Some(vec![Material::Grass; grid.len()]),
+    };
+    let store = Arc::new(MemoryTileStore::new());
+    let summary = build_pyramid::<cig_terrain::build::BuildError>(&raster, 64, &mut |t| {
+        store.insert(t.key, t.encode());
+        Ok(())
+    })
+    .expect("build");
+    let mut geoid = GeoidGrid::zero();
+    geoid.undulation_m.iter_mut().for_each(|v| *v = GEOID_M);
+    let manifest = Manifest::from_build(&summary, geoid, 0, vec!["test".into()]);
+    let db = TerrainDatabase::new(manifest, store as Arc<dyn cig_terrain::TileStore>).expect("db");
+    let cache = TileCache::new(Arc::new(db), PagingConfig::default()).expect("cache");
+    QuerySession::new(Arc::new(cache))
+}
+
+/// Longitude of the ridge (column 64) and of a point on the plane (column 20).
+fn lon_of_col(col: f64) -> f64 {
+    let (_, e) = cig_geo::metres_per_degree(SOUTH);
+    WEST + col * 30.0 / e
+}
+fn lat_of_row(row: f64) -> f64 {
+    let (n, _) = cig_geo::metres_per_degree(SOUTH);
+    SOUTH + row * 30.0 / n
+}
+
+fn world(scenario: &str) -> IgWorld {
+    IgWorld::new(
+        Scenario::from_toml(scenario).expect("scenario"),
+        WorldConfig {
+            session: SessionConfig::default(),
+            start: UtcTime::from_calendar(2026, 6, 21, 12, 0, 0.0).expect("time"),
+            fog_mode: FogMode::Exponential,
+            effects: EffectsConfig::default(),
+            join_exercise: true,
+        },
+    )
+    .expect("world")
+}
+
+fn send(world: &mut IgWorld, version: Version, order: ByteOrder, frame: u32, packets: Vec<Packet>) {
+    let mut all = vec![Packet::IgControl(IgControl {
+        ig_mode: 1,
+        host_frame_number: frame,
+        ..IgControl::default()
+    })];
+    all.extend(packets);
+    let mut bytes = Vec::new();
+    encode_message(&Message::new(version, order, all), &mut bytes).expect("encode");
+    world
+        .receive_cigi(&bytes)
+        .expect("the IG accepts the message");
+}
+
+/// One IG frame; returns the IG's message as the host decodes it.
+fn frame(world: &mut IgWorld, q: &mut QuerySession) -> Message {
+    world.step(1.0 / 60.0, q);
+    let message = world.host_message(q, 1234);
+    let mut bytes = Vec::new();
+    encode_message(&message, &mut bytes).expect("encode");
+    decode_message(&bytes).expect("the host decodes the IG's message")
+}
+
+fn entity_3(id: u16, lat: f64, lon: f64, alt: f64, yaw: f32) -> Packet {
+    Packet::EntityControl(EntityControl {
+        entity_id: id,
+        entity_state: 1,
+        entity_type: 1,
+        yaw_deg: yaw,
+        lat_deg_or_x_m: lat,
+        lon_deg_or_y_m: lon,
+        alt_m_or_z_m: alt,
+        ..EntityControl::default()
+    })
+}
+
+#[test]
+fn hat_and_hot_answers_match_the_database_in_both_versions_and_byte_orders() {
+    for (version, order) in [
+        (Version::V3_3, ByteOrder::LittleEndian),
+        (Version::V3_3, ByteOrder::BigEndian),
+        (Version::V4_0, ByteOrder::LittleEndian),
+        (Version::V4_0, ByteOrder::BigEndian),
+    ] {
+        let mut q = query();
+        let mut w = world("");
+        let (lat, lon) = (lat_of_row(40.5), lon_of_col(63.3));
+        let truth = q.hot(lat, lon).expect("hot");
+        let request = |id, kind| {
+            Packet::HatHotRequest(HatHotRequest {
+                hat_hot_id: id,
+                request_type: kind,
+                lat_deg_or_x_m: lat,
+                lon_deg_or_y_m: lon,
+                alt_m_or_z_m: 500.0,
+                ..HatHotRequest::default()
+            })
+        };
+        send(
+            &mut w,
+            version,
+            order,
+            77,
+            vec![request(1, 0), request(2, 1), request(3, 2)],
+        );
+        let reply = frame(&mut w, &mut q);
+        assert_eq!((reply.version, reply.byte_order), (version, order));
+        let Some(Packet::StartOfFrame(sof)) = reply.packets.first() else {
+            panic!(
+                "the IG's message opens with Start of Frame: {:?}",
+                reply.packets.first()
+            );
+        };
+        assert_eq!(sof.last_host_frame_number, 77);
+        assert_eq!(sof.ig_frame_number, 1);
+        assert_eq!(sof.timestamp_10us, 1234);
+        let mut seen = 0;
+        for p in &reply.packets {
+            match p {
+                Packet::HatHotResponse(r) if r.hat_hot_id == 1 => {
+                    assert!(r.valid && !r.response_type_hot);
+                    assert!(
+                        (r.height_m - (500.0 - truth.height_msl_m)).abs() < 1e-6,
+                        "{r:?}"
+                    );
+                    assert_eq!(r.host_frame_lsn, 77 & 0xF);
+                    seen += 1;
+                }
+                Packet::HatHotResponse(r) if r.hat_hot_id == 2 => {
+                    assert!(r.valid && r.response_type_hot);
+                    assert!((r.height_m - truth.height_msl_m).abs() < 1e-6, "{r:?}");
+                    seen += 1;
+                }
+                Packet::HatHotExtendedResponse(r) => {
+                    assert!(r.valid);
+                    assert!((r.hot_m - truth.height_msl_m).abs() < 1e-6);
+                    assert!((r.hat_m - (500.0 - truth.height_msl_m)).abs() < 1e-6);
+                    assert_eq!(r.material_code, u32::from(Material::Grass.to_byte()));
+                    // West flank of the ridge: the normal leans west.
+                    assert!((r.normal_azimuth_deg - 270.0).abs() < 1.0, "{r:?}");
+                    assert!(r.normal_elevation_deg < 89.0);
+                    seen += 1;
+                }
+                _ => {}
+            }
+        }
+        assert_eq!(seen, 3, "{version} {order:?}: {:?}", reply.packets);
+        // One-shot requests are answered once.
+        let next = frame(&mut w, &mut q);
+        assert_eq!(next.packets.len(), 1, "{:?}", next.packets);
+    }
+}
+
+#[test]
+fn standing_requests_repeat_at_their_period_and_off_database_points_are_invalid() {
+    let mut q = query();
+    let mut w = world("");
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        1,
+        vec![
+            Packet::HatHotRequest(HatHotRequest {
+                hat_hot_id: 9,
+                request_type: 1,
+                update_period: 2,
+                lat_deg_or_x_m: lat_of_row(10.0),
+                lon_deg_or_y_m: lon_of_col(10.0),
+                ..HatHotRequest::default()
+            }),
+            Packet::HatHotRequest(HatHotRequest {
+                hat_hot_id: 10,
+                request_type: 1,
+                lat_deg_or_x_m: 10.0,
+                lon_deg_or_y_m: 10.0,
+                ..HatHotRequest::default()
+            }),
+        ],
+    );
+    let answered: Vec<usize> = (0..6)
+        .map(|_| {
+            frame(&mut w, &mut q)
+                .packets
+                .iter()
+                .filter(|p| matches!(p, Packet::HatHotResponse(r) if r.hat_hot_id == 9 && r.valid))
+                .count()
+        })
+        .collect();
+    assert_eq!(answered, vec![1, 0, 1, 0, 1, 0]);
+    // A request with the same ID and period 0 ends it after one more answer.
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        2,
+        vec![Packet::HatHotRequest(HatHotRequest {
+            hat_hot_id: 9,
+            request_type: 1,
+            lat_deg_or_x_m: lat_of_row(10.0),
+            lon_deg_or_y_m: lon_of_col(10.0),
+            ..HatHotRequest::default()
+        })],
+    );
+    assert_eq!(frame(&mut w, &mut q).packets.len(), 2);
+    assert_eq!(frame(&mut w, &mut q).packets.len(), 1);
+    assert!(w.session().counters().hat_hot_answered >= 5);
+}
+
+#[test]
+fn attached_entities_and_views_follow_their_parents_and_position_requests_report_them() {
+    let mut q = query();
+    let mut w = world("");
+    let (lat, lon) = (lat_of_row(64.0), lon_of_col(20.0));
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::BigEndian,
+        5,
+        vec![
+            entity_3(1, lat, lon, 300.0, 90.0),
+            Packet::EntityControl(EntityControl {
+                entity_id: 2,
+                entity_state: 1,
+                attach: true,
+                parent_id: 1,
+                lat_deg_or_x_m: 100.0,
+                lon_deg_or_y_m: 0.0,
+                alt_m_or_z_m: -10.0,
+                yaw_deg: 45.0,
+                ..EntityControl::default()
+            }),
+            Packet::ViewControl(ViewControl {
+                view_id: 0,
+                entity_id: 2,
+                x_offset_enable: true,
+                x_offset_m: -5.0,
+                yaw_enable: true,
+                yaw_deg: -45.0,
+                ..ViewControl::default()
+            }),
+            Packet::ViewDefinition(ViewDefinition {
+                view_id: 0,
+                left_enable: true,
+                right_enable: true,
+                top_enable: true,
+                bottom_enable: true,
+                left_deg: -30.0,
+                right_deg: 20.0,
+                top_deg: 15.0,
+                bottom_deg: -25.0,
+                ..ViewDefinition::default()
+            }),
+            Packet::PositionRequest(PositionRequest {
+                object_id: 2,
+                object_class: 0,
+                coordinate_system: 0,
+                ..PositionRequest::default()
+            }),
+            Packet::PositionRequest(PositionRequest {
+                object_id: 2,
+                object_class: 0,
+                coordinate_system: 1,
+                part_id: 1,
+                ..PositionRequest::default()
+            }),
+        ],
+    );
+    let reply = frame(&mut w, &mut q);
+    let responses: Vec<_> = reply
+        .packets
+        .iter()
+        .filter_map(|p| match p {
+            Packet::PositionResponse(r) => Some(r.clone()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(responses.len(), 2, "{:?}", reply.packets);
+    let geo = responses
+        .iter()
+        .find(|r| r.coordinate_system == 0)
+        .expect("geodetic");
+    // 100 m east of the parent (heading 90), 10 m up, heading 135.
+    let east = cig_geo::EnuFrame::new(Geodetic::new(lat, lon, 0.0)).geodetic_to_enu(Geodetic::new(
+        geo.lat_deg_or_x_m,
+        geo.lon_deg_or_y_m,
+        0.0,
+    ));
+    assert!(
+        (east.x - 100.0).abs() < 0.01 && east.y.abs() < 0.01,
+        "{east:?}"
+    );
+    assert!((geo.alt_m_or_z_m - 310.0).abs() < 0.01, "{geo:?}");
+    assert!((geo.yaw_deg - 135.0).abs() < 1e-3);
+    let rel = responses
+        .iter()
+        .find(|r| r.coordinate_system == 1)
+        .expect("relative");
+    assert!((rel.lat_deg_or_x_m - 100.0).abs() < 1e-3 && (rel.alt_m_or_z_m + 10.0).abs() < 1e-3);
+    // The view: 5 m behind entity 2 along its axis, looking along the parent's heading.
+    let fallback = View {
+        eye: Geodetic::new(lat, lon, 1000.0),
+        orientation: Hpr::default(),
+        fov: FovDeg::symmetric(60.0, 45.0),
+        width_px: 64,
+        height_px: 48,
+    };
+    let snapshot = w.snapshot(64, 48, &fallback);
+    assert_eq!(snapshot.views.len(), 1);
+    let view = snapshot.views[0];
+    assert!(
+        (view.orientation.heading_deg - 90.0).abs() < 1e-6,
+        "{view:?}"
+    );
+    assert_eq!(
+        view.fov,
+        FovDeg {
+            left_deg: 30.0,
+            right_deg: 20.0,
+            down_deg: 25.0,
+            up_deg: 15.0
+        }
+    );
+    // The ellipsoid height of the eye is the MSL altitude plus the geoid.
+    assert!((view.eye.alt_m - (310.0 + f64::from(GEOID_M))).abs() < 0.01);
+    assert_eq!(snapshot.entities.len(), 2);
+}
+
+#[test]
+fn rates_move_entities_between_host_updates_and_clamped_entities_sit_on_the_ground() {
+    let mut q = query();
+    let mut w = world("");
+    let (lat, lon) = (lat_of_row(30.0), lon_of_col(30.0));
+    send(
+        &mut w,
+        Version::V4_0,
+        ByteOrder::LittleEndian,
+        1,
+        vec![
+            Packet::EntityControl4(EntityControl4 {
+                entity_id: 3,
+                entity_state: 1,
+                entity_type_or_country: 1,
+                ..EntityControl4::default()
+            }),
+            Packet::EntityPosition(EntityPosition {
+                entity_id: 3,
+                lat_deg_or_x_m: lat,
+                lon_deg_or_y_m: lon,
+                alt_m_or_z_m: 200.0,
+                ..EntityPosition::default()
+            }),
+            Packet::RateControl(RateControl {
+                entity_id: 3,
+                x_rate_mps: 10.0,
+                yaw_rate_dps: 5.0,
+                ..RateControl::default()
+            }),
+            Packet::EntityPosition(EntityPosition {
+                entity_id: 4,
+                lat_deg_or_x_m: lat,
+                lon_deg_or_y_m: lon_of_col(63.0),
+                alt_m_or_z_m: 2.0,
+                ground_ocean_clamp: 2,
+                yaw_deg: 0.0,
+                ..EntityPosition::default()
+            }),
+        ],
+    );
+    for _ in 0..60 {
+        w.step(1.0 / 60.0, &mut q);
+    }
+    let pose = w.session().poses()[&3];
+    let start = Geodetic::new(lat, lon, 200.0 + f64::from(GEOID_M));
+    let moved = cig_geo::EnuFrame::new(start).geodetic_to_enu(pose.position);
+    assert!(
+        (moved.y - 10.0).abs() < 0.05 && moved.x.abs() < 0.05,
+        "{moved:?}"
+    );
+    assert!((pose.orientation.heading_deg - 5.0).abs() < 0.01);
+    let clamped = w.session().poses()[&4];
+    let ground = q
+        .hot(clamped.position.lat_deg, clamped.position.lon_deg)
+        .expect("hot");
+    assert!((clamped.position.alt_m - (ground.height_ellipsoid_m() + 2.0)).abs() < 1e-6);
+    // On the ridge's west flank facing north, the entity rolls (its right side is higher).
+    assert!(clamped.orientation.roll_deg.abs() > 5.0, "{clamped:?}");
+}
+
+#[test]
+fn line_of_sight_across_the_ridge_is_blocked_and_along_it_is_clear() {
+    let mut q = query();
+    let mut w = world("");
+    let lat = lat_of_row(64.0);
+    let los = |id, lon_a, lon_b, alt| {
+        Packet::LosSegmentRequest(LosSegmentRequest {
+            los_id: id,
+            request_type_extended: true,
+            source_lat_deg_or_x_m: lat,
+            source_lon_deg_or_y_m: lon_a,
+            source_alt_m_or_z_m: alt,
+            destination_lat_deg_or_x_m: lat,
+            destination_lon_deg_or_y_m: lon_b,
+            destination_alt_m_or_z_m: alt,
+            ..LosSegmentRequest::default()
+        })
+    };
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        3,
+        vec![
+            los(1, lon_of_col(40.0), lon_of_col(90.0), 120.0),
+            los(2, lon_of_col(40.0), lon_of_col(90.0), 400.0),
+        ],
+    );
+    let reply = frame(&mut w, &mut q);
+    let mut by_id = std::collections::BTreeMap::new();
+    for p in &reply.packets {
+        if let Packet::LosExtendedResponse(r) = p {
+            by_id.insert(r.los_id, r.clone());
+        }
+    }
+    let blocked = &by_id[&1];
+    assert!(
+        blocked.valid && !blocked.visible && blocked.range_valid,
+        "{blocked:?}"
+    );
+    // It meets the ridge's west flank, short of column 64, about (64 - 40) * 30 m away.
+    assert!(
+        blocked.range_m > 600.0 && blocked.range_m < 24.0 * 30.0,
+        "{blocked:?}"
+    );
+    assert!(blocked.alt_m_or_z_m > 119.0 && blocked.alt_m_or_z_m < 121.0);
+    let clear = &by_id[&2];
+    assert!(
+        clear.valid && clear.visible && !clear.range_valid,
+        "{clear:?}"
+    );
+}
+
+#[test]
+fn reset_clears_entities_and_garbage_is_refused_without_harm() {
+    let mut q = query();
+    let mut w = world("");
+    let (lat, lon) = (lat_of_row(30.0), lon_of_col(30.0));
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        1,
+        vec![
+            entity_3(0, lat, lon, 300.0, 0.0),
+            entity_3(7, lat, lon, 300.0, 0.0),
+        ],
+    );
+    frame(&mut w, &mut q);
+    assert_eq!(w.session().entities().len(), 2);
+    for garbage in [
+        &b""[..],
+        &[0xFF; 3][..],
+        &[1, 24, 3, 0, 0, 0, 0x80, 0][..],
+        &[0u8; 70000][..],
+    ] {
+        assert!(w.receive_cigi(garbage).is_err());
+    }
+    let mut bytes = Vec::new();
+    encode_message(
+        &Message::new(
+            Version::V3_3,
+            ByteOrder::LittleEndian,
+            vec![Packet::IgControl(IgControl {
+                ig_mode: 0,
+                host_frame_number: 2,
+                ..IgControl::default()
+            })],
+        ),
+        &mut bytes,
+    )
+    .expect("encode");
+    w.receive_cigi(&bytes).expect("reset");
+    let reply = frame(&mut w, &mut q);
+    assert_eq!(
+        w.session().entities().keys().copied().collect::<Vec<_>>(),
+        vec![0]
+    );
+    let Some(Packet::StartOfFrame(sof)) = reply.packets.first() else {
+        panic!("Start of Frame first");
+    };
+    assert_eq!(sof.ig_mode, 0);
+    assert_eq!(w.cigi_rejected(), 4);
+}
+
+const DIS_SCENARIO: &str = r#"
+start_time = "2026-06-21T12:00:00Z"
+[[models]]
+model = "tank"
+dis_type = "1:1:225:1"
+[[entities]]
+id = 1
+model = "tank"
+dis_id = "1:3001:1"
+dis_type = "1:1:225:1:1:0:0"
+lat_deg = 36.01
+lon_deg = -120.99
+clamp = "height_and_attitude"
+speed_mps = 10
+path = [[36.015, -120.99]]
+appearance = "0x8000"
+[dis]
+site = 1
+application = 3001
+exercise = 4
+time_master = true
+"#;
+
+#[test]
+fn two_igs_share_entities_and_time_over_dis_and_draw_the_same_plume() {
+    let mut qa = query();
+    let mut qb = query();
+    let mut a = world(DIS_SCENARIO);
+    let b_scenario = DIS_SCENARIO
+        .replace(
+            "application = 3001\nexercise",
+            "application = 3002\nexercise",
+        )
+        .replace("time_master = true", "time_master = false")
+        .replace("2026-06-21T12:00:00Z", "2026-01-01T00:00:00Z")
+        .replace("[[entities]]", "[[entities_unused]]");
+    // B has no entities of its own.
+    let b_scenario: String = b_scenario
+        .split("[[entities_unused]]")
+        .next()
+        .map(|head| {
+            format!(
+                "{head}{}",
+                &b_scenario[b_scenario.find("[dis]").expect("dis")..]
+            )
+        })
+        .expect("split");
+    let mut b = world(&b_scenario);
+    let fallback = View {
+        eye: Geodetic::new(36.0, -121.0, 1000.0),
+        orientation: Hpr::default(),
+        fov: FovDeg::symmetric(60.0, 45.0),
+        width_px: 64,
+        height_px: 48,
+    };
+    for _ in 0..180 {
+        a.step(1.0 / 60.0, &mut qa);
+        b.step(1.0 / 60.0, &mut qb);
+        for d in a.take_dis_outgoing() {
+            b.receive_dis(&d, &mut qb);
+        }
+        for d in b.take_dis_outgoing() {
+            a.receive_dis(&d, &mut qa);
+        }
+    }
+    // B adopted A's time (not its own 1 January start).
+    assert!(
+        (b.unix_time_s() - a.unix_time_s()).abs() < 0.05,
+        "{} {}",
+        a.unix_time_s(),
+        b.unix_time_s()
+    );
+    // B draws A's tank where A has it, with the table's model.
+    let snapshot = b.snapshot(64, 48, &fallback);
+    let tank = snapshot
+        .entities
+        .iter()
+        .find(|e| e.model == "tank")
+        .expect("remote tank");
+    let truth = a.session().poses()[&1].position;
+    let gap = (tank.position.to_ecef() - truth.to_ecef()).length();
+    assert!(gap < 1.0, "remote tank {gap} m from its owner's");
+    // Its smoke appearance bit (0x8000) started the same plume on both... B's plume follows the
+    // remote entity; the puffs B computes for it are deterministic.
+    assert!(
+        b.effects().stats().live_effects >= 1,
+        "{:?}",
+        b.effects().stats()
+    );
+    let counters = b.exercise().expect("exercise").counters();
+    assert!(
+        counters.entity_states_applied >= 1 && counters.bad_pdus == 0,
+        "{counters:?}"
+    );
+}
+
+#[test]
+fn a_detonation_starts_the_same_plume_on_every_ig() {
+    use cig_dis::codec::{encode_pdu, DisMessage, DisVersion, EncodeHeader};
+    use cig_dis::dis_rs::detonation::model::{Detonation, DetonationDescriptor};
+    use cig_dis::dis_rs::enumerations::DetonationResult;
+    use cig_dis::dis_rs::model::{EntityId, EventId, Location, MunitionDescriptor, VectorF32};
+    use cig_dis::dis_rs::BodyRaw;
+    let impact = Geodetic::new(lat_of_row(60.0), lon_of_col(30.0), 112.0).to_ecef();
+    let detonation = Detonation::builder()
+        .with_source_entity_id(EntityId::new(3, 4, 5))
+        .with_target_entity_id(EntityId::new(0, 0, 0))
+        .with_exploding_entity_id(EntityId::new(3, 4, 6))
+        .with_event_id(EventId::new(3, 4, 77))
+        .with_velocity(VectorF32::new(0.0, 0.0, -200.0))
+        .with_world_location(Location::new(impact.x, impact.y, impact.z))
+        .with_descriptor(DetonationDescriptor::Munition(MunitionDescriptor::default()))
+        .with_entity_location(VectorF32::new(0.0, 0.0, 0.0))
+        .with_detonation_result(DetonationResult::from(3))
+        .build();
+    let header = |exercise_id| EncodeHeader {
+        version: DisVersion::V7,
+        exercise_id,
+        timestamp: 0,
+    };
+    let pdu = encode_pdu(
+        header(4),
+        &DisMessage::Detonation(Box::new(detonation.clone())),
+    )
+    .expect("encode");
+    let other_exercise =
+        encode_pdu(header(5), &DisMessage::Detonation(Box::new(detonation))).expect("encode");
+    let scenario =
+        "start_time = \"2026-06-21T12:00:00Z\"\n[dis]\nexercise = 4\ntime_master = true\n";
+    let run = |delay_frames: usize| {
+        let mut q = query();
+        let mut w = world(scenario);
+        for i in 0..240 {
+            if i == delay_frames {
+                w.receive_dis(&pdu, &mut q);
+                w.receive_dis(&other_exercise, &mut q);
+                w.receive_dis(&[0xde, 0xad], &mut q);
+            }
+            w.step(1.0 / 60.0, &mut q);
+        }
+        let counters = w.exercise().expect("exercise").counters();
+        assert_eq!(counters.impacts_started, 1, "{counters:?}");
+        assert_eq!(counters.bad_pdus, 1);
+        (w.effects().puff_states(), w.effects().stats().active)
+    };
+    let (a, active) = run(10);
+    let (b, _) = run(10);
+    assert!(active > 0, "the impact emits puffs");
+    assert_eq!(a, b, "the same event gives the same puffs");
+}
