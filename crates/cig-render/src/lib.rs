@@ -17,4 +17,6 @@ pub use gpu::{Gpu, RenderError};
 pub use offscreen::{load_for_view, render_image, render_image_with, Image};
 pub use renderer::serde_like::FrameStats;
 pub use renderer::{FrameOptions, Renderer, FRAME_FORMAT, MSAA_SAMPLES};
-pub use viewer::{run_viewer, ViewerError, ViewerOptions, ViewerReport};
+pub use viewer::{
+    run_viewer, run_viewer_driven, FrameDriver, ViewerError, ViewerOptions, ViewerReport,
+};

@@ -48,6 +48,89 @@ pub enum Command {
     /// Sun and moon positions, the moon's phase, rise/set and twilight times of the local
     /// day, and the natural illuminance, for a place and a UTC time (1900-2100).
     Ephem(EphemArgs),
+    /// Be the image generator of a CIGI host (3.3 or 4.0), optionally in a DIS exercise.
+    #[command(allow_negative_numbers = true)]
+    Serve(ServeArgs),
+    /// A small scripted CIGI host, for demos and tests.
+    Host(HostArgs),
+}
+
+#[derive(Args)]
+pub struct ServeArgs {
+    /// Terrain database directory.
+    #[arg(long)]
+    pub db: PathBuf,
+    /// Scenario file (TOML): entity-type table, owned entities, default view, DIS settings.
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// UDP port the host's messages arrive on.
+    #[arg(long, default_value_t = 8004)]
+    pub cigi_port: u16,
+    /// Where the IG's messages go, HOST:PORT (default: back to the sender of the host's
+    /// messages).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub cigi_host: Option<String>,
+    /// Local address of the CIGI port: loopback, any, an address or an interface name.
+    #[arg(long, default_value = "loopback")]
+    pub cigi_bind: String,
+    /// DIS port (joins the exercise even without a [dis] table in the scenario).
+    #[arg(long)]
+    pub dis_port: Option<u16>,
+    /// Local address of the DIS port (overrides the scenario's).
+    #[arg(long)]
+    pub dis_bind: Option<String>,
+    /// Draw off-screen instead of in a window.
+    #[arg(long)]
+    pub headless: bool,
+    /// Draw nothing: answer the host and join the exercise only (a query-only IG, tests).
+    #[arg(long)]
+    pub no_render: bool,
+    /// Frame size (each view).
+    #[arg(long, value_name = "WxH", default_value = "640x480")]
+    pub size: String,
+    /// Write each frame as PNG into this folder (with --headless).
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
+    /// Stop after N frames (default: run until killed or the window closes).
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Frame rate, Hz.
+    #[arg(long, default_value_t = 60.0)]
+    pub rate_hz: f64,
+    /// Simulation start, ISO 8601 UTC (default: the scenario's, else now).
+    #[arg(long)]
+    pub time: Option<String>,
+    /// Database number reported in Start of Frame.
+    #[arg(long, default_value_t = 1)]
+    pub database_number: i8,
+    /// Print the run's counters as one JSON line at the end.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct HostArgs {
+    /// Host script (TOML): entities and their paths, view, requests, time.
+    #[arg(long)]
+    pub script: PathBuf,
+    /// The IG, HOST:PORT.
+    #[arg(long, value_name = "HOST:PORT", default_value = "127.0.0.1:8004")]
+    pub ig: String,
+    /// Local UDP port the IG's messages arrive on (0: any free one).
+    #[arg(long, default_value_t = 8005)]
+    pub port: u16,
+    /// Local address: loopback, any, an address or an interface name.
+    #[arg(long, default_value = "loopback")]
+    pub bind: String,
+    /// Host frames to send (default: the script's).
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Frames to keep listening after the last one is sent.
+    #[arg(long, default_value_t = 10)]
+    pub drain_frames: u32,
+    /// One JSON line per answer received, and a summary line.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Subcommand)]

@@ -10,15 +10,17 @@ mod db;
 mod demo;
 mod ephem;
 mod flight;
+mod host;
 #[allow(
     dead_code,
-    reason = "the network edge's API is shared with `cig serve`, which uses the parts the tools do not"
+    reason = "the network edge's API is shared by `cig serve`, `cig host` and `cig dis`; each uses a part"
 )]
 mod net;
 mod output;
 mod plume;
 mod query;
 mod render;
+mod serve;
 mod view;
 
 use clap::Parser;
@@ -74,6 +76,8 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),
+        cli::Command::Serve(args) => serve::run(&args, &config),
+        cli::Command::Host(args) => host::run(&args),
         cli::Command::Config(cli::ConfigCommand::Default) => {
             print!("{}", config::Config::default_toml()?);
             Ok(())

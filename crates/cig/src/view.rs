@@ -13,7 +13,7 @@ use cig_terrain_io::store::open_database;
 use std::sync::Arc;
 
 /// Near the south edge of the database, a little above its highest point, in the middle.
-fn default_eye(cache: &TileCache) -> Geodetic {
+pub fn default_eye(cache: &TileCache) -> Geodetic {
     let manifest = cache.database().manifest();
     let g = &manifest.layout.grid;
     let lat = g.south_lat_deg + 0.05 * (g.north_lat_deg() - g.south_lat_deg);

@@ -2,27 +2,9 @@
 
 mod common;
 
-use common::{cig, one_line_error};
+use common::{cig, one_line_error, small_db};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-
-fn small_db(dir: &Path) -> PathBuf {
-    let db = dir.join("db");
-    cig()
-        .args(["db", "synth", "--out"])
-        .arg(&db)
-        .args([
-            "--origin",
-            "35.98,-121.23",
-            "--size-km",
-            "4",
-            "--spacing-m",
-            "30",
-        ])
-        .assert()
-        .success();
-    db
-}
+use std::path::Path;
 
 fn render_args(db: &Path, out: &Path) -> Vec<String> {
     [

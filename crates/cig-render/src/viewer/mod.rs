@@ -70,7 +70,14 @@ pub struct ViewerOptions {
     /// A scripted flight played from the first frame (eye, orientation and time interpolated
     /// between shots); the camera is the user's once it ends.
     pub script: Vec<Shot>,
+    /// Models added to the built-in ones (e.g. glTF files a scenario names).
+    pub models: Vec<cig_scene::models::Model>,
 }
+
+/// Supplies each frame's world when the viewer is driven from outside (an IG serving a host):
+/// called once per frame with the seconds since the previous frame and the window's size; the
+/// operator panel's level-of-detail threshold and wireframe still apply.
+pub type FrameDriver = Box<dyn FnMut(f64, u32, u32) -> FrameSnapshot>;
 
 /// One shot of a scripted flight.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -136,6 +143,7 @@ impl ViewerOptions {
             exit_after_frames: None,
             capture_last_frame: false,
             script: Vec::new(),
+            models: Vec::new(),
         }
     }
 
@@ -186,6 +194,16 @@ pub fn run_viewer(
     cache: Arc<TileCache>,
     options: ViewerOptions,
 ) -> Result<ViewerReport, ViewerError> {
+    run_viewer_driven(cache, options, None)
+}
+
+/// As [`run_viewer`], with each frame's world (views, entities, time, fog) from `driver` when
+/// one is given instead of the free camera and the panel's clock.
+pub fn run_viewer_driven(
+    cache: Arc<TileCache>,
+    options: ViewerOptions,
+    driver: Option<FrameDriver>,
+) -> Result<ViewerReport, ViewerError> {
     options
         .view(
             options.width_px,
@@ -215,6 +233,7 @@ pub fn run_viewer(
         error: None,
         report: ViewerReport::default(),
         first_frame: None,
+        driver,
     };
     let run = event_loop.run_app(&mut app);
     if let Some(error) = app.error.take() {
@@ -238,6 +257,7 @@ struct App {
     error: Option<ViewerError>,
     report: ViewerReport,
     first_frame: Option<Instant>,
+    driver: Option<FrameDriver>,
 }
 
 /// What was drawn last, to re-draw it off-screen for a screenshot.
@@ -402,7 +422,10 @@ impl App {
                 "the window has no sRGB format: colours will look too dark"
             );
         }
-        let renderer = Renderer::new(Arc::clone(&gpu), &self.cache, formats.scene);
+        let mut renderer = Renderer::new(Arc::clone(&gpu), &self.cache, formats.scene);
+        if !self.options.models.is_empty() {
+            renderer.set_models(self.options.models.clone());
+        }
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(
             egui_ctx.clone(),
@@ -557,11 +580,27 @@ impl App {
             }
         }
 
-        let mut snapshot = FrameSnapshot::new(
-            self.panel.unix_time_s,
-            vec![self.options.view(width_px, height_px, &self.camera)],
-        );
-        snapshot.fog = self.panel.fog();
+        let mut snapshot = match self.driver.as_mut() {
+            Some(driver) => {
+                let snapshot = driver(dt_s, width_px, height_px);
+                if let Some(first) = snapshot.views.first() {
+                    self.camera.eye = first.eye;
+                    self.camera.orientation = first.orientation;
+                    self.panel.unix_time_s = snapshot.unix_time_s;
+                    r.cache
+                        .update(&snapshot.views.iter().map(|v| v.eye).collect::<Vec<_>>());
+                }
+                snapshot
+            }
+            None => {
+                let mut snapshot = FrameSnapshot::new(
+                    self.panel.unix_time_s,
+                    vec![self.options.view(width_px, height_px, &self.camera)],
+                );
+                snapshot.fog = self.panel.fog();
+                snapshot
+            }
+        };
         snapshot.max_pixel_error = self.panel.max_pixel_error;
         snapshot.wireframe = self.panel.wireframe;
         let last = LastFrame {

@@ -23,3 +23,22 @@ pub fn one_line_error(out: &assert_cmd::assert::Assert) -> String {
     assert!(!stderr.contains("panicked"), "{stderr}");
     lines[0].to_string()
 }
+
+/// A 4 km synthetic database near 36 N 121 W with 30 m posts, built with `cig db synth`.
+pub fn small_db(dir: &std::path::Path) -> std::path::PathBuf {
+    let db = dir.join("db");
+    cig()
+        .args(["db", "synth", "--out"])
+        .arg(&db)
+        .args([
+            "--origin",
+            "35.98,-121.23",
+            "--size-km",
+            "4",
+            "--spacing-m",
+            "30",
+        ])
+        .assert()
+        .success();
+    db
+}

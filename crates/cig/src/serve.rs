@@ -1,0 +1,519 @@
+//! `cig serve`: the image generator driven by a CIGI host and joined to a DIS exercise.
+//!
+//! Glue only: the world (CIGI session, scenario, DIS exercise, clock, effects) is `cig-ig`'s
+//! `IgWorld`; sockets are `net`'s endpoints; frames are `cig-render`'s. Each frame: drain the
+//! host's and the exercise's datagrams into the world, step it, send the frame's message
+//! (Start of Frame and the answers) and the exercise's PDUs, and draw. Bad datagrams are
+//! counted and logged at a limited rate; the loop keeps going.
+
+use crate::cli::ServeArgs;
+use crate::config::Config;
+use crate::net::{BindTarget, Delivery, EndpointConfig, RateLimitedLog, UdpEndpoint};
+use crate::render::{parse_size, parse_time, write_png};
+use anyhow::{bail, Context};
+use cig_cigi::encode_message;
+use cig_effects::EffectsConfig;
+use cig_environment::UtcTime;
+use cig_geo::Geodetic;
+use cig_ig::{IgWorld, Scenario, SessionConfig, WorldConfig};
+use cig_scene::lighting::FogMode;
+use cig_scene::{FovDeg, Hpr, View};
+use cig_terrain::{QuerySession, TileCache};
+use cig_terrain_io::store::open_database;
+use std::net::{SocketAddr, ToSocketAddrs};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Parses a scenario's DIS delivery: "broadcast", "multicast:GROUP" or "unicast:HOST:PORT".
+pub fn parse_delivery(text: &str, port: u16) -> anyhow::Result<(Delivery, Option<SocketAddr>)> {
+    let text = text.trim();
+    if text == "broadcast" {
+        return Ok((Delivery::Broadcast, None));
+    }
+    if let Some(group) = text.strip_prefix("multicast:") {
+        let group: std::net::Ipv4Addr = group
+            .parse()
+            .with_context(|| format!("delivery {text:?}: {group:?} is not an IPv4 address"))?;
+        if !group.is_multicast() {
+            bail!("delivery {text:?}: {group} is not a multicast group (224.0.0.0/4)");
+        }
+        return Ok((
+            Delivery::Multicast(group),
+            Some(SocketAddr::from((group, port))),
+        ));
+    }
+    if let Some(to) = text.strip_prefix("unicast:") {
+        return Ok((Delivery::Unicast, Some(resolve(to, "delivery")?)));
+    }
+    bail!("delivery {text:?} is not broadcast, multicast:GROUP or unicast:HOST:PORT")
+}
+
+/// Resolves "HOST:PORT".
+pub fn resolve(text: &str, what: &str) -> anyhow::Result<SocketAddr> {
+    text.to_socket_addrs()
+        .with_context(|| format!("{what} {text:?} is not HOST:PORT"))?
+        .next()
+        .with_context(|| format!("{what} {text:?} names no address"))
+}
+
+/// Reads and checks a scenario file.
+pub fn read_scenario(path: &Path) -> anyhow::Result<Scenario> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read the scenario {}", path.display()))?;
+    Scenario::from_toml(&text).with_context(|| format!("scenario {}", path.display()))
+}
+
+/// glTF models the scenario's table names, loaded relative to the scenario's folder.
+fn scenario_models(
+    scenario: &Scenario,
+    scenario_path: Option<&Path>,
+) -> anyhow::Result<Vec<cig_scene::models::Model>> {
+    let base = scenario_path
+        .and_then(Path::parent)
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let table = cig_ig::ModelTable::from_scenario(scenario);
+    table
+        .gltf_files()
+        .iter()
+        .map(|(name, path)| {
+            let full = base.join(path);
+            cig_render::load_gltf_model(&full, name)
+                .with_context(|| format!("model {name:?} of the scenario"))
+        })
+        .collect()
+}
+
+/// How the frames are shown.
+enum Output {
+    None,
+    Offscreen {
+        renderer: Box<cig_render::Renderer>,
+        out_dir: Option<PathBuf>,
+    },
+}
+
+/// Totals of a run, printed at the end.
+#[derive(Default)]
+struct Totals {
+    frames: u64,
+    cigi_datagrams: u64,
+    cigi_bad: u64,
+    dis_datagrams: u64,
+    messages_sent: u64,
+    overframes: u64,
+    frame_ms_sum: f64,
+    frame_ms_max: f64,
+}
+
+pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
+    let (width_px, height_px) = parse_size(&args.size)?;
+    if !(args.rate_hz.is_finite() && (1.0..=1000.0).contains(&args.rate_hz)) {
+        bail!("--rate-hz {} must lie between 1 and 1000", args.rate_hz);
+    }
+    if args.frames == Some(0) {
+        bail!("--frames must be at least 1");
+    }
+    if args.out_dir.is_some() && !args.headless {
+        bail!("--out-dir needs --headless (a window shows the frames otherwise)");
+    }
+    let scenario = match &args.scenario {
+        Some(path) => read_scenario(path)?,
+        None => Scenario::from_toml("").context("the empty scenario")?,
+    };
+    let start = match (&args.time, scenario.start()) {
+        (Some(t), _) => parse_time(t).and_then(|s| {
+            UtcTime::from_unix_seconds(s).map_err(|e| anyhow::anyhow!("--time: {e}"))
+        })?,
+        (None, Some(t)) => t,
+        (None, None) => UtcTime::from_unix_seconds(
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0.0, |d| d.as_secs_f64()),
+        )
+        .context("the system clock")?,
+    };
+    let fog_mode = scenario.fog_mode().unwrap_or(FogMode::Exponential);
+    let cigi_bind: BindTarget = args.cigi_bind.parse().context("--cigi-bind")?;
+    let host = args
+        .cigi_host
+        .as_deref()
+        .map(|h| resolve(h, "--cigi-host"))
+        .transpose()?;
+    let models = scenario_models(&scenario, args.scenario.as_deref())?;
+    let database = Arc::new(open_database(&args.db)?);
+    let cache = Arc::new(TileCache::new(database, config.paging.clone())?);
+    let mut query = QuerySession::new(Arc::clone(&cache));
+
+    let mut dis_settings = scenario.dis.clone();
+    if let Some(port) = args.dis_port {
+        let settings = dis_settings.get_or_insert_with(Default::default);
+        settings.port = port;
+    }
+    if let Some(bind) = &args.dis_bind {
+        if let Some(settings) = dis_settings.as_mut() {
+            settings.bind = bind.clone();
+        }
+    }
+    let mut scenario = scenario;
+    scenario.dis = dis_settings.clone();
+    let dis = match &dis_settings {
+        Some(settings) => {
+            let (delivery, destination) =
+                parse_delivery(&settings.delivery, settings.port).context("the DIS delivery")?;
+            let bind: BindTarget = settings.bind.parse().context("the DIS bind target")?;
+            Some(UdpEndpoint::open(EndpointConfig {
+                label: "DIS",
+                bind,
+                port: settings.port,
+                delivery,
+                destination,
+                queue_limit: 8192,
+                reuse_port: true,
+            })?)
+        }
+        None => None,
+    };
+    let cigi = UdpEndpoint::open(EndpointConfig {
+        label: "CIGI",
+        bind: cigi_bind,
+        port: args.cigi_port,
+        delivery: Delivery::Unicast,
+        destination: host,
+        queue_limit: 256,
+        reuse_port: false,
+    })?;
+    tracing::info!(
+        "serving {} on CIGI {}{}",
+        args.db.display(),
+        cigi.local_addr(),
+        dis.as_ref()
+            .map(|d| format!(", DIS {}", d.local_addr()))
+            .unwrap_or_default()
+    );
+    let mut world = IgWorld::new(
+        scenario,
+        WorldConfig {
+            session: SessionConfig {
+                database_number: args.database_number,
+                ..SessionConfig::default()
+            },
+            start,
+            fog_mode,
+            effects: EffectsConfig::default(),
+            join_exercise: dis.is_some(),
+        },
+    )?;
+    let eye = crate::view::default_eye(&cache);
+    let fallback = View {
+        eye,
+        orientation: Hpr {
+            heading_deg: 0.0,
+            pitch_deg: -10.0,
+            roll_deg: 0.0,
+        },
+        fov: FovDeg::from_horizontal(60.0, width_px, height_px),
+        width_px,
+        height_px,
+    };
+    cache.update(&[eye]);
+    cache.wait_idle();
+
+    if !args.headless && !args.no_render {
+        return run_windowed(args, cache, world, query, cigi, dis, fallback, models);
+    }
+    let mut output = if args.no_render {
+        Output::None
+    } else {
+        let gpu = cig_render::Gpu::headless()?;
+        let mut renderer = cig_render::Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
+        if !models.is_empty() {
+            renderer.set_models(models);
+        }
+        if let Some(dir) = &args.out_dir {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        Output::Offscreen {
+            renderer: Box::new(renderer),
+            out_dir: args.out_dir.clone(),
+        }
+    };
+    let mut loop_state = LoopState::new(args.rate_hz);
+    let mut totals = Totals::default();
+    loop {
+        if args.frames.is_some_and(|n| totals.frames >= n) {
+            break;
+        }
+        let began = Instant::now();
+        let snapshot = loop_state.tick(
+            &mut world,
+            &mut query,
+            &cigi,
+            dis.as_ref(),
+            &mut totals,
+            (width_px, height_px, &fallback),
+        );
+        if let Output::Offscreen { renderer, out_dir } = &mut output {
+            let eyes: Vec<Geodetic> = snapshot.views.iter().map(|v| v.eye).collect();
+            cache.update(&eyes);
+            for index in 0..snapshot.views.len() {
+                let (image, _stats) = cig_render::render_image_with(
+                    renderer,
+                    &cache,
+                    &snapshot,
+                    index,
+                    cig_render::FrameOptions::default(),
+                )?;
+                if let Some(dir) = out_dir {
+                    let name = if snapshot.views.len() == 1 {
+                        format!("frame_{:05}.png", totals.frames)
+                    } else {
+                        format!("frame_{:05}_view{index}.png", totals.frames)
+                    };
+                    write_png(&image, &dir.join(name))?;
+                }
+            }
+        }
+        let frame_ms = began.elapsed().as_secs_f64() * 1000.0;
+        totals.frames += 1;
+        totals.frame_ms_sum += frame_ms;
+        totals.frame_ms_max = totals.frame_ms_max.max(frame_ms);
+        let period = Duration::from_secs_f64(1.0 / args.rate_hz);
+        match period.checked_sub(began.elapsed()) {
+            Some(rest) => std::thread::sleep(rest),
+            None => {
+                totals.overframes += 1;
+                loop_state.overframing = true;
+            }
+        }
+    }
+    report(&totals, &world, &cigi, dis.as_ref(), args.json)
+}
+
+/// Per-frame work shared by the headless and windowed loops.
+struct LoopState {
+    started: Instant,
+    last: Instant,
+    bad_cigi: RateLimitedLog,
+    inbox: Vec<crate::net::Datagram>,
+    reply_to: Option<SocketAddr>,
+    overframing: bool,
+    period_s: f64,
+}
+
+impl LoopState {
+    fn new(rate_hz: f64) -> LoopState {
+        let now = Instant::now();
+        LoopState {
+            started: now,
+            last: now,
+            bad_cigi: RateLimitedLog::new("CIGI"),
+            inbox: Vec::new(),
+            reply_to: None,
+            overframing: false,
+            period_s: 1.0 / rate_hz,
+        }
+    }
+
+    /// One frame of the world; returns what to draw.
+    fn tick(
+        &mut self,
+        world: &mut IgWorld,
+        query: &mut QuerySession,
+        cigi: &UdpEndpoint,
+        dis: Option<&UdpEndpoint>,
+        totals: &mut Totals,
+        (width_px, height_px, fallback): (u32, u32, &View),
+    ) -> cig_scene::FrameSnapshot {
+        let now = Instant::now();
+        let dt_s = (now - self.last).as_secs_f64();
+        self.overframing |= dt_s > self.period_s * 1.5;
+        self.last = now;
+        self.inbox.clear();
+        cigi.drain(&mut self.inbox);
+        for d in &self.inbox {
+            totals.cigi_datagrams += 1;
+            match world.receive_cigi(&d.bytes) {
+                Ok(()) => self.reply_to = Some(d.from),
+                Err(e) => {
+                    totals.cigi_bad += 1;
+                    self.bad_cigi.note(now, &d.from.to_string(), &e.to_string());
+                }
+            }
+        }
+        if let Some(dis) = dis {
+            self.inbox.clear();
+            dis.drain(&mut self.inbox);
+            for d in &self.inbox {
+                totals.dis_datagrams += 1;
+                world.receive_dis(&d.bytes, query);
+            }
+        }
+        world.step(dt_s, query);
+        let ticks = ((now - self.started).as_micros() / 10) as u32;
+        let mut message = world.host_message(query, ticks);
+        if let Some(cig_cigi::Packet::StartOfFrame(sof)) = message.packets.first_mut() {
+            sof.overframing = std::mem::take(&mut self.overframing);
+        }
+        let mut bytes = Vec::with_capacity(1024);
+        match encode_message(&message, &mut bytes) {
+            Ok(()) => {
+                let sent = match (cigi.destination(), self.reply_to) {
+                    (Some(_), _) => cigi.send(&bytes),
+                    (None, Some(to)) => cigi.send_to(&bytes, to),
+                    (None, None) => Ok(()),
+                };
+                match sent {
+                    Ok(()) => totals.messages_sent += 1,
+                    Err(e) => {
+                        self.bad_cigi.note(now, "send", &e.to_string());
+                    }
+                }
+            }
+            Err(e) => tracing::error!("CIGI: the frame's message cannot be encoded: {e}"),
+        }
+        if let Some(dis) = dis {
+            for pdu in world.take_dis_outgoing() {
+                if let Err(e) = dis.send(&pdu) {
+                    self.bad_cigi.note(now, "DIS send", &e.to_string());
+                }
+            }
+        }
+        world.snapshot(width_px, height_px, fallback)
+    }
+}
+
+#[allow(
+    clippy::too_many_arguments,
+    reason = "hands the whole serving state to the window's loop"
+)]
+fn run_windowed(
+    args: &ServeArgs,
+    cache: Arc<TileCache>,
+    mut world: IgWorld,
+    mut query: QuerySession,
+    cigi: UdpEndpoint,
+    dis: Option<UdpEndpoint>,
+    fallback: View,
+    models: Vec<cig_scene::models::Model>,
+) -> anyhow::Result<()> {
+    let mut options = cig_render::ViewerOptions::new(fallback.eye, fallback.orientation);
+    options.title = format!("cig serve: {}", args.db.display());
+    options.width_px = fallback.width_px;
+    options.height_px = fallback.height_px;
+    options.exit_after_frames = args.frames;
+    options.models = models;
+    let shared = Arc::new(std::sync::Mutex::new(Totals::default()));
+    let totals = Arc::clone(&shared);
+    let mut loop_state = LoopState::new(args.rate_hz);
+    let dis_out = dis.as_ref().map(UdpEndpoint::local_addr);
+    let driver: cig_render::FrameDriver = Box::new(move |_dt_s, width_px, height_px| {
+        let mut t = totals
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let snapshot = loop_state.tick(
+            &mut world,
+            &mut query,
+            &cigi,
+            dis.as_ref(),
+            &mut t,
+            (width_px, height_px, &fallback),
+        );
+        t.frames += 1;
+        snapshot
+    });
+    let report = match cig_render::run_viewer_driven(cache, options, Some(driver)) {
+        Ok(report) => report,
+        Err(cig_render::ViewerError::NoDisplay(reason)) => {
+            bail!("cig serve needs a display unless --headless is given ({reason})")
+        }
+        Err(e) => return Err(e.into()),
+    };
+    let t = shared
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    eprintln!(
+        "served {} frames in a window ({}), {} host datagrams ({} bad){}",
+        report.frames,
+        report.adapter,
+        t.cigi_datagrams,
+        t.cigi_bad,
+        dis_out.map(|a| format!(", DIS on {a}")).unwrap_or_default()
+    );
+    Ok(())
+}
+
+fn report(
+    totals: &Totals,
+    world: &IgWorld,
+    cigi: &UdpEndpoint,
+    dis: Option<&UdpEndpoint>,
+    json: bool,
+) -> anyhow::Result<()> {
+    let c = world.session().counters();
+    let mean_ms = totals.frame_ms_sum / (totals.frames.max(1) as f64);
+    let exercise = world.exercise().map(|x| {
+        let e = x.counters();
+        serde_json::json!({
+            "datagrams": e.datagrams,
+            "pdus": e.pdus,
+            "bad_pdus": e.bad_pdus,
+            "entity_states_applied": e.entity_states_applied,
+            "ignored": e.ignored,
+            "detonations": e.detonations,
+            "impacts_started": e.impacts_started,
+            "environmental_processes": e.environmental_processes,
+            "pdus_sent": e.pdus_sent,
+            "remote_entities": x.remote_len(),
+            "time_role": format!("{:?}", x.time_role()),
+        })
+    });
+    let value = serde_json::json!({
+        "frames": totals.frames,
+        "ig_frame_number": world.session().ig_frame_number(),
+        "last_host_frame_number": world.session().last_host_frame_number(),
+        "frame_ms_mean": mean_ms,
+        "frame_ms_max": totals.frame_ms_max,
+        "overframes": totals.overframes,
+        "cigi": {
+            "datagrams": totals.cigi_datagrams,
+            "bad_datagrams": totals.cigi_bad,
+            "messages_sent": totals.messages_sent,
+            "packets_applied": c.packets_applied,
+            "packets_ignored": c.packets_ignored,
+            "hat_hot_answered": c.hat_hot_answered,
+            "los_answered": c.los_answered,
+            "position_answered": c.position_answered,
+            "environment_answered": c.environment_answered,
+            "collisions_reported": c.collisions_reported,
+            "queue_dropped": cigi.stats().dropped_queue_full,
+            "entities": world.session().entities().len(),
+            "address": cigi.local_addr().to_string(),
+        },
+        "dis": exercise.map(|mut e| {
+            if let (Some(obj), Some(d)) = (e.as_object_mut(), dis) {
+                obj.insert("queue_dropped".into(), d.stats().dropped_queue_full.into());
+                obj.insert("address".into(), d.local_addr().to_string().into());
+            }
+            e
+        }),
+        "effects_live": world.effects().stats().live_effects,
+        "sim_time": UtcTime::from_unix_seconds(world.unix_time_s()).map(|t| t.to_iso8601_seconds()).unwrap_or_default(),
+    });
+    if json {
+        println!("{}", serde_json::to_string(&value)?);
+    } else {
+        eprintln!(
+            "served {} frames ({:.1} ms mean, {} overframes): {} host datagrams ({} bad), {} HAT/HOT, {} LOS answered",
+            totals.frames,
+            mean_ms,
+            totals.overframes,
+            totals.cigi_datagrams,
+            totals.cigi_bad,
+            c.hat_hot_answered,
+            c.los_answered
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,389 @@
+//! End-to-end runs of `cig serve` and `cig host` over UDP on the loopback: the host's HAT/HOT
+//! and LOS answers against the database's own queries (`cig query`), bad datagrams on the IG's
+//! port, off-screen frames, and bad command-line input.
+
+mod common;
+
+use common::{cig, one_line_error, small_db};
+use serde_json::Value;
+use std::io::{BufRead, BufReader};
+use std::net::UdpSocket;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn free_udp_port() -> u16 {
+    UdpSocket::bind("127.0.0.1:0")
+        .and_then(|s| s.local_addr())
+        .map(|a| a.port())
+        .expect("a free port")
+}
+
+/// Starts `cig serve` with `-v` and waits until it says it is serving.
+fn start_serve(args: &[String]) -> Child {
+    let mut child = Command::new(assert_cmd::cargo::cargo_bin("cig"))
+        .arg("-v")
+        .arg("serve")
+        .args(args)
+        .env_remove("CIG_LOG")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("cig serve starts");
+    let stderr = child.stderr.take().expect("stderr");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut ready = Some(tx);
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if line.contains("serving") {
+                if let Some(tx) = ready.take() {
+                    let _ = tx.send(());
+                }
+            }
+        }
+    });
+    rx.recv_timeout(Duration::from_secs(60))
+        .expect("cig serve says it is serving within a minute");
+    child
+}
+
+fn query_height_msl(db: &Path, lat: f64, lon: f64) -> f64 {
+    let out = cig()
+        .args(["query", "hat"])
+        .arg(db)
+        .args([lat.to_string(), lon.to_string(), "--json".into()])
+        .output()
+        .expect("cig query");
+    assert!(out.status.success());
+    let v: Value = serde_json::from_slice(&out.stdout).expect("json");
+    v["height_m"].as_f64().expect("height_m")
+}
+
+fn lines(bytes: &[u8]) -> Vec<Value> {
+    String::from_utf8_lossy(bytes)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect()
+}
+
+#[test]
+fn a_scripted_host_gets_answers_that_match_the_database_in_both_versions() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let points = [(35.99, -121.22), (36.005, -121.21), (36.01, -121.195)];
+    for (version, order) in [("3.3", "little"), ("4.0", "big")] {
+        let ig_port = free_udp_port();
+        let host_port = free_udp_port();
+        let mut serve = start_serve(&[
+            "--db".into(),
+            db.display().to_string(),
+            "--no-render".into(),
+            "--cigi-port".into(),
+            ig_port.to_string(),
+            "--cigi-host".into(),
+            format!("127.0.0.1:{host_port}"),
+        ]);
+        let mut script = format!(
+            "version = \"{version}\"\nbyte_order = \"{order}\"\nframes = 60\ntime = \"2026-06-21T10:00:00Z\"\n\
+             [[entities]]\nid = 0\ntype = 1\nclamp = \"height\"\nalt_m = 2.0\nspeed_mps = 30\npath = [[35.99, -121.22], [36.01, -121.20]]\n\
+             [view]\nentity = 0\noffset_m = [0, 0, -3]\n\
+             [[hat]]\nid = 100\nentity = 0\ntype = \"hat\"\nevery_frame = true\n\
+             [[los]]\nid = 200\nfrom = [35.99, -121.22, 2000]\nto = [36.01, -121.20, 2000]\nextended = true\nevery_frame = true\n"
+        );
+        for (i, (lat, lon)) in points.iter().enumerate() {
+            script += &format!(
+                "[[hat]]\nid = {i}\nlat_deg = {lat}\nlon_deg = {lon}\nalt_m = 1500\ntype = \"extended\"\nevery_frame = true\n"
+            );
+        }
+        let script_path = dir.path().join(format!("host-{version}.toml"));
+        std::fs::write(&script_path, script).expect("script");
+        let out = cig()
+            .args(["host", "--script"])
+            .arg(&script_path)
+            .args([
+                "--ig".into(),
+                format!("127.0.0.1:{ig_port}"),
+                "--port".into(),
+                host_port.to_string(),
+                "--json".into(),
+            ])
+            .timeout(Duration::from_secs(120))
+            .output()
+            .expect("cig host");
+        let _ = serve.kill();
+        let _ = serve.wait();
+        assert!(
+            out.status.success(),
+            "cig host: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let answers = lines(&out.stdout);
+        let summary = answers.last().expect("summary")["summary"].clone();
+        assert!(
+            summary["start_of_frames"].as_u64().unwrap_or(0) >= 30,
+            "{summary}"
+        );
+        // Answers come in the IG's next frame: at most a few host frames later.
+        assert!(
+            summary["latency_frames_max"].as_u64().unwrap_or(99) <= 4,
+            "{summary}"
+        );
+        for (i, (lat, lon)) in points.iter().enumerate() {
+            let truth = query_height_msl(&db, *lat, *lon);
+            let got: Vec<&Value> = answers
+                .iter()
+                .filter(|a| a["packet"] == "hat_hot_extended" && a["id"] == i)
+                .collect();
+            assert!(
+                got.len() >= 30,
+                "{version}: {} answers to request {i}",
+                got.len()
+            );
+            for a in got {
+                assert_eq!(a["valid"], true);
+                let hot = a["hot_m"].as_f64().expect("hot");
+                let hat = a["hat_m"].as_f64().expect("hat");
+                assert!(
+                    (hot - truth).abs() < 1e-6,
+                    "{version} point {i}: {hot} vs {truth}"
+                );
+                assert!((hat - (1500.0 - truth)).abs() < 1e-6);
+            }
+        }
+        // The clamped entity sits 2 m above the terrain: HAT of its origin is 2 m.
+        let below: Vec<f64> = answers
+            .iter()
+            .filter(|a| a["packet"] == "hat_hot" && a["id"] == 100)
+            .filter_map(|a| a["height_m"].as_f64())
+            .collect();
+        assert!(below.len() >= 30);
+        assert!(below.iter().all(|h| (h - 2.0).abs() < 1e-3), "{below:?}");
+        // The high sightline sees over everything.
+        let los: Vec<&Value> = answers
+            .iter()
+            .filter(|a| a["packet"] == "los_extended")
+            .collect();
+        assert!(
+            !los.is_empty()
+                && los
+                    .iter()
+                    .all(|a| a["visible"] == true && a["valid"] == true)
+        );
+    }
+}
+
+#[test]
+fn garbage_on_the_cigi_port_is_counted_and_the_ig_keeps_serving() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let ig_port = free_udp_port();
+    let started = Instant::now();
+    let serve = start_serve(&[
+        "--db".into(),
+        db.display().to_string(),
+        "--no-render".into(),
+        "--cigi-port".into(),
+        ig_port.to_string(),
+        "--frames".into(),
+        "90".into(),
+        "--json".into(),
+    ]);
+    let socket = UdpSocket::bind("127.0.0.1:0").expect("socket");
+    socket
+        .set_read_timeout(Some(Duration::from_secs(5)))
+        .expect("timeout");
+    let target = format!("127.0.0.1:{ig_port}");
+    let garbage: [&[u8]; 5] = [
+        b"",
+        &[0xFF; 7],
+        &[1, 24, 2, 0, 0, 0, 0x80, 0, 0, 0], // truncated IG Control
+        &[
+            1, 24, 9, 1, 0, 0, 0x80, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+        ], // version 9
+        &[0x55; 4000],
+    ];
+    for g in garbage {
+        socket.send_to(g, &target).expect("send");
+    }
+    // A valid CIGI 3.3 IG Control afterwards, built from ICD 3.3 §4.1.1 by hand (little-endian:
+    // the magic number 0x8000 reads 00 80): it is answered, to its sender.
+    let mut ig_control = vec![
+        1,            // packet ID
+        24,           // size
+        3,            // major version
+        1,            // database number
+        (3 << 4) | 1, // minor version 3, IG mode operate
+        0,            // reserved
+        0x00,
+        0x80, // byte-swap magic 0x8000, little-endian
+    ];
+    ig_control.extend_from_slice(&7u32.to_le_bytes()); // host frame number
+    ig_control.extend_from_slice(&[0; 12]); // timestamp, last IG frame, reserved
+    socket.send_to(&ig_control, &target).expect("send");
+    let mut buf = [0u8; 2048];
+    let (n, _) = socket
+        .recv_from(&mut buf)
+        .expect("the IG answers a valid host message");
+    assert!(
+        n >= 24 && buf[0] == 101,
+        "Start of Frame first: {:?}",
+        &buf[..n.min(8)]
+    );
+    let out = serve.wait_with_output().expect("serve ends");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).expect("json summary");
+    assert_eq!(summary["frames"], 90);
+    assert_eq!(summary["cigi"]["bad_datagrams"], 5, "{summary}");
+    assert_eq!(summary["last_host_frame_number"], 7, "{summary}");
+    assert!(started.elapsed() < Duration::from_secs(60));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn serve_draws_off_screen_frames_of_the_scenario() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let scenario = dir.path().join("scenario.toml");
+    std::fs::write(
+        &scenario,
+        "start_time = \"2026-06-21T12:00:00Z\"\nvisibility_m = 30000\n\
+         [[entities]]\nid = 1\nmodel = \"tank\"\nlat_deg = 35.995\nlon_deg = -121.215\nclamp = \"height_and_attitude\"\nspeed_mps = 10\npath = [[36.0, -121.21]]\n\
+         [view]\nentity = 1\noffset_m = [-40, 0, -15]\nhpr_deg = [0, -15, 0]\nfov_deg = 50\n",
+    )
+    .expect("scenario");
+    let frames = dir.path().join("frames");
+    let out = cig()
+        .args(["serve", "--db"])
+        .arg(&db)
+        .arg("--scenario")
+        .arg(&scenario)
+        .args([
+            "--headless",
+            "--size",
+            "96x64",
+            "--frames",
+            "3",
+            "--json",
+            "--cigi-port",
+        ])
+        .arg(free_udp_port().to_string())
+        .arg("--out-dir")
+        .arg(&frames)
+        .timeout(Duration::from_secs(300))
+        .output()
+        .expect("serve");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(summary["frames"], 3);
+    assert_eq!(summary["cigi"]["entities"], 1);
+    for i in 0..3 {
+        let png = frames.join(format!("frame_{i:05}.png"));
+        let decoder = png::Decoder::new(std::io::BufReader::new(
+            std::fs::File::open(&png).expect("frame written"),
+        ));
+        let reader = decoder.read_info().expect("a PNG");
+        assert_eq!((reader.info().width, reader.info().height), (96, 64));
+    }
+}
+
+#[test]
+fn bad_serve_and_host_input_gives_one_line_errors() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let missing_db = dir.path().join("nowhere");
+    let bad_scenario = dir.path().join("bad.toml");
+    std::fs::write(
+        &bad_scenario,
+        "[[entities]]\nid = 1\nlat_deg = 95\nlon_deg = 0\n",
+    )
+    .expect("write");
+    let db = small_db(dir.path());
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "serve".into(),
+                "--db".into(),
+                db.display().to_string(),
+                "--scenario".into(),
+                bad_scenario.display().to_string(),
+                "--no-render".into(),
+            ],
+            "entities[0].lat_deg",
+        ),
+        (
+            vec![
+                "serve".into(),
+                "--db".into(),
+                missing_db.display().to_string(),
+                "--no-render".into(),
+            ],
+            "nowhere",
+        ),
+        (
+            vec![
+                "serve".into(),
+                "--db".into(),
+                db.display().to_string(),
+                "--size".into(),
+                "0x5".into(),
+            ],
+            "--size",
+        ),
+        (
+            vec![
+                "serve".into(),
+                "--db".into(),
+                db.display().to_string(),
+                "--out-dir".into(),
+                "x".into(),
+            ],
+            "--headless",
+        ),
+        (
+            vec![
+                "serve".into(),
+                "--db".into(),
+                db.display().to_string(),
+                "--no-render".into(),
+                "--cigi-bind".into(),
+                "nosuchif0".into(),
+                "--frames".into(),
+                "1".into(),
+            ],
+            "nosuchif0",
+        ),
+        (
+            vec![
+                "host".into(),
+                "--script".into(),
+                bad_scenario.display().to_string(),
+            ],
+            "host script",
+        ),
+        (
+            vec![
+                "host".into(),
+                "--script".into(),
+                dir.path().join("none.toml").display().to_string(),
+            ],
+            "none.toml",
+        ),
+    ];
+    for (args, needle) in cases {
+        let assert = cig()
+            .args(&args)
+            .timeout(Duration::from_secs(60))
+            .assert()
+            .failure();
+        let line = one_line_error(&assert);
+        assert!(line.contains(needle), "{args:?}: {line}");
+    }
+}
