@@ -8,6 +8,7 @@ mod cli;
 mod config;
 mod db;
 mod demo;
+mod dis;
 mod ephem;
 mod flight;
 #[allow(
@@ -74,6 +75,8 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),
+        cli::Command::Dis(cli::DisCommand::Listen(args)) => dis::listen(&args),
+        cli::Command::Dis(cli::DisCommand::Send(args)) => dis::send(&args),
         cli::Command::Config(cli::ConfigCommand::Default) => {
             print!("{}", config::Config::default_toml()?);
             Ok(())
