@@ -153,6 +153,33 @@ pub enum BenchCommand {
     Particles(BenchParticlesArgs),
     /// Renderer: a 300 m/s low-level pass, level of detail against full detail in one run.
     Render(BenchRenderArgs),
+    /// Network side of the IG: DIS decoding, 10,000 dead-reckoned remote entities, 100 HAT/HOT
+    /// requests a frame, CIGI decoding, and (with --flood) a 100,000 PDU/s flood at 60 Hz.
+    #[command(allow_negative_numbers = true)]
+    Net(BenchNetArgs),
+}
+
+#[derive(Args)]
+pub struct BenchNetArgs {
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Seconds each measure may take.
+    #[arg(long, default_value_t = 2.0, value_name = "S")]
+    pub seconds: f64,
+    /// Terrain database for the HAT/HOT measure; default: the demo database "demo-db", built
+    /// when missing.
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Also run the flood: Entity State PDUs into a loopback endpoint while a 60 Hz loop runs.
+    #[arg(long)]
+    pub flood: bool,
+    /// Seconds of flood.
+    #[arg(long, default_value_t = 60.0, value_name = "S")]
+    pub flood_s: f64,
+    /// PDUs per second of the flood.
+    #[arg(long, default_value_t = 100_000, value_name = "N")]
+    pub flood_rate: u64,
 }
 
 #[derive(Args)]

@@ -1,6 +1,7 @@
 //! End-to-end tests of `cig dis listen` and `cig dis send` on the loopback, with each other and
-//! with an independent DIS implementation: the Python package `opendis` (PyPI `opendis`).
-//! The opendis tests skip, with a message, when `python3 -c "import opendis"` fails.
+//! with an independent DIS implementation: the Python package `opendis` (PyPI `opendis`);
+//! and of `cig bench net`'s report. The opendis tests skip, with a message, when
+//! `python3 -c "import opendis"` fails.
 
 mod common;
 
@@ -652,4 +653,104 @@ fn listen_describes_data_environmental_and_remove_pdus() {
     assert_eq!(v[3]["pdu_name"], "Remove Entity");
     assert_eq!(v[3]["receiving_id"], "1:2:3");
     assert_eq!(v[3]["request_id"], 44);
+}
+
+/// The benchmark's report has every measure with sane figures (no timing assertions).
+#[test]
+fn bench_net_reports_every_measure_and_the_flood() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("db");
+    cig()
+        .args([
+            "db",
+            "synth",
+            "--origin",
+            "36,-121",
+            "--size-km",
+            "3",
+            "--spacing-m",
+            "30",
+        ])
+        .arg("--out")
+        .arg(&db)
+        .assert()
+        .success();
+    let out = cig()
+        .args([
+            "bench",
+            "net",
+            "--json",
+            "--seconds",
+            "0.5",
+            "--flood",
+            "--flood-s",
+            "1",
+        ])
+        .arg("--db")
+        .arg(&db)
+        .assert()
+        .success();
+    let v: Value = serde_json::from_slice(&out.get_output().stdout).expect("one JSON report");
+    for key in ["machine", "date_utc", "commit"] {
+        assert!(!v[key].is_null(), "{key}");
+    }
+    let positive = |x: &Value, what: &str| {
+        let f = x
+            .as_f64()
+            .unwrap_or_else(|| panic!("{what} is not a number: {x}"));
+        assert!(f.is_finite() && f > 0.0, "{what} = {f}");
+    };
+    let d = &v["dis_decode"];
+    positive(&d["decode_per_s_one_core"], "decode rate");
+    positive(&d["decode_cost_vs_copy"], "decode ratio");
+    assert!(d["meets_target"].is_boolean());
+    let t = &v["dis_remote_table"];
+    assert_eq!(t["entities"], 10_000);
+    positive(&t["frame_ms_median"], "table frame");
+    positive(&t["snapshot_ms_median"], "snapshot");
+    let h = &v["hat_hot"];
+    assert_eq!(h["requests_per_frame"], 100);
+    positive(&h["frame_ms_median"], "hat frame");
+    positive(&h["fraction_of_60hz_frame_median"], "hat fraction");
+    let c = &v["cigi_decode"];
+    for case in [
+        "v3_3_big_endian",
+        "v3_3_little_endian",
+        "v4_0_little_endian",
+    ] {
+        positive(&c[case]["decode_us_median"], case);
+        assert!(
+            c[case]["datagram_octets"].as_u64().unwrap() > 48_000,
+            "{case}"
+        );
+    }
+    let f = &v["flood"];
+    positive(&f["unloaded"]["frames_per_s"], "unloaded rate");
+    positive(&f["loaded"]["frames_per_s"], "loaded rate");
+    positive(&f["frame_rate_ratio_loaded_vs_unloaded"], "rate ratio");
+    let sent = f["sent"].as_u64().unwrap();
+    let received = f["received"].as_u64().unwrap();
+    assert!(sent > 1000, "the flood sent {sent}");
+    assert!(received <= sent && received > 0, "{received} of {sent}");
+    assert!(f["loaded"]["pdus_applied"].as_u64().unwrap() > 0);
+    assert_eq!(f["loaded"]["bad_pdus"], 0);
+    assert!(f["peak_queue_len"].as_u64().unwrap() <= f["queue_limit"].as_u64().unwrap());
+    assert!(f["dropped_queue_full"].is_u64());
+    positive(&f["memory_kb"]["rss_end"], "RSS");
+    positive(&f["memory_kb"]["hwm_end"], "HWM");
+}
+
+#[test]
+fn bench_net_refuses_bad_durations() {
+    for (option, value) in [
+        ("--seconds", "0"),
+        ("--flood-s", "-1"),
+        ("--flood-rate", "0"),
+    ] {
+        let out = cig()
+            .args(["bench", "net", "--flood", option, value])
+            .assert()
+            .failure();
+        assert!(one_line_error(&out).contains(option), "{option}");
+    }
 }
