@@ -53,6 +53,9 @@ pub enum Command {
     Serve(ServeArgs),
     /// A small scripted CIGI host, for demos and tests.
     Host(HostArgs),
+    /// DIS (IEEE 1278.1) diagnostic tools: print received PDUs, send Entity State PDUs.
+    #[command(subcommand)]
+    Dis(DisCommand),
 }
 
 #[derive(Args)]
@@ -233,6 +236,33 @@ pub enum BenchCommand {
     Particles(BenchParticlesArgs),
     /// Renderer: a 300 m/s low-level pass, level of detail against full detail in one run.
     Render(BenchRenderArgs),
+    /// Network side of the IG: DIS decoding, 10,000 dead-reckoned remote entities, 100 HAT/HOT
+    /// requests a frame, CIGI decoding, and (with --flood) a 100,000 PDU/s flood at 60 Hz.
+    #[command(allow_negative_numbers = true)]
+    Net(BenchNetArgs),
+}
+
+#[derive(Args)]
+pub struct BenchNetArgs {
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Seconds each measure may take.
+    #[arg(long, default_value_t = 2.0, value_name = "S")]
+    pub seconds: f64,
+    /// Terrain database for the HAT/HOT measure; default: the demo database "demo-db", built
+    /// when missing.
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Also run the flood: Entity State PDUs into a loopback endpoint while a 60 Hz loop runs.
+    #[arg(long)]
+    pub flood: bool,
+    /// Seconds of flood.
+    #[arg(long, default_value_t = 60.0, value_name = "S")]
+    pub flood_s: f64,
+    /// PDUs per second of the flood.
+    #[arg(long, default_value_t = 100_000, value_name = "N")]
+    pub flood_rate: u64,
 }
 
 #[derive(Args)]
@@ -484,4 +514,109 @@ pub struct EphemArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(Subcommand)]
+pub enum DisCommand {
+    /// Print each PDU received on a UDP port: one readable line, or one JSON line with --json.
+    #[command(allow_negative_numbers = true)]
+    Listen(DisListenArgs),
+    /// Send Entity State PDUs for one entity (built by cig's DIS encoder).
+    #[command(allow_negative_numbers = true)]
+    Send(DisSendArgs),
+}
+
+#[derive(Args)]
+pub struct DisListenArgs {
+    /// UDP port to listen on (DIS commonly uses 3000).
+    #[arg(long, value_name = "P")]
+    pub port: u16,
+    /// Where to listen: "loopback" (default), "any" (every interface), an IP address or an
+    /// interface name.
+    #[arg(long, value_name = "B", default_value = "loopback")]
+    pub bind: String,
+    /// Receive the subnet's broadcasts (binds the interface's broadcast address).
+    #[arg(long, conflicts_with = "multicast")]
+    pub broadcast: bool,
+    /// Join this IPv4 multicast group on the bound interface.
+    #[arg(long, value_name = "GROUP")]
+    pub multicast: Option<String>,
+    /// Print only PDUs of this exercise.
+    #[arg(long, value_name = "N")]
+    pub exercise: Option<u8>,
+    /// Stop after this many PDUs (bad datagrams do not count).
+    #[arg(long, value_name = "N")]
+    pub count: Option<u64>,
+    /// Stop after this many seconds; an error when --count PDUs have not arrived by then.
+    #[arg(long, value_name = "S")]
+    pub timeout_s: Option<f64>,
+    /// Print JSON lines.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct DisSendArgs {
+    /// Destination UDP port.
+    #[arg(long, value_name = "P")]
+    pub port: u16,
+    /// Destination host (name or address); default 127.0.0.1, or the broadcast address or
+    /// group with --broadcast / --multicast.
+    #[arg(long, value_name = "HOST")]
+    pub to: Option<String>,
+    /// Where to send from: "loopback" (default), "any", an IP address or an interface name.
+    #[arg(long, value_name = "B", default_value = "loopback")]
+    pub bind: String,
+    /// Broadcast to the bound interface's subnet.
+    #[arg(long, conflicts_with = "multicast")]
+    pub broadcast: bool,
+    /// Send to this IPv4 multicast group through the bound interface.
+    #[arg(long, value_name = "GROUP")]
+    pub multicast: Option<String>,
+    /// Entity ID "SITE:APP:ID".
+    #[arg(long, value_name = "SITE:APP:ID")]
+    pub entity: String,
+    /// Entity type "KIND:DOMAIN:COUNTRY:CATEGORY:SUBCATEGORY[:SPECIFIC:EXTRA]".
+    #[arg(long = "type", value_name = "K:D:C:CAT:SUB[:SPEC:EXTRA]")]
+    pub entity_type: String,
+    /// Latitude, degrees (-90..90).
+    #[arg(long)]
+    pub lat: f64,
+    /// Longitude, degrees (-180..180).
+    #[arg(long)]
+    pub lon: f64,
+    /// Height above the WGS84 ellipsoid, metres.
+    #[arg(long, value_name = "M")]
+    pub alt: f64,
+    /// Velocity "EAST,NORTH,UP", m/s; with --count the entity moves by it between PDUs.
+    #[arg(long, value_name = "E,N,U", allow_hyphen_values = true)]
+    pub velocity: Option<String>,
+    /// Heading, degrees clockwise from north; default: the direction of the horizontal
+    /// velocity, or north.
+    #[arg(long, value_name = "H")]
+    pub heading_deg: Option<f64>,
+    /// Appearance bits, hexadecimal ("0x8020": smoke and flaming).
+    #[arg(long, value_name = "HEX")]
+    pub appearance: Option<String>,
+    /// Marking text (up to 11 ASCII characters).
+    #[arg(long, default_value = "cig")]
+    pub marking: String,
+    /// Force ID (0 other, 1 friendly, 2 opposing, 3 neutral).
+    #[arg(long, default_value_t = 1)]
+    pub force_id: u8,
+    /// Exercise ID.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub exercise: u8,
+    /// Dead-reckoning algorithm 0-9 (2: FPW, fixed orientation, constant velocity).
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub dr: u8,
+    /// DIS protocol version: 7 (IEEE 1278.1-2012) or 6 (IEEE 1278.1a-1998).
+    #[arg(long, default_value_t = 7)]
+    pub version: u8,
+    /// PDUs to send.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub count: u64,
+    /// Seconds between PDUs.
+    #[arg(long, value_name = "S", default_value_t = 1.0)]
+    pub interval_s: f64,
 }

@@ -2,12 +2,14 @@
 //! configuration, calls the library crates, prints results. See `ARCHITECTURE.md`.
 
 mod bench;
+mod bench_net;
 mod bench_particles;
 mod bench_render;
 mod cli;
 mod config;
 mod db;
 mod demo;
+mod dis;
 mod ephem;
 mod flight;
 mod host;
@@ -73,11 +75,14 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::View(args) => view::run(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Particles(args)) => bench_particles::run(&args),
         cli::Command::Bench(cli::BenchCommand::Render(args)) => bench_render::run(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Net(args)) => bench_net::run(&args, &config),
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),
         cli::Command::Serve(args) => serve::run(&args, &config),
         cli::Command::Host(args) => host::run(&args),
+        cli::Command::Dis(cli::DisCommand::Listen(args)) => dis::listen(&args),
+        cli::Command::Dis(cli::DisCommand::Send(args)) => dis::send(&args),
         cli::Command::Config(cli::ConfigCommand::Default) => {
             print!("{}", config::Config::default_toml()?);
             Ok(())
