@@ -10,20 +10,26 @@
 //! Owned entities are published with the 1 m / 3° thresholds and a 5 s heartbeat. The
 //! simulation world time is shared over Data Query / Data / Set Data with datums 52000 and
 //! 52370 (§VI.E.4): a joining node asks, adopts the master's time, and takes over when the
-//! master falls silent.
+//! master falls silent. Smoke and fire sources of the scenario are published as Environmental
+//! Process PDUs (a Gaussian plume record at the source, every 5 s and a last one at the end),
+//! and other nodes' processes start a plume here at their source (stopped by a last update or
+//! 12 s of silence). Lightning strikes announced by other nodes (Data PDU, datum 51010) are kept
+//! for the renderer's flash (§VI.E.5).
 //!
 //! Effects run on "effect time": seconds of world time since 2020-01-01T00:00:00Z, the same on
 //! every node that shares the world time.
 //!
-//! Limits: entity types map to models by the scenario's table; Environmental Process PDUs are
-//! decoded and counted (their Gaussian plume and puff records are not yet drawn by the
-//! renderer); articulated parts of remote entities are not read.
+//! Limits: entity types map to models by the scenario's table; a remote process is drawn as a
+//! standard 5 MW smoke source at its record's source (the plume record carries no fire size);
+//! articulated parts of remote entities are not read.
 
 use crate::model_table::ModelTable;
 use crate::scenario::{parse_dis_id, parse_hex_u32, DisSettings, DisTypePattern, Scenario};
+use cig_dis::dis_rs::model::EntityId;
 use cig_dis::{
     decode_datagram, encode_pdu, impact_effect, DisMessage, DisVersion, EncodeHeader, EntityEffect,
-    EntityKey, EntityTypeCode, ImpactSize, ImpactSurface, NodeId, OwnedEntityPublisher,
+    EntityKey, EntityTypeCode, EnvironmentGeometry, EnvironmentRecord, EnvironmentalProcess,
+    GaussianPlume, ImpactSize, ImpactSurface, LightningStrike, NodeId, OwnedEntityPublisher,
     OwnedEntityState, PublisherConfig, RemoteEntitySnapshot, RemoteEntityTable, RemoteTableConfig,
     TableEvent, TimeMessage, TimeSync, TimeSyncConfig,
 };
@@ -50,8 +56,34 @@ pub struct ExerciseCounters {
     pub detonations: u64,
     pub impacts_started: u64,
     pub environmental_processes: u64,
+    pub remote_processes_started: u64,
+    pub lightning_strikes: u64,
     pub pdus_sent: u64,
 }
+
+/// A smoke or fire process this IG owns and publishes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OwnedProcess {
+    /// Process number (SITE:APPLICATION:number).
+    pub number: u16,
+    /// Source position, above the ellipsoid.
+    pub position: Geodetic,
+    /// Plume extent now: downwind length, width and height, metres.
+    pub extent_m: [f64; 3],
+    /// Still emitting.
+    pub active: bool,
+}
+
+/// A process another node publishes, drawn here.
+struct RemoteProcess {
+    handle: EffectHandle,
+    last_heard_s: f64,
+}
+
+/// Seconds between Environmental Process updates of an unchanged process.
+pub const PROCESS_HEARTBEAT_S: f64 = 5.0;
+/// A remote process unheard for this long is stopped (2.4 heartbeats, as for entities).
+pub const PROCESS_TIMEOUT_S: f64 = 12.0;
 
 /// An owned entity's publisher and identity.
 struct Owned {
@@ -73,9 +105,16 @@ pub struct Exercise {
     owned: BTreeMap<u16, Owned>,
     time: TimeSync,
     remote_effects: BTreeMap<EntityKey, EntityEffects>,
+    remote_processes: BTreeMap<(u16, u16, u16), RemoteProcess>,
+    /// Owned processes: number → (last sent, sequence number, was active).
+    process_sent: BTreeMap<u16, (f64, u16, bool)>,
+    lightning: Vec<LightningStrike>,
     outgoing: Vec<Vec<u8>>,
     counters: ExerciseCounters,
 }
+
+/// At most this many received lightning strikes wait for the renderer.
+const MAX_PENDING_STRIKES: usize = 64;
 
 /// What the owned entity is doing now, for publishing.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -164,6 +203,9 @@ impl Exercise {
             owned,
             time: time.clone(),
             remote_effects: BTreeMap::new(),
+            remote_processes: BTreeMap::new(),
+            process_sent: BTreeMap::new(),
+            lightning: Vec::new(),
             outgoing: Vec::new(),
             counters: ExerciseCounters::default(),
         };
@@ -276,9 +318,17 @@ impl Exercise {
                         }
                     }
                 }
-                DisMessage::EnvironmentalProcess(_) => self.counters.environmental_processes += 1,
+                DisMessage::EnvironmentalProcess(process) => {
+                    self.counters.environmental_processes += 1;
+                    self.receive_process(now_s, process, effects);
+                }
                 other => {
-                    if let Some(t) = TimeMessage::from_message(other) {
+                    if let Some(strike) = LightningStrike::from_message(other) {
+                        self.counters.lightning_strikes += 1;
+                        if self.lightning.len() < MAX_PENDING_STRIKES {
+                            self.lightning.push(strike);
+                        }
+                    } else if let Some(t) = TimeMessage::from_message(other) {
                         let replies = self.time.receive(now_s, &t);
                         self.queue_time(now_s, &replies);
                     } else {
@@ -287,6 +337,142 @@ impl Exercise {
                 }
             }
         }
+    }
+
+    /// Starts (or keeps alive, or stops) the plume of another node's process.
+    fn receive_process(
+        &mut self,
+        now_s: f64,
+        process: &EnvironmentalProcess,
+        effects: &mut EffectSystem,
+    ) {
+        let id = &process.process_id;
+        let key = (
+            id.simulation_address.site_id,
+            id.simulation_address.application_id,
+            id.entity_id,
+        );
+        if (key.0, key.1) == (self.settings.site, self.settings.application) {
+            return;
+        }
+        let t = self.effect_time_s(now_s);
+        if process.is_last || !process.is_active {
+            if let Some(p) = self.remote_processes.remove(&key) {
+                let _ = effects.stop(p.handle, t);
+            }
+            return;
+        }
+        if let Some(p) = self.remote_processes.get_mut(&key) {
+            p.last_heard_s = now_s;
+            return;
+        }
+        let source = process.records.iter().find_map(|r| match &r.geometry {
+            EnvironmentGeometry::GaussianPlume(p) => Some(p.source_location_ecef_m),
+            EnvironmentGeometry::GaussianPuff(p) => Some(p.origination_location_ecef_m),
+            EnvironmentGeometry::Unknown { .. } => None,
+        });
+        let Some(source) = source.map(DVec3::from_array).filter(|p| p.is_finite()) else {
+            return;
+        };
+        let seed = (u64::from(key.0) << 32) | (u64::from(key.1) << 16) | u64::from(key.2);
+        let spec = PlumeSpec {
+            id: EffectId(cig_dis::detonation::splitmix64(seed ^ 0x5052_4f43)),
+            kind: PlumeKind::Smoke,
+            position: Geodetic::from_ecef(source),
+            size_m: 5.0,
+            source: PlumeSource::HeatReleaseW(5.0e6),
+            start_time_s: t,
+            duration_s: 1.0e6,
+        };
+        if let Ok(handle) = effects.start_plume(&spec) {
+            self.counters.remote_processes_started += 1;
+            self.remote_processes.insert(
+                key,
+                RemoteProcess {
+                    handle,
+                    last_heard_s: now_s,
+                },
+            );
+        }
+    }
+
+    /// Publishes this IG's smoke and fire processes: an Environmental Process PDU with a
+    /// Gaussian plume record when one starts, every [`PROCESS_HEARTBEAT_S`], and a last one
+    /// when it ends.
+    pub fn publish_processes(&mut self, now_s: f64, processes: &[OwnedProcess]) {
+        for p in processes {
+            let (last_s, sequence, was_active) = self
+                .process_sent
+                .get(&p.number)
+                .copied()
+                .unwrap_or((f64::NEG_INFINITY, 0, false));
+            let ended = was_active && !p.active;
+            let due = p.active && now_s - last_s >= PROCESS_HEARTBEAT_S;
+            if !(due || ended) {
+                continue;
+            }
+            let [length_m, width_m, height_m] = p.extent_m.map(|v| v as f32);
+            let body = EnvironmentalProcess {
+                process_id: EntityId::new(self.settings.site, self.settings.application, p.number),
+                environment_type: EntityTypeCode {
+                    kind: 4,
+                    domain: 0,
+                    country: 0,
+                    category: 1,
+                    subcategory: 0,
+                    specific: 0,
+                    extra: 0,
+                }
+                .to_dis(),
+                model_type: 0,
+                is_last: !p.active,
+                is_active: p.active,
+                sequence_number: sequence,
+                records: vec![EnvironmentRecord {
+                    index: 0,
+                    geometry: EnvironmentGeometry::GaussianPlume(GaussianPlume {
+                        source_location_ecef_m: p.position.to_ecef().to_array(),
+                        orientation_rad: [0.0; 3],
+                        length_m,
+                        width_m,
+                        height_m,
+                        length_rate_mps: 0.0,
+                        width_rate_mps: 0.0,
+                        height_rate_mps: 0.0,
+                        leading_edge_centroid_height_m: height_m / 2.0,
+                        leading_edge_velocity_mps: [0.0; 3],
+                    }),
+                }],
+            };
+            self.queue(now_s, &DisMessage::EnvironmentalProcess(body));
+            self.process_sent
+                .insert(p.number, (now_s, sequence.wrapping_add(1), p.active));
+        }
+    }
+
+    /// Announces a lightning strike this IG made, so other nodes flash too.
+    pub fn announce_lightning(
+        &mut self,
+        now_s: f64,
+        position_ecef_m: DVec3,
+        seed: u64,
+        intensity: f32,
+    ) {
+        let strike = LightningStrike {
+            from: NodeId {
+                site: self.settings.site,
+                application: self.settings.application,
+            },
+            position_ecef_m,
+            seed,
+            intensity,
+        };
+        self.queue(now_s, &strike.to_message());
+    }
+
+    /// Lightning strikes other nodes announced since the last call.
+    pub fn take_lightning(&mut self) -> Vec<LightningStrike> {
+        std::mem::take(&mut self.lightning)
     }
 
     fn effect_time_s(&self, now_s: f64) -> f64 {
@@ -424,6 +610,14 @@ impl Exercise {
     ) {
         let events = self.remote.expire(now_s);
         self.handle_events(now_s, events, effects, query);
+        let t_stop = self.effect_time_s(now_s);
+        self.remote_processes.retain(|_, p| {
+            let alive = now_s - p.last_heard_s <= PROCESS_TIMEOUT_S;
+            if !alive {
+                let _ = effects.stop(p.handle, t_stop);
+            }
+            alive
+        });
         let t = self.effect_time_s(now_s);
         for (key, slot) in &self.remote_effects {
             let Some(pose) = self.remote.pose(*key, now_s) else {

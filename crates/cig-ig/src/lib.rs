@@ -26,6 +26,6 @@ pub mod world;
 pub use exercise::{Exercise, ExerciseCounters, EFFECT_EPOCH_UNIX_S};
 pub use model_table::{CigiEntityType, ModelTable};
 pub use pose::{BodyOffset, Pose};
-pub use scenario::{DisSettings, Scenario, ScenarioError};
+pub use scenario::{DisSettings, Scenario, ScenarioError, SmokeSource};
 pub use session::{IgSession, SessionConfig, SessionCounters};
 pub use world::{IgWorld, WorldConfig, WorldError};

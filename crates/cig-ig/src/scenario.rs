@@ -45,6 +45,16 @@
 //! hpr_deg = [90.0, -5.0, 0.0]
 //! fov_deg = 60.0
 //!
+//! [[smoke]]                          # smoke and fire sources (DIS Environmental Processes)
+//! id = 1
+//! kind = "smoke"                       # smoke or flame
+//! lat_deg = 51.01
+//! lon_deg = -1.47
+//! size_m = 5                           # fire footprint
+//! heat_release_w = 5e6
+//! start_s = 0                          # after start_time
+//! duration_s = 900
+//!
 //! [dis]
 //! exercise = 1
 //! site = 3001
@@ -110,6 +120,49 @@ pub struct Scenario {
     pub view: Option<ScenarioView>,
     #[serde(default)]
     pub dis: Option<DisSettings>,
+    /// Smoke and fire sources (processes, published as DIS Environmental Process PDUs).
+    #[serde(default)]
+    pub smoke: Vec<SmokeSource>,
+}
+
+/// A smoke or fire source the scenario starts.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SmokeSource {
+    /// Process number (the DIS process id is SITE:APPLICATION:id).
+    pub id: u16,
+    /// "smoke" or "flame".
+    #[serde(default = "smoke_kind")]
+    pub kind: String,
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    /// Above the terrain, metres.
+    #[serde(default)]
+    pub alt_m: f64,
+    /// Fire footprint diameter, metres.
+    #[serde(default = "five")]
+    pub size_m: f64,
+    /// Convective heat release, watts.
+    #[serde(default = "five_mw")]
+    pub heat_release_w: f64,
+    /// Seconds after the scenario's start.
+    #[serde(default)]
+    pub start_s: f64,
+    #[serde(default = "hour")]
+    pub duration_s: f64,
+}
+
+fn smoke_kind() -> String {
+    "smoke".to_string()
+}
+fn five() -> f64 {
+    5.0
+}
+fn five_mw() -> f64 {
+    5.0e6
+}
+fn hour() -> f64 {
+    3600.0
 }
 
 fn one() -> f64 {
@@ -490,6 +543,33 @@ impl Scenario {
                     ));
                 }
             }
+        }
+        let mut smoke_ids = std::collections::BTreeSet::new();
+        for (i, m) in self.smoke.iter().enumerate() {
+            let key = format!("smoke[{i}]");
+            if !smoke_ids.insert(m.id) {
+                return Err(value_error(
+                    format!("{key}.id"),
+                    format!("{} is used twice", m.id),
+                ));
+            }
+            if m.kind != "smoke" && m.kind != "flame" {
+                return Err(value_error(
+                    format!("{key}.kind"),
+                    format!("\"{}\" is not smoke or flame", m.kind),
+                ));
+            }
+            check_lat_lon(&key, m.lat_deg, m.lon_deg)?;
+            check_finite(&format!("{key}.alt_m"), m.alt_m, -100.0, 10_000.0)?;
+            check_finite(&format!("{key}.size_m"), m.size_m, 0.1, 1000.0)?;
+            check_finite(
+                &format!("{key}.heat_release_w"),
+                m.heat_release_w,
+                1.0,
+                1.0e12,
+            )?;
+            check_finite(&format!("{key}.start_s"), m.start_s, 0.0, 1.0e7)?;
+            check_finite(&format!("{key}.duration_s"), m.duration_s, 0.1, 1.0e7)?;
         }
         if let Some(v) = &self.view {
             match (v.entity, v.eye) {

@@ -16,13 +16,16 @@
 //! Limits: scripted entities follow straight segments at constant speed; a host entity with
 //! the same ID as a scripted one takes it over for good (it stops following its script).
 
-use crate::exercise::{Exercise, OwnedTruth, EFFECT_EPOCH_UNIX_S};
+use crate::exercise::{Exercise, OwnedProcess, OwnedTruth, EFFECT_EPOCH_UNIX_S};
 use crate::model_table::{CigiEntityType, ModelTable};
 use crate::pose::{azimuth_elevation_deg, child_pose, wrap_deg, BodyOffset, Pose};
-use crate::scenario::{DisTypePattern, Scenario, ScenarioEntity};
+use crate::scenario::{DisTypePattern, Scenario, ScenarioEntity, SmokeSource};
 use crate::session::{EntityLife, IgEntity, IgSession, Placement, SessionConfig};
 use cig_cigi::{decode_message, CigiError, Message};
-use cig_effects::{EffectSystem, EffectsConfig, EffectsError};
+use cig_effects::{
+    EffectHandle, EffectId, EffectSystem, EffectsConfig, EffectsError, PlumeKind, PlumeSource,
+    PlumeSpec,
+};
 use cig_environment::{SimClock, UtcTime};
 use cig_geo::{EnuFrame, Geodetic};
 use cig_scene::lighting::{Fog, FogMode};
@@ -142,6 +145,17 @@ pub struct IgWorld {
     previous_owned: BTreeMap<u16, (f64, Geodetic)>,
     fog_mode: FogMode,
     cigi_rejected: u64,
+    smoke: Vec<SmokeState>,
+    last_process_publish_s: f64,
+}
+
+/// A scenario smoke source and the plume it runs.
+struct SmokeState {
+    source: SmokeSource,
+    /// Source position once placed on the terrain, and its plume.
+    started: Option<(Geodetic, EffectHandle)>,
+    /// Placing it failed (off the database): reported once, never retried.
+    failed: bool,
 }
 
 fn model_for_scenario_entity(e: &ScenarioEntity, table: &ModelTable) -> String {
@@ -196,6 +210,15 @@ impl IgWorld {
             )),
             _ => None,
         };
+        let smoke = scenario
+            .smoke
+            .iter()
+            .map(|source| SmokeState {
+                source: source.clone(),
+                started: None,
+                failed: false,
+            })
+            .collect();
         let mut effects = EffectSystem::new(config.effects)?;
         effects.advance_to(start_unix_s - EFFECT_EPOCH_UNIX_S)?;
         Ok(IgWorld {
@@ -210,6 +233,8 @@ impl IgWorld {
             previous_owned: BTreeMap::new(),
             fog_mode: config.fog_mode,
             cigi_rejected: 0,
+            smoke,
+            last_process_publish_s: f64::NEG_INFINITY,
         })
     }
 
@@ -221,6 +246,16 @@ impl IgWorld {
     }
     pub fn exercise(&self) -> Option<&Exercise> {
         self.exercise.as_ref()
+    }
+    pub fn exercise_mut(&mut self) -> Option<&mut Exercise> {
+        self.exercise.as_mut()
+    }
+    /// Lightning strikes other nodes announced since the last call.
+    pub fn take_lightning(&mut self) -> Vec<cig_dis::LightningStrike> {
+        self.exercise
+            .as_mut()
+            .map(Exercise::take_lightning)
+            .unwrap_or_default()
     }
     pub fn effects(&self) -> &EffectSystem {
         &self.effects
@@ -313,7 +348,14 @@ impl IgWorld {
         if let Err(e) = self.effects.advance_to(effect_time_s) {
             tracing::warn!("effects stop advancing: {e}");
         }
+        self.start_smoke(query);
         if let Some(x) = self.exercise.as_mut() {
+            if now - self.last_process_publish_s >= 1.0 && !self.smoke.is_empty() {
+                self.last_process_publish_s = now;
+                let processes =
+                    smoke_processes(&self.smoke, &self.effects, effect_time_s, self.start_unix_s);
+                x.publish_processes(now, &processes);
+            }
             let mut truths = BTreeMap::new();
             for (id, pose) in self.session.poses() {
                 let velocity = match self.previous_owned.get(id) {
@@ -333,6 +375,57 @@ impl IgWorld {
                 );
             }
             x.tick(now, &truths, &mut self.effects, query);
+        }
+    }
+
+    /// Places the scenario's smoke sources on the terrain and starts their plumes (once).
+    fn start_smoke(&mut self, query: &mut QuerySession) {
+        let (site, application) = self
+            .scenario
+            .dis
+            .as_ref()
+            .map_or((0, 0), |d| (d.site, d.application));
+        let start_effect_s = self.start_unix_s - EFFECT_EPOCH_UNIX_S;
+        for s in self
+            .smoke
+            .iter_mut()
+            .filter(|s| s.started.is_none() && !s.failed)
+        {
+            let src = &s.source;
+            let ground = match query.hot(src.lat_deg, src.lon_deg) {
+                Ok(g) => g,
+                Err(e) => {
+                    tracing::warn!("smoke source {} cannot be placed: {e}", src.id);
+                    s.failed = true;
+                    continue;
+                }
+            };
+            let position = Geodetic::new(
+                src.lat_deg,
+                src.lon_deg,
+                ground.height_ellipsoid_m() + src.alt_m,
+            );
+            let seed = (u64::from(site) << 32) | (u64::from(application) << 16) | u64::from(src.id);
+            let spec = PlumeSpec {
+                id: EffectId(cig_dis::detonation::splitmix64(seed ^ 0x5052_4f43)),
+                kind: if src.kind == "flame" {
+                    PlumeKind::Flame
+                } else {
+                    PlumeKind::Smoke
+                },
+                position,
+                size_m: src.size_m,
+                source: PlumeSource::HeatReleaseW(src.heat_release_w),
+                start_time_s: start_effect_s + src.start_s,
+                duration_s: src.duration_s,
+            };
+            match self.effects.start_plume(&spec) {
+                Ok(handle) => s.started = Some((position, handle)),
+                Err(e) => {
+                    tracing::warn!("smoke source {} cannot start: {e}", src.id);
+                    s.failed = true;
+                }
+            }
         }
     }
 
@@ -467,4 +560,40 @@ impl IgWorld {
         let d = cig_scene::lighting::sun_direction_ecef(self.unix_time_s(), at);
         azimuth_elevation_deg(EnuFrame::new(at).ecef_vector_to_enu(d))
     }
+}
+
+/// The scenario's processes as published: source, extent of their puffs, and whether they
+/// still emit.
+fn smoke_processes(
+    smoke: &[SmokeState],
+    effects: &EffectSystem,
+    effect_time_s: f64,
+    start_unix_s: f64,
+) -> Vec<OwnedProcess> {
+    let puffs = effects.puff_states();
+    smoke
+        .iter()
+        .filter_map(|s| {
+            let (position, handle) = s.started?;
+            let frame = EnuFrame::new(position);
+            let mut extent = [s.source.size_m, s.source.size_m, s.source.size_m];
+            for p in puffs.iter().filter(|p| p.effect == handle.slot) {
+                let v = frame.ecef_to_enu(DVec3::from_array(p.centre_ecef_m));
+                let horizontal = v.truncate().length() + p.sigma_m;
+                extent[0] = extent[0].max(horizontal);
+                extent[1] = extent[1].max(4.0 * p.sigma_m);
+                extent[2] = extent[2].max(v.z + 2.0 * p.sigma_m);
+            }
+            let begins = start_unix_s - EFFECT_EPOCH_UNIX_S + s.source.start_s;
+            let active = effects.is_live(handle)
+                && effect_time_s >= begins
+                && effect_time_s < begins + s.source.duration_s;
+            Some(OwnedProcess {
+                number: s.source.id,
+                position,
+                extent_m: extent,
+                active,
+            })
+        })
+        .collect()
 }

@@ -688,3 +688,53 @@ fn a_detonation_starts_the_same_plume_on_every_ig() {
     assert!(active > 0, "the impact emits puffs");
     assert_eq!(a, b, "the same event gives the same puffs");
 }
+
+#[test]
+fn smoke_processes_and_lightning_reach_the_other_ig() {
+    let mut qa = query();
+    let mut qb = query();
+    let a_scenario = format!(
+        "start_time = \"2026-06-21T12:00:00Z\"\n\
+         [[smoke]]\nid = 5\nlat_deg = {}\nlon_deg = {}\nduration_s = 4\n\
+         [dis]\nsite = 1\napplication = 10\nexercise = 2\ntime_master = true\n",
+        lat_of_row(50.0),
+        lon_of_col(30.0)
+    );
+    let b_scenario =
+        "start_time = \"2026-06-21T12:00:00Z\"\n[dis]\nsite = 1\napplication = 11\nexercise = 2\n";
+    let mut a = world(&a_scenario);
+    let mut b = world(b_scenario);
+    let mut started_at_b = 0;
+    let mut strikes = Vec::new();
+    for frame in 0..60 * 20 {
+        a.step(1.0 / 60.0, &mut qa);
+        b.step(1.0 / 60.0, &mut qb);
+        if frame == 30 {
+            let x = a.exercise_mut().expect("exercise");
+            let at = Geodetic::new(lat_of_row(60.0), lon_of_col(60.0), 3000.0).to_ecef();
+            x.announce_lightning(0.5, at, 99, 0.8);
+        }
+        for d in a.take_dis_outgoing() {
+            b.receive_dis(&d, &mut qb);
+        }
+        for d in b.take_dis_outgoing() {
+            a.receive_dis(&d, &mut qa);
+        }
+        strikes.extend(b.take_lightning());
+        started_at_b = b
+            .exercise()
+            .expect("exercise")
+            .counters()
+            .remote_processes_started;
+    }
+    let counters = b.exercise().expect("exercise").counters();
+    assert_eq!(started_at_b, 1, "{counters:?}");
+    assert!(
+        counters.environmental_processes >= 2,
+        "start and last update: {counters:?}"
+    );
+    assert_eq!(strikes.len(), 1);
+    assert_eq!(strikes[0].seed, 99);
+    // After the source's 4 s and the last update, B's copy stops emitting; its puffs age out.
+    assert!(b.effects().stats().spawned_total > 0);
+}

@@ -387,3 +387,108 @@ fn bad_serve_and_host_input_gives_one_line_errors() {
         assert!(line.contains(needle), "{args:?}: {line}");
     }
 }
+
+#[test]
+fn serve_publishes_its_scenario_entities_and_draws_remote_ones_over_dis() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let ig_dis_port = free_udp_port();
+    let listen_port = free_udp_port();
+    let scenario = dir.path().join("exercise.toml");
+    std::fs::write(
+        &scenario,
+        format!(
+            "start_time = \"2026-06-21T12:00:00Z\"\n\
+             [[models]]\nmodel = \"ship\"\ndis_type = \"1:3\"\n\
+             [[entities]]\nid = 1\nmodel = \"tank\"\ndis_id = \"1:3001:7\"\ndis_type = \"1:1:225:1:1:0:0\"\n\
+             lat_deg = 35.995\nlon_deg = -121.215\nclamp = \"height_and_attitude\"\nspeed_mps = 12\npath = [[36.0, -121.21]]\n\
+             [dis]\nexercise = 3\nsite = 1\napplication = 3001\nport = {ig_dis_port}\ndelivery = \"unicast:127.0.0.1:{listen_port}\"\n"
+        ),
+    )
+    .expect("scenario");
+    let listener = Command::new(assert_cmd::cargo::cargo_bin("cig"))
+        .args([
+            "dis",
+            "listen",
+            "--port",
+            &listen_port.to_string(),
+            "--count",
+            "2",
+        ])
+        .args(["--exercise", "3", "--timeout-s", "60", "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("listener");
+    let serve = start_serve(&[
+        "--db".into(),
+        db.display().to_string(),
+        "--scenario".into(),
+        scenario.display().to_string(),
+        "--no-render".into(),
+        "--cigi-port".into(),
+        free_udp_port().to_string(),
+        "--frames".into(),
+        "150".into(),
+        "--json".into(),
+    ]);
+    // A ship of another simulator, sent to the IG's DIS port.
+    cig()
+        .args([
+            "dis",
+            "send",
+            "--port",
+            &ig_dis_port.to_string(),
+            "--to",
+            "127.0.0.1",
+        ])
+        .args([
+            "--entity",
+            "2:5:9",
+            "--type",
+            "1:3:225:6:1",
+            "--exercise",
+            "3",
+        ])
+        .args([
+            "--lat",
+            "36.0",
+            "--lon",
+            "-121.2",
+            "--alt",
+            "0",
+            "--velocity",
+            "5,0,0",
+        ])
+        .args(["--count", "5", "--interval-s", "0.1"])
+        .timeout(Duration::from_secs(60))
+        .assert()
+        .success();
+    let out = serve.wait_with_output().expect("serve ends");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).expect("json");
+    let dis = &summary["dis"];
+    assert_eq!(dis["remote_entities"], 1, "{summary}");
+    assert!(
+        dis["entity_states_applied"].as_u64().unwrap_or(0) >= 1,
+        "{summary}"
+    );
+    assert!(dis["pdus_sent"].as_u64().unwrap_or(0) >= 1, "{summary}");
+    let heard = listener.wait_with_output().expect("listener ends");
+    let pdus = lines(&heard.stdout);
+    let tank = pdus
+        .iter()
+        .find(|p| p["entity_id"] == "1:3001:7")
+        .unwrap_or_else(|| panic!("the IG's tank was published: {pdus:?}"));
+    assert_eq!(tank["entity_type"], "1:1:225:1:1:0:0");
+    let lat = tank["position"]["lat_deg"].as_f64().expect("lat");
+    let lon = tank["position"]["lon_deg"].as_f64().expect("lon");
+    assert!(
+        (lat - 35.995).abs() < 0.002 && (lon + 121.215).abs() < 0.002,
+        "{tank}"
+    );
+}
