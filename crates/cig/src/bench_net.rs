@@ -86,6 +86,8 @@ pub const MEASURES: &[Measure] = &[
     ("dis_remote_table", measure_remote_table),
     ("hat_hot", measure_hat_hot),
     ("cigi_decode", measure_cigi_decode),
+    ("cigi_apply", measure_cigi_apply),
+    ("hat_hot_ig_frame", measure_hat_hot_ig_frame),
 ];
 
 pub fn run(args: &BenchNetArgs, config: &Config) -> anyhow::Result<()> {
@@ -480,51 +482,7 @@ fn measure_cigi_decode(context: &BenchContext) -> anyhow::Result<Value> {
     ];
     let budget = Duration::from_secs_f64(context.seconds / (2.0 * variants.len() as f64));
     for (name, version, order) in variants {
-        let mut packets = vec![Packet::IgControl(IgControl {
-            ig_mode: 1,
-            host_frame_number: 1,
-            ..IgControl::default()
-        })];
-        for i in 0..CIGI_ENTITIES {
-            let id = u16::try_from(i + 1)?;
-            let (lat, lon, alt) = (
-                rng.gen_range(35.0..37.0),
-                rng.gen_range(-122.0..-120.0),
-                rng.gen_range(0.0..3000.0),
-            );
-            let (yaw, pitch, roll) = (
-                rng.gen_range(0.0..360.0),
-                rng.gen_range(-10.0..10.0),
-                rng.gen_range(-30.0..30.0),
-            );
-            packets.push(if version.major == 3 {
-                Packet::EntityControl(EntityControl {
-                    entity_id: id,
-                    entity_state: 1,
-                    entity_type: 7,
-                    alpha: 255,
-                    yaw_deg: yaw,
-                    pitch_deg: pitch,
-                    roll_deg: roll,
-                    lat_deg_or_x_m: lat,
-                    lon_deg_or_y_m: lon,
-                    alt_m_or_z_m: alt,
-                    ..EntityControl::default()
-                })
-            } else {
-                Packet::EntityPosition(EntityPosition {
-                    entity_id: id,
-                    yaw_deg: yaw,
-                    pitch_deg: pitch,
-                    roll_deg: roll,
-                    lat_deg_or_x_m: lat,
-                    lon_deg_or_y_m: lon,
-                    alt_m_or_z_m: alt,
-                    ..EntityPosition::default()
-                })
-            });
-        }
-        let message = Message::new(version, order, packets);
+        let message = entity_message(version, order, &mut rng)?;
         let mut datagram = Vec::new();
         cig_cigi::encode_message(&message, &mut datagram)?;
         let check = cig_cigi::decode_message(&datagram)?;
@@ -562,6 +520,193 @@ fn measure_cigi_decode(context: &BenchContext) -> anyhow::Result<Value> {
     cases.insert("entity_packets".into(), json!(CIGI_ENTITIES));
     cases.insert("apply_budget_ms".into(), json!(CIGI_APPLY_BUDGET_MS));
     Ok(Value::Object(cases))
+}
+
+/// A host message of IG Control and [`CIGI_ENTITIES`] entity controls (3.3 Entity Control or
+/// 4.0 Entity Position) at random places near 36 N 121 W.
+fn entity_message(
+    version: Version,
+    order: ByteOrder,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> anyhow::Result<Message> {
+    let mut packets = vec![Packet::IgControl(IgControl {
+        ig_mode: 1,
+        host_frame_number: 1,
+        ..IgControl::default()
+    })];
+    for i in 0..CIGI_ENTITIES {
+        let id = u16::try_from(i + 1)?;
+        let (lat, lon, alt) = (
+        rng.gen_range(35.0..37.0),
+        rng.gen_range(-122.0..-120.0),
+        rng.gen_range(0.0..3000.0),
+        );
+        let (yaw, pitch, roll) = (
+        rng.gen_range(0.0..360.0),
+        rng.gen_range(-10.0..10.0),
+        rng.gen_range(-30.0..30.0),
+        );
+        packets.push(if version.major == 3 {
+        Packet::EntityControl(EntityControl {
+            entity_id: id,
+            entity_state: 1,
+            entity_type: 7,
+            alpha: 255,
+            yaw_deg: yaw,
+            pitch_deg: pitch,
+            roll_deg: roll,
+            lat_deg_or_x_m: lat,
+            lon_deg_or_y_m: lon,
+            alt_m_or_z_m: alt,
+            ..EntityControl::default()
+        })
+        } else {
+        Packet::EntityPosition(EntityPosition {
+            entity_id: id,
+            yaw_deg: yaw,
+            pitch_deg: pitch,
+            roll_deg: roll,
+            lat_deg_or_x_m: lat,
+            lon_deg_or_y_m: lon,
+            alt_m_or_z_m: alt,
+            ..EntityPosition::default()
+        })
+        });
+    }
+    Ok(Message::new(version, order, packets))
+}
+
+/// An IG world with no scenario, for the CIGI measures.
+fn empty_world() -> anyhow::Result<cig_ig::IgWorld> {
+    Ok(cig_ig::IgWorld::new(
+        cig_ig::Scenario::from_toml("")?,
+        cig_ig::WorldConfig {
+            session: cig_ig::SessionConfig::default(),
+            start: cig_environment::UtcTime::from_calendar(2026, 6, 21, 12, 0, 0.0)?,
+            fog_mode: cig_scene::lighting::FogMode::Exponential,
+            effects: cig_effects::EffectsConfig::default(),
+            join_exercise: false,
+        },
+    )?)
+}
+
+/// (e) Applying a host message of 1,000 entity controls: decoded and applied to the IG's
+/// session (entities existing: the steady state), against copying the datagram.
+fn measure_cigi_apply(context: &BenchContext) -> anyhow::Result<Value> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(15);
+    let mut cases = serde_json::Map::new();
+    let variants = [
+        ("v3_3_little_endian", Version::V3_3, ByteOrder::LittleEndian),
+        ("v4_0_big_endian", Version::V4_0, ByteOrder::BigEndian),
+    ];
+    let budget = Duration::from_secs_f64(context.seconds / (2.0 * variants.len() as f64));
+    for (name, version, order) in variants {
+        let message = entity_message(version, order, &mut rng)?;
+        let mut datagram = Vec::new();
+        cig_cigi::encode_message(&message, &mut datagram)?;
+        let mut world = empty_world()?;
+        let started = Instant::now();
+        world.receive_cigi(&datagram)?;
+        let create_us = started.elapsed().as_secs_f64() * 1e6;
+        anyhow::ensure!(
+            world.session().entities().len() == CIGI_ENTITIES,
+            "the benchmark message does not create every entity"
+        );
+        let (mut apply_us, mut copy_us) = (Vec::new(), Vec::new());
+        let mut buffer = Vec::with_capacity(datagram.len());
+        for _ in 0..ROUNDS {
+            let per_s = rate(budget / ROUNDS as u32, 1, || {
+                let _ = black_box(world.receive_cigi(black_box(&datagram)));
+            });
+            apply_us.push(1e6 / per_s);
+            let per_s = rate(budget / ROUNDS as u32, 1, || {
+                buffer.clear();
+                buffer.extend_from_slice(black_box(&datagram));
+                black_box(&buffer);
+            });
+            copy_us.push(1e6 / per_s);
+        }
+        let apply = median(apply_us);
+        let copy = median(copy_us);
+        cases.insert(
+            name.to_string(),
+            json!({
+                "datagram_octets": datagram.len(),
+                "first_message_creating_entities_us": create_us,
+                "decode_and_apply_us_median": apply,
+                "baseline_copy_us_median": copy,
+                "apply_vs_copy": apply / copy,
+                "fraction_of_budget": apply / (CIGI_APPLY_BUDGET_MS * 1e3),
+                "meets_budget": apply <= CIGI_APPLY_BUDGET_MS * 1e3,
+            }),
+        );
+    }
+    cases.insert("entity_packets".into(), json!(CIGI_ENTITIES));
+    cases.insert("budget_ms".into(), json!(CIGI_APPLY_BUDGET_MS));
+    Ok(Value::Object(cases))
+}
+
+/// (f) The IG's CIGI frame with 100 HAT/HOT requests: the host message decoded and applied,
+/// the world stepped, the answers computed and the IG's message encoded, every 60 Hz frame;
+/// every request is answered in the next frame's message.
+fn measure_hat_hot_ig_frame(context: &BenchContext) -> anyhow::Result<Value> {
+    let path = database(context)?;
+    let mut q = crate::query::session(&path, context.config)?;
+    let grid = q.cache().database().layout().grid;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(16);
+    let (lat0, lat1) = (grid.south_lat_deg, grid.north_lat_deg());
+    let (lon0, lon1) = (grid.west_lon_deg, grid.east_lon_deg());
+    let mut world = empty_world()?;
+    let frames = ((context.seconds / FRAME_S).ceil() as usize).clamp(30, 100_000);
+    let (mut frame_ms, mut answered) = (Vec::with_capacity(frames), Vec::with_capacity(frames));
+    let mut datagram = Vec::new();
+    let mut reply = Vec::new();
+    for f in 0..=frames {
+        let mut packets = vec![Packet::IgControl(IgControl {
+            ig_mode: 1,
+            host_frame_number: f as u32,
+            ..IgControl::default()
+        })];
+        for i in 0..HAT_REQUESTS_PER_FRAME {
+            packets.push(Packet::HatHotRequest(cig_cigi::HatHotRequest {
+                hat_hot_id: i as u16,
+                request_type: (i % 3) as u8,
+                lat_deg_or_x_m: rng.gen_range(lat0..lat1),
+                lon_deg_or_y_m: rng.gen_range(lon0..lon1),
+                alt_m_or_z_m: 1500.0,
+                ..cig_cigi::HatHotRequest::default()
+            }));
+        }
+        datagram.clear();
+        cig_cigi::encode_message(
+            &Message::new(Version::V3_3, ByteOrder::LittleEndian, packets),
+            &mut datagram,
+        )?;
+        let started = Instant::now();
+        world.receive_cigi(&datagram)?;
+        world.step(FRAME_S, &mut q);
+        let message = world.host_message(&mut q, f as u32);
+        reply.clear();
+        cig_cigi::encode_message(&message, &mut reply)?;
+        let elapsed = ms(started.elapsed());
+        // The first frame pages the tiles in: left out of the statistics.
+        if f > 0 {
+            frame_ms.push(elapsed);
+            answered.push(message.packets.len() - 1);
+        }
+    }
+    let median_ms = median(frame_ms.clone());
+    let p99 = percentile(frame_ms, 0.99);
+    let all_answered = answered.iter().all(|n| *n == HAT_REQUESTS_PER_FRAME);
+    Ok(json!({
+        "database": path.display().to_string(),
+        "requests_per_frame": HAT_REQUESTS_PER_FRAME,
+        "frames": frames,
+        "ig_cigi_frame_ms_median": median_ms,
+        "ig_cigi_frame_ms_p99": p99,
+        "fraction_of_60hz_frame_p99": p99 / (FRAME_S * 1e3),
+        "every_request_answered_next_frame": all_answered,
+    }))
 }
 
 /// VmRSS and VmHWM of this process, kB (Linux; `None` elsewhere).
