@@ -546,12 +546,27 @@ impl RemoteEntityTable {
     /// A plain snapshot of every entity at `now_s`, in key order.
     #[must_use]
     pub fn snapshot(&self, now_s: f64) -> Vec<RemoteEntitySnapshot> {
+        self.snapshot_where(now_s, |_| true)
+    }
+
+    /// A plain snapshot at `now_s` of the entities whose dead-reckoned ECEF position `keep`
+    /// accepts (e.g. those near an eyepoint), in key order; the geodetic conversion, the most
+    /// expensive part, is done only for those.
+    #[must_use]
+    pub fn snapshot_where(
+        &self,
+        now_s: f64,
+        keep: impl Fn(DVec3) -> bool,
+    ) -> Vec<RemoteEntitySnapshot> {
         self.entities
             .iter()
-            .map(|(key, e)| {
+            .filter_map(|(key, e)| {
                 let pose = e.pose(now_s, self.config.smoothing_s);
+                if !keep(pose.position_ecef_m) {
+                    return None;
+                }
                 let geodetic = Geodetic::from_ecef(pose.position_ecef_m);
-                RemoteEntitySnapshot {
+                Some(RemoteEntitySnapshot {
                     key: *key,
                     entity_type: e.entity_type,
                     position_ecef_m: pose.position_ecef_m,
@@ -564,7 +579,7 @@ impl RemoteEntityTable {
                     appearance: e.appearance,
                     marking: e.marking.clone(),
                     age_s: now_s - e.received_s,
-                }
+                })
             })
             .collect()
     }

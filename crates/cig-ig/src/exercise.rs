@@ -683,6 +683,19 @@ impl Exercise {
         self.remote.snapshot(now_s)
     }
 
+    /// Remote entities at `now_s` within `radius_m` of any of `eyes_ecef_m`.
+    pub fn remote_entities_near(
+        &self,
+        now_s: f64,
+        eyes_ecef_m: &[DVec3],
+        radius_m: f64,
+    ) -> Vec<RemoteEntitySnapshot> {
+        let r2 = radius_m * radius_m;
+        self.remote.snapshot_where(now_s, |p| {
+            eyes_ecef_m.iter().any(|e| e.distance_squared(p) <= r2)
+        })
+    }
+
     /// The model for a remote entity.
     pub fn model_for(models: &ModelTable, t: &EntityTypeCode) -> String {
         models.model_for_dis(t).to_string()

@@ -509,15 +509,15 @@ impl IgWorld {
     pub fn snapshot(&self, width_px: u32, height_px: u32, fallback: &View) -> FrameSnapshot {
         let views = self.views(width_px, height_px, fallback);
         let mut snapshot = FrameSnapshot::new(self.unix_time_s(), views.clone());
+        let mut visibility_m = 40_000.0;
         if let Some(first) = views.first() {
-            let default_vis = self.scenario.visibility_m;
-            let mut visibility = self.session.visibility_at_m(first.eye);
-            if let Some(v) = default_vis {
+            visibility_m = self.session.visibility_at_m(first.eye);
+            if let Some(v) = self.scenario.visibility_m {
                 if self.session.environment().atmosphere.is_none() {
-                    visibility = visibility.min(v);
+                    visibility_m = visibility_m.min(v);
                 }
             }
-            snapshot.fog = Fog::from_visibility(self.fog_mode, visibility);
+            snapshot.fog = Fog::from_visibility(self.fog_mode, visibility_m);
         }
         for (id, e) in self.session.entities() {
             if e.life != EntityLife::Active {
@@ -533,11 +533,14 @@ impl IgWorld {
             }
         }
         if let Some(x) = &self.exercise {
-            for (i, r) in x.remote_entities(self.monotonic_s).into_iter().enumerate() {
+            // Entities far beyond the fog are not drawn: no need to convert them.
+            let eyes: Vec<DVec3> = views.iter().map(|v| v.eye.to_ecef()).collect();
+            let radius_m = (4.0 * visibility_m).clamp(10_000.0, 400_000.0);
+            let near = x.remote_entities_near(self.monotonic_s, &eyes, radius_m);
+            for r in near {
                 let [heading_deg, pitch_deg, roll_deg] = r.heading_pitch_roll_deg;
                 snapshot.entities.push(EntityInstance {
-                    // Remote entities live above the 16-bit CIGI id space.
-                    id: 0x1_0000 + i as u32,
+                    id: remote_instance_id(r.key),
                     model: self
                         .session
                         .models()
@@ -596,4 +599,12 @@ fn smoke_processes(
             })
         })
         .collect()
+}
+
+/// A stable draw id for a remote entity, above the 16-bit CIGI id space (the renderer keys each
+/// entity's level-of-detail hysteresis by it): 31 bits of a hash of its DIS id, top bit set.
+fn remote_instance_id(key: cig_dis::EntityKey) -> u32 {
+    let packed =
+        (u64::from(key.site) << 32) | (u64::from(key.application) << 16) | u64::from(key.entity);
+    0x8000_0000 | (cig_dis::detonation::splitmix64(packed) as u32 & 0x7FFF_FFFF)
 }

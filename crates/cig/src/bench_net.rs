@@ -377,49 +377,8 @@ fn measure_hat_hot(context: &BenchContext) -> anyhow::Result<Value> {
     let path = database(context)?;
     let mut q = crate::query::session(&path, context.config)?;
     let grid = q.cache().database().layout().grid;
-    let centre = Geodetic::new(
-        0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
-        0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
-        0.0,
-    );
-    let frame = EnuFrame::new(centre);
-    // Entities within 40% of the database's half-size of its centre, at 10-200 m/s.
-    let (north_m, east_m) = {
-        let span = frame.geodetic_to_enu(Geodetic::new(
-            grid.north_lat_deg(),
-            grid.east_lon_deg(),
-            0.0,
-        ));
-        (span.y.abs() * 0.4, span.x.abs() * 0.4)
-    };
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
-    let entities: Vec<(DVec3, DVec3)> = (0..HAT_REQUESTS_PER_FRAME)
-        .map(|_| {
-            let p = DVec3::new(
-                rng.gen_range(-east_m..=east_m),
-                rng.gen_range(-north_m..=north_m),
-                rng.gen_range(500.0..3000.0),
-            );
-            let heading: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
-            let speed = rng.gen_range(10.0..200.0);
-            (
-                p,
-                DVec3::new(speed * heading.sin(), speed * heading.cos(), 0.0),
-            )
-        })
-        .collect();
-    let points_at = |t_s: f64| -> Vec<Geodetic> {
-        entities
-            .iter()
-            .map(|(p, v)| {
-                // Bounce inside the box so a long run stays on the database.
-                let mut e = *p + *v * t_s;
-                e.x = fold(e.x, east_m);
-                e.y = fold(e.y, north_m);
-                frame.enu_to_geodetic(e)
-            })
-            .collect()
-    };
+    let moving = MovingEntities::new(&grid);
+    let points_at = |t_s: f64| moving.points_at(t_s);
     let ask = |q: &mut cig_terrain::QuerySession, points: &[Geodetic]| -> anyhow::Result<()> {
         for (i, point) in points.iter().enumerate() {
             if i % 2 == 0 {
@@ -455,6 +414,68 @@ fn measure_hat_hot(context: &BenchContext) -> anyhow::Result<Value> {
         "fraction_of_60hz_frame_p99": p99 / (FRAME_S * 1e3),
         "answered_within_the_frame": p99 < FRAME_S * 1e3,
     }))
+}
+
+/// [`HAT_REQUESTS_PER_FRAME`] entities flying straight at 10-200 m/s, 500-3,000 m up, within 40%
+/// of the database's half-size of its centre (bouncing off that box), as a host's requests
+/// follow its entities.
+struct MovingEntities {
+    frame: EnuFrame,
+    east_m: f64,
+    north_m: f64,
+    entities: Vec<(DVec3, DVec3)>,
+}
+
+impl MovingEntities {
+    fn new(grid: &cig_terrain::GeoGrid) -> MovingEntities {
+        let centre = Geodetic::new(
+            0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
+            0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
+            0.0,
+        );
+        let frame = EnuFrame::new(centre);
+        let span = frame.geodetic_to_enu(Geodetic::new(
+            grid.north_lat_deg(),
+            grid.east_lon_deg(),
+            0.0,
+        ));
+        let (north_m, east_m) = (span.y.abs() * 0.4, span.x.abs() * 0.4);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
+        let entities = (0..HAT_REQUESTS_PER_FRAME)
+            .map(|_| {
+                let p = DVec3::new(
+                    rng.gen_range(-east_m..=east_m),
+                    rng.gen_range(-north_m..=north_m),
+                    rng.gen_range(500.0..3000.0),
+                );
+                let heading: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
+                let speed = rng.gen_range(10.0..200.0);
+                (
+                    p,
+                    DVec3::new(speed * heading.sin(), speed * heading.cos(), 0.0),
+                )
+            })
+            .collect();
+        MovingEntities {
+            frame,
+            east_m,
+            north_m,
+            entities,
+        }
+    }
+
+    fn points_at(&self, t_s: f64) -> Vec<Geodetic> {
+        self.entities
+            .iter()
+            .map(|(p, v)| {
+                // Bounce inside the box so a long run stays on the database.
+                let mut e = *p + *v * t_s;
+                e.x = fold(e.x, self.east_m);
+                e.y = fold(e.y, self.north_m);
+                self.frame.enu_to_geodetic(e)
+            })
+            .collect()
+    }
 }
 
 /// `x` folded back into [-limit, limit] (a bounce off the box walls).
@@ -537,40 +558,40 @@ fn entity_message(
     for i in 0..CIGI_ENTITIES {
         let id = u16::try_from(i + 1)?;
         let (lat, lon, alt) = (
-        rng.gen_range(35.0..37.0),
-        rng.gen_range(-122.0..-120.0),
-        rng.gen_range(0.0..3000.0),
+            rng.gen_range(35.0..37.0),
+            rng.gen_range(-122.0..-120.0),
+            rng.gen_range(0.0..3000.0),
         );
         let (yaw, pitch, roll) = (
-        rng.gen_range(0.0..360.0),
-        rng.gen_range(-10.0..10.0),
-        rng.gen_range(-30.0..30.0),
+            rng.gen_range(0.0..360.0),
+            rng.gen_range(-10.0..10.0),
+            rng.gen_range(-30.0..30.0),
         );
         packets.push(if version.major == 3 {
-        Packet::EntityControl(EntityControl {
-            entity_id: id,
-            entity_state: 1,
-            entity_type: 7,
-            alpha: 255,
-            yaw_deg: yaw,
-            pitch_deg: pitch,
-            roll_deg: roll,
-            lat_deg_or_x_m: lat,
-            lon_deg_or_y_m: lon,
-            alt_m_or_z_m: alt,
-            ..EntityControl::default()
-        })
+            Packet::EntityControl(EntityControl {
+                entity_id: id,
+                entity_state: 1,
+                entity_type: 7,
+                alpha: 255,
+                yaw_deg: yaw,
+                pitch_deg: pitch,
+                roll_deg: roll,
+                lat_deg_or_x_m: lat,
+                lon_deg_or_y_m: lon,
+                alt_m_or_z_m: alt,
+                ..EntityControl::default()
+            })
         } else {
-        Packet::EntityPosition(EntityPosition {
-            entity_id: id,
-            yaw_deg: yaw,
-            pitch_deg: pitch,
-            roll_deg: roll,
-            lat_deg_or_x_m: lat,
-            lon_deg_or_y_m: lon,
-            alt_m_or_z_m: alt,
-            ..EntityPosition::default()
-        })
+            Packet::EntityPosition(EntityPosition {
+                entity_id: id,
+                yaw_deg: yaw,
+                pitch_deg: pitch,
+                roll_deg: roll,
+                lat_deg_or_x_m: lat,
+                lon_deg_or_y_m: lon,
+                alt_m_or_z_m: alt,
+                ..EntityPosition::default()
+            })
         });
     }
     Ok(Message::new(version, order, packets))
@@ -646,16 +667,15 @@ fn measure_cigi_apply(context: &BenchContext) -> anyhow::Result<Value> {
     Ok(Value::Object(cases))
 }
 
-/// (f) The IG's CIGI frame with 100 HAT/HOT requests: the host message decoded and applied,
+/// (f) The IG's CIGI frame with 100 HAT/HOT requests (the moving entities of (c)): the host
+/// message decoded and applied,
 /// the world stepped, the answers computed and the IG's message encoded, every 60 Hz frame;
 /// every request is answered in the next frame's message.
 fn measure_hat_hot_ig_frame(context: &BenchContext) -> anyhow::Result<Value> {
     let path = database(context)?;
     let mut q = crate::query::session(&path, context.config)?;
     let grid = q.cache().database().layout().grid;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(16);
-    let (lat0, lat1) = (grid.south_lat_deg, grid.north_lat_deg());
-    let (lon0, lon1) = (grid.west_lon_deg, grid.east_lon_deg());
+    let moving = MovingEntities::new(&grid);
     let mut world = empty_world()?;
     let frames = ((context.seconds / FRAME_S).ceil() as usize).clamp(30, 100_000);
     let (mut frame_ms, mut answered) = (Vec::with_capacity(frames), Vec::with_capacity(frames));
@@ -667,13 +687,13 @@ fn measure_hat_hot_ig_frame(context: &BenchContext) -> anyhow::Result<Value> {
             host_frame_number: f as u32,
             ..IgControl::default()
         })];
-        for i in 0..HAT_REQUESTS_PER_FRAME {
+        for (i, point) in moving.points_at(f as f64 * FRAME_S).iter().enumerate() {
             packets.push(Packet::HatHotRequest(cig_cigi::HatHotRequest {
                 hat_hot_id: i as u16,
                 request_type: (i % 3) as u8,
-                lat_deg_or_x_m: rng.gen_range(lat0..lat1),
-                lon_deg_or_y_m: rng.gen_range(lon0..lon1),
-                alt_m_or_z_m: 1500.0,
+                lat_deg_or_x_m: point.lat_deg,
+                lon_deg_or_y_m: point.lon_deg,
+                alt_m_or_z_m: point.alt_m,
                 ..cig_cigi::HatHotRequest::default()
             }));
         }
