@@ -492,3 +492,35 @@ fn serve_publishes_its_scenario_entities_and_draws_remote_ones_over_dis() {
         "{tank}"
     );
 }
+
+#[test]
+fn serve_shows_its_views_in_a_window() {
+    if Command::new("xvfb-run").arg("--help").output().is_err() {
+        eprintln!("SKIPPED: xvfb-run is not installed (scripts/setup.sh --test installs xvfb)");
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let scenario = dir.path().join("window.toml");
+    std::fs::write(
+        &scenario,
+        "start_time = \"2026-06-21T12:00:00Z\"\n\
+         [[entities]]\nid = 1\nmodel = \"truck\"\nlat_deg = 35.995\nlon_deg = -121.215\nclamp = \"height\"\n\
+         [view]\nentity = 1\noffset_m = [-30, 0, -10]\nhpr_deg = [0, -10, 0]\n",
+    )
+    .expect("scenario");
+    let run = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(assert_cmd::cargo::cargo_bin("cig"))
+        .args(["serve", "--db"])
+        .arg(&db)
+        .arg("--scenario")
+        .arg(&scenario)
+        .args(["--size", "320x240", "--frames", "5", "--cigi-port"])
+        .arg(free_udp_port().to_string())
+        .output()
+        .expect("xvfb-run");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("served 5 frames in a window"), "{stderr}");
+}
