@@ -221,14 +221,38 @@ impl Exercise {
         exercise
     }
 
+    /// PDU headers carry the shared world time past the hour, marked absolute (the exercise's
+    /// nodes agree on it).
     fn header(&self, now_s: f64) -> EncodeHeader {
         EncodeHeader {
             version: self.version,
             exercise_id: self.settings.exercise,
             timestamp: cig_dis::codec::timestamp_from_seconds_past_hour(
-                now_s.rem_euclid(3600.0),
-                false,
+                self.world_time_unix_s(now_s).rem_euclid(3600.0),
+                true,
             ),
+        }
+    }
+
+    /// The world time an event happened: the PDU's absolute timestamp when it is within 30 s
+    /// of the world time now (so every node starts its effect at the same instant whatever the
+    /// network's delay), else the time it arrived.
+    fn event_time_unix_s(&self, now_s: f64, timestamp: u32) -> f64 {
+        let now_world = self.world_time_unix_s(now_s);
+        let (past_hour_s, absolute) = cig_dis::codec::timestamp_seconds_past_hour(timestamp);
+        if !absolute || !past_hour_s.is_finite() {
+            return now_world;
+        }
+        let mut t = (now_world / 3600.0).floor() * 3600.0 + past_hour_s;
+        if t - now_world > 1800.0 {
+            t -= 3600.0;
+        } else if now_world - t > 1800.0 {
+            t += 3600.0;
+        }
+        if (t - now_world).abs() <= 30.0 {
+            t
+        } else {
+            now_world
         }
     }
 
@@ -313,7 +337,9 @@ impl Exercise {
                 DisMessage::Detonation(d) => {
                     self.counters.detonations += 1;
                     if let Some(start) = impact_effect(d) {
-                        if self.start_impact(now_s, &start, effects) {
+                        let at_s = self.event_time_unix_s(now_s, pdu.header.timestamp)
+                            - EFFECT_EPOCH_UNIX_S;
+                        if self.start_impact(at_s, &start, effects) {
                             self.counters.impacts_started += 1;
                         }
                     }
@@ -479,9 +505,10 @@ impl Exercise {
         self.world_time_unix_s(now_s) - EFFECT_EPOCH_UNIX_S
     }
 
+    /// Starts smoke and flame at an impact, at effect time `t`.
     fn start_impact(
         &mut self,
-        now_s: f64,
+        t: f64,
         start: &cig_dis::ImpactEffectStart,
         effects: &mut EffectSystem,
     ) -> bool {
@@ -495,7 +522,6 @@ impl Exercise {
             ImpactSurface::Ground => 1.0,
             ImpactSurface::Building => 1.5,
         };
-        let t = self.effect_time_s(now_s);
         let mut ok = true;
         for (kind, salt, d) in [
             (PlumeKind::Smoke, 0u64, duration_s * factor),
@@ -542,53 +568,9 @@ impl Exercise {
                 | (u64::from(key.application) << 16)
                 | u64::from(key.entity);
             for effect in diff.start {
-                let handle = match effect {
-                    EntityEffect::SmokePlume | EntityEffect::EngineSmoke | EntityEffect::Flames => {
-                        let (kind, heat_w, salt) = match effect {
-                            EntityEffect::Flames => (PlumeKind::Flame, 5.0e6, 3),
-                            EntityEffect::EngineSmoke => (PlumeKind::Smoke, 2.0e5, 2),
-                            _ => (PlumeKind::Smoke, 5.0e6, 1),
-                        };
-                        effects
-                            .start_plume(&PlumeSpec {
-                                id: EffectId(cig_dis::detonation::splitmix64(seed ^ salt)),
-                                kind,
-                                position,
-                                size_m: 3.0,
-                                source: PlumeSource::HeatReleaseW(heat_w),
-                                start_time_s: t,
-                                duration_s: 3600.0,
-                            })
-                            .ok()
-                    }
-                    EntityEffect::DustCloud(size) => {
-                        let material = query
-                            .hot(position.lat_deg, position.lon_deg)
-                            .map_or(Material::DryClay, |s| s.material);
-                        let velocity =
-                            EnuFrame::new(position).ecef_vector_to_enu(pose.velocity_ecef_mps);
-                        let length_m = match size {
-                            cig_dis::DustCloudSize::Large => 10.0,
-                            cig_dis::DustCloudSize::Medium => 7.0,
-                            _ => 4.0,
-                        };
-                        effects
-                            .start_dust_trail(&DustTrailSpec {
-                                id: EffectId(cig_dis::detonation::splitmix64(seed ^ 4)),
-                                start_time_s: t,
-                                duration_s: None,
-                                vehicle_length_m: length_m,
-                                vehicle: VehicleUpdate {
-                                    time_s: t,
-                                    position,
-                                    velocity_enu_mps: velocity.to_array(),
-                                    material,
-                                    roadside_material: None,
-                                },
-                            })
-                            .ok()
-                    }
-                };
+                let velocity = EnuFrame::new(position).ecef_vector_to_enu(pose.velocity_ecef_mps);
+                let handle =
+                    start_entity_effect(effects, query, effect, seed, position, velocity, t);
                 if let Some(h) = handle {
                     slot.handles.insert(effect, h);
                 }
@@ -624,29 +606,9 @@ impl Exercise {
                 continue;
             };
             let position = Geodetic::from_ecef(pose.position_ecef_m);
+            let velocity = EnuFrame::new(position).ecef_vector_to_enu(pose.velocity_ecef_mps);
             for (effect, handle) in &slot.handles {
-                match effect {
-                    EntityEffect::DustCloud(_) => {
-                        let velocity =
-                            EnuFrame::new(position).ecef_vector_to_enu(pose.velocity_ecef_mps);
-                        let material = query
-                            .hot(position.lat_deg, position.lon_deg)
-                            .map_or(Material::DryClay, |s| s.material);
-                        let _ = effects.update_vehicle(
-                            *handle,
-                            &VehicleUpdate {
-                                time_s: t,
-                                position,
-                                velocity_enu_mps: velocity.to_array(),
-                                material,
-                                roadside_material: None,
-                            },
-                        );
-                    }
-                    _ => {
-                        let _ = effects.move_plume(*handle, position);
-                    }
-                }
+                follow_entity_effect(effects, query, *effect, *handle, position, velocity, t);
             }
         }
         let replies = self.time.tick(now_s);
@@ -671,6 +633,13 @@ impl Exercise {
                 self.queue(now_s, &DisMessage::EntityState(Box::new(body)));
             }
         }
+    }
+
+    /// Forgets every effect handle (after the effect system was rebuilt by a jump back in time);
+    /// remote entities' effects start again with their next appearance change.
+    pub fn forget_effects(&mut self) {
+        self.remote_effects.clear();
+        self.remote_processes.clear();
     }
 
     /// PDUs to send, each one datagram.
@@ -699,5 +668,95 @@ impl Exercise {
     /// The model for a remote entity.
     pub fn model_for(models: &ModelTable, t: &EntityTypeCode) -> String {
         models.model_for_dis(t).to_string()
+    }
+}
+
+/// Starts one appearance effect on an entity at `position` moving at `velocity_enu_mps`, at
+/// effect time `t_s`; `seed` is the entity's identity, so every node starts the same effect.
+pub fn start_entity_effect(
+    effects: &mut EffectSystem,
+    query: &mut QuerySession,
+    effect: EntityEffect,
+    seed: u64,
+    position: Geodetic,
+    velocity_enu_mps: DVec3,
+    t_s: f64,
+) -> Option<EffectHandle> {
+    match effect {
+        EntityEffect::SmokePlume | EntityEffect::EngineSmoke | EntityEffect::Flames => {
+            let (kind, heat_w, salt) = match effect {
+                EntityEffect::Flames => (PlumeKind::Flame, 5.0e6, 3),
+                EntityEffect::EngineSmoke => (PlumeKind::Smoke, 2.0e5, 2),
+                _ => (PlumeKind::Smoke, 5.0e6, 1),
+            };
+            effects
+                .start_plume(&PlumeSpec {
+                    id: EffectId(cig_dis::detonation::splitmix64(seed ^ salt)),
+                    kind,
+                    position,
+                    size_m: 3.0,
+                    source: PlumeSource::HeatReleaseW(heat_w),
+                    start_time_s: t_s,
+                    duration_s: 3600.0,
+                })
+                .ok()
+        }
+        EntityEffect::DustCloud(size) => {
+            let material = query
+                .hot(position.lat_deg, position.lon_deg)
+                .map_or(Material::DryClay, |s| s.material);
+            let length_m = match size {
+                cig_dis::DustCloudSize::Large => 10.0,
+                cig_dis::DustCloudSize::Medium => 7.0,
+                _ => 4.0,
+            };
+            effects
+                .start_dust_trail(&DustTrailSpec {
+                    id: EffectId(cig_dis::detonation::splitmix64(seed ^ 4)),
+                    start_time_s: t_s,
+                    duration_s: None,
+                    vehicle_length_m: length_m,
+                    vehicle: VehicleUpdate {
+                        time_s: t_s,
+                        position,
+                        velocity_enu_mps: velocity_enu_mps.to_array(),
+                        material,
+                        roadside_material: None,
+                    },
+                })
+                .ok()
+        }
+    }
+}
+
+/// Moves an entity's effect with it: a plume's source, or a dust trail's vehicle.
+pub fn follow_entity_effect(
+    effects: &mut EffectSystem,
+    query: &mut QuerySession,
+    effect: EntityEffect,
+    handle: EffectHandle,
+    position: Geodetic,
+    velocity_enu_mps: DVec3,
+    t_s: f64,
+) {
+    match effect {
+        EntityEffect::DustCloud(_) => {
+            let material = query
+                .hot(position.lat_deg, position.lon_deg)
+                .map_or(Material::DryClay, |s| s.material);
+            let _ = effects.update_vehicle(
+                handle,
+                &VehicleUpdate {
+                    time_s: t_s,
+                    position,
+                    velocity_enu_mps: velocity_enu_mps.to_array(),
+                    material,
+                    roadside_material: None,
+                },
+            );
+        }
+        _ => {
+            let _ = effects.move_plume(handle, position);
+        }
     }
 }

@@ -77,6 +77,18 @@ pub const MAX_ENTITIES: usize = 65_536;
 /// At most this many standing requests of each kind.
 pub const MAX_STANDING_REQUESTS: usize = 4096;
 
+/// At most this many answers wait for a later message; beyond, the oldest are dropped (counted).
+pub const MAX_DEFERRED_ANSWERS: usize = 4 * MAX_PACKETS_PER_MESSAGE;
+
+/// At most this many collision notifications a frame.
+pub const MAX_COLLISION_NOTES: usize = 256;
+
+/// At most this many collision volumes are tested against each other a frame.
+pub const MAX_COLLISION_VOLUMES: usize = 1024;
+
+/// Distinct problems remembered as told to the host.
+const MAX_TOLD: usize = 1024;
+
 /// An entity's life state.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EntityLife {
@@ -323,7 +335,6 @@ impl EnvironmentState {
 #[derive(Clone, Debug)]
 struct Pending<T> {
     request: T,
-    host_frame_lsn: u8,
     /// Frames until the next answer (0: this frame).
     countdown: u8,
 }
@@ -340,6 +351,7 @@ pub struct SessionCounters {
     pub environment_answered: u64,
     pub collisions_reported: u64,
     pub answers_deferred: u64,
+    pub answers_dropped: u64,
 }
 
 /// Configuration of a session.
@@ -372,9 +384,13 @@ pub struct IgSession {
     los_segment: BTreeMap<u16, Pending<LosSegmentRequest>>,
     los_vector: BTreeMap<u16, Pending<LosVectorRequest>>,
     position: BTreeMap<(u8, u16, u8), Pending<PositionRequest>>,
-    environment_requests: Vec<(EnvironmentalConditionsRequest, u8)>,
+    environment_requests: Vec<EnvironmentalConditionsRequest>,
     deferred: VecDeque<Packet>,
     ig_messages: VecDeque<String>,
+    /// Problems already told to the host (each is told once).
+    told: std::collections::BTreeSet<String>,
+    /// The scenario's entities, restored after a reset.
+    initial_entities: Vec<IgEntity>,
     user_packets: Vec<UserDefined>,
     /// Host version and byte order, from the last message.
     host_format: Option<(Version, ByteOrder)>,
@@ -436,6 +452,8 @@ impl IgSession {
             environment_requests: Vec::new(),
             deferred: VecDeque::new(),
             ig_messages: VecDeque::new(),
+            told: std::collections::BTreeSet::new(),
+            initial_entities: Vec::new(),
             user_packets: Vec::new(),
             host_format: None,
             ig_mode: 1,
@@ -482,6 +500,11 @@ impl IgSession {
     pub fn poses(&self) -> &BTreeMap<u16, Pose> {
         &self.poses
     }
+    /// The 4 low bits of the last host frame number, as answers carry them.
+    fn host_frame_lsn(&self) -> u8 {
+        (self.last_host_frame_number & 0xF) as u8
+    }
+
     /// A time the host set with Celestial Sphere Control since the last call.
     pub fn take_time_set(&mut self) -> Option<UtcTime> {
         self.time_set.take()
@@ -492,14 +515,41 @@ impl IgSession {
     }
     /// Queues an IG Message for the host (deduplicated; at most 16 wait).
     pub fn tell_host(&mut self, text: String) {
-        if !self.ig_messages.contains(&text) && self.ig_messages.len() < 16 {
+        if self.told.len() >= MAX_TOLD {
+            // Forget old problems rather than grow: they may be told again.
+            self.told.clear();
+        }
+        if self.ig_messages.len() < 16 && self.told.insert(text.clone()) {
             self.ig_messages.push_back(text);
         }
     }
 
-    /// Adds or replaces an entity (the scenario's entities enter this way).
+    /// Adds or replaces an entity of the scenario; it comes back as it was after an IG reset.
     pub fn insert_entity(&mut self, entity: IgEntity) {
+        self.initial_entities.retain(|e| e.id != entity.id);
+        self.initial_entities.push(entity.clone());
         self.entities.insert(entity.id, entity);
+    }
+
+    /// Removes an entity and, as the ICD requires, every entity attached to it (transitively).
+    fn destroy(&mut self, id: u16) -> bool {
+        if self.entities.remove(&id).is_none() {
+            return false;
+        }
+        let mut doomed = vec![id];
+        while let Some(parent) = doomed.pop() {
+            let children: Vec<u16> = self
+                .entities
+                .values()
+                .filter(|e| matches!(e.placement, Placement::Attached { parent_id, .. } if parent_id == parent))
+                .map(|e| e.id)
+                .collect();
+            for child in children {
+                self.entities.remove(&child);
+                doomed.push(child);
+            }
+        }
+        true
     }
 
     /// Mutable access for the scenario's scripts (they move only entities still `scripted`).
@@ -511,12 +561,8 @@ impl IgSession {
     pub fn apply(&mut self, message: &Message) {
         self.host_format = Some((message.version, message.byte_order));
         self.counters.messages_applied += 1;
-        let mut host_frame_lsn = (self.last_host_frame_number & 0xF) as u8;
         for packet in &message.packets {
-            if let Packet::IgControl(c) = packet {
-                host_frame_lsn = (c.host_frame_number & 0xF) as u8;
-            }
-            if self.apply_packet(packet, host_frame_lsn) {
+            if self.apply_packet(packet) {
                 self.counters.packets_applied += 1;
             } else {
                 self.counters.packets_ignored += 1;
@@ -543,6 +589,10 @@ impl IgSession {
 
     fn reset(&mut self) {
         self.entities.retain(|id, _| *id == 0);
+        for e in &self.initial_entities {
+            self.entities.insert(e.id, e.clone());
+        }
+        self.told.clear();
         self.hat_hot.clear();
         self.los_segment.clear();
         self.los_vector.clear();
@@ -552,7 +602,7 @@ impl IgSession {
     }
 
     /// Applies one packet; `false` when it was not applicable (counted as ignored).
-    fn apply_packet(&mut self, packet: &Packet, host_frame_lsn: u8) -> bool {
+    fn apply_packet(&mut self, packet: &Packet) -> bool {
         match packet {
             Packet::IgControl(c) => self.apply_ig_control(c),
             Packet::EntityControl(c) => self.apply_entity_control_3(c),
@@ -702,23 +752,17 @@ impl IgSession {
                 }
                 None => false,
             },
-            Packet::HatHotRequest(r) => {
-                standing(&mut self.hat_hot, r.hat_hot_id, r.clone(), host_frame_lsn)
-            }
-            Packet::LosSegmentRequest(r) => {
-                standing(&mut self.los_segment, r.los_id, r.clone(), host_frame_lsn)
-            }
-            Packet::LosVectorRequest(r) => {
-                standing(&mut self.los_vector, r.los_id, r.clone(), host_frame_lsn)
-            }
+            Packet::HatHotRequest(r) => standing(&mut self.hat_hot, r.hat_hot_id, r.clone()),
+            Packet::LosSegmentRequest(r) => standing(&mut self.los_segment, r.los_id, r.clone()),
+            Packet::LosVectorRequest(r) => standing(&mut self.los_vector, r.los_id, r.clone()),
             Packet::PositionRequest(r) => {
                 let key = (r.object_class, r.object_id, r.part_id);
-                standing(&mut self.position, key, r.clone(), host_frame_lsn)
+                standing(&mut self.position, key, r.clone())
             }
             Packet::EnvironmentalConditionsRequest(r)
                 if self.environment_requests.len() < MAX_STANDING_REQUESTS =>
             {
-                self.environment_requests.push((r.clone(), host_frame_lsn));
+                self.environment_requests.push(r.clone());
                 true
             }
             Packet::UserDefined(u) => {
@@ -752,7 +796,7 @@ impl IgSession {
 
     fn apply_entity_control_3(&mut self, c: &EntityControl) -> bool {
         if c.entity_state == 2 {
-            return self.entities.remove(&c.entity_id).is_some();
+            return self.destroy(c.entity_id);
         }
         if !finite3(c.lat_deg_or_x_m, c.lon_deg_or_y_m, c.alt_m_or_z_m) {
             return false;
@@ -815,7 +859,7 @@ impl IgSession {
 
     fn apply_entity_control_4(&mut self, c: &EntityControl4) -> bool {
         if c.entity_state == 2 {
-            return self.entities.remove(&c.entity_id).is_some();
+            return self.destroy(c.entity_id);
         }
         let entity_type = if c.extended_entity_type {
             CigiEntityType::Dis(cig_dis::EntityTypeCode {
@@ -905,28 +949,43 @@ impl IgSession {
         true
     }
 
+    /// View Control: to the view named, or, with a non-zero group, to every view of that group
+    /// (group membership comes from View Definition; ICD 3.3 §4.1.16).
     fn apply_view_control(&mut self, v: &ViewControl) -> bool {
-        let view = self.views.entry(v.view_id).or_insert(IgView {
-            id: v.view_id,
-            group_id: v.group_id,
-            entity_id: v.entity_id,
-            offset: BodyOffset::default(),
-            orientation: Hpr::default(),
-            fov: None,
-        });
-        view.group_id = v.group_id;
-        view.entity_id = v.entity_id;
-        let set = |enable: bool, value: f32, slot: &mut f64| {
-            if enable && value.is_finite() {
-                *slot = f64::from(value);
-            }
+        let targets: Vec<u16> = if v.group_id != 0 {
+            self.views
+                .values()
+                .filter(|view| view.group_id == v.group_id)
+                .map(|view| view.id)
+                .collect()
+        } else {
+            vec![v.view_id]
         };
-        set(v.x_offset_enable, v.x_offset_m, &mut view.offset.x_m);
-        set(v.y_offset_enable, v.y_offset_m, &mut view.offset.y_m);
-        set(v.z_offset_enable, v.z_offset_m, &mut view.offset.z_m);
-        set(v.roll_enable, v.roll_deg, &mut view.orientation.roll_deg);
-        set(v.pitch_enable, v.pitch_deg, &mut view.orientation.pitch_deg);
-        set(v.yaw_enable, v.yaw_deg, &mut view.orientation.heading_deg);
+        if targets.is_empty() {
+            return false;
+        }
+        for id in targets {
+            let view = self.views.entry(id).or_insert(IgView {
+                id,
+                group_id: 0,
+                entity_id: v.entity_id,
+                offset: BodyOffset::default(),
+                orientation: Hpr::default(),
+                fov: None,
+            });
+            view.entity_id = v.entity_id;
+            let set = |enable: bool, value: f32, slot: &mut f64| {
+                if enable && value.is_finite() {
+                    *slot = f64::from(value);
+                }
+            };
+            set(v.x_offset_enable, v.x_offset_m, &mut view.offset.x_m);
+            set(v.y_offset_enable, v.y_offset_m, &mut view.offset.y_m);
+            set(v.z_offset_enable, v.z_offset_m, &mut view.offset.z_m);
+            set(v.roll_enable, v.roll_deg, &mut view.orientation.roll_deg);
+            set(v.pitch_enable, v.pitch_deg, &mut view.orientation.pitch_deg);
+            set(v.yaw_enable, v.yaw_deg, &mut view.orientation.heading_deg);
+        }
         true
     }
 
@@ -939,6 +998,7 @@ impl IgSession {
             orientation: Hpr::default(),
             fov: None,
         });
+        view.group_id = d.group_id;
         let mut fov = view.fov.unwrap_or(FovDeg::symmetric(60.0, 45.0));
         let set = |enable: bool, value: f32, slot: &mut f64| {
             if enable && value.is_finite() {
@@ -1022,9 +1082,24 @@ impl IgSession {
                     *alt_m += enu.z;
                 }
                 Placement::Attached { offset, .. } => {
-                    offset.x_m += x * dt_s;
-                    offset.y_m += y * dt_s;
-                    offset.z_m += z * dt_s;
+                    // Body-axis rates turn with the entity's orientation in its parent's frame
+                    // (the parent's x, y, z taken as north, east, down).
+                    let (dx, dy, dz) = if rates.body_axes {
+                        let enu = offset_enu(
+                            e.orientation,
+                            BodyOffset {
+                                x_m: x,
+                                y_m: y,
+                                z_m: z,
+                            },
+                        );
+                        (enu.y, enu.x, -enu.z)
+                    } else {
+                        (x, y, z)
+                    };
+                    offset.x_m += dx * dt_s;
+                    offset.y_m += dy * dt_s;
+                    offset.z_m += dz * dt_s;
                 }
             }
             e.orientation.heading_deg = wrap_deg(e.orientation.heading_deg + yaw * dt_s);
@@ -1194,13 +1269,18 @@ impl IgSession {
             let rest = answers.split_off(room);
             self.counters.answers_deferred += rest.len() as u64;
             self.deferred.extend(rest);
+            while self.deferred.len() > MAX_DEFERRED_ANSWERS {
+                self.deferred.pop_front();
+                self.counters.answers_dropped += 1;
+            }
         }
         packets.extend(answers);
         Message::new(version, byte_order, packets)
     }
 
     fn answer_hat_hot(&mut self, query: &mut QuerySession, out: &mut Vec<Packet>) {
-        for (r, lsn) in due(&mut self.hat_hot) {
+        let lsn_now = self.host_frame_lsn();
+        for (r, lsn) in due(&mut self.hat_hot, lsn_now) {
             self.counters.hat_hot_answered += 1;
             let point = self.request_point(
                 r.coordinate_system_entity,
@@ -1242,8 +1322,9 @@ impl IgSession {
     }
 
     fn answer_los(&mut self, query: &mut QuerySession, out: &mut Vec<Packet>) {
+        let lsn_now = self.host_frame_lsn();
         let mut jobs = Vec::new();
-        for (r, lsn) in due(&mut self.los_segment) {
+        for (r, lsn) in due(&mut self.los_segment, lsn_now) {
             let from = self.request_point(
                 r.source_coordinate_entity,
                 r.entity_id,
@@ -1278,7 +1359,7 @@ impl IgSession {
                 0.0,
             ));
         }
-        for (r, lsn) in due(&mut self.los_vector) {
+        for (r, lsn) in due(&mut self.los_vector, lsn_now) {
             let from = self.request_point(
                 r.source_coordinate_entity,
                 r.entity_id,
@@ -1295,8 +1376,28 @@ impl IgSession {
                 && r.max_range_m > r.min_range_m
                 && r.azimuth_deg.is_finite()
                 && r.elevation_deg.is_finite();
+            // From an entity, azimuth and elevation are measured in its body axes.
+            let body = r
+                .source_coordinate_entity
+                .then(|| self.poses.get(&r.entity_id).map(|p| p.orientation))
+                .flatten();
             let segment = from.filter(|_| ok).map(|source| {
-                let d = direction_enu(f64::from(r.azimuth_deg), f64::from(r.elevation_deg));
+                let (az, el) = (f64::from(r.azimuth_deg), f64::from(r.elevation_deg));
+                let d = match body {
+                    Some(orientation) => {
+                        let (sa, ca) = az.to_radians().sin_cos();
+                        let (se, ce) = el.to_radians().sin_cos();
+                        offset_enu(
+                            orientation,
+                            BodyOffset {
+                                x_m: ce * ca,
+                                y_m: ce * sa,
+                                z_m: -se,
+                            },
+                        )
+                    }
+                    None => direction_enu(az, el),
+                };
                 (
                     displaced(source, d * f64::from(r.min_range_m)),
                     displaced(source, d * f64::from(r.max_range_m)),
@@ -1369,7 +1470,8 @@ impl IgSession {
     }
 
     fn answer_positions(&mut self, query: &mut QuerySession, out: &mut Vec<Packet>) {
-        for (r, _lsn) in due(&mut self.position) {
+        let lsn_now = self.host_frame_lsn();
+        for (r, _lsn) in due(&mut self.position, lsn_now) {
             self.counters.position_answered += 1;
             let response = match r.object_class {
                 0 => self.entity_position(&r, query),
@@ -1460,7 +1562,7 @@ impl IgSession {
 
     fn answer_environment(&mut self, out: &mut Vec<Packet>) {
         let requests = std::mem::take(&mut self.environment_requests);
-        for (r, _lsn) in requests {
+        for r in requests {
             self.counters.environment_answered += 1;
             if !finite3(r.latitude_deg, r.longitude_deg, r.altitude_m)
                 || r.latitude_deg.abs() > 90.0
@@ -1633,7 +1735,9 @@ impl IgSession {
                 } else {
                     f64::from(v.height_or_radius_m).abs()
                 };
-                spheres.push((e.id, v.volume_id, centre.to_ecef(), radius));
+                if spheres.len() < MAX_COLLISION_VOLUMES {
+                    spheres.push((e.id, v.volume_id, centre.to_ecef(), radius));
+                }
             }
         }
         for (i, a) in spheres.iter().enumerate() {
@@ -1653,6 +1757,7 @@ impl IgSession {
                 }
             }
         }
+        notes.truncate(MAX_COLLISION_NOTES);
         self.counters.collisions_reported += notes.len() as u64;
         out.extend(notes);
     }
@@ -1721,12 +1826,7 @@ fn set_placement(
 
 /// Files a request: one-shot (period 0) or standing (answered every `period` frames); a
 /// request with the ID of a standing one replaces it.
-fn standing<K: Ord, T>(
-    map: &mut BTreeMap<K, Pending<T>>,
-    key: K,
-    request: T,
-    host_frame_lsn: u8,
-) -> bool {
+fn standing<K: Ord, T>(map: &mut BTreeMap<K, Pending<T>>, key: K, request: T) -> bool {
     if map.len() >= MAX_STANDING_REQUESTS && !map.contains_key(&key) {
         return false;
     }
@@ -1734,15 +1834,18 @@ fn standing<K: Ord, T>(
         key,
         Pending {
             request,
-            host_frame_lsn,
             countdown: 0,
         },
     );
     true
 }
 
-/// Requests due this frame; one-shot ones leave the map, standing ones restart their count.
-fn due<K: Ord + Clone, T: Clone + HasPeriod>(map: &mut BTreeMap<K, Pending<T>>) -> Vec<(T, u8)> {
+/// Requests due this frame, each with `lsn` (the 4 low bits of the host frame the answer is
+/// computed in, ICD 3.3 §4.2.2); one-shot ones leave the map, standing ones restart their count.
+fn due<K: Ord + Clone, T: Clone + HasPeriod>(
+    map: &mut BTreeMap<K, Pending<T>>,
+    lsn: u8,
+) -> Vec<(T, u8)> {
     let mut out = Vec::new();
     let mut finished = Vec::new();
     for (key, pending) in map.iter_mut() {
@@ -1750,7 +1853,7 @@ fn due<K: Ord + Clone, T: Clone + HasPeriod>(map: &mut BTreeMap<K, Pending<T>>) 
             pending.countdown -= 1;
             continue;
         }
-        out.push((pending.request.clone(), pending.host_frame_lsn));
+        out.push((pending.request.clone(), lsn));
         let period = pending.request.period();
         if period == 0 {
             finished.push(key.clone());

@@ -142,11 +142,21 @@ pub struct IgWorld {
     effects: EffectSystem,
     monotonic_s: f64,
     scripts: BTreeMap<u16, Script>,
-    previous_owned: BTreeMap<u16, (f64, Geodetic)>,
+    /// Per entity: the last position sample (time, place) and the velocity it gave.
+    previous_owned: BTreeMap<u16, (f64, Geodetic, DVec3)>,
     fog_mode: FogMode,
     cigi_rejected: u64,
     smoke: Vec<SmokeState>,
     last_process_publish_s: f64,
+    /// Seconds of scripted motion since the start (forward only, at the clock's rate).
+    script_time_s: f64,
+    /// Appearance effects of the scenario's entities, by (entity, effect).
+    owned_effects: BTreeMap<(u16, cig_dis::EntityEffect), cig_effects::EffectHandle>,
+    /// The first view's eye after the last step, and the geoid undulation there.
+    first_eye: Option<Geodetic>,
+    eye_geoid_m: f64,
+    /// Geoid undulation at the scenario's fixed eye, if it has one.
+    fixed_eye_geoid_m: f64,
 }
 
 /// A scenario smoke source and the plume it runs.
@@ -235,6 +245,11 @@ impl IgWorld {
             cigi_rejected: 0,
             smoke,
             last_process_publish_s: f64::NEG_INFINITY,
+            script_time_s: 0.0,
+            owned_effects: BTreeMap::new(),
+            first_eye: None,
+            eye_geoid_m: 0.0,
+            fixed_eye_geoid_m: 0.0,
         })
     }
 
@@ -306,7 +321,10 @@ impl IgWorld {
         };
         self.monotonic_s += dt;
         let now = self.monotonic_s;
-        if let Some(t) = self.session.take_time_set() {
+        let set = self.session.take_time_set();
+        // A host repeating the current time every frame changes nothing and announces nothing.
+        let set = set.filter(|t| (t.unix_seconds() - self.clock.now().unix_seconds()).abs() > 1.0);
+        if let Some(t) = set {
             self.clock.set_time(t);
             if let Some(x) = self.exercise.as_mut() {
                 x.set_time(now, t.unix_seconds(), self.clock.rate());
@@ -322,7 +340,14 @@ impl IgWorld {
         } else if let Err(e) = self.clock.advance(dt) {
             tracing::warn!("the simulation clock stops: {e}");
         }
-        let elapsed_s = self.clock.now().unix_seconds() - self.start_unix_s;
+        // Scripts run on their own time, which only moves forward at the clock's rate: a time
+        // of day the host or the exercise sets does not make entities jump along their paths.
+        let rate = self
+            .exercise
+            .as_ref()
+            .map_or(self.clock.rate(), Exercise::rate);
+        self.script_time_s += dt * rate.max(0.0);
+        let mut script_velocity = BTreeMap::new();
         for (id, script) in &self.scripts {
             let Some(e) = self.session.entity_mut(*id) else {
                 continue;
@@ -330,7 +355,7 @@ impl IgWorld {
             if !e.scripted {
                 continue;
             }
-            let (lat_deg, lon_deg, heading_deg, _) = script.at(elapsed_s);
+            let (lat_deg, lon_deg, heading_deg, velocity) = script.at(self.script_time_s);
             let alt_m = match e.placement {
                 Placement::Geodetic { alt_m, .. } => alt_m,
                 Placement::Attached { .. } => 0.0,
@@ -341,14 +366,66 @@ impl IgWorld {
                 alt_m,
             };
             e.orientation.heading_deg = heading_deg;
+            script_velocity.insert(*id, velocity);
         }
         self.session.advance(dt, query);
         self.session.resolve_poses(query);
         let effect_time_s = self.clock.now().unix_seconds() - EFFECT_EPOCH_UNIX_S;
+        if self
+            .effects
+            .time_s()
+            .is_some_and(|t| effect_time_s < t - 1.0)
+        {
+            // The world went back in time (a host or master set an earlier time): the effects
+            // start over from the new time.
+            match EffectSystem::new(*self.effects.config()) {
+                Ok(fresh) => {
+                    self.effects = fresh;
+                    for s in &mut self.smoke {
+                        s.started = None;
+                        s.failed = false;
+                    }
+                    self.owned_effects.clear();
+                    if let Some(x) = self.exercise.as_mut() {
+                        x.forget_effects();
+                    }
+                }
+                Err(e) => tracing::warn!("effects cannot start over: {e}"),
+            }
+        }
         if let Err(e) = self.effects.advance_to(effect_time_s) {
             tracing::warn!("effects stop advancing: {e}");
         }
         self.start_smoke(query);
+        // Velocities: the script's where there is one, else positions at least 0.2 s apart.
+        let mut velocities = BTreeMap::new();
+        let poses: Vec<(u16, Pose)> = self.session.poses().iter().map(|(k, v)| (*k, *v)).collect();
+        self.previous_owned
+            .retain(|id, _| self.session.poses().contains_key(id));
+        for (id, pose) in &poses {
+            let velocity = match script_velocity.get(id) {
+                Some(v) => *v,
+                None => {
+                    let sample =
+                        self.previous_owned
+                            .entry(*id)
+                            .or_insert((now, pose.position, DVec3::ZERO));
+                    let span = now - sample.0;
+                    if span >= 0.2 {
+                        let v = EnuFrame::new(sample.1).geodetic_to_enu(pose.position) / span;
+                        // A jump (a teleport, an id reused) is not a velocity.
+                        *sample = (
+                            now,
+                            pose.position,
+                            if v.length() < 3000.0 { v } else { DVec3::ZERO },
+                        );
+                    }
+                    sample.2
+                }
+            };
+            velocities.insert(*id, velocity);
+        }
+        self.run_owned_effects(query, effect_time_s, &velocities);
         if let Some(x) = self.exercise.as_mut() {
             if now - self.last_process_publish_s >= 1.0 && !self.smoke.is_empty() {
                 self.last_process_publish_s = now;
@@ -356,25 +433,105 @@ impl IgWorld {
                     smoke_processes(&self.smoke, &self.effects, effect_time_s, self.start_unix_s);
                 x.publish_processes(now, &processes);
             }
-            let mut truths = BTreeMap::new();
-            for (id, pose) in self.session.poses() {
-                let velocity = match self.previous_owned.get(id) {
-                    Some((t, p)) if now - t > 1e-6 => {
-                        EnuFrame::new(*p).geodetic_to_enu(pose.position) / (now - t)
-                    }
-                    _ => DVec3::ZERO,
-                };
-                self.previous_owned.insert(*id, (now, pose.position));
-                truths.insert(
-                    *id,
-                    OwnedTruth {
-                        position: pose.position,
-                        orientation: pose.orientation,
-                        velocity_enu_mps: velocity,
-                    },
-                );
-            }
+            let truths: BTreeMap<u16, OwnedTruth> = poses
+                .iter()
+                .map(|(id, pose)| {
+                    (
+                        *id,
+                        OwnedTruth {
+                            position: pose.position,
+                            orientation: pose.orientation,
+                            velocity_enu_mps: velocities.get(id).copied().unwrap_or(DVec3::ZERO),
+                        },
+                    )
+                })
+                .collect();
             x.tick(now, &truths, &mut self.effects, query);
+        }
+        if let Some(eye) = self.scenario.view.as_ref().and_then(|v| v.eye) {
+            self.fixed_eye_geoid_m = query.geoid_undulation_m(eye[0], eye[1]);
+        }
+        self.first_eye = self
+            .views(
+                1,
+                1,
+                &View {
+                    eye: Geodetic::new(0.0, 0.0, 0.0),
+                    orientation: Hpr::default(),
+                    fov: FovDeg::symmetric(60.0, 45.0),
+                    width_px: 1,
+                    height_px: 1,
+                },
+            )
+            .first()
+            .map(|v| v.eye);
+        self.eye_geoid_m = self
+            .first_eye
+            .map_or(0.0, |e| query.geoid_undulation_m(e.lat_deg, e.lon_deg));
+    }
+
+    /// The appearance effects of the scenario's own entities (smoke, flames, dust), started,
+    /// stopped and moved with them as on every other node that sees them.
+    fn run_owned_effects(
+        &mut self,
+        query: &mut QuerySession,
+        t_s: f64,
+        velocities: &BTreeMap<u16, DVec3>,
+    ) {
+        for e in &self.scenario.entities {
+            let Some(appearance) = e
+                .appearance
+                .as_deref()
+                .and_then(crate::scenario::parse_hex_u32)
+            else {
+                continue;
+            };
+            let (kind, domain) = e
+                .dis_type
+                .as_deref()
+                .and_then(DisTypePattern::parse)
+                .and_then(|p| p.exact())
+                .map_or((1, 1), |t| (t.kind, t.domain));
+            let wanted =
+                cig_dis::EffectsRequested::from_appearance(appearance, kind, domain).active();
+            let Some(pose) = self.session.poses().get(&e.id).copied() else {
+                continue;
+            };
+            let velocity = velocities.get(&e.id).copied().unwrap_or(DVec3::ZERO);
+            let seed = e
+                .dis_id
+                .as_deref()
+                .and_then(crate::scenario::parse_dis_id)
+                .map_or(u64::from(e.id), |(s, a, n)| {
+                    (u64::from(s) << 32) | (u64::from(a) << 16) | u64::from(n)
+                });
+            for effect in wanted {
+                let key = (e.id, effect);
+                match self.owned_effects.get(&key) {
+                    Some(handle) => crate::exercise::follow_entity_effect(
+                        &mut self.effects,
+                        query,
+                        effect,
+                        *handle,
+                        pose.position,
+                        velocity,
+                        t_s,
+                    ),
+                    None => {
+                        if let Some(handle) = crate::exercise::start_entity_effect(
+                            &mut self.effects,
+                            query,
+                            effect,
+                            seed,
+                            pose.position,
+                            velocity,
+                            t_s,
+                        ) {
+                            self.owned_effects.insert(key, handle);
+                        }
+                    }
+                }
+            }
         }
     }
 
@@ -478,8 +635,9 @@ impl IgWorld {
                         .poses()
                         .get(&id)
                         .map(|p| child_pose(*p, offset, relative)),
+                    // The scenario gives the eye's altitude above MSL.
                     (None, Some(eye)) => Some(Pose {
-                        position: Geodetic::new(eye[0], eye[1], eye[2]),
+                        position: Geodetic::new(eye[0], eye[1], eye[2] + self.fixed_eye_geoid_m),
                         orientation: relative,
                     }),
                     _ => None,
@@ -511,7 +669,13 @@ impl IgWorld {
         let mut snapshot = FrameSnapshot::new(self.unix_time_s(), views.clone());
         let mut visibility_m = 40_000.0;
         if let Some(first) = views.first() {
-            visibility_m = self.session.visibility_at_m(first.eye);
+            // Weather layers are given above MSL.
+            let eye_msl = Geodetic::new(
+                first.eye.lat_deg,
+                first.eye.lon_deg,
+                first.eye.alt_m - self.eye_geoid_m,
+            );
+            visibility_m = self.session.visibility_at_m(eye_msl);
             if let Some(v) = self.scenario.visibility_m {
                 if self.session.environment().atmosphere.is_none() {
                     visibility_m = visibility_m.min(v);

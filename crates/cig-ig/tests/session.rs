@@ -224,9 +224,15 @@ fn standing_requests_repeat_at_their_period_and_off_database_points_are_invalid(
             }),
         ],
     );
+    let mut off_database = Vec::new();
     let answered: Vec<usize> = (0..6)
         .map(|_| {
-            frame(&mut w, &mut q)
+            let reply = frame(&mut w, &mut q);
+            off_database.extend(reply.packets.iter().filter_map(|p| match p {
+                Packet::HatHotResponse(r) if r.hat_hot_id == 10 => Some(r.valid),
+                _ => None,
+            }));
+            reply
                 .packets
                 .iter()
                 .filter(|p| matches!(p, Packet::HatHotResponse(r) if r.hat_hot_id == 9 && r.valid))
@@ -234,6 +240,8 @@ fn standing_requests_repeat_at_their_period_and_off_database_points_are_invalid(
         })
         .collect();
     assert_eq!(answered, vec![1, 0, 1, 0, 1, 0]);
+    // The point 10 N 10 E is far off the database: one answer, marked invalid.
+    assert_eq!(off_database, vec![false]);
     // A request with the same ID and period 0 ends it after one more answer.
     send(
         &mut w,
@@ -562,7 +570,7 @@ time_master = true
 "#;
 
 #[test]
-fn two_igs_share_entities_and_time_over_dis_and_draw_the_same_plume() {
+fn two_igs_share_entities_and_time_over_dis_and_both_draw_the_tanks_smoke() {
     let mut qa = query();
     let mut qb = query();
     let mut a = world(DIS_SCENARIO);
@@ -653,10 +661,11 @@ fn a_detonation_starts_the_same_plume_on_every_ig() {
         .with_entity_location(VectorF32::new(0.0, 0.0, 0.0))
         .with_detonation_result(DetonationResult::from(3))
         .build();
+    // Sent 0.1 s past 12:00:00 world time, stamped absolute.
     let header = |exercise_id| EncodeHeader {
         version: DisVersion::V7,
         exercise_id,
-        timestamp: 0,
+        timestamp: cig_dis::codec::timestamp_from_seconds_past_hour(0.1, true),
     };
     let pdu = encode_pdu(
         header(4),
@@ -683,8 +692,9 @@ fn a_detonation_starts_the_same_plume_on_every_ig() {
         assert_eq!(counters.bad_pdus, 1);
         (w.effects().puff_states(), w.effects().stats().active)
     };
+    // Two IGs that get the PDU at different times (network delay) draw the same puffs.
     let (a, active) = run(10);
-    let (b, _) = run(10);
+    let (b, _) = run(40);
     assert!(active > 0, "the impact emits puffs");
     assert_eq!(a, b, "the same event gives the same puffs");
 }
@@ -737,4 +747,159 @@ fn smoke_processes_and_lightning_reach_the_other_ig() {
     assert_eq!(strikes[0].seed, 99);
     // After the source's 4 s and the last update, B's copy stops emitting; its puffs age out.
     assert!(b.effects().stats().spawned_total > 0);
+}
+
+#[test]
+fn reset_brings_back_the_scenario_destroy_takes_children_and_groups_move_together() {
+    let mut q = query();
+    let scenario = format!(
+        "[[entities]]\nid = 5\nmodel = \"tank\"\nlat_deg = {}\nlon_deg = {}\n",
+        lat_of_row(20.0),
+        lon_of_col(20.0)
+    );
+    let mut w = world(&scenario);
+    let (lat, lon) = (lat_of_row(30.0), lon_of_col(30.0));
+    let attached = |id, parent| {
+        Packet::EntityControl(EntityControl {
+            entity_id: id,
+            entity_state: 1,
+            attach: true,
+            parent_id: parent,
+            lat_deg_or_x_m: 5.0,
+            ..EntityControl::default()
+        })
+    };
+    let definition = |view_id, group_id| {
+        Packet::ViewDefinition(ViewDefinition {
+            view_id,
+            group_id,
+            ..ViewDefinition::default()
+        })
+    };
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        1,
+        vec![
+            entity_3(1, lat, lon, 300.0, 0.0),
+            attached(2, 1),
+            attached(3, 2),
+            entity_3(4, lat, lon, 300.0, 0.0),
+            definition(1, 7),
+            definition(2, 7),
+            definition(3, 0),
+            Packet::ViewControl(ViewControl {
+                group_id: 7,
+                entity_id: 4,
+                yaw_enable: true,
+                yaw_deg: 90.0,
+                ..ViewControl::default()
+            }),
+        ],
+    );
+    frame(&mut w, &mut q);
+    let views = w.session().views();
+    assert_eq!(
+        (
+            views[&1].entity_id,
+            views[&2].entity_id,
+            views[&3].entity_id
+        ),
+        (4, 4, 0)
+    );
+    assert_eq!(views[&2].orientation.heading_deg, 90.0);
+    // Destroying entity 1 takes 2 and 3 (attached to it) with it.
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        2,
+        vec![Packet::EntityControl(EntityControl {
+            entity_id: 1,
+            entity_state: 2,
+            ..EntityControl::default()
+        })],
+    );
+    frame(&mut w, &mut q);
+    assert_eq!(
+        w.session().entities().keys().copied().collect::<Vec<_>>(),
+        vec![4, 5]
+    );
+    // A reset keeps the scenario's entity.
+    send(&mut w, Version::V3_3, ByteOrder::LittleEndian, 3, vec![]);
+    let mut bytes = Vec::new();
+    encode_message(
+        &Message::new(
+            Version::V3_3,
+            ByteOrder::LittleEndian,
+            vec![Packet::IgControl(IgControl {
+                ig_mode: 0,
+                host_frame_number: 4,
+                ..IgControl::default()
+            })],
+        ),
+        &mut bytes,
+    )
+    .expect("encode");
+    w.receive_cigi(&bytes).expect("reset");
+    frame(&mut w, &mut q);
+    assert_eq!(
+        w.session().entities().keys().copied().collect::<Vec<_>>(),
+        vec![5]
+    );
+}
+
+#[test]
+fn a_vector_from_an_entity_is_aimed_in_its_body_axes() {
+    let mut q = query();
+    let mut w = world("");
+    // An entity west of the ridge, facing east (yaw 90), 120 m up: a level vector dead ahead
+    // (azimuth 0 in its body axes) hits the ridge; the same vector from a north-facing entity
+    // runs along the plain and misses.
+    let lat = lat_of_row(64.0);
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        1,
+        vec![
+            entity_3(1, lat, lon_of_col(40.0), 120.0, 90.0),
+            entity_3(2, lat, lon_of_col(40.0), 120.0, 0.0),
+        ],
+    );
+    frame(&mut w, &mut q);
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        2,
+        vec![
+            Packet::LosVectorRequest(cig_cigi::LosVectorRequest {
+                los_id: 1,
+                source_coordinate_entity: true,
+                entity_id: 1,
+                max_range_m: 1500.0,
+                ..cig_cigi::LosVectorRequest::default()
+            }),
+            Packet::LosVectorRequest(cig_cigi::LosVectorRequest {
+                los_id: 2,
+                source_coordinate_entity: true,
+                entity_id: 2,
+                max_range_m: 1500.0,
+                ..cig_cigi::LosVectorRequest::default()
+            }),
+        ],
+    );
+    let reply = frame(&mut w, &mut q);
+    let visible: std::collections::BTreeMap<u16, bool> = reply
+        .packets
+        .iter()
+        .filter_map(|p| match p {
+            Packet::LosResponse(r) if r.valid => Some((r.los_id, r.visible)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(visible.get(&1), Some(&false), "{:?}", reply.packets);
+    assert_eq!(visible.get(&2), Some(&true), "{:?}", reply.packets);
 }

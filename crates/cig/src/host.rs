@@ -223,8 +223,12 @@ fn entity_at(e: &HostEntity, t_s: f64) -> (f64, f64, f64) {
         let d = w[1] - w[0];
         let len = d.truncate().length();
         let heading = d.x.atan2(d.y).to_degrees().rem_euclid(360.0);
-        if s <= len || len == 0.0 {
-            let p = w[0] + d * (s / len.max(1e-9)).min(1.0);
+        if len == 0.0 {
+            // A repeated point: on to the next segment.
+            continue;
+        }
+        if s <= len {
+            let p = w[0] + d * (s / len).min(1.0);
             let g = frame.enu_to_geodetic(glam::DVec3::new(p.x, p.y, 0.0));
             return (g.lat_deg, g.lon_deg, heading);
         }
@@ -268,7 +272,7 @@ pub fn run(args: &HostArgs) -> anyhow::Result<()> {
     let mut inbox = Vec::new();
     let mut out = std::io::stdout().lock();
     let frames = args.frames.unwrap_or(script.frames);
-    for frame in 0..frames + args.drain_frames {
+    for frame in 0..frames.saturating_add(args.drain_frames) {
         let tick = started + period * frame;
         if let Some(wait) = tick.checked_duration_since(Instant::now()) {
             std::thread::sleep(wait);
@@ -330,9 +334,18 @@ pub fn run(args: &HostArgs) -> anyhow::Result<()> {
                     other => Some((0, serde_json::json!({"packet": other.name()}))),
                 };
                 if let Some((latency, mut value)) = line {
-                    answers += 1;
-                    latency_sum += u64::from(latency);
-                    latency_max = latency_max.max(latency);
+                    let is_answer = matches!(
+                        p,
+                        Packet::HatHotResponse(_)
+                            | Packet::HatHotExtendedResponse(_)
+                            | Packet::LosResponse(_)
+                            | Packet::LosExtendedResponse(_)
+                    );
+                    if is_answer {
+                        answers += 1;
+                        latency_sum += u64::from(latency);
+                        latency_max = latency_max.max(latency);
+                    }
                     if let Some(obj) = value.as_object_mut() {
                         obj.insert("host_frame".into(), frame.into());
                         obj.insert("ig_frame".into(), last_ig_frame.into());

@@ -183,14 +183,6 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         queue_limit: 256,
         reuse_port: false,
     })?;
-    tracing::info!(
-        "serving {} on CIGI {}{}",
-        args.db.display(),
-        cigi.local_addr(),
-        dis.as_ref()
-            .map(|d| format!(", DIS {}", d.local_addr()))
-            .unwrap_or_default()
-    );
     let mut world = IgWorld::new(
         scenario,
         WorldConfig {
@@ -218,6 +210,14 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
     };
     cache.update(&[eye]);
     cache.wait_idle();
+    tracing::info!(
+        "serving {} on CIGI {}{}",
+        args.db.display(),
+        cigi.local_addr(),
+        dis.as_ref()
+            .map(|d| format!(", DIS {}", d.local_addr()))
+            .unwrap_or_default()
+    );
 
     if !args.headless && !args.no_render {
         return run_windowed(args, cache, world, query, cigi, dis, fallback, models);
@@ -360,13 +360,15 @@ impl LoopState {
         match encode_message(&message, &mut bytes) {
             Ok(()) => {
                 let sent = match (cigi.destination(), self.reply_to) {
-                    (Some(_), _) => cigi.send(&bytes),
-                    (None, Some(to)) => cigi.send_to(&bytes, to),
-                    (None, None) => Ok(()),
+                    (Some(_), _) => Some(cigi.send(&bytes)),
+                    (None, Some(to)) => Some(cigi.send_to(&bytes, to)),
+                    // No host yet: nobody to tell.
+                    (None, None) => None,
                 };
                 match sent {
-                    Ok(()) => totals.messages_sent += 1,
-                    Err(e) => {
+                    None => {}
+                    Some(Ok(())) => totals.messages_sent += 1,
+                    Some(Err(e)) => {
                         self.bad_cigi.note(now, "send", &e.to_string());
                     }
                 }

@@ -19,8 +19,30 @@ fn free_udp_port() -> u16 {
         .expect("a free port")
 }
 
+/// A running `cig serve` and what it has written to stderr so far.
+struct Serving {
+    child: Child,
+    stderr: std::sync::Arc<std::sync::Mutex<String>>,
+}
+
+impl Serving {
+    fn kill(mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+
+    /// Waits for the end; (status, stdout, stderr).
+    fn finish(self) -> (std::process::ExitStatus, Vec<u8>, String) {
+        let out = self.child.wait_with_output().expect("serve ends");
+        // Give the reader thread a moment to take the last lines.
+        std::thread::sleep(Duration::from_millis(100));
+        let stderr = self.stderr.lock().map(|s| s.clone()).unwrap_or_default();
+        (out.status, out.stdout, stderr)
+    }
+}
+
 /// Starts `cig serve` with `-v` and waits until it says it is serving.
-fn start_serve(args: &[String]) -> Child {
+fn start_serve(args: &[String]) -> Serving {
     let mut child = Command::new(assert_cmd::cargo::cargo_bin("cig"))
         .arg("-v")
         .arg("serve")
@@ -32,9 +54,15 @@ fn start_serve(args: &[String]) -> Child {
         .expect("cig serve starts");
     let stderr = child.stderr.take().expect("stderr");
     let (tx, rx) = std::sync::mpsc::channel();
+    let log = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+    let sink = std::sync::Arc::clone(&log);
     std::thread::spawn(move || {
         let mut ready = Some(tx);
         for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if let Ok(mut all) = sink.lock() {
+                all.push_str(&line);
+                all.push('\n');
+            }
             if line.contains("serving") {
                 if let Some(tx) = ready.take() {
                     let _ = tx.send(());
@@ -44,7 +72,7 @@ fn start_serve(args: &[String]) -> Child {
     });
     rx.recv_timeout(Duration::from_secs(60))
         .expect("cig serve says it is serving within a minute");
-    child
+    Serving { child, stderr: log }
 }
 
 fn query_height_msl(db: &Path, lat: f64, lon: f64) -> f64 {
@@ -74,7 +102,7 @@ fn a_scripted_host_gets_answers_that_match_the_database_in_both_versions() {
     for (version, order) in [("3.3", "little"), ("4.0", "big")] {
         let ig_port = free_udp_port();
         let host_port = free_udp_port();
-        let mut serve = start_serve(&[
+        let serve = start_serve(&[
             "--db".into(),
             db.display().to_string(),
             "--no-render".into(),
@@ -110,8 +138,7 @@ fn a_scripted_host_gets_answers_that_match_the_database_in_both_versions() {
             .timeout(Duration::from_secs(120))
             .output()
             .expect("cig host");
-        let _ = serve.kill();
-        let _ = serve.wait();
+        serve.kill();
         assert!(
             out.status.success(),
             "cig host: {}",
@@ -156,7 +183,7 @@ fn a_scripted_host_gets_answers_that_match_the_database_in_both_versions() {
             .filter(|a| a["packet"] == "hat_hot" && a["id"] == 100)
             .filter_map(|a| a["height_m"].as_f64())
             .collect();
-        assert!(below.len() >= 30);
+        assert!(below.len() >= 20);
         assert!(below.iter().all(|h| (h - 2.0).abs() < 1e-3), "{below:?}");
         // The high sightline sees over everything.
         let los: Vec<&Value> = answers
@@ -229,19 +256,20 @@ fn garbage_on_the_cigi_port_is_counted_and_the_ig_keeps_serving() {
         "Start of Frame first: {:?}",
         &buf[..n.min(8)]
     );
-    let out = serve.wait_with_output().expect("serve ends");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let summary: Value = serde_json::from_slice(&out.stdout).expect("json summary");
+    let (status, stdout, stderr) = serve.finish();
+    assert!(status.success(), "{stderr}");
+    let summary: Value = serde_json::from_slice(&stdout).expect("json summary");
     assert_eq!(summary["frames"], 90);
     assert_eq!(summary["cigi"]["bad_datagrams"], 5, "{summary}");
     assert_eq!(summary["last_host_frame_number"], 7, "{summary}");
     assert!(started.elapsed() < Duration::from_secs(60));
-    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
+    // Bad datagrams are logged, at most once a second per sender.
+    let warnings = stderr
+        .lines()
+        .filter(|l| l.contains("dropped a datagram"))
+        .count();
+    assert!((1..=3).contains(&warnings), "{stderr}");
 }
 
 #[test]
@@ -429,7 +457,7 @@ fn serve_publishes_its_scenario_entities_and_draws_remote_ones_over_dis() {
         "--cigi-port".into(),
         free_udp_port().to_string(),
         "--frames".into(),
-        "150".into(),
+        "600".into(),
         "--json".into(),
     ]);
     // A ship of another simulator, sent to the IG's DIS port.
@@ -464,13 +492,9 @@ fn serve_publishes_its_scenario_entities_and_draws_remote_ones_over_dis() {
         .timeout(Duration::from_secs(60))
         .assert()
         .success();
-    let out = serve.wait_with_output().expect("serve ends");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let summary: Value = serde_json::from_slice(&out.stdout).expect("json");
+    let (status, stdout, stderr) = serve.finish();
+    assert!(status.success(), "{stderr}");
+    let summary: Value = serde_json::from_slice(&stdout).expect("json");
     let dis = &summary["dis"];
     assert_eq!(dis["remote_entities"], 1, "{summary}");
     assert!(
