@@ -13,8 +13,17 @@
 //!    answers to the requests received in step 1;
 //! 4. [`IgWorld::snapshot`] is what the renderer draws.
 //!
+//! Time: scripted entities move on their own forward-only time (elapsed seconds × the clock's
+//! rate), so a time of day set by the host or the exercise does not make them jump. Effects run
+//! on the shared world time; when it goes back (a host or master sets an earlier time) the
+//! effect system starts over from the new time (scenario smoke restarts, other effects start
+//! again with their next event). The DIS velocity of an owned entity is its script's, else the
+//! difference of positions at least 0.2 s apart.
+//!
 //! Limits: scripted entities follow straight segments at constant speed; a host entity with
-//! the same ID as a scripted one takes it over for good (it stops following its script).
+//! the same ID as a scripted one takes it over for good (it stops following its script); effect
+//! time is world time since 2020-01-01 and the effect system accepts ±1e9 s of it, so worlds
+//! before 1988 or after 2051 cannot be built.
 
 use crate::exercise::{Exercise, OwnedProcess, OwnedTruth, EFFECT_EPOCH_UNIX_S};
 use crate::model_table::{CigiEntityType, ModelTable};
