@@ -12,10 +12,6 @@ mod demo;
 mod dis;
 mod ephem;
 mod flight;
-#[allow(
-    dead_code,
-    reason = "the network edge's API is shared with `cig serve`, which uses the parts the tools do not"
-)]
 mod net;
 mod output;
 mod plume;
