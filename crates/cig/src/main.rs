@@ -13,10 +13,6 @@ mod dis;
 mod ephem;
 mod flight;
 mod host;
-#[allow(
-    dead_code,
-    reason = "the network edge's API is shared by `cig serve`, `cig host` and `cig dis`; each uses a part"
-)]
 mod net;
 mod output;
 mod plume;

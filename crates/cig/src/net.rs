@@ -128,6 +128,11 @@ impl BindTarget {
                 address: IpAddr::V4(Ipv4Addr::UNSPECIFIED),
                 broadcast: Some(Ipv4Addr::BROADCAST),
             }),
+            BindTarget::Address(address) if address.is_unspecified() => Ok(InterfaceAddress {
+                // 0.0.0.0 or :: typed out: every interface, as `any`.
+                address: *address,
+                broadcast: address.is_ipv4().then_some(Ipv4Addr::BROADCAST),
+            }),
             BindTarget::Address(address) => {
                 let listed = interface_addresses()?
                     .into_iter()

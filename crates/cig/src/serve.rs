@@ -104,6 +104,9 @@ struct Totals {
     overframes: u64,
     frame_ms_sum: f64,
     frame_ms_max: f64,
+    /// Problems noted on the sockets (bad datagrams, failed sends) and warning lines logged.
+    problems_noted: u64,
+    warnings_logged: u64,
 }
 
 pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
@@ -382,6 +385,8 @@ impl LoopState {
                 }
             }
         }
+        totals.problems_noted = self.bad_cigi.count();
+        totals.warnings_logged = self.bad_cigi.lines_logged();
         world.snapshot(width_px, height_px, fallback)
     }
 }
@@ -490,6 +495,8 @@ fn report(
             "environment_answered": c.environment_answered,
             "collisions_reported": c.collisions_reported,
             "queue_dropped": cigi.stats().dropped_queue_full,
+            "problems_noted": totals.problems_noted,
+            "warnings_logged": totals.warnings_logged,
             "entities": world.session().entities().len(),
             "address": cigi.local_addr().to_string(),
         },

@@ -21,8 +21,13 @@ struct Listener {
 
 impl Listener {
     fn start(extra: &[&str]) -> Listener {
+        Listener::start_on(0, extra)
+    }
+
+    fn start_on(port: u16, extra: &[&str]) -> Listener {
         let mut child = Command::new(assert_cmd::cargo::cargo_bin("cig"))
-            .args(["-v", "dis", "listen", "--port", "0", "--timeout-s", "30"])
+            .args(["-v", "dis", "listen", "--timeout-s", "30", "--port"])
+            .arg(port.to_string())
             .args(extra)
             .env_remove("CIG_LOG")
             .stdout(Stdio::piped())
@@ -153,6 +158,33 @@ fn send_and_listen_round_trip_in_json() {
     assert_eq!(p["effects"]["dust"], "small");
     assert_eq!(p["dead_reckoning"]["algorithm"], 2);
     assert_eq!(p["dead_reckoning"]["name"], "FPW");
+}
+
+/// Two IGs on one machine share the DIS port: a broadcast (or multicast) Entity State reaches
+/// both listeners.
+#[test]
+fn broadcast_and_multicast_reach_every_listener_sharing_the_port() {
+    for mode in [vec!["--broadcast"], vec!["--multicast", "239.7.7.7"]] {
+        let mut extra = vec!["--json", "--count", "1"];
+        extra.extend(&mode);
+        let first = Listener::start(&extra);
+        let second = Listener::start_on(first.port, &extra);
+        assert_eq!(first.port, second.port);
+        let sent = cig().args(send_args(first.port)).args(&mode).assert();
+        if !sent.get_output().status.success() {
+            eprintln!(
+                "SKIPPED {mode:?}: the kernel refuses it on the loopback: {}",
+                String::from_utf8_lossy(&sent.get_output().stderr)
+            );
+            continue;
+        }
+        for listener in [first, second] {
+            let (lines, ok) = listener.finish();
+            assert!(ok, "{mode:?}: {lines:?}");
+            let v = json_lines(&lines);
+            assert_eq!(v[0]["entity_id"], "11:22:33", "{mode:?}");
+        }
+    }
 }
 
 #[test]

@@ -261,6 +261,7 @@ fn garbage_on_the_cigi_port_is_counted_and_the_ig_keeps_serving() {
     let summary: Value = serde_json::from_slice(&stdout).expect("json summary");
     assert_eq!(summary["frames"], 90);
     assert_eq!(summary["cigi"]["bad_datagrams"], 5, "{summary}");
+    assert_eq!(summary["cigi"]["problems_noted"], 5, "{summary}");
     assert_eq!(summary["last_host_frame_number"], 7, "{summary}");
     assert!(started.elapsed() < Duration::from_secs(60));
     assert!(!stderr.contains("panicked"), "{stderr}");
