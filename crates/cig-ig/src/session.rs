@@ -32,6 +32,11 @@
 //!   database's query service, the surface the renderer draws at full detail.
 //! - User-defined packets: kept for the caller (`take_user_packets`).
 //!
+//! Line of sight also sees the obscurants: the smoke, flame and dust on the clear part of the
+//! line are a translucent surface of alpha 255·(1 − T), T the Beer–Lambert transmittance
+//! through the puffs (thesis 000 Eq 1-4), which stops the line when it reaches the request's
+//! alpha threshold.
+//!
 //! Limits: line-of-sight and collision segments test the terrain only (not entity geometry);
 //! collision volumes test other entities' volumes as bounding spheres; sensor tracking is not
 //! simulated (a sensor in a track mode reports "searching"); motion trackers and trajectory
@@ -56,6 +61,7 @@ use cig_cigi::{
     TerrestrialSurfaceConditionsResponse, UserDefined, Version, ViewControl, ViewDefinition,
     WaveControl, WeatherConditionsResponse, WeatherControl,
 };
+use cig_effects::EffectSystem;
 use cig_environment::UtcTime;
 use cig_geo::Geodetic;
 use cig_scene::snapshot::Clamp;
@@ -352,6 +358,19 @@ pub struct SessionCounters {
     pub collisions_reported: u64,
     pub answers_deferred: u64,
     pub answers_dropped: u64,
+    pub los_obscured: u64,
+}
+
+/// One line-of-sight request to answer.
+struct LosJob {
+    los_id: u16,
+    extended: bool,
+    entity_relative: bool,
+    entity_id: u16,
+    lsn: u8,
+    segment: Option<(Geodetic, Geodetic)>,
+    range_offset_m: f64,
+    alpha_threshold: u8,
 }
 
 /// Configuration of a session.
@@ -1222,7 +1241,13 @@ impl IgSession {
     /// Ends the IG frame: Start of Frame, then the answers to every request due, collision
     /// notifications, sensor responses and IG messages, in the host's version and byte order.
     /// `timestamp_10us` is the IG's clock in 10 µs ticks (wrapping). Resolve poses first.
-    pub fn end_frame(&mut self, query: &mut QuerySession, timestamp_10us: u32) -> Message {
+    /// `obscurants`: the smoke, flame and dust line-of-sight answers see through (or not).
+    pub fn end_frame(
+        &mut self,
+        query: &mut QuerySession,
+        obscurants: Option<&EffectSystem>,
+        timestamp_10us: u32,
+    ) -> Message {
         self.ig_frame_number = self.ig_frame_number.wrapping_add(1);
         let (version, byte_order) = self
             .host_format
@@ -1249,7 +1274,7 @@ impl IgSession {
         })];
         let mut answers: Vec<Packet> = self.deferred.drain(..).collect();
         self.answer_hat_hot(query, &mut answers);
-        self.answer_los(query, &mut answers);
+        self.answer_los(query, obscurants, &mut answers);
         self.answer_positions(query, &mut answers);
         self.answer_environment(&mut answers);
         self.detect_collisions(query, &mut answers);
@@ -1321,7 +1346,12 @@ impl IgSession {
         }
     }
 
-    fn answer_los(&mut self, query: &mut QuerySession, out: &mut Vec<Packet>) {
+    fn answer_los(
+        &mut self,
+        query: &mut QuerySession,
+        obscurants: Option<&EffectSystem>,
+        out: &mut Vec<Packet>,
+    ) {
         let lsn_now = self.host_frame_lsn();
         let mut jobs = Vec::new();
         for (r, lsn) in due(&mut self.los_segment, lsn_now) {
@@ -1349,15 +1379,16 @@ impl IgSession {
                 ],
                 query,
             );
-            jobs.push((
-                r.los_id,
-                r.request_type_extended,
-                r.response_coordinate_entity,
-                r.entity_id,
+            jobs.push(LosJob {
+                los_id: r.los_id,
+                extended: r.request_type_extended,
+                entity_relative: r.response_coordinate_entity,
+                entity_id: r.entity_id,
                 lsn,
-                from.zip(to),
-                0.0,
-            ));
+                segment: from.zip(to),
+                range_offset_m: 0.0,
+                alpha_threshold: r.alpha_threshold,
+            });
         }
         for (r, lsn) in due(&mut self.los_vector, lsn_now) {
             let from = self.request_point(
@@ -1403,21 +1434,48 @@ impl IgSession {
                     displaced(source, d * f64::from(r.max_range_m)),
                 )
             });
-            jobs.push((
-                r.los_id,
-                r.request_type_extended,
-                r.response_coordinate_entity,
-                r.entity_id,
+            jobs.push(LosJob {
+                los_id: r.los_id,
+                extended: r.request_type_extended,
+                entity_relative: r.response_coordinate_entity,
+                entity_id: r.entity_id,
                 lsn,
                 segment,
-                f64::from(r.min_range_m),
-            ));
+                range_offset_m: f64::from(r.min_range_m),
+                alpha_threshold: r.alpha_threshold,
+            });
         }
-        for (los_id, extended, entity_relative, entity_id, lsn, segment, range_offset_m) in jobs {
+        for job in jobs {
+            let LosJob {
+                los_id,
+                extended,
+                entity_relative,
+                entity_id,
+                lsn,
+                segment,
+                range_offset_m,
+                alpha_threshold,
+            } = job;
             self.counters.los_answered += 1;
             let result = segment.and_then(|(a, b)| query.los(a, b).ok());
             let hit = result.and_then(|r| r.hit);
-            let visible = result.is_some_and(|r| r.visible);
+            let mut visible = result.is_some_and(|r| r.visible);
+            // Smoke, flame and dust on the clear part of the line are a translucent surface of
+            // opacity 1 - T (T = exp(-optical depth)): as alpha, it stops the line when it
+            // reaches the request's alpha threshold (ICD 3.3: surfaces below it are ignored).
+            let obscurant_alpha = match (obscurants, segment) {
+                (Some(effects), Some((a, b))) if result.is_some() => {
+                    let end = hit.map_or(b, |h| h.point);
+                    let t = effects.transmittance_ecef(a.to_ecef(), end.to_ecef());
+                    (255.0 * (1.0 - t.transmittance)).round().clamp(0.0, 255.0) as u8
+                }
+                _ => 0,
+            };
+            let obscured = visible && obscurant_alpha > 0 && obscurant_alpha >= alpha_threshold;
+            if obscured {
+                visible = false;
+                self.counters.los_obscured += 1;
+            }
             if extended {
                 let mut response = LosExtendedResponse {
                     los_id,
@@ -1425,6 +1483,7 @@ impl IgSession {
                     visible,
                     host_frame_lsn: lsn,
                     response_count: 1,
+                    alpha: if obscured { obscurant_alpha } else { 0 },
                     ..LosExtendedResponse::default()
                 };
                 if let Some(h) = hit {

@@ -597,7 +597,8 @@ impl IgWorld {
 
     /// The frame's message to the host (Start of Frame and answers).
     pub fn host_message(&mut self, query: &mut QuerySession, timestamp_10us: u32) -> Message {
-        self.session.end_frame(query, timestamp_10us)
+        self.session
+            .end_frame(query, Some(&self.effects), timestamp_10us)
     }
 
     /// DIS PDUs to send, one datagram each.

@@ -903,3 +903,73 @@ fn a_vector_from_an_entity_is_aimed_in_its_body_axes() {
     assert_eq!(visible.get(&1), Some(&false), "{:?}", reply.packets);
     assert_eq!(visible.get(&2), Some(&true), "{:?}", reply.packets);
 }
+
+#[test]
+fn smoke_on_a_clear_line_of_sight_stops_it_at_the_requests_alpha_threshold() {
+    let mut q = query();
+    let (lat, lon) = (lat_of_row(60.0), lon_of_col(20.0));
+    let scenario = format!(
+        "start_time = \"2026-06-21T12:00:00Z\"\n[[smoke]]\nid = 1\nlat_deg = {lat}\nlon_deg = {lon}\nheat_release_w = 2e6\n"
+    );
+    let mut w = world(&scenario);
+    for _ in 0..60 * 90 {
+        w.step(1.0 / 60.0, &mut q);
+    }
+    // Along the plume's axis (the wind blows from the west), 30 m above the plain.
+    let ground_msl = q.hot(lat, lon).expect("hot").height_msl_m;
+    let from = (lat, lon_of_col(13.0), ground_msl + 30.0);
+    let to = (lat, lon_of_col(34.0), ground_msl + 30.0);
+    let geoid = f64::from(GEOID_M);
+    let t = w
+        .effects()
+        .transmittance(
+            Geodetic::new(from.0, from.1, from.2 + geoid),
+            Geodetic::new(to.0, to.1, to.2 + geoid),
+        )
+        .expect("transmittance");
+    let alpha = (255.0 * (1.0 - t.transmittance)).round() as u8;
+    assert!(
+        alpha > 50 && alpha < 255,
+        "the test line crosses the plume: T = {t:?}"
+    );
+    let los = |id, threshold| {
+        Packet::LosSegmentRequest(LosSegmentRequest {
+            los_id: id,
+            request_type_extended: true,
+            alpha_threshold: threshold,
+            source_lat_deg_or_x_m: from.0,
+            source_lon_deg_or_y_m: from.1,
+            source_alt_m_or_z_m: from.2,
+            destination_lat_deg_or_x_m: to.0,
+            destination_lon_deg_or_y_m: to.1,
+            destination_alt_m_or_z_m: to.2,
+            ..LosSegmentRequest::default()
+        })
+    };
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        1,
+        vec![los(1, alpha), los(2, alpha + 1)],
+    );
+    let reply = frame(&mut w, &mut q);
+    let answers: std::collections::BTreeMap<u16, (bool, u8)> = reply
+        .packets
+        .iter()
+        .filter_map(|p| match p {
+            Packet::LosExtendedResponse(r) if r.valid => Some((r.los_id, (r.visible, r.alpha))),
+            _ => None,
+        })
+        .collect();
+    // One frame later the plume has moved a little: allow the alpha to differ by a few.
+    let (visible, got_alpha) = answers[&1];
+    assert!(
+        !visible && got_alpha.abs_diff(alpha) <= 3,
+        "{answers:?} vs {alpha}"
+    );
+    assert!(
+        answers[&2].0 || answers[&2].1 > alpha,
+        "{answers:?} vs {alpha}"
+    );
+}
