@@ -769,14 +769,20 @@ impl RateLimitedLog {
 
     /// Bad datagrams noted so far.
     #[must_use]
-    #[allow(dead_code, reason = "for the IG's statistics (`cig serve`) and the tests")]
+    #[allow(
+        dead_code,
+        reason = "for the IG's statistics (`cig serve`) and the tests"
+    )]
     pub fn count(&self) -> u64 {
         self.total
     }
 
     /// Lines logged so far.
     #[must_use]
-    #[allow(dead_code, reason = "for the IG's statistics (`cig serve`) and the tests")]
+    #[allow(
+        dead_code,
+        reason = "for the IG's statistics (`cig serve`) and the tests"
+    )]
     pub fn lines_logged(&self) -> u64 {
         self.logged
     }
