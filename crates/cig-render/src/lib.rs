@@ -1,5 +1,5 @@
 //! The wgpu renderer of cig: round-earth terrain with continuous level of detail, entity
-//! models, sky and fog, for off-screen frames and windows alike.
+//! models, sky and fog, obscurant puffs (smoke, flame, dust), for off-screen frames and windows alike.
 //!
 //! The renderer owns every GPU resource; the world reaches it as plain data (a
 //! [`cig_scene::FrameSnapshot`] and the terrain [`cig_terrain::TileCache`]). Any wgpu backend
@@ -8,6 +8,7 @@
 pub mod gltf_model;
 pub mod gpu;
 pub mod offscreen;
+pub mod puffs;
 pub mod renderer;
 pub mod terrain;
 pub mod viewer;

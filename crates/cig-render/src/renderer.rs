@@ -6,12 +6,15 @@
 //! the sky as a full-screen triangle, then every node (one indexed draw each, sharing one vertex
 //! pool, index buffer and bind group), then entity models. Depth is reversed (1 at the near
 //! plane, 0 at infinity) in a 32-bit float buffer with a `Greater` test; colour is rendered
-//! with 4x multisampling and resolved (the edge smoothing of source 001).
+//! with 4x multisampling and resolved (the edge smoothing of source 001). When the snapshot
+//! has obscurant puffs in view, the depth samples are kept and two more passes accumulate the
+//! puffs and composite them onto the resolved frame ([`crate::puffs`]).
 //!
-//! Limits: one pass per view, no shadows; the sky is a gradient until the environment's
+//! Limits: one scene pass per view, no shadows; the sky is a gradient until the environment's
 //! atmosphere lands.
 
 use crate::gpu::{Gpu, RenderError};
+use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainGpu};
 use cig_geo::Geodetic;
 use cig_scene::lighting::{FogMode, Lighting};
@@ -41,15 +44,20 @@ pub mod serde_like {
         pub node_stand_ins: u32,
         pub nodes_dropped: u32,
         pub entities_drawn: u32,
+        /// Obscurant puffs drawn (after culling to the view).
+        pub puffs_drawn: u32,
         pub tiles_resident: u32,
         pub tiles_wanted: u32,
         /// CPU time of level-of-detail selection and culling, milliseconds.
         pub cpu_select_ms: f64,
         /// CPU time of the whole frame (selection, meshes, encoding, submission).
         pub cpu_frame_ms: f64,
-        /// GPU time of the render pass (timestamp queries) or, when the device has none, the
-        /// time from submission to completion.
+        /// GPU time of the frame's passes (timestamp queries: the scene pass and, when puffs
+        /// are drawn, the puff passes) or, when the device has none, the time from submission
+        /// to completion.
         pub gpu_ms: f64,
+        /// GPU time of the puff passes (timestamp queries; 0 without them or without puffs).
+        pub puff_gpu_ms: f64,
         pub gpu_timed_by: &'static str,
     }
 }
@@ -135,11 +143,13 @@ pub struct Renderer {
     /// When each drawn node of each view first appeared, and the frame it was last drawn.
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
+    puffs: PuffPass,
+    /// Queries: 0 the frame's start, 1 its end, 2 the start of the puff passes.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: u64,
 }
 
-fn shader(gpu: &Gpu, label: &str, body: &str) -> wgpu::ShaderModule {
+pub(crate) fn shader(gpu: &Gpu, label: &str, body: &str) -> wgpu::ShaderModule {
     let source = format!("{}\n{}", include_str!("shaders/common.wgsl"), body);
     gpu.device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -148,7 +158,7 @@ fn shader(gpu: &Gpu, label: &str, body: &str) -> wgpu::ShaderModule {
         })
 }
 
-fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+pub(crate) fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
@@ -465,22 +475,23 @@ impl Renderer {
                 device.create_query_set(&wgpu::QuerySetDescriptor {
                     label: Some("frame time"),
                     ty: wgpu::QueryType::Timestamp,
-                    count: 2,
+                    count: 3,
                 }),
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("timestamps"),
-                    size: 16,
+                    size: 24,
                     usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 }),
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("timestamps readback"),
-                    size: 16,
+                    size: 24,
                     usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
             )
         });
+        let puffs = PuffPass::new(&gpu, colour_format);
         let mut renderer = Renderer {
             model_vertices: empty("model vertices", wgpu::BufferUsages::VERTEX),
             model_indices: empty("model indices", wgpu::BufferUsages::INDEX),
@@ -502,6 +513,7 @@ impl Renderer {
             model_lod_memory: HashMap::new(),
             node_first_seen: HashMap::new(),
             targets: None,
+            puffs,
             timestamps,
             frame: 0,
         };
@@ -580,7 +592,7 @@ impl Renderer {
     fn targets(&mut self, size: (u32, u32)) {
         if self.targets.as_ref().map(|t| t.size) != Some(size) {
             let device = &self.gpu.device;
-            let make = |label, format| {
+            let make = |label, format, usage| {
                 device
                     .create_texture(&wgpu::TextureDescriptor {
                         label: Some(label),
@@ -593,16 +605,24 @@ impl Renderer {
                         sample_count: MSAA_SAMPLES,
                         dimension: wgpu::TextureDimension::D2,
                         format,
-                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
                         view_formats: &[],
                     })
                     .create_view(&Default::default())
             };
-            self.targets = Some(Targets {
+            let targets = Targets {
                 size,
-                msaa_colour: make("msaa colour", self.colour_format),
-                depth: make("depth", DEPTH_FORMAT),
-            });
+                msaa_colour: make(
+                    "msaa colour",
+                    self.colour_format,
+                    wgpu::TextureUsages::empty(),
+                ),
+                // The puff pass reads the depth samples.
+                depth: make("depth", DEPTH_FORMAT, wgpu::TextureUsages::TEXTURE_BINDING),
+            };
+            self.puffs
+                .resize(&self.gpu, size, &targets.depth, &self.globals);
+            self.targets = Some(targets);
         }
     }
 
@@ -690,6 +710,7 @@ impl Renderer {
             );
         }
 
+        let puff_count = self.puffs.prepare(&self.gpu, &camera, snapshot);
         let size = (view.width_px, view.height_px);
         let mut encoder = self
             .gpu
@@ -717,7 +738,8 @@ impl Renderer {
                     .map(|(set, _, _)| wgpu::RenderPassTimestampWrites {
                         query_set: set,
                         beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
+                        // With puffs, the frame ends after their passes.
+                        end_of_pass_write_index: (puff_count == 0).then_some(1),
                     });
             let terrain_pipeline = if wire {
                 self.terrain_wire_pipeline
@@ -744,7 +766,12 @@ impl Renderer {
                     view: &targets.depth,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(0.0),
-                        store: wgpu::StoreOp::Discard,
+                        // Kept for the puff pass, which reads it.
+                        store: if puff_count > 0 {
+                            wgpu::StoreOp::Store
+                        } else {
+                            wgpu::StoreOp::Discard
+                        },
                     }),
                     stencil_ops: None,
                 }),
@@ -789,9 +816,19 @@ impl Renderer {
                 stats.entities_drawn = draws.len() as u32;
             }
         }
+        if puff_count > 0 {
+            stats.draw_calls += self.puffs.encode(
+                &mut encoder,
+                target,
+                puff_count,
+                self.timestamps.as_ref().map(|(set, _, _)| (set, 2, 1)),
+            );
+            stats.puffs_drawn = puff_count as u32;
+        }
+        let queries = if puff_count > 0 { 3 } else { 2 };
         if let Some((set, resolve, readback)) = &self.timestamps {
-            encoder.resolve_query_set(set, 0..2, resolve, 0);
-            encoder.copy_buffer_to_buffer(resolve, 0, readback, 0, 16);
+            encoder.resolve_query_set(set, 0..queries, resolve, 0);
+            encoder.copy_buffer_to_buffer(resolve, 0, readback, 0, u64::from(queries) * 8);
         }
         stats.triangles = stats.terrain_triangles + stats.model_triangles;
         let submit_started = std::time::Instant::now();
@@ -802,25 +839,37 @@ impl Renderer {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| RenderError::Gpu(e.to_string()))?;
         let wall_gpu_ms = submit_started.elapsed().as_secs_f64() * 1e3;
-        (stats.gpu_ms, stats.gpu_timed_by) = match self.read_timestamps() {
-            Some(ms) => (ms, "timestamp_query"),
-            None => (wall_gpu_ms, "submit_to_completion"),
-        };
+        (stats.gpu_ms, stats.puff_gpu_ms, stats.gpu_timed_by) =
+            match self.read_timestamps(puff_count > 0) {
+                Some((frame_ms, puff_ms)) => (frame_ms, puff_ms, "timestamp_query"),
+                None => (wall_gpu_ms, 0.0, "submit_to_completion"),
+            };
         Ok(stats)
     }
 
-    fn read_timestamps(&self) -> Option<f64> {
+    /// (frame, puff passes) GPU milliseconds from the timestamp queries.
+    fn read_timestamps(&self, with_puffs: bool) -> Option<(f64, f64)> {
         let (_, _, readback) = self.timestamps.as_ref()?;
         let slice = readback.slice(..);
         crate::gpu::map_for_reading(&self.gpu, &slice).ok()?;
-        let ticks: [u64; 2] = {
+        let ticks: [u64; 3] = {
             let data = slice.get_mapped_range().ok()?;
             let v: &[u64] = bytemuck::cast_slice(&data);
-            [v.first().copied()?, v.get(1).copied()?]
+            [
+                v.first().copied()?,
+                v.get(1).copied()?,
+                v.get(2).copied().unwrap_or(0),
+            ]
         };
         readback.unmap();
-        let period_ns = f64::from(self.gpu.queue.get_timestamp_period());
-        Some(ticks[1].saturating_sub(ticks[0]) as f64 * period_ns / 1e6)
+        let period_ms = f64::from(self.gpu.queue.get_timestamp_period()) / 1e6;
+        let frame_ms = ticks[1].saturating_sub(ticks[0]) as f64 * period_ms;
+        let puff_ms = if with_puffs {
+            ticks[1].saturating_sub(ticks[2]) as f64 * period_ms
+        } else {
+            0.0
+        };
+        Some((frame_ms, puff_ms))
     }
 
     fn write_globals(

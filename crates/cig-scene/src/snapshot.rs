@@ -88,6 +88,13 @@ pub struct FrameSnapshot {
     pub max_pixel_error: f64,
     pub wireframe: bool,
     pub entities: Vec<EntityInstance>,
+    /// Obscurant puffs to draw (smoke, flame, dust), positions relative to
+    /// `puff_origin_ecef_m` (fill with `cig_effects::EffectSystem::snapshot(origin, ..)`).
+    /// The renderer re-bases them on each view's eye, the difference taken in f64.
+    pub puffs: Vec<cig_effects::PuffInstance>,
+    /// ECEF point the puff positions are relative to, m (best: near the eyes, so the f32
+    /// offsets stay small).
+    pub puff_origin_ecef_m: glam::DVec3,
 }
 
 impl FrameSnapshot {
@@ -100,6 +107,8 @@ impl FrameSnapshot {
             max_pixel_error: 1.0,
             wireframe: false,
             entities: Vec::new(),
+            puffs: Vec::new(),
+            puff_origin_ecef_m: glam::DVec3::ZERO,
         }
     }
 }

@@ -1,0 +1,143 @@
+// Obscurant puffs: order-independent accumulation of optical depth and in-scattered light
+// (see puffs.rs for the algorithm). `NEAR_PLANE_M` and `SCENE_SAMPLES` are prepended by Rust.
+
+@group(0) @binding(1) var scene_depth: texture_depth_multisampled_2d;
+
+// Billboard radius in the puff's sigmas, and the Gaussian's value there (exp(-2.5^2 / 2)).
+const RADIUS_SIGMAS: f32 = 2.5;
+const EDGE_GAUSS: f32 = 0.043936934;
+// Radiance of fully glowing flame gas, in units of the frame's white.
+const FLAME_RADIANCE: f32 = 2.5;
+// Largest centre optical depth (opacity 0.9999).
+const MAX_TAU: f32 = 9.21;
+
+struct PuffOut {
+    @builtin(position) clip: vec4<f32>,
+    // Eye-relative point on the billboard (or the view ray): the pixel's ray direction.
+    @location(0) ray: vec3<f32>,
+    @location(1) @interpolate(flat) centre_radius: vec4<f32>,
+    // Albedo (the part of the colour that scatters light) and the centre optical depth.
+    @location(2) @interpolate(flat) albedo_tau: vec4<f32>,
+    @location(3) @interpolate(flat) emission: vec4<f32>,
+};
+
+@vertex
+fn vs_main(
+    @builtin(vertex_index) vertex: u32,
+    @location(0) position_radius: vec4<f32>,
+    @location(1) colour_opacity: vec4<f32>,
+    @location(2) emissive_temperature: vec2<f32>,
+) -> PuffOut {
+    var out: PuffOut;
+    let c = position_radius.xyz;
+    let r = position_radius.w;
+    let d2 = dot(c, c);
+    let emissive = clamp(emissive_temperature.x, 0.0, 1.0);
+    out.centre_radius = position_radius;
+    out.albedo_tau = vec4<f32>(
+        colour_opacity.rgb * (1.0 - emissive),
+        min(-log(max(1.0 - colour_opacity.w, 1e-4)), MAX_TAU),
+    );
+    out.emission = vec4<f32>(colour_opacity.rgb * emissive * FLAME_RADIANCE, 0.0);
+    if (d2 < 1.21 * r * r) {
+        // The eye is in (or at the edge of) the puff: a full-screen triangle of view rays.
+        if (vertex >= 3u) {
+            out.clip = vec4<f32>(0.0, 0.0, 0.5, 1.0);
+            out.ray = g.cam_forward.xyz;
+            return out;
+        }
+        let xy = vec2<f32>(f32((vertex << 1u) & 2u), f32(vertex & 2u)) * 2.0 - 1.0;
+        let t = g.tangents;
+        let x_tan = mix(-t.x, t.y, xy.x * 0.5 + 0.5);
+        let y_tan = mix(-t.z, t.w, xy.y * 0.5 + 0.5);
+        out.clip = vec4<f32>(xy, 0.5, 1.0);
+        out.ray = g.cam_forward.xyz + g.cam_right.xyz * x_tan + g.cam_up.xyz * y_tan;
+        return out;
+    }
+    // A square facing the eye through the centre, large enough to hold the sphere's outline.
+    let d = sqrt(d2);
+    let n = c / d;
+    var side = cross(n, g.cam_up.xyz);
+    if (dot(side, side) < 1e-6) {
+        side = cross(n, g.cam_right.xyz);
+    }
+    side = normalize(side);
+    let up = cross(side, n);
+    let half_size = r * d / sqrt(d2 - r * r);
+    let corners = array<vec2<f32>, 6>(
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+    );
+    let k = corners[min(vertex, 5u)];
+    let p = c + (side * k.x + up * k.y) * half_size;
+    out.clip = g.view_proj * vec4<f32>(p, 1.0);
+    out.ray = p;
+    return out;
+}
+
+// erf(x), Abramowitz and Stegun 7.1.26 (absolute error below 1.5e-7).
+fn erf_approx(x: f32) -> f32 {
+    let a = abs(x);
+    let t = 1.0 / (1.0 + 0.3275911 * a);
+    let poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+    let y = 1.0 - poly * exp(-a * a);
+    return select(y, -y, x < 0.0);
+}
+
+struct Accumulated {
+    // rgb: optical depth times in-scattered radiance; a: optical depth.
+    @location(0) scatter: vec4<f32>,
+    // rgb: emitted radiance reaching the eye.
+    @location(1) emission: vec4<f32>,
+};
+
+@fragment
+fn fs_main(in: PuffOut) -> Accumulated {
+    let dir = normalize(in.ray);
+    let c = in.centre_radius.xyz;
+    let r = in.centre_radius.w;
+    let sigma = r / RADIUS_SIGMAS;
+    let s0 = dot(c, dir);
+    let b2 = max(dot(c, c) - s0 * s0, 0.0);
+    // Column optical depth of the Gaussian at this ray's distance from the centre, windowed to
+    // reach zero at the billboard's radius (no visible rim).
+    let window = (exp(-0.5 * b2 / (sigma * sigma)) - EDGE_GAUSS) / (1.0 - EDGE_GAUSS);
+    if (window <= 0.0) {
+        discard;
+    }
+    // The part of the column between the eye and the scene behind: the Gaussian's distribution
+    // along the ray, cut at the eye and at each depth sample (soft, no intersection lines).
+    let pixel = vec2<i32>(in.clip.xy);
+    let along = max(dot(dir, g.cam_forward.xyz), 1e-4);
+    let inv = 0.70710678 / sigma;
+    let behind_eye = erf_approx(-s0 * inv);
+    var erf_sum = 0.0;
+    for (var s = 0; s < SCENE_SAMPLES; s++) {
+        let depth = textureLoad(scene_depth, pixel, s);
+        var reach = 1.0;
+        if (depth > 0.0) {
+            reach = erf_approx((NEAR_PLANE_M / depth / along - s0) * inv);
+        }
+        erf_sum += max(reach - behind_eye, 0.0);
+    }
+    let fraction = 0.5 * erf_sum / f32(SCENE_SAMPLES);
+    let tau = in.albedo_tau.w * window * fraction;
+    if (tau <= 0.0) {
+        discard;
+    }
+    // Light: the sun on the side of the puff it faces (wrapped, light passes through thin
+    // smoke) and the sky's ambient, as the terrain is lit.
+    var n = -dir;
+    if (b2 < r * r) {
+        n = (dir * (s0 - sqrt(r * r - b2)) - c) / r;
+    }
+    let sun = g.sun_colour.rgb * (0.5 + 0.5 * dot(n, g.sun_dir.xyz));
+    let sky = g.ambient.rgb * (0.6 + 0.4 * dot(n, g.eye_up.xyz));
+    let distance_m = max(s0, 0.0);
+    let f = fog_factor(distance_m);
+    let radiance = f * in.albedo_tau.rgb * (sun + sky) + (1.0 - f) * g.fog_colour.rgb;
+    var out: Accumulated;
+    out.scatter = vec4<f32>(radiance * tau, tau);
+    out.emission = vec4<f32>(in.emission.rgb * (f * (1.0 - exp(-tau))), 0.0);
+    return out;
+}
