@@ -74,7 +74,14 @@ fuzz_target!(|data: &[u8]| {
             session: cig_ig::SessionConfig::default(),
             start,
             fog_mode: cig_scene::lighting::FogMode::Exponential,
-            effects: cig_effects::EffectsConfig::default(),
+            // Small pools: the fuzzer builds a world per input.
+            effects: cig_effects::EffectsConfig {
+                plume_slots: 4,
+                puffs_per_column: 8,
+                dust_slots: 4,
+                puffs_per_dust_trail: 8,
+                area: None,
+            },
             join_exercise: true,
         },
     ) else {

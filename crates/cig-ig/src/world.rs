@@ -693,6 +693,11 @@ impl IgWorld {
             }
             snapshot.fog = Fog::from_visibility(self.fog_mode, visibility_m);
         }
+        if let Some(first) = views.first() {
+            let origin = first.eye.to_ecef();
+            self.effects.snapshot(origin, &mut snapshot.puffs);
+            snapshot.puff_origin_ecef_m = origin;
+        }
         for (id, e) in self.session.entities() {
             if e.life != EntityLife::Active {
                 continue;

@@ -973,3 +973,30 @@ fn smoke_on_a_clear_line_of_sight_stops_it_at_the_requests_alpha_threshold() {
         "{answers:?} vs {alpha}"
     );
 }
+
+#[test]
+fn the_snapshot_carries_the_effects_puffs() {
+    let mut q = query();
+    let (lat, lon) = (lat_of_row(60.0), lon_of_col(20.0));
+    let scenario = format!(
+        "start_time = \"2026-06-21T12:00:00Z\"\n[[smoke]]\nid = 1\nlat_deg = {lat}\nlon_deg = {lon}\n"
+    );
+    let mut w = world(&scenario);
+    let fallback = View {
+        eye: Geodetic::new(lat_of_row(30.0), lon, 400.0),
+        orientation: Hpr::default(),
+        fov: FovDeg::symmetric(60.0, 45.0),
+        width_px: 64,
+        height_px: 48,
+    };
+    let mut counts = Vec::new();
+    for i in 0..180 {
+        w.step(1.0 / 60.0, &mut q);
+        if i % 30 == 29 {
+            counts.push(w.snapshot(64, 48, &fallback).puffs.len());
+        }
+    }
+    assert!(counts.last().copied().unwrap_or(0) > 0, "{counts:?} {:?}", w.effects().stats());
+    let s = w.snapshot(64, 48, &fallback);
+    assert_eq!(s.puff_origin_ecef_m, fallback.eye.to_ecef());
+}

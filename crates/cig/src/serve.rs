@@ -107,6 +107,9 @@ struct Totals {
     /// Problems noted on the sockets (bad datagrams, failed sends) and warning lines logged.
     problems_noted: u64,
     warnings_logged: u64,
+    /// Entities and obscurant puffs in the last frame drawn.
+    entities_drawn: u32,
+    puffs_drawn: u32,
 }
 
 pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
@@ -261,13 +264,15 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
             let eyes: Vec<Geodetic> = snapshot.views.iter().map(|v| v.eye).collect();
             cache.update(&eyes);
             for index in 0..snapshot.views.len() {
-                let (image, _stats) = cig_render::render_image_with(
+                let (image, stats) = cig_render::render_image_with(
                     renderer,
                     &cache,
                     &snapshot,
                     index,
                     cig_render::FrameOptions::default(),
                 )?;
+                totals.entities_drawn = stats.entities_drawn;
+                totals.puffs_drawn = stats.puffs_drawn;
                 if let Some(dir) = out_dir {
                     let name = if snapshot.views.len() == 1 {
                         format!("frame_{:05}.png", totals.frames)
@@ -508,6 +513,10 @@ fn report(
             e
         }),
         "effects_live": world.effects().stats().live_effects,
+        "last_frame": {
+            "entities_drawn": totals.entities_drawn,
+            "puffs_drawn": totals.puffs_drawn,
+        },
         "sim_time": UtcTime::from_unix_seconds(world.unix_time_s()).map(|t| t.to_iso8601_seconds()).unwrap_or_default(),
     });
     if json {

@@ -282,6 +282,7 @@ fn serve_draws_off_screen_frames_of_the_scenario() {
         &scenario,
         "start_time = \"2026-06-21T12:00:00Z\"\nvisibility_m = 30000\n\
          [[entities]]\nid = 1\nmodel = \"tank\"\nlat_deg = 35.995\nlon_deg = -121.215\nclamp = \"height_and_attitude\"\nspeed_mps = 10\npath = [[36.0, -121.21]]\n\
+         [[smoke]]\nid = 1\nlat_deg = 35.9975\nlon_deg = -121.2125\nstart_s = 0\n\
          [view]\nentity = 1\noffset_m = [-40, 0, -15]\nhpr_deg = [0, -15, 0]\nfov_deg = 50\n",
     )
     .expect("scenario");
@@ -296,7 +297,7 @@ fn serve_draws_off_screen_frames_of_the_scenario() {
             "--size",
             "96x64",
             "--frames",
-            "3",
+            "150",
             "--json",
             "--cigi-port",
         ])
@@ -312,8 +313,11 @@ fn serve_draws_off_screen_frames_of_the_scenario() {
         String::from_utf8_lossy(&out.stderr)
     );
     let summary: Value = serde_json::from_slice(&out.stdout).expect("json");
-    assert_eq!(summary["frames"], 3);
+    assert_eq!(summary["frames"], 150);
     assert_eq!(summary["cigi"]["entities"], 1);
+    // The tank and the scenario's smoke are drawn.
+    assert_eq!(summary["last_frame"]["entities_drawn"], 1, "{summary}");
+    assert!(summary["last_frame"]["puffs_drawn"].as_u64().unwrap_or(0) > 0, "{summary}");
     for i in 0..3 {
         let png = frames.join(format!("frame_{i:05}.png"));
         let decoder = png::Decoder::new(std::io::BufReader::new(
