@@ -166,6 +166,10 @@ pub struct IgWorld {
     eye_geoid_m: f64,
     /// Geoid undulation at the scenario's fixed eye, if it has one.
     fixed_eye_geoid_m: f64,
+    last_air_update_s: f64,
+    operator_wind: Option<cig_effects::system::Wind>,
+    operator_plumes: Vec<cig_effects::EffectHandle>,
+    operator_plumes_started: u32,
 }
 
 /// A scenario smoke source and the plume it runs.
@@ -259,6 +263,10 @@ impl IgWorld {
             first_eye: None,
             eye_geoid_m: 0.0,
             fixed_eye_geoid_m: 0.0,
+            last_air_update_s: f64::NEG_INFINITY,
+            operator_wind: None,
+            operator_plumes: Vec::new(),
+            operator_plumes_started: 0,
         })
     }
 
@@ -395,12 +403,17 @@ impl IgWorld {
                         s.failed = false;
                     }
                     self.owned_effects.clear();
+                    self.operator_plumes.clear();
                     if let Some(x) = self.exercise.as_mut() {
                         x.forget_effects();
                     }
                 }
                 Err(e) => tracing::warn!("effects cannot start over: {e}"),
             }
+        }
+        if now - self.last_air_update_s >= 1.0 {
+            self.last_air_update_s = now;
+            self.update_effects_air();
         }
         if let Err(e) = self.effects.advance_to(effect_time_s) {
             tracing::warn!("effects stop advancing: {e}");
@@ -477,6 +490,110 @@ impl IgWorld {
         self.eye_geoid_m = self
             .first_eye
             .map_or(0.0, |e| query.geoid_undulation_m(e.lat_deg, e.lon_deg));
+    }
+
+    /// The air the effects drift in: the host's wind, temperature and cloud (CIGI Atmosphere and
+    /// Weather Control) at the first eye, with the Pasquill class from wind, sun elevation and
+    /// cloud (Turner's key); the effects' defaults where the host set nothing.
+    fn update_effects_air(&mut self) {
+        let environment = self.session.environment();
+        let Some(a) = environment.atmosphere.as_ref() else {
+            if let Some(w) = self.operator_wind {
+                let mut air = *self.effects.atmosphere();
+                air.wind = w;
+                if let Err(e) = self.effects.set_atmosphere(air) {
+                    tracing::warn!("the operator's wind cannot be used: {e}");
+                }
+            }
+            return;
+        };
+        let wind = self.operator_wind.unwrap_or(cig_effects::system::Wind {
+            speed_mps: f64::from(a.horizontal_wind_speed_mps).clamp(0.0, 100.0),
+            from_deg: f64::from(a.wind_direction_deg).rem_euclid(360.0),
+        });
+        let at = self.first_eye.unwrap_or(Geodetic::new(0.0, 0.0, 0.0));
+        let (cover, ceiling_m) = environment
+            .weather
+            .values()
+            .filter(|w| w.weather_enable && (1..=3).contains(&w.layer_id))
+            .map(|w| {
+                (
+                    (f64::from(w.coverage_pct) / 100.0).clamp(0.0, 1.0),
+                    f64::from(w.base_elevation_m),
+                )
+            })
+            .fold((0.0, 10_000.0), |(c, b), (c2, b2)| {
+                (f64::max(c, c2), f64::min(b, b2))
+            });
+        let (_, sun_elevation_deg) = self.sun_az_el_deg(at);
+        let temperature_k = f64::from(a.air_temperature_c) + 273.15;
+        match cig_effects::system::Atmosphere::from_weather(
+            wind,
+            if temperature_k.is_finite() {
+                temperature_k.clamp(180.0, 340.0)
+            } else {
+                288.15
+            },
+            sun_elevation_deg,
+            cover,
+            ceiling_m.max(0.0),
+        )
+        .and_then(|air| self.effects.set_atmosphere(air))
+        {
+            Ok(()) => {}
+            Err(e) => self
+                .session
+                .tell_host(format!("the weather cannot drive the obscurants: {e}")),
+        }
+    }
+
+    /// Starts an operator's plume (panel or command) at a point on the ground; returns its
+    /// number, or why it cannot start.
+    pub fn start_operator_plume(
+        &mut self,
+        position: Geodetic,
+        flame: bool,
+        heat_release_w: f64,
+    ) -> Result<u32, EffectsError> {
+        self.operator_plumes_started += 1;
+        let number = self.operator_plumes_started;
+        let t = self.clock.now().unix_seconds() - EFFECT_EPOCH_UNIX_S;
+        let handle = self.effects.start_plume(&PlumeSpec {
+            id: EffectId(cig_dis::detonation::splitmix64(
+                0x4f50_0000_0000 | u64::from(number),
+            )),
+            kind: if flame {
+                PlumeKind::Flame
+            } else {
+                PlumeKind::Smoke
+            },
+            position,
+            size_m: 5.0,
+            source: PlumeSource::HeatReleaseW(heat_release_w),
+            start_time_s: t,
+            duration_s: 3600.0,
+        })?;
+        self.operator_plumes.push(handle);
+        Ok(number)
+    }
+
+    /// Stops every operator plume (their puffs age out).
+    pub fn stop_operator_plumes(&mut self) {
+        let t = self.clock.now().unix_seconds() - EFFECT_EPOCH_UNIX_S;
+        for h in self.operator_plumes.drain(..) {
+            let _ = self.effects.stop(h, t);
+        }
+    }
+
+    /// Sets the wind the obscurants drift in (the operator's; it wins over the host's).
+    pub fn set_operator_wind(&mut self, speed_mps: f64, from_deg: f64) {
+        if speed_mps.is_finite() && from_deg.is_finite() {
+            self.operator_wind = Some(cig_effects::system::Wind {
+                speed_mps: speed_mps.clamp(0.0, 100.0),
+                from_deg: from_deg.rem_euclid(360.0),
+            });
+            self.last_air_update_s = f64::NEG_INFINITY;
+        }
     }
 
     /// The appearance effects of the scenario's own entities (smoke, flames, dust), started,

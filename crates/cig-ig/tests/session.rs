@@ -996,7 +996,73 @@ fn the_snapshot_carries_the_effects_puffs() {
             counts.push(w.snapshot(64, 48, &fallback).puffs.len());
         }
     }
-    assert!(counts.last().copied().unwrap_or(0) > 0, "{counts:?} {:?}", w.effects().stats());
+    assert!(
+        counts.last().copied().unwrap_or(0) > 0,
+        "{counts:?} {:?}",
+        w.effects().stats()
+    );
     let s = w.snapshot(64, 48, &fallback);
     assert_eq!(s.puff_origin_ecef_m, fallback.eye.to_ecef());
+}
+
+#[test]
+fn the_hosts_wind_carries_the_smoke_and_the_operator_can_start_and_stop_plumes() {
+    let mut q = query();
+    let (lat, lon) = (lat_of_row(60.0), lon_of_col(60.0));
+    let mut w = world("start_time = \"2026-06-21T12:00:00Z\"\n");
+    // Wind from the east at 8 m/s.
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        1,
+        vec![Packet::AtmosphereControl(cig_cigi::AtmosphereControl {
+            atmospheric_model_enable: true,
+            humidity_pct: 50,
+            air_temperature_c: 20.0,
+            visibility_range_m: 20_000.0,
+            horizontal_wind_speed_mps: 8.0,
+            wind_direction_deg: 90.0,
+            barometric_pressure_mbar: 1013.0,
+            ..cig_cigi::AtmosphereControl::default()
+        })],
+    );
+    let ground = q.hot(lat, lon).expect("hot").height_ellipsoid_m();
+    let source = Geodetic::new(lat, lon, ground);
+    w.step(1.0 / 60.0, &mut q);
+    assert_eq!(
+        w.start_operator_plume(source, false, 3.0e6)
+            .expect("starts"),
+        1
+    );
+    for _ in 0..60 * 60 {
+        w.step(1.0 / 60.0, &mut q);
+    }
+    let wind = w.effects().atmosphere().wind;
+    assert_eq!((wind.speed_mps, wind.from_deg), (8.0, 90.0));
+    let frame = cig_geo::EnuFrame::new(source);
+    let puffs = w.effects().puff_states();
+    let mean_east = puffs
+        .iter()
+        .map(|p| {
+            frame
+                .ecef_to_enu(glam::DVec3::from_array(p.centre_ecef_m))
+                .x
+        })
+        .sum::<f64>()
+        / puffs.len().max(1) as f64;
+    assert!(
+        !puffs.is_empty() && mean_east < -50.0,
+        "the smoke drifts west: {mean_east} m"
+    );
+    w.stop_operator_plumes();
+    let before = w.effects().stats().spawned_total;
+    for _ in 0..60 * 5 {
+        w.step(1.0 / 60.0, &mut q);
+    }
+    assert_eq!(
+        w.effects().stats().spawned_total,
+        before,
+        "a stopped plume emits no more"
+    );
 }

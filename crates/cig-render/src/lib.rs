@@ -19,5 +19,6 @@ pub use offscreen::{load_for_view, render_image, render_image_with, Image};
 pub use renderer::serde_like::FrameStats;
 pub use renderer::{FrameOptions, Renderer, FRAME_FORMAT, MSAA_SAMPLES};
 pub use viewer::{
-    run_viewer, run_viewer_driven, FrameDriver, ViewerError, ViewerOptions, ViewerReport,
+    run_viewer, run_viewer_driven, FrameDriver, ObscurantOrder, ViewerError, ViewerOptions,
+    ViewerReport, ViewerTick,
 };

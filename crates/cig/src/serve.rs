@@ -420,7 +420,26 @@ fn run_windowed(
     let totals = Arc::clone(&shared);
     let mut loop_state = LoopState::new(args.rate_hz);
     let dis_out = dis.as_ref().map(UdpEndpoint::local_addr);
-    let driver: cig_render::FrameDriver = Box::new(move |_dt_s, width_px, height_px| {
+    let driver: cig_render::FrameDriver = Box::new(move |tick: &cig_render::ViewerTick| {
+        let (width_px, height_px) = (tick.width_px, tick.height_px);
+        for order in &tick.orders {
+            match *order {
+                cig_render::ObscurantOrder::StartPlume {
+                    at,
+                    flame,
+                    heat_release_w,
+                } => {
+                    if let Err(e) = world.start_operator_plume(at, flame, heat_release_w) {
+                        tracing::warn!("the operator's plume cannot start: {e}");
+                    }
+                }
+                cig_render::ObscurantOrder::StopPlumes => world.stop_operator_plumes(),
+                cig_render::ObscurantOrder::SetWind {
+                    speed_mps,
+                    from_deg,
+                } => world.set_operator_wind(speed_mps, from_deg),
+            }
+        }
         let mut t = totals
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);

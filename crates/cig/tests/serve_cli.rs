@@ -317,7 +317,10 @@ fn serve_draws_off_screen_frames_of_the_scenario() {
     assert_eq!(summary["cigi"]["entities"], 1);
     // The tank and the scenario's smoke are drawn.
     assert_eq!(summary["last_frame"]["entities_drawn"], 1, "{summary}");
-    assert!(summary["last_frame"]["puffs_drawn"].as_u64().unwrap_or(0) > 0, "{summary}");
+    assert!(
+        summary["last_frame"]["puffs_drawn"].as_u64().unwrap_or(0) > 0,
+        "{summary}"
+    );
     for i in 0..3 {
         let png = frames.join(format!("frame_{i:05}.png"));
         let decoder = png::Decoder::new(std::io::BufReader::new(

@@ -41,6 +41,8 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
+pub use panel::ObscurantCommand;
+
 /// What the viewer shows first and how it behaves.
 #[derive(Clone, Debug)]
 pub struct ViewerOptions {
@@ -75,9 +77,48 @@ pub struct ViewerOptions {
 }
 
 /// Supplies each frame's world when the viewer is driven from outside (an IG serving a host):
-/// called once per frame with the seconds since the previous frame and the window's size; the
-/// operator panel's level-of-detail threshold and wireframe still apply.
-pub type FrameDriver = Box<dyn FnMut(f64, u32, u32) -> FrameSnapshot>;
+/// called once per frame; the operator panel's level-of-detail threshold and wireframe still
+/// apply, and its obscurant orders are handed over in the tick.
+pub type FrameDriver = Box<dyn FnMut(&ViewerTick) -> FrameSnapshot>;
+
+/// One frame of a driven viewer.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewerTick {
+    /// Real seconds since the previous frame.
+    pub dt_s: f64,
+    pub width_px: u32,
+    pub height_px: u32,
+    /// The operator's obscurant orders this frame, places resolved on the terrain.
+    pub orders: Vec<ObscurantOrder>,
+}
+
+/// An operator's obscurant order with its place found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ObscurantOrder {
+    /// Start a plume on the ground at `at` (altitude above the ellipsoid).
+    StartPlume {
+        at: Geodetic,
+        flame: bool,
+        heat_release_w: f64,
+    },
+    /// Stop every plume the operator started.
+    StopPlumes,
+    /// Set the wind the obscurants drift in (direction it blows from, degrees).
+    SetWind { speed_mps: f64, from_deg: f64 },
+}
+
+/// Effect time of the stand-alone viewer's own obscurants: seconds since 2020-01-01 UTC (the
+/// IG's effect epoch), so the effect system's ±1e9 s covers the dates the panel allows.
+const VIEWER_EFFECT_EPOCH_UNIX_S: f64 = 1_577_836_800.0;
+
+/// Where the camera's view axis meets the terrain, within 30 km.
+fn ground_ahead(cache: &Arc<TileCache>, camera: &FlyCamera) -> Option<Geodetic> {
+    let mut q = cig_terrain::QuerySession::new(Arc::clone(cache));
+    let (forward, _, _) = camera.orientation.axes_enu();
+    let frame = cig_geo::EnuFrame::new(camera.eye);
+    let end = frame.enu_to_geodetic(forward * 30_000.0);
+    q.los(camera.eye, end).ok()?.hit.map(|h| h.point)
+}
 
 /// One shot of a scripted flight.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -234,6 +275,9 @@ pub fn run_viewer_driven(
         report: ViewerReport::default(),
         first_frame: None,
         driver,
+        effects: None,
+        operator_plumes: Vec::new(),
+        puff_scratch: Vec::new(),
     };
     let run = event_loop.run_app(&mut app);
     if let Some(error) = app.error.take() {
@@ -258,6 +302,10 @@ struct App {
     report: ViewerReport,
     first_frame: Option<Instant>,
     driver: Option<FrameDriver>,
+    /// The stand-alone viewer's own obscurants (a driven viewer's belong to its driver).
+    effects: Option<cig_effects::EffectSystem>,
+    operator_plumes: Vec<cig_effects::EffectHandle>,
+    puff_scratch: Vec<cig_effects::PuffInstance>,
 }
 
 /// What was drawn last, to re-draw it off-screen for a screenshot.
@@ -580,9 +628,41 @@ impl App {
             }
         }
 
+        let mut orders = Vec::new();
+        for command in self.panel.take_commands() {
+            match command {
+                ObscurantCommand::StartPlume {
+                    flame,
+                    heat_release_w,
+                } => match ground_ahead(&r.cache, &self.camera) {
+                    Some(at) => orders.push(ObscurantOrder::StartPlume {
+                        at,
+                        flame,
+                        heat_release_w,
+                    }),
+                    None => {
+                        self.panel.obscurant_note =
+                            "no ground within 30 km at the centre of the view".into();
+                    }
+                },
+                ObscurantCommand::StopPlumes => orders.push(ObscurantOrder::StopPlumes),
+                ObscurantCommand::SetWind {
+                    speed_mps,
+                    from_deg,
+                } => orders.push(ObscurantOrder::SetWind {
+                    speed_mps,
+                    from_deg,
+                }),
+            }
+        }
         let mut snapshot = match self.driver.as_mut() {
             Some(driver) => {
-                let snapshot = driver(dt_s, width_px, height_px);
+                let snapshot = driver(&ViewerTick {
+                    dt_s,
+                    width_px,
+                    height_px,
+                    orders,
+                });
                 if let Some(first) = snapshot.views.first() {
                     self.camera.eye = first.eye;
                     self.camera.orientation = first.orientation;
@@ -598,6 +678,21 @@ impl App {
                     vec![self.options.view(width_px, height_px, &self.camera)],
                 );
                 snapshot.fog = self.panel.fog();
+                let note = run_own_obscurants(
+                    &mut self.effects,
+                    &mut self.operator_plumes,
+                    &orders,
+                    self.panel.unix_time_s - VIEWER_EFFECT_EPOCH_UNIX_S,
+                );
+                if let Some(note) = note {
+                    self.panel.obscurant_note = note;
+                }
+                if let Some(effects) = &self.effects {
+                    let origin = self.camera.eye.to_ecef();
+                    effects.snapshot(origin, &mut self.puff_scratch);
+                    snapshot.puffs.clone_from(&self.puff_scratch);
+                    snapshot.puff_origin_ecef_m = origin;
+                }
                 snapshot
             }
         };
@@ -933,5 +1028,138 @@ mod script_tests {
         assert!(scripted_pose(&script, 2.5).is_none());
         assert!(scripted_pose(&[], 0.0).is_none());
         assert!(scripted_pose(&script, f64::NAN).is_none());
+    }
+}
+
+/// The stand-alone viewer's obscurants: carries out the operator's orders and advances them to
+/// effect time `t_s` (starting over when the panel's clock goes back). Returns a note for the
+/// panel when an order could not be carried out.
+fn run_own_obscurants(
+    effects: &mut Option<cig_effects::EffectSystem>,
+    plumes: &mut Vec<cig_effects::EffectHandle>,
+    orders: &[ObscurantOrder],
+    t_s: f64,
+) -> Option<String> {
+    let mut note = None;
+    if effects.is_none() && !orders.is_empty() {
+        match cig_effects::EffectSystem::new(cig_effects::EffectsConfig::default()) {
+            Ok(system) => *effects = Some(system),
+            Err(e) => return Some(format!("obscurants unavailable: {e}")),
+        }
+    }
+    let system = effects.as_mut()?;
+    if system.time_s().is_some_and(|now| t_s < now - 1.0) {
+        // The clock went back: start over (the plumes' past is not kept).
+        match cig_effects::EffectSystem::new(*system.config()) {
+            Ok(fresh) => {
+                *system = fresh;
+                plumes.clear();
+            }
+            Err(e) => return Some(format!("obscurants cannot start over: {e}")),
+        }
+    }
+    if let Err(e) = system.advance_to(t_s) {
+        return Some(format!("obscurants stopped: {e}"));
+    }
+    for order in orders {
+        match *order {
+            ObscurantOrder::StartPlume {
+                at,
+                flame,
+                heat_release_w,
+            } => {
+                let id = cig_effects::EffectId(0x5649_4557_0000_0000 | plumes.len() as u64);
+                let spec = cig_effects::system::PlumeSpec {
+                    id,
+                    kind: if flame {
+                        cig_effects::system::PlumeKind::Flame
+                    } else {
+                        cig_effects::system::PlumeKind::Smoke
+                    },
+                    position: at,
+                    size_m: 5.0,
+                    source: cig_effects::system::PlumeSource::HeatReleaseW(heat_release_w),
+                    start_time_s: t_s,
+                    duration_s: 3600.0,
+                };
+                match system.start_plume(&spec) {
+                    Ok(h) => {
+                        plumes.push(h);
+                        note = Some(format!(
+                            "{} at {:.5}, {:.5}",
+                            if flame { "fire" } else { "smoke" },
+                            at.lat_deg,
+                            at.lon_deg
+                        ));
+                    }
+                    Err(e) => note = Some(format!("cannot start: {e}")),
+                }
+            }
+            ObscurantOrder::StopPlumes => {
+                for h in plumes.drain(..) {
+                    let _ = system.stop(h, t_s);
+                }
+            }
+            ObscurantOrder::SetWind {
+                speed_mps,
+                from_deg,
+            } => {
+                let mut air = *system.atmosphere();
+                air.wind = cig_effects::system::Wind {
+                    speed_mps,
+                    from_deg,
+                };
+                if let Err(e) = system.set_atmosphere(air) {
+                    note = Some(format!("wind refused: {e}"));
+                }
+            }
+        }
+    }
+    note
+}
+
+#[cfg(test)]
+mod obscurant_tests {
+    use super::*;
+
+    #[test]
+    fn operator_orders_start_stop_and_blow_plumes_and_a_clock_set_back_starts_over() {
+        let mut effects = None;
+        let mut plumes = Vec::new();
+        let at = Geodetic::new(36.0, -121.0, 100.0);
+        let start = ObscurantOrder::StartPlume {
+            at,
+            flame: false,
+            heat_release_w: 4.0e6,
+        };
+        assert!(run_own_obscurants(&mut effects, &mut plumes, &[], 0.0).is_none());
+        assert!(effects.is_none(), "no system until the first order");
+        let note = run_own_obscurants(&mut effects, &mut plumes, &[start], 100.0);
+        assert!(note.is_some_and(|n| n.starts_with("smoke at")));
+        assert_eq!(plumes.len(), 1);
+        let wind = ObscurantOrder::SetWind {
+            speed_mps: 12.0,
+            from_deg: 45.0,
+        };
+        run_own_obscurants(&mut effects, &mut plumes, &[wind], 101.0);
+        let system = effects.as_ref().expect("system");
+        assert_eq!(system.atmosphere().wind.speed_mps, 12.0);
+        for i in 0..60 {
+            run_own_obscurants(&mut effects, &mut plumes, &[], 101.0 + f64::from(i));
+        }
+        let spawned = effects.as_ref().map_or(0, |e| e.stats().spawned_total);
+        assert!(spawned > 0);
+        run_own_obscurants(
+            &mut effects,
+            &mut plumes,
+            &[ObscurantOrder::StopPlumes],
+            161.0,
+        );
+        assert!(plumes.is_empty());
+        run_own_obscurants(&mut effects, &mut plumes, &[start], 162.0);
+        // The panel's clock set back an hour: the obscurants start over, empty.
+        run_own_obscurants(&mut effects, &mut plumes, &[], 162.0 - 3600.0);
+        assert!(plumes.is_empty());
+        assert_eq!(effects.as_ref().map(|e| e.stats().spawned_total), Some(0));
     }
 }

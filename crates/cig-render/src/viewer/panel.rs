@@ -85,10 +85,35 @@ pub struct PanelState {
     pub fog_mode: FogMode,
     pub max_pixel_error: f64,
     pub wireframe: bool,
+    /// Heat release of the next plume the operator starts, MW.
+    pub plume_heat_mw: f64,
+    /// The next plume is a fire (flame) rather than smoke.
+    pub plume_flame: bool,
+    /// Wind for the obscurants: speed, and the direction it blows from.
+    pub wind_speed_mps: f64,
+    pub wind_from_deg: f64,
+    /// A line about the last obscurant order (e.g. why it could not be done).
+    pub obscurant_note: String,
+    /// Orders given this frame, taken by the viewer.
+    commands: Vec<ObscurantCommand>,
     /// The date field being edited.
     date_text: String,
     date_error: bool,
 }
+
+/// What the operator asked of the obscurants.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ObscurantCommand {
+    /// Start a plume where the camera looks.
+    StartPlume { flame: bool, heat_release_w: f64 },
+    /// Stop every plume the operator started.
+    StopPlumes,
+    /// Set the wind the obscurants drift in.
+    SetWind { speed_mps: f64, from_deg: f64 },
+}
+
+/// Heat release range of operator plumes, MW.
+const PLUME_HEAT_RANGE_MW: (f64, f64) = (0.1, 200.0);
 
 /// Statistics the panel shows, besides the renderer's.
 #[derive(Clone, Debug, Default)]
@@ -123,6 +148,12 @@ impl PanelState {
             fog_mode,
             max_pixel_error: clamp_or(max_pixel_error, MAX_PIXEL_ERROR_RANGE_PX, 1.0),
             wireframe,
+            plume_heat_mw: 5.0,
+            plume_flame: false,
+            wind_speed_mps: 3.0,
+            wind_from_deg: 270.0,
+            obscurant_note: String::new(),
+            commands: Vec::new(),
             date_text: String::new(),
             date_error: false,
         };
@@ -151,6 +182,11 @@ impl PanelState {
         }
     }
 
+    /// The obscurant orders given since the last call.
+    pub fn take_commands(&mut self) -> Vec<ObscurantCommand> {
+        std::mem::take(&mut self.commands)
+    }
+
     /// The fog these settings ask for.
     pub fn fog(&self) -> Fog {
         Fog::from_visibility(self.fog_mode, self.visibility_m)
@@ -168,6 +204,8 @@ impl PanelState {
                 self.atmosphere_ui(ui);
                 ui.separator();
                 self.detail_ui(ui, info);
+                ui.separator();
+                self.obscurants_ui(ui);
                 ui.separator();
                 camera_ui(ui, camera, info);
             });
@@ -256,6 +294,57 @@ impl PanelState {
                 ui.selectable_value(&mut self.fog_mode, mode, mode.name());
             }
         });
+    }
+
+    fn obscurants_ui(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Obscurants");
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.plume_flame, false, "smoke");
+            ui.selectable_value(&mut self.plume_flame, true, "fire");
+        });
+        ui.add(
+            egui::Slider::new(
+                &mut self.plume_heat_mw,
+                PLUME_HEAT_RANGE_MW.0..=PLUME_HEAT_RANGE_MW.1,
+            )
+            .logarithmic(true)
+            .text("heat release")
+            .suffix(" MW"),
+        );
+        ui.horizontal(|ui| {
+            if ui
+                .button("start where I look")
+                .on_hover_text("on the ground at the centre of the view")
+                .clicked()
+            {
+                self.commands.push(ObscurantCommand::StartPlume {
+                    flame: self.plume_flame,
+                    heat_release_w: self.plume_heat_mw * 1.0e6,
+                });
+            }
+            if ui.button("stop all").clicked() {
+                self.commands.push(ObscurantCommand::StopPlumes);
+            }
+        });
+        let speed = ui.add(
+            egui::Slider::new(&mut self.wind_speed_mps, 0.0..=30.0)
+                .text("wind")
+                .suffix(" m/s"),
+        );
+        let from = ui.add(
+            egui::Slider::new(&mut self.wind_from_deg, 0.0..=359.0)
+                .text("from")
+                .suffix("°"),
+        );
+        if speed.changed() || from.changed() {
+            self.commands.push(ObscurantCommand::SetWind {
+                speed_mps: self.wind_speed_mps,
+                from_deg: self.wind_from_deg,
+            });
+        }
+        if !self.obscurant_note.is_empty() {
+            ui.label(&self.obscurant_note);
+        }
     }
 
     fn detail_ui(&mut self, ui: &mut egui::Ui, info: &FrameInfo) {
