@@ -130,7 +130,7 @@ const FIRE_SIZE_M: f64 = 3.0;
 /// Parses "LAT,LON[,HEAT_MW[,SECONDS]]".
 pub fn parse_smoke(text: &str) -> anyhow::Result<FireSpec> {
     let v = parse_numbers(text, "--smoke", &[2, 3, 4])
-        .context("expected LAT,LON[,HEAT_MW[,SECONDS]]")?;
+        .map_err(|e| anyhow::anyhow!("{e:#} (LAT,LON[,HEAT_MW[,SECONDS]])"))?;
     let get = |i: usize, default: f64| v.get(i).copied().unwrap_or(default);
     let (lat_deg, lon_deg, heat_mw, burning_s) =
         (get(0, 0.0), get(1, 0.0), get(2, 5.0), get(3, 120.0));
@@ -153,7 +153,8 @@ pub fn parse_smoke(text: &str) -> anyhow::Result<FireSpec> {
 
 /// Parses "SPEED,FROM_DEG".
 pub fn parse_wind(text: &str) -> anyhow::Result<cig_effects::Wind> {
-    let v = parse_numbers(text, "--wind", &[2]).context("expected SPEED,FROM_DEG")?;
+    let v = parse_numbers(text, "--wind", &[2])
+        .map_err(|e| anyhow::anyhow!("{e:#} (SPEED,FROM_DEG)"))?;
     let (speed_mps, from_deg) = (v[0], v[1]);
     if !(0.0..=60.0).contains(&speed_mps) {
         bail!("--wind \"{text}\": speed {speed_mps} m/s must lie in 0..60");
