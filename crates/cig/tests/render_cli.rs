@@ -228,6 +228,23 @@ fn bench_render_reports_both_ways_and_their_ratios() {
     assert!(
         json["full_detail"]["triangles_mean"].as_f64() >= json["lod"]["triangles_mean"].as_f64()
     );
+    // The plumes comparison: every one of the 32 plumes' puffs in view, timed both ways.
+    let plumes = &json["plumes"];
+    assert_eq!(plumes["plumes"].as_u64(), Some(32), "{plumes}");
+    assert!(
+        plumes["puffs_drawn_mean"].as_f64().unwrap_or(0.0) > 5000.0,
+        "{plumes}"
+    );
+    for key in ["frame_time_with_over_without", "puff_share_of_frame_time"] {
+        assert!(
+            plumes[key].as_f64().is_some_and(f64::is_finite),
+            "{key}: {plumes}"
+        );
+    }
+    assert!(
+        plumes["frame_ms_with"]["median"].as_f64() > Some(0.0),
+        "{plumes}"
+    );
 }
 
 #[test]
