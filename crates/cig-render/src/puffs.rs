@@ -25,10 +25,14 @@
 //! Limits: the colour is the optical-depth-weighted mean of the puffs on a pixel, not the
 //! front-to-back order (a bright flame behind thick smoke shows through as much as in front of
 //! it); no self-shadowing or phase function; emission is not dimmed by smoke in front of it;
-//! the optical depth is summed in half floats (order changes the last bit).
+//! the optical depth is summed in half floats (order changes the last bit). On wgpu's GL
+//! backend, which cannot sample multisampled textures, the fallback draws each puff's square at
+//! its nearest point and depth-tests it against the scene per sample (accumulating in
+//! multisampled targets, then resolved): terrain inside a puff is hidden by it rather than
+//! faded, and terrain in front cuts it with the frame's edge smoothing but no soft contact.
 
 use crate::gpu::Gpu;
-use crate::renderer::{shader, uniform_entry, MSAA_SAMPLES};
+use crate::renderer::{shader, uniform_entry, DEPTH_FORMAT, MSAA_SAMPLES};
 use cig_effects::PuffInstance;
 use cig_scene::view::NEAR_PLANE_M;
 use cig_scene::{Camera, FrameSnapshot};
@@ -37,15 +41,30 @@ use cig_scene::{Camera, FrameSnapshot};
 pub const MAX_PUFFS_DRAWN: usize = 1 << 18;
 const ACCUMULATION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
+/// How the puffs meet the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum DepthMode {
+    /// The fragment reads the scene's depth samples: soft contact (every backend but GL).
+    Samples,
+    /// The GL fallback: a depth test against the scene's depth buffer, multisampled targets.
+    Test,
+}
+
 struct PuffTargets {
     accumulate_bind: wgpu::BindGroup,
     composite_bind: wgpu::BindGroup,
+    /// The targets the composite reads (single-sample).
     scatter: wgpu::TextureView,
     emission: wgpu::TextureView,
+    /// In `DepthMode::Test`: the multisampled targets drawn into, resolved into the above.
+    multisampled: Option<(wgpu::TextureView, wgpu::TextureView)>,
 }
 
 /// The puff pass's pipelines, instance buffer and accumulation targets.
 pub(crate) struct PuffPass {
+    mode: DepthMode,
+    /// False when the device cannot draw puffs at all (logged once at start).
+    usable: bool,
     accumulate_layout: wgpu::BindGroupLayout,
     composite_layout: wgpu::BindGroupLayout,
     accumulate_pipeline: wgpu::RenderPipeline,
@@ -69,44 +88,64 @@ fn instance_buffer(gpu: &Gpu, capacity: usize) -> wgpu::Buffer {
 impl PuffPass {
     pub(crate) fn new(gpu: &Gpu, colour_format: wgpu::TextureFormat) -> PuffPass {
         let device = &gpu.device;
-        let float_texture = |binding| wgpu::BindGroupLayoutEntry {
+        let mode = if gpu.info.backend == wgpu::Backend::Gl {
+            DepthMode::Test
+        } else {
+            DepthMode::Samples
+        };
+        let usable = match mode {
+            DepthMode::Samples => true,
+            DepthMode::Test => {
+                let flags = gpu
+                    .adapter
+                    .get_texture_format_features(ACCUMULATION_FORMAT)
+                    .flags;
+                let ok = flags.sample_count_supported(MSAA_SAMPLES)
+                    && flags.contains(wgpu::TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE);
+                if !ok {
+                    tracing::warn!(
+                        "obscurant puffs are not drawn: this GL device cannot multisample {ACCUMULATION_FORMAT:?} targets"
+                    );
+                }
+                ok
+            }
+        };
+        let float_texture = |binding, multisampled| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable: false },
                 view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
+                multisampled,
             },
             count: None,
         };
+        let accumulate_entries = match mode {
+            // Depth32Float bound as unfilterable float (WebGPU allows it; GLSL needs it).
+            DepthMode::Samples => vec![uniform_entry(0), float_texture(1, true)],
+            DepthMode::Test => vec![uniform_entry(0)],
+        };
         let accumulate_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("puff accumulate"),
-            entries: &[
-                uniform_entry(0),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: true,
-                    },
-                    count: None,
-                },
-            ],
+            entries: &accumulate_entries,
         });
         let composite_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("puff composite"),
-            entries: &[uniform_entry(0), float_texture(1), float_texture(2)],
+            entries: &[
+                uniform_entry(0),
+                float_texture(1, false),
+                float_texture(2, false),
+            ],
         });
-        let constants = format!(
-            "const NEAR_PLANE_M: f32 = {NEAR_PLANE_M:?};\nconst SCENE_SAMPLES: i32 = {MSAA_SAMPLES};\n"
+        let depth_source = match mode {
+            DepthMode::Samples => include_str!("shaders/puff_depth_samples.wgsl"),
+            DepthMode::Test => include_str!("shaders/puff_depth_test.wgsl"),
+        };
+        let source = format!(
+            "const NEAR_PLANE_M: f32 = {NEAR_PLANE_M:?};\nconst SCENE_SAMPLES: i32 = {MSAA_SAMPLES};\n{depth_source}\n{}",
+            include_str!("shaders/puffs.wgsl")
         );
-        let accumulate_module = shader(
-            gpu,
-            "puff accumulate",
-            &(constants + include_str!("shaders/puffs.wgsl")),
-        );
+        let accumulate_module = shader(gpu, "puff accumulate", &source);
         let composite_module = shader(
             gpu,
             "puff composite",
@@ -132,6 +171,23 @@ impl PuffPass {
             }),
             write_mask: wgpu::ColorWrites::ALL,
         });
+        let (depth_stencil, multisample) = match mode {
+            DepthMode::Samples => (None, wgpu::MultisampleState::default()),
+            DepthMode::Test => (
+                Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Greater),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                wgpu::MultisampleState {
+                    count: MSAA_SAMPLES,
+                    mask: !0,
+                    alpha_to_coverage_enabled: false,
+                },
+            ),
+        };
         let accumulate_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("puff accumulate"),
             layout: Some(&layout("puff accumulate", &accumulate_layout)),
@@ -152,8 +208,8 @@ impl PuffPass {
                 cull_mode: None,
                 ..Default::default()
             },
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
+            depth_stencil,
+            multisample,
             fragment: Some(wgpu::FragmentState {
                 module: &accumulate_module,
                 entry_point: Some("fs_main"),
@@ -202,6 +258,8 @@ impl PuffPass {
         });
         let capacity = 1024;
         PuffPass {
+            mode,
+            usable,
             accumulate_layout,
             composite_layout,
             accumulate_pipeline,
@@ -223,7 +281,7 @@ impl PuffPass {
         snapshot: &FrameSnapshot,
     ) -> usize {
         self.staging.clear();
-        if snapshot.puffs.is_empty() {
+        if snapshot.puffs.is_empty() || !self.usable {
             return 0;
         }
         let shift = snapshot.puff_origin_ecef_m - camera.eye_ecef;
@@ -279,6 +337,14 @@ impl PuffPass {
         count
     }
 
+    /// Extra usage the frame's depth buffer needs for this pass.
+    pub(crate) fn depth_usage(&self) -> wgpu::TextureUsages {
+        match self.mode {
+            DepthMode::Samples => wgpu::TextureUsages::TEXTURE_BINDING,
+            DepthMode::Test => wgpu::TextureUsages::empty(),
+        }
+    }
+
     /// Makes the accumulation targets for frames of `size` reading `depth` (the frame's
     /// multisampled depth buffer); called whenever the renderer makes its targets.
     pub(crate) fn resize(
@@ -288,8 +354,11 @@ impl PuffPass {
         depth: &wgpu::TextureView,
         globals: &wgpu::Buffer,
     ) {
+        if !self.usable {
+            return;
+        }
         let device = &gpu.device;
-        let make = |label| {
+        let make = |label, sample_count, usage| {
             device
                 .create_texture(&wgpu::TextureDescriptor {
                     label: Some(label),
@@ -299,30 +368,47 @@ impl PuffPass {
                         depth_or_array_layers: 1,
                     },
                     mip_level_count: 1,
-                    sample_count: 1,
+                    sample_count,
                     dimension: wgpu::TextureDimension::D2,
                     format: ACCUMULATION_FORMAT,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
                     view_formats: &[],
                 })
                 .create_view(&Default::default())
         };
-        let scatter = make("puff scatter sum");
-        let emission = make("puff emission sum");
+        let sampled = wgpu::TextureUsages::TEXTURE_BINDING;
+        let scatter = make("puff scatter sum", 1, sampled);
+        let emission = make("puff emission sum", 1, sampled);
+        let none = wgpu::TextureUsages::empty();
+        let (multisampled, accumulate_entries) = match self.mode {
+            DepthMode::Samples => (
+                None,
+                vec![
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: globals.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(depth),
+                    },
+                ],
+            ),
+            DepthMode::Test => (
+                Some((
+                    make("puff scatter samples", MSAA_SAMPLES, none),
+                    make("puff emission samples", MSAA_SAMPLES, none),
+                )),
+                vec![wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: globals.as_entire_binding(),
+                }],
+            ),
+        };
         let accumulate_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("puff accumulate"),
             layout: &self.accumulate_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: globals.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(depth),
-                },
-            ],
+            entries: &accumulate_entries,
         });
         let composite_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("puff composite"),
@@ -347,6 +433,7 @@ impl PuffPass {
             composite_bind,
             scatter,
             emission,
+            multisampled,
         });
     }
 
@@ -356,6 +443,7 @@ impl PuffPass {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
         count: usize,
         timestamps: Option<(&wgpu::QuerySet, u32, u32)>,
     ) -> u32 {
@@ -365,28 +453,43 @@ impl PuffPass {
         if count == 0 {
             return 0;
         }
+        let multisampled = targets.multisampled.as_ref();
+        // Multisampled targets are resolved; only the resolved ones are kept.
         let clear = wgpu::Operations {
             load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-            store: wgpu::StoreOp::Store,
+            store: if multisampled.is_some() {
+                wgpu::StoreOp::Discard
+            } else {
+                wgpu::StoreOp::Store
+            },
         };
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("puff accumulate"),
                 color_attachments: &[
                     Some(wgpu::RenderPassColorAttachment {
-                        view: &targets.scatter,
+                        view: multisampled.map_or(&targets.scatter, |m| &m.0),
                         depth_slice: None,
-                        resolve_target: None,
+                        resolve_target: multisampled.map(|_| &targets.scatter),
                         ops: clear,
                     }),
                     Some(wgpu::RenderPassColorAttachment {
-                        view: &targets.emission,
+                        view: multisampled.map_or(&targets.emission, |m| &m.1),
                         depth_slice: None,
-                        resolve_target: None,
+                        resolve_target: multisampled.map(|_| &targets.emission),
                         ops: clear,
                     }),
                 ],
-                depth_stencil_attachment: None,
+                depth_stencil_attachment: multisampled.map(|_| {
+                    wgpu::RenderPassDepthStencilAttachment {
+                        view: depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
+                    }
+                }),
                 timestamp_writes: timestamps.map(|(set, begin, _)| {
                     wgpu::RenderPassTimestampWrites {
                         query_set: set,

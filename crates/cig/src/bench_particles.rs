@@ -24,6 +24,38 @@ use std::time::Instant;
 
 const TARGET_MS: f64 = 1.0;
 
+/// The benchmark's air: 4 m/s from 250 degrees, neutral (class D), 290 K.
+pub fn bench_atmosphere() -> Atmosphere {
+    Atmosphere {
+        wind: Wind {
+            speed_mps: 4.0,
+            from_deg: 250.0,
+        },
+        stability: StabilityClass::D,
+        air_temperature_k: 290.0,
+        dtheta_dz_k_per_m: None,
+    }
+}
+
+/// Starts the benchmark's fires at `positions`: each a smoke and a flame plume (3 m across,
+/// 5 MW, burning from time 0 for the whole run), effect ids `2 * fire + kind`.
+pub fn start_fires(sys: &mut EffectSystem, positions: &[Geodetic]) -> anyhow::Result<()> {
+    for (fire, position) in positions.iter().enumerate() {
+        for (k, kind) in [PlumeKind::Smoke, PlumeKind::Flame].into_iter().enumerate() {
+            sys.start_plume(&PlumeSpec {
+                id: EffectId((fire * 2 + k) as u64),
+                kind,
+                position: *position,
+                size_m: 3.0,
+                source: PlumeSource::HeatReleaseW(5.0e6),
+                start_time_s: 0.0,
+                duration_s: 1.0e6,
+            })?;
+        }
+    }
+    Ok(())
+}
+
 fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
     v.sort_by(f64::total_cmp);
     let i = ((v.len() as f64 - 1.0) * q).round() as usize;
@@ -39,35 +71,19 @@ pub fn run(args: &BenchParticlesArgs) -> anyhow::Result<()> {
     let origin = Geodetic::new(36.0, -121.0, 50.0);
     let frame = EnuFrame::new(origin);
     let mut sys = EffectSystem::new(EffectsConfig::default())?;
-    sys.set_atmosphere(Atmosphere {
-        wind: Wind {
-            speed_mps: 4.0,
-            from_deg: 250.0,
-        },
-        stability: StabilityClass::D,
-        air_temperature_k: 290.0,
-        dtheta_dz_k_per_m: None,
-    })?;
+    sys.set_atmosphere(bench_atmosphere())?;
     sys.advance_to(0.0)?;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-    for fire in 0..16u64 {
-        let position = frame.enu_to_geodetic(DVec3::new(
-            rng.gen_range(-5000.0..5000.0),
-            rng.gen_range(-5000.0..5000.0),
-            0.0,
-        ));
-        for (k, kind) in [PlumeKind::Smoke, PlumeKind::Flame].into_iter().enumerate() {
-            sys.start_plume(&PlumeSpec {
-                id: EffectId(fire * 2 + k as u64),
-                kind,
-                position,
-                size_m: 3.0,
-                source: PlumeSource::HeatReleaseW(5.0e6),
-                start_time_s: 0.0,
-                duration_s: 1.0e6,
-            })?;
-        }
-    }
+    let fires: Vec<Geodetic> = (0..16)
+        .map(|_| {
+            frame.enu_to_geodetic(DVec3::new(
+                rng.gen_range(-5000.0..5000.0),
+                rng.gen_range(-5000.0..5000.0),
+                0.0,
+            ))
+        })
+        .collect();
+    start_fires(&mut sys, &fires)?;
     for vehicle in 0..200u64 {
         let position = frame.enu_to_geodetic(DVec3::new(
             rng.gen_range(-5000.0..5000.0),

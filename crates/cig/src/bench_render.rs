@@ -1,15 +1,20 @@
 //! `cig bench render`: a fixed low-level pass over a database, drawn with the level-of-detail
-//! renderer and at full detail in the same run.
+//! renderer and at full detail in the same run, and the same frames with and without 32
+//! smoke-and-flame plumes in view (the scene of `cig bench particles`: 16 fires of a smoke and a
+//! flame plume, 5 columns x 75 puffs each, after 100 s of burning).
 
 use crate::bench::{date_utc, machine};
+use crate::bench_particles::{bench_atmosphere, start_fires};
 use crate::cli::BenchRenderArgs;
 use crate::config::Config;
 use crate::flight::{views_along, Leg};
 use anyhow::Context;
-use cig_geo::Geodetic;
+use cig_geo::{EnuFrame, Geodetic};
 use cig_render::{FrameOptions, FrameStats, Renderer};
 use cig_scene::FrameSnapshot;
 use cig_terrain::{QuerySession, TileCache};
+use glam::DVec3;
+use rand::{Rng, SeedableRng};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -28,6 +33,9 @@ pub fn pass_leg(db: &cig_terrain::TerrainDatabase, speed_mps: f64, duration_s: f
         pitch_deg: -3.0,
     }
 }
+
+/// How long the comparison's fires have burnt (every smoke pool full: smoke lives 90 s), s.
+const PLUMES_BURNING_S: f64 = 100.0;
 
 fn percentile(v: &[f64], p: f64) -> f64 {
     let mut s = v.to_vec();
@@ -49,6 +57,45 @@ struct Run {
     gpu_ms: Vec<f64>,
     triangles: Vec<f64>,
     draw_calls: Vec<f64>,
+    puffs: Vec<f64>,
+    puff_gpu_ms: Vec<f64>,
+}
+
+/// Fires of the plume comparison: 16 points on the terrain ahead of the pass's start, from a
+/// third of the reach to the reach (4 km, or less where the database ends sooner), within
+/// 0.3 of their distance to either side of the track.
+fn fire_positions(session: &mut QuerySession, leg: &Leg) -> anyhow::Result<Vec<Geodetic>> {
+    let frame = EnuFrame::new(leg.start);
+    let (sh, ch) = leg.heading_deg.to_radians().sin_cos();
+    let forward = DVec3::new(sh, ch, 0.0);
+    let right = DVec3::new(ch, -sh, 0.0);
+    let inside = |session: &mut QuerySession, enu: DVec3| {
+        let p = frame.enu_to_geodetic(enu);
+        session
+            .hot(p.lat_deg, p.lon_deg)
+            .map(|h| Geodetic::new(p.lat_deg, p.lon_deg, h.height_ellipsoid_m()))
+    };
+    let mut reach_m = 0.0;
+    while reach_m < 4000.0 {
+        let ahead = reach_m + 100.0;
+        let sides = [-0.3, 0.3].map(|s| forward * ahead + right * (s * ahead));
+        if sides.iter().any(|&p| inside(session, p).is_err()) {
+            break;
+        }
+        reach_m = ahead;
+    }
+    anyhow::ensure!(
+        reach_m >= 600.0,
+        "the database ends {reach_m} m ahead of the pass: too close for the plume comparison"
+    );
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(16);
+    (0..16)
+        .map(|_| {
+            let d = rng.gen_range(reach_m / 3.0..reach_m);
+            let side = rng.gen_range(-0.3..0.3) * d;
+            inside(session, forward * d + right * side).context("a plume of the comparison")
+        })
+        .collect()
 }
 
 fn render_frames(
@@ -64,6 +111,8 @@ fn render_frames(
         gpu_ms: Vec::new(),
         triangles: Vec::new(),
         draw_calls: Vec::new(),
+        puffs: Vec::new(),
+        puff_gpu_ms: Vec::new(),
     };
     for snapshot in snapshots {
         let started = Instant::now();
@@ -88,6 +137,8 @@ fn render_frames(
         run.gpu_ms.push(stats.gpu_ms);
         run.triangles.push(stats.triangles as f64);
         run.draw_calls.push(f64::from(stats.draw_calls));
+        run.puffs.push(f64::from(stats.puffs_drawn));
+        run.puff_gpu_ms.push(stats.puff_gpu_ms);
     }
     Ok(run)
 }
@@ -175,6 +226,58 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     let lod_again = render_frames(&mut renderer, &cache, &sample, &target, false)?;
 
     let lod_frame = percentile(&lod.frame_ms, 0.5).min(percentile(&lod_again.frame_ms, 0.5));
+
+    // 3. The same frames with 32 plumes in view, interleaved with frames without them.
+    let fires = fire_positions(&mut session, &leg)?;
+    let mut effects = cig_effects::EffectSystem::new(cig_effects::EffectsConfig {
+        plume_slots: 2 * fires.len(),
+        dust_slots: 0,
+        ..Default::default()
+    })?;
+    effects.set_atmosphere(bench_atmosphere())?;
+    effects.advance_to(0.0)?;
+    start_fires(&mut effects, &fires)?;
+    effects.advance_to(PLUMES_BURNING_S)?;
+    let smoky: Vec<FrameSnapshot> = sample
+        .iter()
+        .map(|s| {
+            let mut s = s.clone();
+            s.puff_origin_ecef_m = s.views[0].eye.to_ecef();
+            effects.snapshot(s.puff_origin_ecef_m, &mut s.puffs);
+            s
+        })
+        .collect();
+    render_frames(&mut renderer, &cache, &smoky[..1], &target, false)?;
+    let mut plain_runs = Vec::new();
+    let mut smoky_runs = Vec::new();
+    for _ in 0..2 {
+        plain_runs.push(render_frames(
+            &mut renderer,
+            &cache,
+            &sample,
+            &target,
+            false,
+        )?);
+        smoky_runs.push(render_frames(
+            &mut renderer,
+            &cache,
+            &smoky,
+            &target,
+            false,
+        )?);
+    }
+    let joined = |runs: &[Run], pick: fn(&Run) -> &Vec<f64>| -> Vec<f64> {
+        runs.iter().flat_map(|r| pick(r).iter().copied()).collect()
+    };
+    let plain_ms = joined(&plain_runs, |r| &r.frame_ms);
+    let smoky_ms = joined(&smoky_runs, |r| &r.frame_ms);
+    let puffs_drawn = mean(&joined(&smoky_runs, |r| &r.puffs));
+    anyhow::ensure!(
+        puffs_drawn > 0.0,
+        "none of the plumes of the comparison is in view"
+    );
+    let (plain_median, smoky_median) = (percentile(&plain_ms, 0.5), percentile(&smoky_ms, 0.5));
+    let puff_share = (smoky_median - plain_median) / smoky_median;
     let report = serde_json::json!({
         "machine": machine(),
         "date_utc": date_utc(),
@@ -214,7 +317,22 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
             "triangles_full_over_lod": mean(&full.triangles) / mean(&lod.triangles).max(1.0),
             "frame_time_full_over_lod": percentile(&full.frame_ms, 0.5) / lod_frame,
         },
+        "plumes": {
+            "plumes": 2 * fires.len(),
+            "puffs_per_plume": 375,
+            "burning_s": PLUMES_BURNING_S,
+            "puffs_drawn_mean": puffs_drawn,
+            "frames_each_way": plain_ms.len(),
+            "frame_ms_without": summary(&plain_ms),
+            "frame_ms_with": summary(&smoky_ms),
+            "gpu_ms_without": summary(&joined(&plain_runs, |r| &r.gpu_ms)),
+            "gpu_ms_with": summary(&joined(&smoky_runs, |r| &r.gpu_ms)),
+            "puff_gpu_ms": summary(&joined(&smoky_runs, |r| &r.puff_gpu_ms)),
+            "frame_time_with_over_without": smoky_median / plain_median,
+            "puff_share_of_frame_time": puff_share,
+        },
         "targets": {
+            "puff_share_of_frame_time_at_most": 0.25,
             "triangles_full_over_lod_at_least": 20.0,
             "frame_time_full_over_lod_at_least": 5.0,
             "cpu_select_ms_at_most": 0.5,
@@ -226,7 +344,8 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     } else {
         println!(
             "pass: {} frames at 300 m/s, median {:.1} ms, max/median after warm-up {:.2}, selection median {:.3} ms\n\
-             level of detail: {:.0} triangles, {:.1} ms; full detail: {:.0} triangles, {:.1} ms; ratios {:.1}x triangles, {:.1}x time",
+             level of detail: {:.0} triangles, {:.1} ms; full detail: {:.0} triangles, {:.1} ms; ratios {:.1}x triangles, {:.1}x time\n\
+             plumes: {} plumes, {:.0} puffs drawn, {:.1} ms with against {:.1} ms without: {:.0}% of the frame",
             snapshots.len(),
             percentile(&streaming.frame_ms, 0.5),
             stall_ratio,
@@ -237,6 +356,11 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
             percentile(&full.frame_ms, 0.5),
             mean(&full.triangles) / mean(&lod.triangles).max(1.0),
             percentile(&full.frame_ms, 0.5) / lod_frame,
+            2 * fires.len(),
+            puffs_drawn,
+            smoky_median,
+            plain_median,
+            100.0 * puff_share,
         );
     }
     Ok(())

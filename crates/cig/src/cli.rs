@@ -411,6 +411,24 @@ pub struct RenderArgs {
     /// glTF file path as MODEL.
     #[arg(long = "entity", value_name = "SPEC", allow_hyphen_values = true)]
     pub entities: Vec<String>,
+    /// A fire "LAT,LON[,HEAT_MW[,SECONDS]]" on the terrain: a smoke plume and its flames,
+    /// releasing HEAT_MW (default 5) and burning for SECONDS (default 120) at --time.
+    /// Repeatable.
+    #[arg(
+        long = "smoke",
+        value_name = "LAT,LON[,HEAT_MW[,SECONDS]]",
+        allow_hyphen_values = true
+    )]
+    pub smoke: Vec<String>,
+    /// Wind for --smoke "SPEED,FROM_DEG": m/s, and the direction it blows from (degrees
+    /// clockwise from true north).
+    #[arg(
+        long,
+        value_name = "SPEED,FROM_DEG",
+        default_value = "5,270",
+        allow_hyphen_values = true
+    )]
+    pub wind: String,
     /// Write frame statistics (triangles, tiles, draw calls, CPU and GPU time) as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,

@@ -110,6 +110,117 @@ pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<EntitySpec> {
     })
 }
 
+/// A fire asked for with `--smoke`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FireSpec {
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    pub heat_w: f64,
+    /// How long it has burnt at the frame's time, s.
+    pub burning_s: f64,
+}
+
+/// Largest heat release `--smoke` takes, MW (a large oil-tank fire).
+const MAX_HEAT_MW: f64 = 10_000.0;
+/// Longest `--smoke` burn simulated, s.
+const MAX_BURN_S: f64 = 3600.0;
+/// Footprint of a `--smoke` fire (a burning vehicle), m.
+const FIRE_SIZE_M: f64 = 3.0;
+
+/// Parses "LAT,LON[,HEAT_MW[,SECONDS]]".
+pub fn parse_smoke(text: &str) -> anyhow::Result<FireSpec> {
+    let v = parse_numbers(text, "--smoke", &[2, 3, 4])
+        .map_err(|e| anyhow::anyhow!("{e:#} (LAT,LON[,HEAT_MW[,SECONDS]])"))?;
+    let get = |i: usize, default: f64| v.get(i).copied().unwrap_or(default);
+    let (lat_deg, lon_deg, heat_mw, burning_s) =
+        (get(0, 0.0), get(1, 0.0), get(2, 5.0), get(3, 120.0));
+    if !(-90.0..=90.0).contains(&lat_deg) || !(-180.0..=180.0).contains(&lon_deg) {
+        bail!("--smoke \"{text}\": latitude must lie in -90..90 and longitude in -180..180");
+    }
+    if !(heat_mw > 0.0 && heat_mw <= MAX_HEAT_MW) {
+        bail!("--smoke \"{text}\": heat release {heat_mw} MW must be above 0 and at most {MAX_HEAT_MW}");
+    }
+    if !(burning_s > 0.0 && burning_s <= MAX_BURN_S) {
+        bail!("--smoke \"{text}\": {burning_s} seconds of burning must be above 0 and at most {MAX_BURN_S}");
+    }
+    Ok(FireSpec {
+        lat_deg,
+        lon_deg,
+        heat_w: heat_mw * 1e6,
+        burning_s,
+    })
+}
+
+/// Parses "SPEED,FROM_DEG".
+pub fn parse_wind(text: &str) -> anyhow::Result<cig_effects::Wind> {
+    let v = parse_numbers(text, "--wind", &[2])
+        .map_err(|e| anyhow::anyhow!("{e:#} (SPEED,FROM_DEG)"))?;
+    let (speed_mps, from_deg) = (v[0], v[1]);
+    if !(0.0..=60.0).contains(&speed_mps) {
+        bail!("--wind \"{text}\": speed {speed_mps} m/s must lie in 0..60");
+    }
+    Ok(cig_effects::Wind {
+        speed_mps,
+        from_deg: from_deg.rem_euclid(360.0),
+    })
+}
+
+/// Starts each fire (a smoke plume and its flames, on the terrain) in a new effect system
+/// stepped to the moment the longest has burnt its seconds, in air of Pasquill's class for
+/// the wind and the sun at `unix_time_s`, and returns the puffs relative to `origin_ecef_m`.
+pub fn fire_puffs(
+    session: &mut QuerySession,
+    fires: &[(String, FireSpec)],
+    wind: cig_effects::Wind,
+    unix_time_s: f64,
+    origin_ecef_m: glam::DVec3,
+) -> anyhow::Result<Vec<cig_effects::PuffInstance>> {
+    use cig_effects::{
+        Atmosphere, EffectId, EffectSystem, EffectsConfig, PlumeKind, PlumeSource, PlumeSpec,
+    };
+    let mut puffs = Vec::new();
+    let Some((_, first)) = fires.first() else {
+        return Ok(puffs);
+    };
+    let sun = cig_scene::Lighting::at(
+        unix_time_s,
+        Geodetic::new(first.lat_deg, first.lon_deg, 0.0),
+    );
+    let atmosphere =
+        Atmosphere::from_weather(wind, 288.15, sun.sun_elevation_deg, 0.0, f64::INFINITY)
+            .context("--wind")?;
+    let mut system = EffectSystem::new(EffectsConfig {
+        plume_slots: 2 * fires.len(),
+        dust_slots: 0,
+        ..Default::default()
+    })?;
+    system.set_atmosphere(atmosphere)?;
+    let end_s = fires.iter().map(|(_, f)| f.burning_s).fold(0.0, f64::max);
+    system.advance_to(0.0)?;
+    for (i, (text, fire)) in fires.iter().enumerate() {
+        let ground = session.hot(fire.lat_deg, fire.lon_deg).with_context(|| {
+            format!("--smoke \"{text}\": the fire cannot be placed on the terrain")
+        })?;
+        let position = Geodetic::new(fire.lat_deg, fire.lon_deg, ground.height_ellipsoid_m());
+        for (k, kind) in [PlumeKind::Smoke, PlumeKind::Flame].into_iter().enumerate() {
+            system
+                .start_plume(&PlumeSpec {
+                    id: EffectId((2 * i + k) as u64),
+                    kind,
+                    position,
+                    size_m: FIRE_SIZE_M,
+                    source: PlumeSource::HeatReleaseW(fire.heat_w),
+                    start_time_s: end_s - fire.burning_s,
+                    duration_s: MAX_BURN_S * 2.0,
+                })
+                .with_context(|| format!("--smoke \"{text}\""))?;
+        }
+    }
+    system.advance_to(end_s)?;
+    system.snapshot(origin_ecef_m, &mut puffs);
+    Ok(puffs)
+}
+
 /// The frame statistics as JSON.
 pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Value {
     serde_json::json!({
@@ -127,6 +238,8 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "meshes_built": stats.meshes_built,
         "nodes_dropped": stats.nodes_dropped,
         "entities_drawn": stats.entities_drawn,
+        "puffs_drawn": stats.puffs_drawn,
+        "puff_gpu_ms": stats.puff_gpu_ms,
         "adapter": gpu.describe(),
         "size": [view.width_px, view.height_px],
     })
@@ -194,6 +307,12 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .enumerate()
         .map(|(i, text)| parse_entity(text, i as u32 + 1))
         .collect::<anyhow::Result<_>>()?;
+    let fires: Vec<(String, FireSpec)> = args
+        .smoke
+        .iter()
+        .map(|text| Ok((text.clone(), parse_smoke(text)?)))
+        .collect::<anyhow::Result<_>>()?;
+    let wind = parse_wind(&args.wind)?;
     let (cache, mut renderer) = open(&args.db, config)?;
     let mut session = QuerySession::new(Arc::clone(&cache));
     let mut entities = Vec::new();
@@ -224,6 +343,14 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     snapshot.max_pixel_error = args.max_pixel_error;
     snapshot.wireframe = args.wireframe;
     snapshot.entities = entities;
+    snapshot.puff_origin_ecef_m = view.eye.to_ecef();
+    snapshot.puffs = fire_puffs(
+        &mut session,
+        &fires,
+        wind,
+        unix_time_s,
+        snapshot.puff_origin_ecef_m,
+    )?;
     cache.update(&[view.eye]);
     cache.wait_idle();
     cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;
@@ -236,12 +363,13 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     eprintln!(
-        "rendered {}x{} to {}: {} triangles, {} nodes, {} draw calls, cpu {:.1} ms, gpu {:.1} ms ({})",
+        "rendered {}x{} to {}: {} triangles, {} nodes, {} puffs, {} draw calls, cpu {:.1} ms, gpu {:.1} ms ({})",
         view.width_px,
         view.height_px,
         args.out.display(),
         stats.triangles,
         stats.terrain_nodes,
+        stats.puffs_drawn,
         stats.draw_calls,
         stats.cpu_frame_ms,
         stats.gpu_ms,

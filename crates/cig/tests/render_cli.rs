@@ -122,6 +122,83 @@ fn bad_render_input_gives_one_line_errors() {
     assert!(!out.exists(), "no frame written after an error");
 }
 
+fn read_rgba(path: &Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(path).expect("png"),
+    ));
+    let mut reader = decoder.read_info().expect("png header");
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).expect("png data");
+    buf.truncate(info.buffer_size());
+    buf
+}
+
+#[test]
+fn render_draws_smoke_plumes_from_the_command_line() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let clear = dir.path().join("clear.png");
+    cig().args(render_args(&db, &clear)).assert().success();
+    let smoky = dir.path().join("smoke.png");
+    let stats = dir.path().join("stats.json");
+    cig()
+        .args(render_args(&db, &smoky))
+        .args([
+            "--smoke",
+            "35.995,-121.215,20,90",
+            "--smoke",
+            "35.993,-121.21",
+            "--wind",
+            "4,250",
+            "--stats",
+            &stats.display().to_string(),
+        ])
+        .assert()
+        .success();
+    let json: Value = serde_json::from_slice(&std::fs::read(&stats).expect("stats")).expect("json");
+    assert!(json["puffs_drawn"].as_u64().unwrap_or(0) > 500, "{json}");
+    assert!(json["puff_gpu_ms"].is_number(), "{json}");
+    let (a, b) = (read_rgba(&clear), read_rgba(&smoky));
+    assert_eq!(a.len(), b.len());
+    let changed = a
+        .chunks_exact(4)
+        .zip(b.chunks_exact(4))
+        .filter(|(p, q)| (0..3).any(|c| p[c].abs_diff(q[c]) > 8))
+        .count();
+    assert!(changed > 20, "only {changed} pixels show the smoke");
+}
+
+#[test]
+fn bad_smoke_and_wind_values_give_one_line_errors() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let out = dir.path().join("frame.png");
+    let cases: Vec<(&str, &str, &str)> = vec![
+        ("--smoke", "fire", "--smoke"),
+        ("--smoke", "35.99", "--smoke"),
+        ("--smoke", "35.99,-121.21,5,60,7", "--smoke"),
+        ("--smoke", "95,-121.21", "latitude"),
+        ("--smoke", "35.99,-121.21,-5", "heat release"),
+        ("--smoke", "35.99,-121.21,nan", "--smoke"),
+        ("--smoke", "35.99,-121.21,5,0", "seconds"),
+        ("--smoke", "35.99,-121.21,5,1e9", "seconds"),
+        ("--smoke", "10,10", "cannot be placed on the terrain"),
+        ("--wind", "5", "--wind"),
+        ("--wind", "-1,270", "speed"),
+        ("--wind", "5,inf", "--wind"),
+    ];
+    for (option, value, expect) in cases {
+        let mut args = render_args(&db, &out);
+        args.extend([option.to_string(), value.to_string()]);
+        if option == "--wind" {
+            args.extend(["--smoke".to_string(), "35.995,-121.215".to_string()]);
+        }
+        let line = one_line_error(&cig().args(&args).assert().failure());
+        assert!(line.contains(expect), "{option} {value}: {line}");
+    }
+    assert!(!out.exists(), "no frame written after an error");
+}
+
 #[test]
 fn bench_render_reports_both_ways_and_their_ratios() {
     let dir = tempfile::tempdir().expect("tmp");
@@ -150,6 +227,23 @@ fn bench_render_reports_both_ways_and_their_ratios() {
     assert!(json["lod"]["cpu_select_ms"]["median"].as_f64().is_some());
     assert!(
         json["full_detail"]["triangles_mean"].as_f64() >= json["lod"]["triangles_mean"].as_f64()
+    );
+    // The plumes comparison: every one of the 32 plumes' puffs in view, timed both ways.
+    let plumes = &json["plumes"];
+    assert_eq!(plumes["plumes"].as_u64(), Some(32), "{plumes}");
+    assert!(
+        plumes["puffs_drawn_mean"].as_f64().unwrap_or(0.0) > 5000.0,
+        "{plumes}"
+    );
+    for key in ["frame_time_with_over_without", "puff_share_of_frame_time"] {
+        assert!(
+            plumes[key].as_f64().is_some_and(f64::is_finite),
+            "{key}: {plumes}"
+        );
+    }
+    assert!(
+        plumes["frame_ms_with"]["median"].as_f64() > Some(0.0),
+        "{plumes}"
     );
 }
 

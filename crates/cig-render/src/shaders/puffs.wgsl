@@ -1,7 +1,8 @@
 // Obscurant puffs: order-independent accumulation of optical depth and in-scattered light
-// (see puffs.rs for the algorithm). `NEAR_PLANE_M` and `SCENE_SAMPLES` are prepended by Rust.
-
-@group(0) @binding(1) var scene_depth: texture_depth_multisampled_2d;
+// (see puffs.rs for the algorithm). Rust prepends `NEAR_PLANE_M`, `SCENE_SAMPLES` and one of
+// puff_depth_samples.wgsl (soft contact read from the depth samples) or puff_depth_test.wgsl
+// (the GL fallback: a depth test at the front of each puff), which define
+// `FRONT_BILLBOARD` and `scene_fraction`.
 
 // Billboard radius in the puff's sigmas, and the Gaussian's value there (exp(-2.5^2 / 2)).
 const RADIUS_SIGMAS: f32 = 2.5;
@@ -32,6 +33,7 @@ fn vs_main(
     let c = position_radius.xyz;
     let r = position_radius.w;
     let d2 = dot(c, c);
+    let d = sqrt(d2);
     let emissive = clamp(emissive_temperature.x, 0.0, 1.0);
     out.centre_radius = position_radius;
     out.albedo_tau = vec4<f32>(
@@ -39,7 +41,7 @@ fn vs_main(
         min(-log(max(1.0 - colour_opacity.w, 1e-4)), MAX_TAU),
     );
     out.emission = vec4<f32>(colour_opacity.rgb * emissive * FLAME_RADIANCE, 0.0);
-    if (d2 < 1.21 * r * r) {
+    if (d2 < 1.21 * r * r || (FRONT_BILLBOARD && d - r < 2.0 * NEAR_PLANE_M)) {
         // The eye is in (or at the edge of) the puff: a full-screen triangle of view rays.
         if (vertex >= 3u) {
             out.clip = vec4<f32>(0.0, 0.0, 0.5, 1.0);
@@ -54,22 +56,26 @@ fn vs_main(
         out.ray = g.cam_forward.xyz + g.cam_right.xyz * x_tan + g.cam_up.xyz * y_tan;
         return out;
     }
-    // A square facing the eye through the centre, large enough to hold the sphere's outline.
-    let d = sqrt(d2);
+    // A square facing the eye through the centre (or, for the depth test, through the
+    // sphere's nearest point), large enough to hold the sphere's outline.
     let n = c / d;
+    var plane_m = d;
+    if (FRONT_BILLBOARD) {
+        plane_m = d - r;
+    }
     var side = cross(n, g.cam_up.xyz);
     if (dot(side, side) < 1e-6) {
         side = cross(n, g.cam_right.xyz);
     }
     side = normalize(side);
     let up = cross(side, n);
-    let half_size = r * d / sqrt(d2 - r * r);
+    let half_size = r * plane_m / sqrt(d2 - r * r);
     let corners = array<vec2<f32>, 6>(
         vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
         vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
     );
     let k = corners[min(vertex, 5u)];
-    let p = c + (side * k.x + up * k.y) * half_size;
+    let p = n * plane_m + (side * k.x + up * k.y) * half_size;
     out.clip = g.view_proj * vec4<f32>(p, 1.0);
     out.ray = p;
     return out;
@@ -105,22 +111,7 @@ fn fs_main(in: PuffOut) -> Accumulated {
     if (window <= 0.0) {
         discard;
     }
-    // The part of the column between the eye and the scene behind: the Gaussian's distribution
-    // along the ray, cut at the eye and at each depth sample (soft, no intersection lines).
-    let pixel = vec2<i32>(in.clip.xy);
-    let along = max(dot(dir, g.cam_forward.xyz), 1e-4);
-    let inv = 0.70710678 / sigma;
-    let behind_eye = erf_approx(-s0 * inv);
-    var erf_sum = 0.0;
-    for (var s = 0; s < SCENE_SAMPLES; s++) {
-        let depth = textureLoad(scene_depth, pixel, s);
-        var reach = 1.0;
-        if (depth > 0.0) {
-            reach = erf_approx((NEAR_PLANE_M / depth / along - s0) * inv);
-        }
-        erf_sum += max(reach - behind_eye, 0.0);
-    }
-    let fraction = 0.5 * erf_sum / f32(SCENE_SAMPLES);
+    let fraction = scene_fraction(vec2<i32>(in.clip.xy), dir, s0, sigma);
     let tau = in.albedo_tau.w * window * fraction;
     if (tau <= 0.0) {
         discard;
