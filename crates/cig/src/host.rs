@@ -38,6 +38,7 @@
 //! from = [51.0, -1.5, 400]
 //! to = [51.02, -1.5, 400]
 //! extended = true
+//! alpha_threshold = 0          # least alpha (surface or smoke) that stops the line
 //! ```
 
 use crate::cli::HostArgs;
@@ -156,6 +157,9 @@ struct HostLos {
     extended: bool,
     #[serde(default)]
     every_frame: bool,
+    /// Least alpha of a surface (or obscurant) that stops the line, 0-255.
+    #[serde(default)]
+    alpha_threshold: u8,
 }
 
 fn check(script: &HostScript) -> anyhow::Result<(Version, ByteOrder)> {
@@ -324,7 +328,7 @@ pub fn run(args: &HostArgs) -> anyhow::Result<()> {
                     Packet::LosExtendedResponse(r) => Some((
                         lsn_latency(r.host_frame_lsn),
                         serde_json::json!({"packet": "los_extended", "id": r.los_id, "valid": r.valid,
-                            "visible": r.visible, "range_valid": r.range_valid, "range_m": r.range_m,
+                            "visible": r.visible, "range_valid": r.range_valid, "range_m": r.range_m, "alpha": r.alpha,
                             "lat_deg": r.lat_deg_or_x_m, "lon_deg": r.lon_deg_or_y_m, "alt_m": r.alt_m_or_z_m}),
                     )),
                     Packet::ImageGeneratorMessage(m) => Some((
@@ -525,6 +529,7 @@ fn build_frame(
         packets.push(Packet::LosSegmentRequest(LosSegmentRequest {
             los_id: l.id,
             request_type_extended: l.extended,
+            alpha_threshold: l.alpha_threshold,
             source_lat_deg_or_x_m: l.from[0],
             source_lon_deg_or_y_m: l.from[1],
             source_alt_m_or_z_m: l.from[2],

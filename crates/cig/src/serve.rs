@@ -84,6 +84,17 @@ fn scenario_models(
         .collect()
 }
 
+/// The database's geographic box, widened by `margin_deg`.
+fn database_area(cache: &TileCache, margin_deg: f64) -> cig_effects::system::ServedArea {
+    let g = cache.database().manifest().layout.grid;
+    cig_effects::system::ServedArea {
+        south_deg: g.south_lat_deg - margin_deg,
+        north_deg: g.north_lat_deg() + margin_deg,
+        west_deg: g.west_lon_deg - margin_deg,
+        east_deg: g.east_lon_deg() + margin_deg,
+    }
+}
+
 /// How the frames are shown.
 enum Output {
     None,
@@ -198,7 +209,12 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
             },
             start,
             fog_mode,
-            effects: EffectsConfig::default(),
+            // Effects are served over the database (a 0.05° margin round it); one started
+            // further out is refused with a message.
+            effects: EffectsConfig {
+                area: Some(database_area(&cache, 0.05)),
+                ..EffectsConfig::default()
+            },
             join_exercise: dis.is_some(),
         },
     )?;

@@ -556,3 +556,83 @@ fn serve_shows_its_views_in_a_window() {
     assert!(run.status.success(), "{stderr}");
     assert!(stderr.contains("served 5 frames in a window"), "{stderr}");
 }
+
+#[test]
+fn a_hosts_line_of_sight_through_the_scenarios_smoke_is_obscured() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let (lat, lon) = (36.0, -121.21);
+    let ground = query_height_msl(&db, lat, lon);
+    let scenario = dir.path().join("smoke.toml");
+    // 60 simulated seconds a second: the plume grows in a second or two.
+    std::fs::write(
+        &scenario,
+        format!(
+            "start_time = \"2026-06-21T12:00:00Z\"\ntime_rate = 60\n\
+             [[smoke]]\nid = 1\nlat_deg = {lat}\nlon_deg = {lon}\nheat_release_w = 2e6\n\
+             [[smoke]]\nid = 2\nlat_deg = 10.0\nlon_deg = 10.0\n"
+        ),
+    )
+    .expect("scenario");
+    let ig_port = free_udp_port();
+    let host_port = free_udp_port();
+    let serve = start_serve(&[
+        "--db".into(),
+        db.display().to_string(),
+        "--scenario".into(),
+        scenario.display().to_string(),
+        "--no-render".into(),
+        "--cigi-port".into(),
+        ig_port.to_string(),
+        "--cigi-host".into(),
+        format!("127.0.0.1:{host_port}"),
+    ]);
+    let alt = ground + 30.0;
+    // Along the plume (the default wind blows from the west) and, as a control, well south of it.
+    let script = format!(
+        "frames = 180\n\
+         [[los]]\nid = 1\nfrom = [{lat}, -121.215, {alt}]\nto = [{lat}, -121.195, {alt}]\nextended = true\nevery_frame = true\n\
+         [[los]]\nid = 2\nfrom = [35.985, -121.215, {alt2}]\nto = [35.985, -121.195, {alt2}]\nextended = true\nevery_frame = true\n",
+        alt2 = alt + 400.0,
+    );
+    let script_path = dir.path().join("los.toml");
+    std::fs::write(&script_path, script).expect("script");
+    let out = cig()
+        .args(["host", "--script"])
+        .arg(&script_path)
+        .args([
+            "--ig".into(),
+            format!("127.0.0.1:{ig_port}"),
+            "--port".into(),
+            host_port.to_string(),
+            "--json".into(),
+        ])
+        .timeout(Duration::from_secs(120))
+        .output()
+        .expect("cig host");
+    let stderr = serve.stderr.lock().map(|s| s.clone()).unwrap_or_default();
+    serve.kill();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let answers = lines(&out.stdout);
+    let through: Vec<&Value> = answers
+        .iter()
+        .filter(|a| a["packet"] == "los_extended" && a["id"] == 1 && a["valid"] == true)
+        .collect();
+    assert!(
+        through
+            .iter()
+            .any(|a| a["visible"] == false && a["alpha"].as_u64().unwrap_or(0) > 0),
+        "the smoke stops the line at some point: {through:?}"
+    );
+    let control: Vec<&Value> = answers
+        .iter()
+        .filter(|a| a["packet"] == "los_extended" && a["id"] == 2)
+        .collect();
+    assert!(!control.is_empty() && control.iter().all(|a| a["visible"] == true));
+    // The source far off the database is refused, with a message.
+    assert!(stderr.contains("smoke source 2 cannot"), "{stderr}");
+}
