@@ -272,8 +272,9 @@ impl PuffPass {
     }
 
     /// Re-bases the snapshot's puffs on the view's eye (the difference of the two origins in
-    /// f64, then each position rounded to f32), leaves out puffs outside the view or without
-    /// optical depth, and uploads the rest. Returns how many will be drawn.
+    /// f64, then each position rounded to f32), leaves out puffs outside the view, without
+    /// optical depth or with non-finite values, clamps colours and emission to 0-1, and uploads
+    /// the rest. Returns how many will be drawn.
     pub(crate) fn prepare(
         &mut self,
         gpu: &Gpu,
@@ -316,6 +317,13 @@ impl PuffPass {
             }
             self.staging.push(PuffInstance {
                 position_eye_m: [rel.x as f32, rel.y as f32, rel.z as f32],
+                colour_rgb: puff.colour_rgb.map(|c| {
+                    if c.is_finite() {
+                        c.clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    }
+                }),
                 opacity: opacity.min(1.0),
                 emissive: if puff.emissive.is_finite() {
                     puff.emissive.clamp(0.0, 1.0)

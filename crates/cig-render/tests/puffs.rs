@@ -314,6 +314,67 @@ fn coincident_puffs_add_optical_depth_like_one_thicker_puff() {
     );
 }
 
+#[test]
+fn puffs_with_impossible_values_are_left_out_without_harming_the_frame() {
+    let db = sea();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let ahead = DVec3::new(0.0, 400.0, 70.0);
+    let good = sky_puff(0.6, [0.5, 0.5, 0.5]);
+    let clean = sky_frame(&[(ahead, good)]);
+    let mut bad = sky_frame(&[(ahead, good)]);
+    let template = bad.puffs[0];
+    for broken in [
+        PuffInstance {
+            position_eye_m: [f32::NAN, 0.0, 0.0],
+            ..template
+        },
+        PuffInstance {
+            radius_m: -3.0,
+            ..template
+        },
+        PuffInstance {
+            radius_m: f32::INFINITY,
+            ..template
+        },
+        PuffInstance {
+            opacity: f32::NAN,
+            ..template
+        },
+        PuffInstance {
+            opacity: -0.5,
+            ..template
+        },
+    ] {
+        bad.puffs.push(broken);
+    }
+    // A colour or glow out of range is clamped, not propagated into the frame as NaN.
+    let mut odd = sky_frame(&[(ahead, good)]);
+    odd.puffs[0].colour_rgb = [f32::NAN, 0.5, 7.0];
+    odd.puffs[0].emissive = f32::NAN;
+    let (clean_image, _) = render(&mut renderer, &cache, &clean, false);
+    let (bad_image, stats) = render(&mut renderer, &cache, &bad, false);
+    assert_eq!(stats.puffs_drawn, 1);
+    assert!(max_abs_diff(&clean_image, &bad_image) <= 1);
+    let (odd_image, stats) = render(&mut renderer, &cache, &odd, false);
+    assert_eq!(stats.puffs_drawn, 1);
+    let mut expected = clean.clone();
+    expected.puffs[0].colour_rgb = [0.0, 0.5, 1.0];
+    expected.puffs[0].emissive = 0.0;
+    let (expected_image, _) = render(&mut renderer, &cache, &expected, false);
+    assert!(max_abs_diff(&odd_image, &expected_image) <= 1);
+    // Puffs relative to an origin far from the eye land where puffs relative to the eye do.
+    let mut shifted = clean.clone();
+    let far = glam::DVec3::new(3.0e5, -2.0e5, 1.0e5);
+    shifted.puff_origin_ecef_m += far;
+    for p in &mut shifted.puffs {
+        let moved = DVec3::from(p.position_eye_m.map(f64::from)) - far;
+        p.position_eye_m = [moved.x as f32, moved.y as f32, moved.z as f32];
+    }
+    let (shifted_image, _) = render(&mut renderer, &cache, &shifted, false);
+    assert!(max_abs_diff(&clean_image, &shifted_image) <= 2);
+}
+
 /// Optical depth along a ray (unit `dir` from the eye) through puffs, the renderer's model
 /// integrated independently in f64: Gaussian columns windowed to zero at the radius.
 fn expected_optical_depth(puffs: &[PuffInstance], dir: DVec3) -> f64 {
