@@ -32,7 +32,8 @@
 //!   black smoke); flame puffs carry the same soot.
 //! - Mass of every puff follows Eq 4, `M(t) = M_0 (f_d + (1 - f_d) e^(-delta t))`; opacity is
 //!   the centre opacity `1 - exp(-alpha M / (2 pi sigma^2))` times the thesis's linear fade with
-//!   age, so trails and plumes thin toward their old end.
+//!   age, so trails and plumes thin toward their old end; the transmittance query thins each
+//!   puff's optical depth the same way, so a line of sight sees what is drawn.
 //! - Dust trails (chapter V.A, appendix D): a trail follows one vehicle, dead-reckoned from its
 //!   last update, and emits behind it puffs whose size and mass come from the speed and the
 //!   soil and road under it ([`crate::dust`]).
@@ -529,6 +530,24 @@ fn mass_law(kind: ObscurantKind) -> (f64, f64) {
 fn mass_kg(kind: ObscurantKind, p: &Puff) -> f64 {
     let (fd, _) = mass_law(kind);
     p.mass0_kg * (fd + (1.0 - fd) * p.decay)
+}
+
+/// The fraction of a puff's mass optical depth that is drawn: the thesis's fade with age thins
+/// old puffs on screen, and the line-of-sight query sees them as thin as they are drawn (so a
+/// sensor and the picture agree). 1 for a new puff; flame glow never adds extinction.
+fn drawn_fraction(kind: ObscurantKind, p: &Puff) -> f64 {
+    let tau = optics::centre_optical_depth(kind, p.mass_kg, p.sigma_m);
+    if tau.is_nan() || tau <= 0.0 {
+        return 0.0;
+    }
+    let drawn = -libm::log1p(-p.opacity.clamp(0.0, 0.999_999));
+    // The drawn opacity is computed in single precision: a new puff's ratio is 1 within 1e-6.
+    let ratio = drawn / tau.min(80.0);
+    if ratio > 0.999 {
+        1.0
+    } else {
+        ratio.max(0.0)
+    }
 }
 
 fn opacity(kind: ObscurantKind, mass_kg: f64, sigma_m: f64, age_s: f64, life_s: f64) -> f64 {
@@ -1073,7 +1092,7 @@ impl EffectSystem {
                             a, b, p.centre, p.mass_kg, p.sigma_m,
                         );
                         if integral > 0.0 {
-                            depth += alpha * integral;
+                            depth += alpha * integral * drawn_fraction(slot.kind, p);
                             crossed += 1;
                         }
                     }

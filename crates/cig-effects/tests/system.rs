@@ -419,7 +419,8 @@ fn transmittance_clear_dense_monotone_and_equal_to_numeric_integration() {
         assert!(t <= last * (1.0 + 1e-9), "{t} after {last}");
         last = t;
     }
-    // The system's answer is the numeric integral of the summed Gaussian field (Eq 1-2).
+    // The system's answer is the numeric integral of the summed Gaussian field (Eq 1-2), each
+    // puff thinned with age as it is drawn.
     let a = DVec3::new(40.0, -300.0, z);
     let b = DVec3::new(80.0, 300.0, z + 20.0);
     let ecef = |p: DVec3| frame.enu_to_ecef(p);
@@ -441,7 +442,14 @@ fn transmittance_clear_dense_monotone_and_equal_to_numeric_integration() {
         for s in &states {
             let d2 =
                 (p - DVec3::from_array(s.centre_ecef_m)).length_squared() / (s.sigma_m * s.sigma_m);
-            c += s.mass_kg / ((2.0 * std::f64::consts::PI).powf(1.5) * s.sigma_m.powi(3))
+            // Each puff as thin as it is drawn: its optical depth times the drawn fraction
+            // (-ln(1 - opacity) over the centre optical depth of its mass, at most 1).
+            let centre_tau = ObscurantKind::Smoke.mass_extinction_m2_per_kg() * s.mass_kg
+                / (2.0 * std::f64::consts::PI * s.sigma_m * s.sigma_m);
+            let drawn = -(1.0 - s.opacity.clamp(0.0, 0.999_999)).ln() / centre_tau.min(80.0);
+            let fraction = if drawn > 0.999 { 1.0 } else { drawn.max(0.0) };
+            c += fraction * s.mass_kg
+                / ((2.0 * std::f64::consts::PI).powf(1.5) * s.sigma_m.powi(3))
                 * (-0.5 * d2).exp();
         }
         sum += w * c;
