@@ -37,6 +37,7 @@
 //! speed_mps = 8.0                      # along `path`, from `lat_deg`/`lon_deg`
 //! path = [[51.02, -1.45], [51.03, -1.44]]
 //! loop_path = true
+//! dust = true                          # trail of dust when moving on soil (tank, truck: on)
 //!
 //! [view]                               # the view when no host defines one
 //! entity = 1                           # attached to an entity (body offsets), or
@@ -219,6 +220,10 @@ pub struct ScenarioEntity {
     /// DIS appearance bits, hexadecimal ("0x..." or digits).
     #[serde(default)]
     pub appearance: Option<String>,
+    /// Raise a dust trail when moving on soil (default: for ground vehicle models, tank and
+    /// truck).
+    #[serde(default)]
+    pub dust: Option<bool>,
 }
 
 /// The view used when no host defines one.

@@ -170,7 +170,12 @@ pub struct IgWorld {
     operator_wind: Option<cig_effects::system::Wind>,
     operator_plumes: Vec<cig_effects::EffectHandle>,
     operator_plumes_started: u32,
+    /// Dust trails of the ground vehicles this IG moves, by entity.
+    dust_trails: BTreeMap<u16, cig_effects::EffectHandle>,
 }
+
+/// Models of ground vehicles that raise dust when they move on soil.
+const DUST_MODELS: [&str; 2] = ["tank", "truck"];
 
 /// A scenario smoke source and the plume it runs.
 struct SmokeState {
@@ -267,6 +272,7 @@ impl IgWorld {
             operator_wind: None,
             operator_plumes: Vec::new(),
             operator_plumes_started: 0,
+            dust_trails: BTreeMap::new(),
         })
     }
 
@@ -404,6 +410,7 @@ impl IgWorld {
                     }
                     self.owned_effects.clear();
                     self.operator_plumes.clear();
+                    self.dust_trails.clear();
                     if let Some(x) = self.exercise.as_mut() {
                         x.forget_effects();
                     }
@@ -448,6 +455,7 @@ impl IgWorld {
             velocities.insert(*id, velocity);
         }
         self.run_owned_effects(query, effect_time_s, &velocities);
+        self.run_vehicle_dust(query, effect_time_s, &velocities);
         if let Some(x) = self.exercise.as_mut() {
             if now - self.last_process_publish_s >= 1.0 && !self.smoke.is_empty() {
                 self.last_process_publish_s = now;
@@ -593,6 +601,87 @@ impl IgWorld {
                 from_deg: from_deg.rem_euclid(360.0),
             });
             self.last_air_update_s = f64::NEG_INFINITY;
+        }
+    }
+
+    /// Dust trails behind the ground vehicles this IG moves (its scenario's and its host's),
+    /// while they move on the ground faster than 1 m/s; the trail's size comes from the speed
+    /// and the soil and road under the vehicle (thesis appendix D, `cig_effects::dust`), so a
+    /// vehicle on a paved road or in water raises none. Remote entities raise dust by their
+    /// appearance bits instead (§VI.E.3).
+    fn run_vehicle_dust(
+        &mut self,
+        query: &mut QuerySession,
+        t_s: f64,
+        velocities: &BTreeMap<u16, DVec3>,
+    ) {
+        let mut moving = Vec::new();
+        for (id, e) in self.session.entities() {
+            let wants = self
+                .scenario
+                .entities
+                .iter()
+                .find(|s| s.id == *id && e.scripted)
+                .and_then(|s| s.dust)
+                .unwrap_or_else(|| DUST_MODELS.contains(&e.model.as_str()));
+            // An entity whose own appearance asks for dust has that trail already.
+            let by_appearance = self.owned_effects.keys().any(|(owner, effect)| {
+                *owner == *id && matches!(effect, cig_dis::EntityEffect::DustCloud(_))
+            });
+            if !wants || by_appearance || e.life != EntityLife::Active {
+                continue;
+            }
+            let Some(pose) = self.session.poses().get(id) else {
+                continue;
+            };
+            let velocity = velocities.get(id).copied().unwrap_or(DVec3::ZERO);
+            let on_ground = query.hat(pose.position).is_ok_and(|(hat, _)| hat < 3.0);
+            moving.push((
+                *id,
+                pose.position,
+                velocity,
+                on_ground && velocity.truncate().length() > 1.0,
+            ));
+        }
+        let kept: std::collections::BTreeSet<u16> =
+            moving.iter().filter(|m| m.3).map(|m| m.0).collect();
+        for (id, handle) in std::mem::take(&mut self.dust_trails) {
+            if kept.contains(&id) {
+                self.dust_trails.insert(id, handle);
+            } else {
+                let _ = self.effects.stop(handle, t_s);
+            }
+        }
+        for (id, position, velocity, raising) in moving {
+            if !raising {
+                continue;
+            }
+            let effect = cig_dis::EntityEffect::DustCloud(cig_dis::DustCloudSize::Medium);
+            match self.dust_trails.get(&id) {
+                Some(h) if self.effects.is_live(*h) => crate::exercise::follow_entity_effect(
+                    &mut self.effects,
+                    query,
+                    effect,
+                    *h,
+                    position,
+                    velocity,
+                    t_s,
+                ),
+                _ => {
+                    let seed = 0x4455_5354_0000_0000 | u64::from(id);
+                    if let Some(h) = crate::exercise::start_entity_effect(
+                        &mut self.effects,
+                        query,
+                        effect,
+                        seed,
+                        position,
+                        velocity,
+                        t_s,
+                    ) {
+                        self.dust_trails.insert(id, h);
+                    }
+                }
+            }
         }
     }
 

@@ -1066,3 +1066,44 @@ fn the_hosts_wind_carries_the_smoke_and_the_operator_can_start_and_stop_plumes()
         "a stopped plume emits no more"
     );
 }
+
+#[test]
+fn a_moving_truck_raises_dust_and_a_stopped_one_does_not() {
+    let mut q = query();
+    let scenario = format!(
+        "start_time = \"2026-06-21T12:00:00Z\"\n\
+         [[entities]]\nid = 1\nmodel = \"truck\"\nlat_deg = {}\nlon_deg = {}\nclamp = \"height\"\nspeed_mps = 12\npath = [[{}, {}]]\n\
+         [[entities]]\nid = 2\nmodel = \"truck\"\nlat_deg = {}\nlon_deg = {}\nclamp = \"height\"\n\
+         [[entities]]\nid = 3\nmodel = \"truck\"\ndust = false\nlat_deg = {}\nlon_deg = {}\nclamp = \"height\"\nspeed_mps = 12\npath = [[{}, {}]]\n",
+        lat_of_row(10.0),
+        lon_of_col(10.0),
+        lat_of_row(100.0),
+        lon_of_col(10.0),
+        lat_of_row(20.0),
+        lon_of_col(40.0),
+        lat_of_row(10.0),
+        lon_of_col(30.0),
+        lat_of_row(100.0),
+        lon_of_col(30.0),
+    );
+    let mut w = world(&scenario);
+    for _ in 0..60 * 10 {
+        w.step(1.0 / 60.0, &mut q);
+    }
+    // Only the moving truck that may raise dust does: one live dust trail, emitting.
+    let stats = w.effects().stats();
+    assert_eq!(stats.live_effects, 1, "{stats:?}");
+    let frame = cig_geo::EnuFrame::new(Geodetic::new(lat_of_row(10.0), lon_of_col(10.0), 100.0));
+    let puffs = w.effects().puff_states();
+    assert!(!puffs.is_empty());
+    // The dust lies behind it, along its track (it drives north from column 10).
+    let mean = puffs
+        .iter()
+        .map(|p| frame.ecef_to_enu(glam::DVec3::from_array(p.centre_ecef_m)))
+        .fold(glam::DVec3::ZERO, |a, b| a + b)
+        / puffs.len() as f64;
+    assert!(
+        mean.x.abs() < 30.0 && mean.y > 0.0 && mean.y < 12.0 * 10.0,
+        "{mean:?}"
+    );
+}
