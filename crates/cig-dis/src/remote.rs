@@ -543,6 +543,14 @@ impl RemoteEntityTable {
             .map(move |(k, e)| (*k, e.pose(now_s, self.config.smoothing_s)))
     }
 
+    /// Forgets which effects each entity's appearance asked for (after the caller's effects
+    /// were rebuilt): the next update of each entity reports its effects as starting again.
+    pub fn forget_effects(&mut self) {
+        for e in self.entities.values_mut() {
+            e.effects = EffectsRequested::default();
+        }
+    }
+
     /// A plain snapshot of every entity at `now_s`, in key order.
     #[must_use]
     pub fn snapshot(&self, now_s: f64) -> Vec<RemoteEntitySnapshot> {

@@ -302,6 +302,9 @@ pub struct PuffState {
     pub sigma_m: f64,
     pub mass_kg: f64,
     pub opacity: f64,
+    /// The fade with age (1 new, 0 at the end of its life) that thins it on screen and in the
+    /// line-of-sight query.
+    pub fade: f64,
     pub age_s: f64,
     pub temperature_k: f64,
 }
@@ -350,6 +353,8 @@ struct Puff {
     sigma_m: f64,
     mass_kg: f64,
     opacity: f64,
+    /// The thesis's fade with age, 1 (new) to 0 (at the end of its life).
+    fade: f64,
     temperature_k: f64,
 }
 
@@ -532,27 +537,30 @@ fn mass_kg(kind: ObscurantKind, p: &Puff) -> f64 {
     p.mass0_kg * (fd + (1.0 - fd) * p.decay)
 }
 
+/// The thesis's linear fade with age.
+fn fade(age_s: f64, life_s: f64) -> f64 {
+    (1.0 - age_s / life_s).clamp(0.0, 1.0)
+}
+
 /// The fraction of a puff's mass optical depth that is drawn: the thesis's fade with age thins
-/// old puffs on screen, and the line-of-sight query sees them as thin as they are drawn (so a
-/// sensor and the picture agree). 1 for a new puff; flame glow never adds extinction.
+/// old puffs on screen (opacity `(1 - e^-tau) fade`), and the line-of-sight query sees them as
+/// thin as they are drawn, `-ln(1 - (1 - e^-tau) fade) / tau` (exactly 1 for a new puff), so a
+/// sensor and the picture agree. Flame glow never adds extinction.
 fn drawn_fraction(kind: ObscurantKind, p: &Puff) -> f64 {
     let tau = optics::centre_optical_depth(kind, p.mass_kg, p.sigma_m);
     if tau.is_nan() || tau <= 0.0 {
         return 0.0;
     }
-    let drawn = -libm::log1p(-p.opacity.clamp(0.0, 0.999_999));
-    // The drawn opacity is computed in single precision: a new puff's ratio is 1 within 1e-6.
-    let ratio = drawn / tau.min(80.0);
-    if ratio > 0.999 {
-        1.0
-    } else {
-        ratio.max(0.0)
+    if p.fade >= 1.0 {
+        return 1.0;
     }
+    let drawn_opacity = -libm::expm1(-tau) * p.fade.max(0.0);
+    (-libm::log1p(-drawn_opacity) / tau).clamp(0.0, 1.0)
 }
 
 fn opacity(kind: ObscurantKind, mass_kg: f64, sigma_m: f64, age_s: f64, life_s: f64) -> f64 {
     let tau = optics::centre_optical_depth(kind, mass_kg, sigma_m);
-    let fade = (1.0 - age_s / life_s).clamp(0.0, 1.0);
+    let fade = fade(age_s, life_s);
     // A render attribute: single precision is plenty (and twice as fast).
     f64::from(1.0 - libm::expf(-(tau.min(80.0) as f32))) * fade
 }
@@ -1051,6 +1059,7 @@ impl EffectSystem {
                             sigma_m: p.sigma_m,
                             mass_kg: p.mass_kg,
                             opacity: p.opacity,
+                            fade: p.fade,
                             age_s: slot.now_local_s - p.spawn_s,
                             temperature_k: p.temperature_k,
                         });
@@ -1501,6 +1510,7 @@ fn smoke_derive(
     p.sigma_m = libm::sqrt(p.sigma0_m * p.sigma0_m + 0.36 * sigma_y * sigma_z);
     p.mass_kg = mass_kg(ObscurantKind::Smoke, p);
     p.opacity = opacity(ObscurantKind::Smoke, p.mass_kg, p.sigma_m, age, life);
+    p.fade = fade(age, life);
     p.temperature_k = atmosphere.air_temperature_k;
 }
 
@@ -1528,6 +1538,7 @@ fn derive_newtonian(
         }
     }
     p.opacity = opacity(kind, p.mass_kg, p.sigma_m, age, life);
+    p.fade = fade(age, life);
     if kind == ObscurantKind::Flame {
         // Flame gas is seen by its own light: as opaque as it glows.
         let fade = (1.0 - age / life).clamp(0.0, 1.0);

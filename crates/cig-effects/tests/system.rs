@@ -442,12 +442,12 @@ fn transmittance_clear_dense_monotone_and_equal_to_numeric_integration() {
         for s in &states {
             let d2 =
                 (p - DVec3::from_array(s.centre_ecef_m)).length_squared() / (s.sigma_m * s.sigma_m);
-            // Each puff as thin as it is drawn: its optical depth times the drawn fraction
-            // (-ln(1 - opacity) over the centre optical depth of its mass, at most 1).
+            // Each puff as thin as it is drawn: (1 - e^-tau) fade is its centre opacity on
+            // screen, and its optical depth scales to match.
             let centre_tau = ObscurantKind::Smoke.mass_extinction_m2_per_kg() * s.mass_kg
                 / (2.0 * std::f64::consts::PI * s.sigma_m * s.sigma_m);
-            let drawn = -(1.0 - s.opacity.clamp(0.0, 0.999_999)).ln() / centre_tau.min(80.0);
-            let fraction = if drawn > 0.999 { 1.0 } else { drawn.max(0.0) };
+            let drawn_opacity = (1.0 - (-centre_tau).exp()) * s.fade;
+            let fraction = -(1.0 - drawn_opacity).ln() / centre_tau;
             c += fraction * s.mass_kg
                 / ((2.0 * std::f64::consts::PI).powf(1.5) * s.sigma_m.powi(3))
                 * (-0.5 * d2).exp();

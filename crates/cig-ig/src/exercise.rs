@@ -636,10 +636,12 @@ impl Exercise {
     }
 
     /// Forgets every effect handle (after the effect system was rebuilt by a jump back in time);
-    /// remote entities' effects start again with their next appearance change.
+    /// remote entities' effects start again with their next Entity State, other nodes'
+    /// processes with their next Environmental Process update.
     pub fn forget_effects(&mut self) {
         self.remote_effects.clear();
         self.remote_processes.clear();
+        self.remote.forget_effects();
     }
 
     /// PDUs to send, each one datagram.

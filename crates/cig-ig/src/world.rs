@@ -172,6 +172,9 @@ pub struct IgWorld {
     operator_plumes_started: u32,
     /// Dust trails of the ground vehicles this IG moves, by entity.
     dust_trails: BTreeMap<u16, cig_effects::EffectHandle>,
+    /// The effects could not advance to the world time (told once until they can again).
+    effects_stalled: bool,
+    operator_plumes_stopped_by_jump_told: bool,
 }
 
 /// Models of ground vehicles that raise dust when they move on soil.
@@ -273,6 +276,8 @@ impl IgWorld {
             operator_plumes: Vec::new(),
             operator_plumes_started: 0,
             dust_trails: BTreeMap::new(),
+            effects_stalled: false,
+            operator_plumes_stopped_by_jump_told: false,
         })
     }
 
@@ -414,6 +419,13 @@ impl IgWorld {
                     if let Some(x) = self.exercise.as_mut() {
                         x.forget_effects();
                     }
+                    self.last_air_update_s = f64::NEG_INFINITY;
+                    if !self.operator_plumes_stopped_by_jump_told {
+                        self.session.tell_host(
+                            "the simulation time went back: obscurants start over".into(),
+                        );
+                        self.operator_plumes_stopped_by_jump_told = true;
+                    }
                 }
                 Err(e) => tracing::warn!("effects cannot start over: {e}"),
             }
@@ -423,7 +435,14 @@ impl IgWorld {
             self.update_effects_air();
         }
         if let Err(e) = self.effects.advance_to(effect_time_s) {
-            tracing::warn!("effects stop advancing: {e}");
+            if !self.effects_stalled {
+                self.effects_stalled = true;
+                self.session
+                    .tell_host(format!("obscurants stop advancing: {e}"));
+                tracing::warn!("effects stop advancing: {e}");
+            }
+        } else {
+            self.effects_stalled = false;
         }
         self.start_smoke(query);
         // Velocities: the script's where there is one, else positions at least 0.2 s apart.
@@ -432,8 +451,10 @@ impl IgWorld {
         self.previous_owned
             .retain(|id, _| self.session.poses().contains_key(id));
         for (id, pose) in &poses {
+            // Velocities are per second of the IG's own (real) time, as DIS dead reckoning runs;
+            // a script moves `rate` world seconds a real second.
             let velocity = match script_velocity.get(id) {
-                Some(v) => *v,
+                Some(v) => *v * rate.max(0.0),
                 None => {
                     let sample =
                         self.previous_owned
@@ -454,8 +475,13 @@ impl IgWorld {
             };
             velocities.insert(*id, velocity);
         }
-        self.run_owned_effects(query, effect_time_s, &velocities);
-        self.run_vehicle_dust(query, effect_time_s, &velocities);
+        // Effects run on world time: velocities per world second.
+        let world_velocities: BTreeMap<u16, DVec3> = velocities
+            .iter()
+            .map(|(id, v)| (*id, if rate > 0.0 { *v / rate } else { DVec3::ZERO }))
+            .collect();
+        self.run_owned_effects(query, effect_time_s, &world_velocities);
+        self.run_vehicle_dust(query, effect_time_s, &world_velocities);
         if let Some(x) = self.exercise.as_mut() {
             if now - self.last_process_publish_s >= 1.0 && !self.smoke.is_empty() {
                 self.last_process_publish_s = now;
@@ -693,12 +719,22 @@ impl IgWorld {
         t_s: f64,
         velocities: &BTreeMap<u16, DVec3>,
     ) {
+        let mut wanted_now = std::collections::BTreeSet::new();
         for e in &self.scenario.entities {
             let Some(appearance) = e
                 .appearance
                 .as_deref()
                 .and_then(crate::scenario::parse_hex_u32)
             else {
+                continue;
+            };
+            // Only an active entity that exists and can be placed smokes.
+            let active = self
+                .session
+                .entities()
+                .get(&e.id)
+                .is_some_and(|x| x.life == EntityLife::Active);
+            let Some(pose) = self.session.poses().get(&e.id).copied().filter(|_| active) else {
                 continue;
             };
             let (kind, domain) = e
@@ -709,9 +745,6 @@ impl IgWorld {
                 .map_or((1, 1), |t| (t.kind, t.domain));
             let wanted =
                 cig_dis::EffectsRequested::from_appearance(appearance, kind, domain).active();
-            let Some(pose) = self.session.poses().get(&e.id).copied() else {
-                continue;
-            };
             let velocity = velocities.get(&e.id).copied().unwrap_or(DVec3::ZERO);
             let seed = e
                 .dis_id
@@ -722,17 +755,22 @@ impl IgWorld {
                 });
             for effect in wanted {
                 let key = (e.id, effect);
+                wanted_now.insert(key);
                 match self.owned_effects.get(&key) {
-                    Some(handle) => crate::exercise::follow_entity_effect(
-                        &mut self.effects,
-                        query,
-                        effect,
-                        *handle,
-                        pose.position,
-                        velocity,
-                        t_s,
-                    ),
-                    None => {
+                    // A live effect follows its entity; one that ran its course starts again.
+                    Some(handle) if self.effects.is_live(*handle) => {
+                        crate::exercise::follow_entity_effect(
+                            &mut self.effects,
+                            query,
+                            effect,
+                            *handle,
+                            pose.position,
+                            velocity,
+                            t_s,
+                        );
+                    }
+                    _ => {
+                        self.owned_effects.remove(&key);
                         if let Some(handle) = crate::exercise::start_entity_effect(
                             &mut self.effects,
                             query,
@@ -746,6 +784,18 @@ impl IgWorld {
                         }
                     }
                 }
+            }
+        }
+        // Entities destroyed, hidden or no longer asking for an effect: it stops.
+        let gone: Vec<_> = self
+            .owned_effects
+            .keys()
+            .filter(|k| !wanted_now.contains(k))
+            .copied()
+            .collect();
+        for key in gone {
+            if let Some(h) = self.owned_effects.remove(&key) {
+                let _ = self.effects.stop(h, t_s);
             }
         }
     }

@@ -223,6 +223,7 @@ fn entity_at(e: &HostEntity, t_s: f64) -> (f64, f64, f64) {
         .map(|p| frame.geodetic_to_enu(Geodetic::new(p[0], p[1], 0.0)))
         .collect();
     let mut s = e.speed_mps * t_s;
+    let mut last_heading = 0.0;
     for w in pts.windows(2) {
         let d = w[1] - w[0];
         let len = d.truncate().length();
@@ -230,6 +231,9 @@ fn entity_at(e: &HostEntity, t_s: f64) -> (f64, f64, f64) {
         let start = frame.enu_to_geodetic(w[0]);
         let local = EnuFrame::new(start).geodetic_to_enu(frame.enu_to_geodetic(w[1]));
         let heading = local.x.atan2(local.y).to_degrees().rem_euclid(360.0);
+        if len > 0.0 {
+            last_heading = heading;
+        }
         if len == 0.0 {
             // A repeated point: on to the next segment.
             continue;
@@ -241,8 +245,9 @@ fn entity_at(e: &HostEntity, t_s: f64) -> (f64, f64, f64) {
         }
         s -= len;
     }
+    // Past the end: at the last point, facing along the last segment.
     let last = e.path[e.path.len() - 1];
-    (last[0], last[1], 0.0)
+    (last[0], last[1], last_heading)
 }
 
 pub fn run(args: &HostArgs) -> anyhow::Result<()> {

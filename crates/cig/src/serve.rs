@@ -134,6 +134,9 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
     if args.out_dir.is_some() && !args.headless {
         bail!("--out-dir needs --headless (a window shows the frames otherwise)");
     }
+    if args.json && !args.headless && !args.no_render {
+        bail!("--json needs --headless or --no-render (a window's run ends with a summary line)");
+    }
     let scenario = match &args.scenario {
         Some(path) => read_scenario(path)?,
         None => Scenario::from_toml("").context("the empty scenario")?,
@@ -434,7 +437,9 @@ fn run_windowed(
     options.models = models;
     let shared = Arc::new(std::sync::Mutex::new(Totals::default()));
     let totals = Arc::clone(&shared);
-    let mut loop_state = LoopState::new(args.rate_hz);
+    // Made at the first frame, so the window's opening is not counted as a late frame.
+    let mut loop_state: Option<LoopState> = None;
+    let rate_hz = args.rate_hz;
     let dis_out = dis.as_ref().map(UdpEndpoint::local_addr);
     let driver: cig_render::FrameDriver = Box::new(move |tick: &cig_render::ViewerTick| {
         let (width_px, height_px) = (tick.width_px, tick.height_px);
@@ -459,14 +464,16 @@ fn run_windowed(
         let mut t = totals
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
-        let snapshot = loop_state.tick(
-            &mut world,
-            &mut query,
-            &cigi,
-            dis.as_ref(),
-            &mut t,
-            (width_px, height_px, &fallback),
-        );
+        let snapshot = loop_state
+            .get_or_insert_with(|| LoopState::new(rate_hz))
+            .tick(
+                &mut world,
+                &mut query,
+                &cigi,
+                dis.as_ref(),
+                &mut t,
+                (width_px, height_px, &fallback),
+            );
         t.frames += 1;
         snapshot
     });

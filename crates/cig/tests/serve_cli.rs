@@ -622,10 +622,16 @@ fn a_hosts_line_of_sight_through_the_scenarios_smoke_is_obscured() {
         .iter()
         .filter(|a| a["packet"] == "los_extended" && a["id"] == 1 && a["valid"] == true)
         .collect();
+    // Clear at first (no smoke yet, no terrain in the way), then stopped by the smoke: an
+    // alpha below 255 and no range (a terrain hit would give 255 and a range).
     assert!(
-        through
-            .iter()
-            .any(|a| a["visible"] == false && a["alpha"].as_u64().unwrap_or(0) > 0),
+        through.first().is_some_and(|a| a["visible"] == true),
+        "{through:?}"
+    );
+    assert!(
+        through.iter().any(|a| a["visible"] == false
+            && a["range_valid"] == false
+            && (1..255).contains(&a["alpha"].as_u64().unwrap_or(0))),
         "the smoke stops the line at some point: {through:?}"
     );
     let control: Vec<&Value> = answers

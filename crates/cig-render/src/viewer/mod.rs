@@ -683,6 +683,7 @@ impl App {
                     &mut self.operator_plumes,
                     &orders,
                     self.panel.unix_time_s - VIEWER_EFFECT_EPOCH_UNIX_S,
+                    (self.panel.wind_speed_mps, self.panel.wind_from_deg),
                 );
                 if let Some(note) = note {
                     self.panel.obscurant_note = note;
@@ -1039,6 +1040,7 @@ fn run_own_obscurants(
     plumes: &mut Vec<cig_effects::EffectHandle>,
     orders: &[ObscurantOrder],
     t_s: f64,
+    (wind_speed_mps, wind_from_deg): (f64, f64),
 ) -> Option<String> {
     let mut note = None;
     if effects.is_none() && !orders.is_empty() {
@@ -1054,6 +1056,14 @@ fn run_own_obscurants(
             Ok(fresh) => {
                 *system = fresh;
                 plumes.clear();
+                note = Some("the clock went back: the plumes start over".into());
+                // The panel's wind still holds.
+                let mut air = *system.atmosphere();
+                air.wind = cig_effects::system::Wind {
+                    speed_mps: wind_speed_mps,
+                    from_deg: wind_from_deg,
+                };
+                let _ = system.set_atmosphere(air);
             }
             Err(e) => return Some(format!("obscurants cannot start over: {e}")),
         }
@@ -1122,6 +1132,8 @@ fn run_own_obscurants(
 mod obscurant_tests {
     use super::*;
 
+    const WIND: (f64, f64) = (3.0, 270.0);
+
     #[test]
     fn operator_orders_start_stop_and_blow_plumes_and_a_clock_set_back_starts_over() {
         let mut effects = None;
@@ -1132,20 +1144,26 @@ mod obscurant_tests {
             flame: false,
             heat_release_w: 4.0e6,
         };
-        assert!(run_own_obscurants(&mut effects, &mut plumes, &[], 0.0).is_none());
+        assert!(run_own_obscurants(&mut effects, &mut plumes, &[], 0.0, WIND).is_none());
         assert!(effects.is_none(), "no system until the first order");
-        let note = run_own_obscurants(&mut effects, &mut plumes, &[start], 100.0);
+        let note = run_own_obscurants(&mut effects, &mut plumes, &[start], 100.0, WIND);
         assert!(note.is_some_and(|n| n.starts_with("smoke at")));
         assert_eq!(plumes.len(), 1);
         let wind = ObscurantOrder::SetWind {
             speed_mps: 12.0,
             from_deg: 45.0,
         };
-        run_own_obscurants(&mut effects, &mut plumes, &[wind], 101.0);
+        run_own_obscurants(&mut effects, &mut plumes, &[wind], 101.0, (12.0, 45.0));
         let system = effects.as_ref().expect("system");
         assert_eq!(system.atmosphere().wind.speed_mps, 12.0);
         for i in 0..60 {
-            run_own_obscurants(&mut effects, &mut plumes, &[], 101.0 + f64::from(i));
+            run_own_obscurants(
+                &mut effects,
+                &mut plumes,
+                &[],
+                101.0 + f64::from(i),
+                (12.0, 45.0),
+            );
         }
         let spawned = effects.as_ref().map_or(0, |e| e.stats().spawned_total);
         assert!(spawned > 0);
@@ -1154,12 +1172,19 @@ mod obscurant_tests {
             &mut plumes,
             &[ObscurantOrder::StopPlumes],
             161.0,
+            (12.0, 45.0),
         );
         assert!(plumes.is_empty());
-        run_own_obscurants(&mut effects, &mut plumes, &[start], 162.0);
+        run_own_obscurants(&mut effects, &mut plumes, &[start], 162.0, (12.0, 45.0));
         // The panel's clock set back an hour: the obscurants start over, empty.
-        run_own_obscurants(&mut effects, &mut plumes, &[], 162.0 - 3600.0);
+        let note = run_own_obscurants(&mut effects, &mut plumes, &[], 162.0 - 3600.0, (12.0, 45.0));
+        assert!(note.is_some_and(|n| n.contains("went back")));
         assert!(plumes.is_empty());
         assert_eq!(effects.as_ref().map(|e| e.stats().spawned_total), Some(0));
+        // The wind the panel shows still blows.
+        assert_eq!(
+            effects.as_ref().map(|e| e.atmosphere().wind.speed_mps),
+            Some(12.0)
+        );
     }
 }
