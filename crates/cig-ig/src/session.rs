@@ -954,17 +954,18 @@ impl IgSession {
         };
         let part = e.parts.entry(p.part_id).or_default();
         part.enabled = p.part_enable;
-        let set = |enable: bool, value: f32, slot: &mut f64| {
-            if enable && value.is_finite() {
-                *slot = f64::from(value);
-            }
-        };
-        set(p.x_offset_enable, p.x_offset_m, &mut part.offset.x_m);
-        set(p.y_offset_enable, p.y_offset_m, &mut part.offset.y_m);
-        set(p.z_offset_enable, p.z_offset_m, &mut part.offset.z_m);
-        set(p.roll_enable, p.roll_deg, &mut part.orientation.roll_deg);
-        set(p.pitch_enable, p.pitch_deg, &mut part.orientation.pitch_deg);
-        set(p.yaw_enable, p.yaw_deg, &mut part.orientation.heading_deg);
+        set_enabled(
+            &mut part.offset,
+            &mut part.orientation,
+            [
+                (p.x_offset_enable, p.x_offset_m),
+                (p.y_offset_enable, p.y_offset_m),
+                (p.z_offset_enable, p.z_offset_m),
+                (p.roll_enable, p.roll_deg),
+                (p.pitch_enable, p.pitch_deg),
+                (p.yaw_enable, p.yaw_deg),
+            ],
+        );
         true
     }
 
@@ -993,17 +994,18 @@ impl IgSession {
                 fov: None,
             });
             view.entity_id = v.entity_id;
-            let set = |enable: bool, value: f32, slot: &mut f64| {
-                if enable && value.is_finite() {
-                    *slot = f64::from(value);
-                }
-            };
-            set(v.x_offset_enable, v.x_offset_m, &mut view.offset.x_m);
-            set(v.y_offset_enable, v.y_offset_m, &mut view.offset.y_m);
-            set(v.z_offset_enable, v.z_offset_m, &mut view.offset.z_m);
-            set(v.roll_enable, v.roll_deg, &mut view.orientation.roll_deg);
-            set(v.pitch_enable, v.pitch_deg, &mut view.orientation.pitch_deg);
-            set(v.yaw_enable, v.yaw_deg, &mut view.orientation.heading_deg);
+            set_enabled(
+                &mut view.offset,
+                &mut view.orientation,
+                [
+                    (v.x_offset_enable, v.x_offset_m),
+                    (v.y_offset_enable, v.y_offset_m),
+                    (v.z_offset_enable, v.z_offset_m),
+                    (v.roll_enable, v.roll_deg),
+                    (v.pitch_enable, v.pitch_deg),
+                    (v.yaw_enable, v.yaw_deg),
+                ],
+            );
         }
         true
     }
@@ -1847,6 +1849,24 @@ impl IgSession {
     pub fn visibility_at_m(&self, point: Geodetic) -> f64 {
         self.environment
             .visibility_at_m(point, self.config.default_visibility_m)
+    }
+}
+
+/// Sets the offset (x, y, z) and orientation (roll, pitch, yaw) fields whose enable flag is
+/// set and whose value is finite, as Articulated Part and View Control give them.
+fn set_enabled(offset: &mut BodyOffset, orientation: &mut Hpr, fields: [(bool, f32); 6]) {
+    let slots = [
+        &mut offset.x_m,
+        &mut offset.y_m,
+        &mut offset.z_m,
+        &mut orientation.roll_deg,
+        &mut orientation.pitch_deg,
+        &mut orientation.heading_deg,
+    ];
+    for (slot, (enable, value)) in slots.into_iter().zip(fields) {
+        if enable && value.is_finite() {
+            *slot = f64::from(value);
+        }
     }
 }
 

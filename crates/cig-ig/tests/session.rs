@@ -98,6 +98,25 @@ fn send(world: &mut IgWorld, version: Version, order: ByteOrder, frame: u32, pac
         .expect("the IG accepts the message");
 }
 
+/// The host puts the IG in reset mode (IG Control with mode 0 alone).
+fn reset(world: &mut IgWorld, frame: u32) {
+    let mut bytes = Vec::new();
+    encode_message(
+        &Message::new(
+            Version::V3_3,
+            ByteOrder::LittleEndian,
+            vec![Packet::IgControl(IgControl {
+                ig_mode: 0,
+                host_frame_number: frame,
+                ..IgControl::default()
+            })],
+        ),
+        &mut bytes,
+    )
+    .expect("encode");
+    world.receive_cigi(&bytes).expect("reset");
+}
+
 /// One IG frame; returns the IG's message as the host decodes it.
 fn frame(world: &mut IgWorld, q: &mut QuerySession) -> Message {
     world.step(1.0 / 60.0, q);
@@ -519,21 +538,7 @@ fn reset_clears_entities_and_garbage_is_refused_without_harm() {
     ] {
         assert!(w.receive_cigi(garbage).is_err());
     }
-    let mut bytes = Vec::new();
-    encode_message(
-        &Message::new(
-            Version::V3_3,
-            ByteOrder::LittleEndian,
-            vec![Packet::IgControl(IgControl {
-                ig_mode: 0,
-                host_frame_number: 2,
-                ..IgControl::default()
-            })],
-        ),
-        &mut bytes,
-    )
-    .expect("encode");
-    w.receive_cigi(&bytes).expect("reset");
+    reset(&mut w, 2);
     let reply = frame(&mut w, &mut q);
     assert_eq!(
         w.session().entities().keys().copied().collect::<Vec<_>>(),
@@ -827,22 +832,7 @@ fn reset_brings_back_the_scenario_destroy_takes_children_and_groups_move_togethe
         vec![4, 5]
     );
     // A reset keeps the scenario's entity.
-    send(&mut w, Version::V3_3, ByteOrder::LittleEndian, 3, vec![]);
-    let mut bytes = Vec::new();
-    encode_message(
-        &Message::new(
-            Version::V3_3,
-            ByteOrder::LittleEndian,
-            vec![Packet::IgControl(IgControl {
-                ig_mode: 0,
-                host_frame_number: 4,
-                ..IgControl::default()
-            })],
-        ),
-        &mut bytes,
-    )
-    .expect("encode");
-    w.receive_cigi(&bytes).expect("reset");
+    reset(&mut w, 4);
     frame(&mut w, &mut q);
     assert_eq!(
         w.session().entities().keys().copied().collect::<Vec<_>>(),

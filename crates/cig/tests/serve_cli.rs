@@ -75,6 +75,23 @@ fn start_serve(args: &[String]) -> Serving {
     Serving { child, stderr: log }
 }
 
+/// Runs `cig host --json` with a script against the IG's port, listening on `host_port`.
+fn run_host(script: &Path, ig_port: u16, host_port: u16) -> std::process::Output {
+    cig()
+        .args(["host", "--script"])
+        .arg(script)
+        .args([
+            "--ig".into(),
+            format!("127.0.0.1:{ig_port}"),
+            "--port".into(),
+            host_port.to_string(),
+            "--json".into(),
+        ])
+        .timeout(Duration::from_secs(120))
+        .output()
+        .expect("cig host")
+}
+
 fn query_height_msl(db: &Path, lat: f64, lon: f64) -> f64 {
     let out = cig()
         .args(["query", "hat"])
@@ -125,19 +142,7 @@ fn a_scripted_host_gets_answers_that_match_the_database_in_both_versions() {
         }
         let script_path = dir.path().join(format!("host-{version}.toml"));
         std::fs::write(&script_path, script).expect("script");
-        let out = cig()
-            .args(["host", "--script"])
-            .arg(&script_path)
-            .args([
-                "--ig".into(),
-                format!("127.0.0.1:{ig_port}"),
-                "--port".into(),
-                host_port.to_string(),
-                "--json".into(),
-            ])
-            .timeout(Duration::from_secs(120))
-            .output()
-            .expect("cig host");
+        let out = run_host(&script_path, ig_port, host_port);
         serve.kill();
         assert!(
             out.status.success(),
@@ -597,19 +602,7 @@ fn a_hosts_line_of_sight_through_the_scenarios_smoke_is_obscured() {
     );
     let script_path = dir.path().join("los.toml");
     std::fs::write(&script_path, script).expect("script");
-    let out = cig()
-        .args(["host", "--script"])
-        .arg(&script_path)
-        .args([
-            "--ig".into(),
-            format!("127.0.0.1:{ig_port}"),
-            "--port".into(),
-            host_port.to_string(),
-            "--json".into(),
-        ])
-        .timeout(Duration::from_secs(120))
-        .output()
-        .expect("cig host");
+    let out = run_host(&script_path, ig_port, host_port);
     let stderr = serve.stderr.lock().map(|s| s.clone()).unwrap_or_default();
     serve.kill();
     assert!(
