@@ -12,6 +12,7 @@
 //! time_rate = 1.0
 //! visibility_m = 20000
 //! fog = "exp"                          # off, linear, exp, exp2
+//! ground_fog = { top_m = 250, visibility_m = 400 }   # a fogged valley (top above MSL)
 //! default_model = "truck"              # for entity types the table does not name
 //!
 //! [[models]]                           # the entity-type table
@@ -110,6 +111,9 @@ pub struct Scenario {
     pub visibility_m: Option<f64>,
     #[serde(default)]
     pub fog: Option<String>,
+    /// A ground fog or haze layer: valleys below its top are fogged, hills above are clear.
+    #[serde(default)]
+    pub ground_fog: Option<GroundFog>,
     /// Model for entity types the table does not name.
     #[serde(default = "default_model")]
     pub default_model: String,
@@ -172,6 +176,16 @@ fn one() -> f64 {
 
 fn default_model() -> String {
     "truck".to_string()
+}
+
+/// A ground fog layer of the scenario.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroundFog {
+    /// Top of the layer, metres above MSL.
+    pub top_m: f64,
+    /// Visibility inside the layer, metres.
+    pub visibility_m: f64,
 }
 
 /// One row of the entity-type table.
@@ -452,6 +466,10 @@ impl Scenario {
         check_finite("time_rate", self.time_rate, -1000.0, 1000.0)?;
         if let Some(v) = self.visibility_m {
             check_finite("visibility_m", v, 1.0, 1.0e7)?;
+        }
+        if let Some(g) = &self.ground_fog {
+            check_finite("ground_fog.top_m", g.top_m, -500.0, 10_000.0)?;
+            check_finite("ground_fog.visibility_m", g.visibility_m, 1.0, 1.0e6)?;
         }
         if let Some(f) = &self.fog {
             if FogMode::parse(f).is_none() {

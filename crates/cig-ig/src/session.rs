@@ -277,6 +277,31 @@ impl EnvironmentState {
     /// weather layer containing the point (ground fog, clouds) and below precipitation layers'
     /// tops (rain, snow, sleet, hail, sand, dust: layers 4-9).
     pub fn visibility_at_m(&self, point: Geodetic, default_m: f64) -> f64 {
+        self.visibility_with(point, default_m, true)
+    }
+
+    /// The ground fog layer (CIGI weather layer 0) over a point: its top above MSL and the
+    /// visibility inside it.
+    pub fn ground_fog_at(&self, point: Geodetic) -> Option<(f64, f64)> {
+        self.layers_at(point)
+            .into_iter()
+            .filter(|l| l.layer_id == 0)
+            .map(|l| {
+                (
+                    f64::from(l.base_elevation_m) + f64::from(l.thickness_m),
+                    f64::from(l.visibility_range_m),
+                )
+            })
+            .find(|(top, v)| top.is_finite() && v.is_finite() && *v > 0.0)
+    }
+
+    /// The visibility the whole view has: as [`Self::visibility_at_m`] but without the ground
+    /// fog layer, which the renderer draws as a layer.
+    pub fn visibility_above_ground_fog_m(&self, point: Geodetic, default_m: f64) -> f64 {
+        self.visibility_with(point, default_m, false)
+    }
+
+    fn visibility_with(&self, point: Geodetic, default_m: f64, ground_fog: bool) -> f64 {
         let mut visibility = self
             .atmosphere
             .as_ref()
@@ -284,6 +309,9 @@ impl EnvironmentState {
             .filter(|v| v.is_finite() && *v > 0.0)
             .unwrap_or(default_m);
         for layer in self.layers_at(point) {
+            if layer.layer_id == 0 && !ground_fog {
+                continue;
+            }
             let base = f64::from(layer.base_elevation_m);
             let top = base + f64::from(layer.thickness_m);
             let inside = match layer.layer_id {
@@ -1845,10 +1873,16 @@ impl IgSession {
         }
     }
 
-    /// Visibility at a point (altitude above the ellipsoid is close enough for layers).
+    /// Visibility at a point (altitude above MSL).
     pub fn visibility_at_m(&self, point: Geodetic) -> f64 {
         self.environment
             .visibility_at_m(point, self.config.default_visibility_m)
+    }
+
+    /// Visibility for the whole view from a point (above MSL), the ground fog layer apart.
+    pub fn view_visibility_m(&self, point: Geodetic) -> f64 {
+        self.environment
+            .visibility_above_ground_fog_m(point, self.config.default_visibility_m)
     }
 }
 

@@ -941,7 +941,17 @@ impl IgWorld {
                 first.eye.lon_deg,
                 first.eye.alt_m - self.eye_geoid_m,
             );
-            visibility_m = self.session.visibility_at_m(eye_msl);
+            visibility_m = self.session.view_visibility_m(eye_msl);
+            // The host's ground fog layer (CIGI weather layer 0), else the scenario's.
+            let layer = self
+                .session
+                .environment()
+                .ground_fog_at(eye_msl)
+                .or(self.scenario.ground_fog.map(|g| (g.top_m, g.visibility_m)));
+            snapshot.ground_fog = layer.map(|(top_msl_m, v)| cig_scene::FogLayer {
+                top_m: top_msl_m + self.eye_geoid_m,
+                visibility_m: v,
+            });
             if let Some(v) = self.scenario.visibility_m {
                 if self.session.environment().atmosphere.is_none() {
                     visibility_m = visibility_m.min(v);

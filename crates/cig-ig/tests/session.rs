@@ -1137,3 +1137,55 @@ fn a_destroyed_entity_stops_smoking() {
         "no more smoke once destroyed"
     );
 }
+
+#[test]
+fn the_hosts_ground_fog_layer_reaches_the_renderer_as_a_layer() {
+    let mut q = query();
+    let mut w = world("");
+    let (lat, lon) = (lat_of_row(30.0), lon_of_col(30.0));
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        1,
+        vec![
+            entity_3(0, lat, lon, 120.0, 0.0),
+            Packet::ViewControl(ViewControl {
+                view_id: 0,
+                entity_id: 0,
+                ..ViewControl::default()
+            }),
+            Packet::WeatherControl(cig_cigi::WeatherControl {
+                layer_id: 0,
+                weather_enable: true,
+                scope: 0,
+                base_elevation_m: 0.0,
+                thickness_m: 150.0,
+                visibility_range_m: 200.0,
+                ..cig_cigi::WeatherControl::default()
+            }),
+        ],
+    );
+    frame(&mut w, &mut q);
+    let fallback = View {
+        eye: Geodetic::new(lat, lon, 1000.0),
+        orientation: Hpr::default(),
+        fov: FovDeg::symmetric(60.0, 45.0),
+        width_px: 64,
+        height_px: 48,
+    };
+    let s = w.snapshot(64, 48, &fallback);
+    let layer = s.ground_fog.expect("a ground fog layer");
+    assert!(
+        (layer.top_m - (150.0 + f64::from(GEOID_M))).abs() < 1e-6,
+        "{layer:?}"
+    );
+    assert_eq!(layer.visibility_m, 200.0);
+    // The eye (120 m, inside the layer) keeps the global visibility for the rest of the view.
+    assert!(s.fog.density_per_m < 3.912 / 10_000.0, "{:?}", s.fog);
+    // The host's Weather Conditions answer at the eye does see the fog.
+    assert_eq!(
+        w.session().visibility_at_m(Geodetic::new(lat, lon, 120.0)),
+        200.0
+    );
+}

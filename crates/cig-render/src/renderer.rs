@@ -96,6 +96,7 @@ struct Globals {
     noise1: [f32; 4],
     noise2: [f32; 4],
     flags: [f32; 4],
+    fog_layer: [f32; 4],
 }
 
 #[repr(C)]
@@ -929,6 +930,15 @@ impl Renderer {
                 if key_background { 1.0 } else { 0.0 },
                 camera.pixels_per_tangent as f32,
             ],
+            fog_layer: match snapshot.ground_fog {
+                Some(layer) if layer.visibility_m.is_finite() && layer.top_m.is_finite() => [
+                    (layer.top_m - camera.view.eye.alt_m) as f32,
+                    layer.extinction_per_m() as f32,
+                    1.0,
+                    0.0,
+                ],
+                _ => [0.0; 4],
+            },
         };
         self.gpu
             .queue

@@ -579,3 +579,72 @@ fn ancestors_stand_in_while_finer_meshes_are_still_being_built() {
     );
     assert_eq!(key_pixels(&image), 0, "holes while meshes build");
 }
+
+#[test]
+fn a_ground_fog_layer_fills_the_valleys_and_leaves_the_hills_clear() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let eye = hills_eye(-1500.0, -1500.0, 1200.0);
+    let v = view(eye, (45.0, -35.0, 0.0), 60.0, (160, 120));
+    let camera = v.camera();
+    let mut q = cig_terrain::QuerySession::new(cache.clone());
+    let frame = EnuFrame::new(eye);
+    // Ground points in view that the eye sees, with their heights and pixels.
+    let mut seen: Vec<(f64, (f64, f64))> = Vec::new();
+    for i in 0..30 {
+        for j in 0..30 {
+            let g = frame.enu_to_geodetic(DVec3::new(
+                -200.0 + 80.0 * f64::from(i),
+                -200.0 + 80.0 * f64::from(j),
+                0.0,
+            ));
+            let Ok(s) = q.hot(g.lat_deg, g.lon_deg) else {
+                continue;
+            };
+            let ground = Geodetic::new(g.lat_deg, g.lon_deg, s.height_ellipsoid_m());
+            let Some((x, y)) = camera.project_ecef(ground.to_ecef()) else {
+                continue;
+            };
+            if !(6.0..154.0).contains(&x) || !(6.0..114.0).contains(&y) {
+                continue;
+            }
+            let above = Geodetic::new(ground.lat_deg, ground.lon_deg, ground.alt_m + 2.0);
+            if q.los(eye, above).is_ok_and(|r| r.visible) {
+                seen.push((ground.alt_m, (x, y)));
+            }
+        }
+    }
+    seen.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (low, high) = (seen[0], seen[seen.len() - 1]);
+    assert!(
+        high.0 - low.0 > 40.0,
+        "the view spans valleys and hills: {low:?} {high:?}"
+    );
+    let mut clear = FrameSnapshot::new(MORNING_UNIX_S, vec![v]);
+    clear.fog = Fog::from_visibility(FogMode::Off, 40_000.0);
+    let mut fogged = clear.clone();
+    fogged.ground_fog = Some(cig_scene::FogLayer {
+        top_m: 0.5 * (low.0 + high.0),
+        visibility_m: 60.0,
+    });
+    let (a, _) = render(&mut renderer, &cache, &clear, false);
+    let (b, _) = render(&mut renderer, &cache, &fogged, false);
+    let change_at = |(x, y): (f64, f64)| {
+        let mut sum = 0.0;
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let i =
+                    ((y as i64 + dy) as usize * a.width as usize + (x as i64 + dx) as usize) * 4;
+                for c in 0..3 {
+                    sum += (f64::from(a.rgba[i + c]) - f64::from(b.rgba[i + c])).abs();
+                }
+            }
+        }
+        sum / 27.0
+    };
+    let valley = change_at(low.1);
+    let hill = change_at(high.1);
+    assert!(valley > 25.0, "the valley floor is fogged: {valley}");
+    assert!(hill < 6.0, "the hilltop above the layer is clear: {hill}");
+}

@@ -15,5 +15,5 @@ pub mod view;
 
 pub use lighting::{Fog, FogMode, Lighting};
 pub use lod::{LodSettings, NodeKey, NodeLayout, Selection, TerrainLod};
-pub use snapshot::{EntityInstance, EntitySpec, FrameSnapshot};
+pub use snapshot::{EntityInstance, EntitySpec, FogLayer, FrameSnapshot};
 pub use view::{Camera, FovDeg, Hpr, View, ViewError};

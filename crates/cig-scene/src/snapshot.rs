@@ -78,6 +78,23 @@ pub fn place_entity(
     })
 }
 
+/// A layer of ground fog or haze: below `top_m` the air is as thick as `visibility_m` says,
+/// on top of the global fog, so a valley can be fogged while the hills above are clear.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FogLayer {
+    /// Top of the layer, metres above the WGS84 ellipsoid.
+    pub top_m: f64,
+    /// Meteorological visibility inside the layer, metres (Koschmieder: 3.912 / extinction).
+    pub visibility_m: f64,
+}
+
+impl FogLayer {
+    /// Extinction coefficient inside the layer, 1/m.
+    pub fn extinction_per_m(&self) -> f64 {
+        crate::lighting::KOSCHMIEDER / self.visibility_m.max(1.0)
+    }
+}
+
 /// Everything the renderer needs for one frame.
 #[derive(Clone, Debug)]
 pub struct FrameSnapshot {
@@ -85,6 +102,8 @@ pub struct FrameSnapshot {
     pub unix_time_s: f64,
     pub views: Vec<View>,
     pub fog: Fog,
+    /// A ground fog or haze layer, if any.
+    pub ground_fog: Option<FogLayer>,
     pub max_pixel_error: f64,
     pub wireframe: bool,
     pub entities: Vec<EntityInstance>,
@@ -104,6 +123,7 @@ impl FrameSnapshot {
             unix_time_s,
             views,
             fog: Fog::from_visibility(FogMode::Exponential, 40_000.0),
+            ground_fog: None,
             max_pixel_error: 1.0,
             wireframe: false,
             entities: Vec::new(),

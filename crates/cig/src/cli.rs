@@ -403,6 +403,10 @@ pub struct RenderArgs {
     /// Fog mode: off, linear, exp, exp2.
     #[arg(long, default_value = "exp")]
     pub fog: String,
+    /// A ground fog layer "TOP_M,VISIBILITY_M": below TOP_M (above the WGS84 ellipsoid, as
+    /// `--eye`) the visibility is VISIBILITY_M, so valleys are fogged and hills clear.
+    #[arg(long, value_name = "TOP_M,VISIBILITY_M", allow_hyphen_values = true)]
+    pub ground_fog: Option<String>,
     /// Draw the terrain as a wireframe.
     #[arg(long)]
     pub wireframe: bool,

@@ -299,6 +299,20 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
             args.visibility
         );
     }
+    let ground_fog = args
+        .ground_fog
+        .as_deref()
+        .map(|text| -> anyhow::Result<cig_scene::FogLayer> {
+            let v = parse_numbers(text, "--ground-fog", &[2])?;
+            if !(v[1] > 0.0 && (-1000.0..=20_000.0).contains(&v[0])) {
+                bail!("--ground-fog \"{text}\": the top must lie in -1000..20000 m and the visibility be more than 0 m");
+            }
+            Ok(cig_scene::FogLayer {
+                top_m: v[0],
+                visibility_m: v[1],
+            })
+        })
+        .transpose()?;
     let fog_mode = FogMode::parse(&args.fog)
         .with_context(|| format!("--fog \"{}\" is not off, linear, exp or exp2", args.fog))?;
     let specs: Vec<EntitySpec> = args
@@ -340,6 +354,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     }
     let mut snapshot = FrameSnapshot::new(unix_time_s, vec![view]);
     snapshot.fog = Fog::from_visibility(fog_mode, args.visibility);
+    snapshot.ground_fog = ground_fog;
     snapshot.max_pixel_error = args.max_pixel_error;
     snapshot.wireframe = args.wireframe;
     snapshot.entities = entities;

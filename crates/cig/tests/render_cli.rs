@@ -92,6 +92,9 @@ fn bad_render_input_gives_one_line_errors() {
         (vec!["--fog", "soup"], "--fog"),
         (vec!["--max-pixel-error", "-1"], "--max-pixel-error"),
         (vec!["--entity", "zeppelin,35.99,-121.21,0"], "no model"),
+        (vec!["--ground-fog", "300"], "--ground-fog"),
+        (vec!["--ground-fog", "300,0"], "--ground-fog"),
+        (vec!["--ground-fog", "1e6,100"], "--ground-fog"),
     ];
     for (extra, expect) in cases {
         let mut args = render_args(&db, &out);

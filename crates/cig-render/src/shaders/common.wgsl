@@ -25,6 +25,8 @@ struct Globals {
     noise2: vec4<f32>,
     // x: wireframe flag, y: exposure, z: key the background, w: pixels per unit tangent.
     flags: vec4<f32>,
+    // Ground fog layer: top height relative to the eye (m), extinction (1/m), enabled, unused.
+    fog_layer: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;
@@ -42,8 +44,42 @@ fn fog_factor(distance_m: f32) -> f32 {
     return 1.0;
 }
 
+// Height of an eye-relative point above the eye, with the earth's curvature (a point d metres
+// away is d^2 / 2R lower than the eye's tangent plane says).
+fn height_above_eye(rel: vec3<f32>) -> f32 {
+    let up = dot(rel, g.eye_up.xyz);
+    let horizontal2 = max(dot(rel, rel) - up * up, 0.0);
+    return up - horizontal2 / (2.0 * 6371000.0);
+}
+
+// Transmittance of the ground fog layer along the straight ray from the eye to `rel`: the
+// length of the ray below the layer's top times its extinction (heights vary linearly along
+// the ray).
+fn fog_layer_transmittance(rel: vec3<f32>) -> f32 {
+    if (g.fog_layer.z < 0.5) {
+        return 1.0;
+    }
+    let top = g.fog_layer.x;
+    let h = height_above_eye(rel);
+    let lo = min(0.0, h);
+    let hi = max(0.0, h);
+    var inside = 0.0;
+    if (top >= hi) {
+        inside = 1.0;
+    } else if (top > lo) {
+        inside = (top - lo) / max(hi - lo, 1e-3);
+    }
+    return exp(-g.fog_layer.y * length(rel) * inside);
+}
+
 fn apply_fog(colour: vec3<f32>, distance_m: f32) -> vec3<f32> {
     let f = fog_factor(distance_m);
+    return f * colour + (1.0 - f) * g.fog_colour.rgb;
+}
+
+// Global fog and the ground fog layer along the ray to an eye-relative point.
+fn apply_fog_at(colour: vec3<f32>, rel: vec3<f32>) -> vec3<f32> {
+    let f = fog_factor(length(rel)) * fog_layer_transmittance(rel);
     return f * colour + (1.0 - f) * g.fog_colour.rgb;
 }
 

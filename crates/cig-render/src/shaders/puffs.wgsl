@@ -125,7 +125,7 @@ fn fs_main(in: PuffOut) -> Accumulated {
     let sun = g.sun_colour.rgb * (0.5 + 0.5 * dot(n, g.sun_dir.xyz));
     let sky = g.ambient.rgb * (0.6 + 0.4 * dot(n, g.eye_up.xyz));
     let distance_m = max(s0, 0.0);
-    let f = fog_factor(distance_m);
+    let f = fog_factor(distance_m) * fog_layer_transmittance(dir * distance_m);
     let radiance = f * in.albedo_tau.rgb * (sun + sky) + (1.0 - f) * g.fog_colour.rgb;
     var out: Accumulated;
     out.scatter = vec4<f32>(radiance * tau, tau);

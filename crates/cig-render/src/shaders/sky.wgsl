@@ -37,5 +37,15 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
     if (cos_sun > 0.999957) {
         colour = max(colour, g.sun_colour.rgb * 4.0);
     }
+    // Inside the ground fog layer, the sky is seen through the rest of it: up to its top for
+    // rays that climb out, through all of it for the others.
+    if (g.fog_layer.z > 0.5 && g.fog_layer.x > 0.0) {
+        let rise = dot(dir, g.eye_up.xyz);
+        var t = 0.0;
+        if (rise > 1e-4) {
+            t = exp(-g.fog_layer.y * g.fog_layer.x / rise);
+        }
+        colour = t * colour + (1.0 - t) * g.fog_colour.rgb;
+    }
     return vec4<f32>(colour, 1.0);
 }

@@ -678,6 +678,7 @@ impl App {
                     vec![self.options.view(width_px, height_px, &self.camera)],
                 );
                 snapshot.fog = self.panel.fog();
+                snapshot.ground_fog = self.panel.ground_fog();
                 let note = run_own_obscurants(
                     &mut self.effects,
                     &mut self.operator_plumes,

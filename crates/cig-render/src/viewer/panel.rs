@@ -85,6 +85,10 @@ pub struct PanelState {
     pub fog_mode: FogMode,
     pub max_pixel_error: f64,
     pub wireframe: bool,
+    /// A ground fog layer: on, its top (metres above the ellipsoid) and the visibility in it.
+    pub ground_fog: bool,
+    pub ground_fog_top_m: f64,
+    pub ground_fog_visibility_m: f64,
     /// Heat release of the next plume the operator starts, MW.
     pub plume_heat_mw: f64,
     /// The next plume is a fire (flame) rather than smoke.
@@ -148,6 +152,9 @@ impl PanelState {
             fog_mode,
             max_pixel_error: clamp_or(max_pixel_error, MAX_PIXEL_ERROR_RANGE_PX, 1.0),
             wireframe,
+            ground_fog: false,
+            ground_fog_top_m: 300.0,
+            ground_fog_visibility_m: 300.0,
             plume_heat_mw: 5.0,
             plume_flame: false,
             wind_speed_mps: 3.0,
@@ -190,6 +197,14 @@ impl PanelState {
     /// The fog these settings ask for.
     pub fn fog(&self) -> Fog {
         Fog::from_visibility(self.fog_mode, self.visibility_m)
+    }
+
+    /// The ground fog layer these settings ask for.
+    pub fn ground_fog(&self) -> Option<cig_scene::FogLayer> {
+        self.ground_fog.then_some(cig_scene::FogLayer {
+            top_m: self.ground_fog_top_m,
+            visibility_m: self.ground_fog_visibility_m,
+        })
     }
 
     /// Draws the panel (a floating window) and applies the operator's changes.
@@ -294,6 +309,20 @@ impl PanelState {
                 ui.selectable_value(&mut self.fog_mode, mode, mode.name());
             }
         });
+        ui.checkbox(&mut self.ground_fog, "ground fog layer");
+        ui.add_enabled(
+            self.ground_fog,
+            egui::Slider::new(&mut self.ground_fog_top_m, -100.0..=3000.0)
+                .text("top")
+                .suffix(" m"),
+        );
+        ui.add_enabled(
+            self.ground_fog,
+            egui::Slider::new(&mut self.ground_fog_visibility_m, 20.0..=5000.0)
+                .logarithmic(true)
+                .text("in the layer")
+                .suffix(" m"),
+        );
     }
 
     fn obscurants_ui(&mut self, ui: &mut egui::Ui) {
