@@ -142,7 +142,92 @@ pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
         started.elapsed().as_secs_f64()
     );
     println!();
+    cigi_session(args, Geodetic::new(clat, clon, 0.0))?;
     fly(args, config, &db, &mut q)
+}
+
+/// A free UDP port on the loopback (bound, then released).
+fn free_port() -> anyhow::Result<u16> {
+    Ok(std::net::UdpSocket::bind("127.0.0.1:0")?
+        .local_addr()?
+        .port())
+}
+
+/// Runs `cig serve` (no drawing) and `cig host` against it over UDP on the loopback for two
+/// seconds: a helicopter flown by the host, its height above the terrain asked every frame.
+fn cigi_session(args: &DemoArgs, centre: Geodetic) -> anyhow::Result<()> {
+    println!("a CIGI 3.3 host flies a helicopter across the database through cig serve (UDP on the loopback):");
+    let exe = std::env::current_exe().context("the cig executable")?;
+    let (ig_port, host_port) = (free_port()?, free_port()?);
+    let dir = tempfile::tempdir().context("a temporary folder")?;
+    let script = dir.path().join("host.toml");
+    let (north, east) = cig_geo::metres_per_degree(centre.lat_deg);
+    std::fs::write(
+        &script,
+        format!(
+            "frames = 120\ntime = \"2026-06-21T19:00:00Z\"\n\
+             [[entities]]\nid = 0\ntype = 1\nalt_m = 900\nspeed_mps = 80\npath = [[{}, {}], [{}, {}]]\n\
+             [view]\nentity = 0\n\
+             [[hat]]\nid = 1\nentity = 0\ntype = \"extended\"\nevery_frame = true\n",
+            centre.lat_deg,
+            centre.lon_deg - 5000.0 / east,
+            centre.lat_deg + 2000.0 / north,
+            centre.lon_deg + 5000.0 / east,
+        ),
+    )
+    .with_context(|| format!("cannot write {}", script.display()))?;
+    let mut serve = std::process::Command::new(&exe)
+        .arg("serve")
+        .arg("--db")
+        .arg(&args.db)
+        .args(["--no-render", "--cigi-port", &ig_port.to_string()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .context("starting cig serve")?;
+    // The IG opens its database and binds its port; the host's early frames may be lost.
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let host = std::process::Command::new(&exe)
+        .arg("host")
+        .arg("--script")
+        .arg(&script)
+        .args(["--ig", &format!("127.0.0.1:{ig_port}")])
+        .args(["--port", &host_port.to_string(), "--json"])
+        .output()
+        .context("running cig host");
+    let _ = serve.kill();
+    let _ = serve.wait();
+    let host = host?;
+    let text = String::from_utf8_lossy(&host.stdout);
+    let lines: Vec<serde_json::Value> = text
+        .lines()
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .collect();
+    let hats: Vec<f64> = lines
+        .iter()
+        .filter(|v| v["packet"] == "hat_hot_extended" && v["valid"] == true)
+        .filter_map(|v| v["hat_m"].as_f64())
+        .collect();
+    match lines.iter().find_map(|v| v.get("summary")) {
+        Some(summary) if !hats.is_empty() => {
+            let lo = hats.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = hats.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            println!(
+                "  {} host frames, {} Start of Frame, {} HAT/HOT answers (latency {:.1} host frames on average); height above terrain {lo:.0}-{hi:.0} m",
+                summary["frames_sent"], summary["start_of_frames"], hats.len(),
+                summary["latency_frames_mean"].as_f64().unwrap_or(0.0)
+            );
+        }
+        _ => println!(
+            "  the IG did not answer ({})",
+            String::from_utf8_lossy(&host.stderr)
+                .lines()
+                .last()
+                .unwrap_or("no message")
+        ),
+    }
+    println!();
+    Ok(())
 }
 
 /// The heading from the centre whose first 10 km are lowest on average: along a valley.
