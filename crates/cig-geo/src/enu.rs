@@ -14,8 +14,7 @@
 
 use glam::{DMat3, DVec3};
 
-use crate::angle::sincos_deg;
-use crate::geodetic::{ecef_to_geodetic, geodetic_to_ecef, Geodetic};
+use crate::geodetic::{ecef_to_geodetic, geodetic_to_ecef, Geodetic, LatLonTrig};
 
 /// Local east-north-up frame at a geodetic origin.
 #[derive(Clone, Copy, Debug)]
@@ -31,15 +30,26 @@ pub struct EnuFrame {
 impl EnuFrame {
     /// The ENU frame whose origin is `origin` (height included).
     pub fn new(origin: Geodetic) -> Self {
-        let (sin_lat, cos_lat) = sincos_deg(origin.lat_deg);
-        let (sin_lon, cos_lon) = sincos_deg(origin.lon_deg);
+        Self::with_trig(origin, LatLonTrig::new(origin.lat_deg, origin.lon_deg))
+    }
+
+    /// [`EnuFrame::new`] with the sines and cosines of the origin's latitude and longitude
+    /// already worked out (`trig` must be those of `origin`).
+    pub fn with_trig(origin: Geodetic, trig: LatLonTrig) -> Self {
+        let LatLonTrig {
+            sin_lat,
+            cos_lat,
+            sin_lon,
+            cos_lon,
+            ..
+        } = trig;
         let east = DVec3::new(-sin_lon, cos_lon, 0.0);
         let north = DVec3::new(-sin_lat * cos_lon, -sin_lat * sin_lon, cos_lat);
         let up = DVec3::new(cos_lat * cos_lon, cos_lat * sin_lon, sin_lat);
         let enu_to_ecef_rot = DMat3::from_cols(east, north, up);
         Self {
             origin,
-            origin_ecef: geodetic_to_ecef(origin),
+            origin_ecef: trig.to_ecef(origin.alt_m),
             enu_to_ecef_rot,
             ecef_to_enu_rot: enu_to_ecef_rot.transpose(),
         }

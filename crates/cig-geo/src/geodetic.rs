@@ -65,15 +65,59 @@ impl Geodetic {
 /// Exact at the poles and on the equator (the trigonometry is done in
 /// degrees with exact quadrant reduction).
 pub fn geodetic_to_ecef(g: Geodetic) -> DVec3 {
-    let (sin_lat, cos_lat) = sincos_deg(g.lat_deg);
-    let (sin_lon, cos_lon) = sincos_deg(g.lon_deg);
-    let n = WGS84_A_M / (1.0 - WGS84_E2 * sin_lat * sin_lat).sqrt();
-    let r = (n + g.alt_m) * cos_lat;
-    DVec3::new(
-        r * cos_lon,
-        r * sin_lon,
-        (n * (1.0 - WGS84_E2) + g.alt_m) * sin_lat,
-    )
+    LatLonTrig::new(g.lat_deg, g.lon_deg).to_ecef(g.alt_m)
+}
+
+/// The sines and cosines of a latitude and a longitude (and the prime vertical
+/// radius of the latitude), for converting many positions that share latitudes
+/// or longitudes (the posts of a grid) without repeating the trigonometry: the
+/// latitude of one value may be combined with the longitude of another
+/// ([`LatLonTrig::with_lon_of`]), and the results are the same bits as
+/// [`geodetic_to_ecef`] and [`crate::EnuFrame::new`] give.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LatLonTrig {
+    pub sin_lat: f64,
+    pub cos_lat: f64,
+    pub sin_lon: f64,
+    pub cos_lon: f64,
+    /// Prime vertical radius of curvature `N = a / sqrt(1 - e² sin² φ)`, metres.
+    pub prime_vertical_radius_m: f64,
+}
+
+impl LatLonTrig {
+    /// Sines and cosines of `lat_deg` and `lon_deg` (exact at multiples of 90 degrees).
+    pub fn new(lat_deg: f64, lon_deg: f64) -> LatLonTrig {
+        let (sin_lat, cos_lat) = sincos_deg(lat_deg);
+        let (sin_lon, cos_lon) = sincos_deg(lon_deg);
+        LatLonTrig {
+            sin_lat,
+            cos_lat,
+            sin_lon,
+            cos_lon,
+            prime_vertical_radius_m: WGS84_A_M / (1.0 - WGS84_E2 * sin_lat * sin_lat).sqrt(),
+        }
+    }
+
+    /// The latitude of `self` with the longitude of `other`.
+    pub fn with_lon_of(self, other: LatLonTrig) -> LatLonTrig {
+        LatLonTrig {
+            sin_lon: other.sin_lon,
+            cos_lon: other.cos_lon,
+            ..self
+        }
+    }
+
+    /// ECEF coordinates (metres) of the position at this latitude and longitude and
+    /// `alt_m` above the ellipsoid; see [`geodetic_to_ecef`].
+    pub fn to_ecef(&self, alt_m: f64) -> DVec3 {
+        let n = self.prime_vertical_radius_m;
+        let r = (n + alt_m) * self.cos_lat;
+        DVec3::new(
+            r * self.cos_lon,
+            r * self.sin_lon,
+            (n * (1.0 - WGS84_E2) + alt_m) * self.sin_lat,
+        )
+    }
 }
 
 /// Earth-centred, Earth-fixed coordinates (metres) to geodetic position.
@@ -332,6 +376,31 @@ mod tests {
                     close(wrap_deg(back.lon_deg - lon_deg), 0.0, 1e-9),
                     "{:?} -> {:?}", g, back
                 );
+            }
+        }
+
+        /// The latitude of one `LatLonTrig` with the longitude of another converts exactly as
+        /// the position with that latitude and longitude does (same bits), and the ENU frame
+        /// built from it is the frame `EnuFrame::new` builds.
+        #[test]
+        fn mixed_trig_converts_as_the_position_itself(
+            lat_deg in -90.0..=90.0_f64,
+            lon_deg in -180.0..=360.0_f64,
+            other_lat_deg in -90.0..=90.0_f64,
+            other_lon_deg in -180.0..=360.0_f64,
+            alt_m in -1e4..=1e6_f64,
+        ) {
+            let trig = LatLonTrig::new(lat_deg, other_lon_deg)
+                .with_lon_of(LatLonTrig::new(other_lat_deg, lon_deg));
+            let g = Geodetic::new(lat_deg, lon_deg, alt_m);
+            let direct = g.to_ecef();
+            let mixed = trig.to_ecef(alt_m);
+            prop_assert_eq!(mixed.to_array().map(f64::to_bits), direct.to_array().map(f64::to_bits));
+            let a = crate::EnuFrame::new(g);
+            let b = crate::EnuFrame::with_trig(g, trig);
+            prop_assert_eq!(a.origin_ecef(), b.origin_ecef());
+            for v in [DVec3::X, DVec3::Y, DVec3::Z] {
+                prop_assert_eq!(a.enu_vector_to_ecef(v), b.enu_vector_to_ecef(v));
             }
         }
 

@@ -42,7 +42,7 @@ pub mod geoid;
 pub mod utm;
 
 pub use enu::EnuFrame;
-pub use geodetic::{ecef_to_geodetic, geodetic_to_ecef, metres_per_degree, Geodetic};
+pub use geodetic::{ecef_to_geodetic, geodetic_to_ecef, metres_per_degree, Geodetic, LatLonTrig};
 
 /// WGS84 semi-major axis (equatorial radius), metres. TR8350.2 chapter 3.
 pub const WGS84_A_M: f64 = 6_378_137.0;

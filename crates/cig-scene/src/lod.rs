@@ -16,6 +16,15 @@
 //! quadtree culling). Node boxes are built from 9 sample points at the lowest and highest
 //! heights, in the node's local east-north-up frame, so curvature is included.
 //!
+//! Cost per frame: the boxes persist across frames in a flat arena of slots linked as the
+//! quadtree (a node's four children in consecutive slots), so a visit reaches its node without
+//! hashing and reads one small record; a node is culled when all 18 sample points lie outside
+//! one frustum plane, decided first by the oriented box that bounds them (wholly outside a
+//! plane, or wholly inside all of them, by more than a millimetre) and only near a plane by the
+//! points themselves, which gives the points' answer exactly. Each tile is asked of the cache
+//! once per selection. The 3 x 3 samples share three latitudes and three longitudes, so a box
+//! costs 6 sines and cosines instead of 40.
+//!
 //! Streaming: a node refines only when its children's tile is resident in the paging cache, so
 //! the renderer always draws what is in memory; the renderer fades newly refined nodes in from
 //! their parent's shape over half a second (a floor on the morph factor), so finer data morphs
@@ -24,17 +33,20 @@
 //! Limits: morph ranges come from each node's own error, not one range per level, so
 //! neighbours may differ by more than one level or meet while one is still partly morphed, and a
 //! node may be drawn from coarser data than its level while its tile loads; the resulting
-//! T-junction gaps are hidden by skirts (see `terrain_mesh`). Node boxes sample 9 points per height, which is conservative
-//! for nodes up to about 1000 km across.
+//! T-junction gaps are hidden by skirts (see `terrain_mesh`). Node boxes sample 9 points per
+//! height, which is conservative for nodes up to about 1000 km across. The arena holds at most
+//! about 50 000 nodes between frames (about 30 MB); past that it is emptied and rebuilt.
 
 use crate::view::Camera;
-use cig_geo::{EnuFrame, Geodetic};
+use cig_geo::{EnuFrame, Geodetic, LatLonTrig};
 use cig_terrain::database::GeoidLookup;
 use cig_terrain::pyramid::quadtree_index;
-use cig_terrain::tile::NodeBounds;
+use cig_terrain::tile::{NodeBounds, Tile};
 use cig_terrain::{PyramidLayout, TileCache, TileKey};
 use glam::DVec3;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
+use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::Arc;
 
 /// Ratio between the distance where a node's children are fully morphed into it and the
 /// distance where they start to morph.
@@ -234,24 +246,189 @@ pub struct Selection {
     pub visited: usize,
 }
 
+/// A node's box: everything the selection reads on every visit, kept small so that a visit
+/// touches few cache lines (the 18 sample points live apart, read only when the box test cannot
+/// decide).
 #[derive(Clone, Copy, Debug)]
-struct NodeGeometry {
-    data_level: u8,
-    bounds: NodeBounds,
-    /// Sample points (ECEF) at the lowest and highest heights.
-    points: [DVec3; 18],
+struct NodeBox {
     frame_origin: DVec3,
     /// Local ENU axes of the node centre.
     axes: [DVec3; 3],
     box_min: DVec3,
     box_max: DVec3,
+    /// The node's geometric error (`NodeBounds::error_m` of its data).
+    error_m: f32,
+    /// Slot of the first of the node's four children (in `children()` order), or
+    /// [`NO_CHILDREN`] before the node was first refined.
+    first_child: u32,
+    /// Pyramid level of the data the box was built from, or [`UNBUILT`].
+    data_level: u8,
 }
 
-/// The persistent part of the selection: node boxes cached across frames.
+/// `NodeBox::data_level` of a slot whose box is not built yet.
+const UNBUILT: u8 = u8::MAX;
+
+/// `NodeBox::first_child` of a slot whose children have no slots yet.
+const NO_CHILDREN: u32 = u32::MAX;
+
+/// Node slots kept across frames; past this the slots are dropped and rebuilt.
+const MAX_CACHED_NODES: usize = 50_000;
+
+/// Distance from a frustum plane within which the box test defers to the sample points,
+/// metres: far above the rounding of the box's axes and the eye-relative differences.
+const CULL_MARGIN_M: f64 = 1e-3;
+
+const EMPTY_BOX: NodeBox = NodeBox {
+    frame_origin: DVec3::ZERO,
+    axes: [DVec3::ZERO; 3],
+    box_min: DVec3::ZERO,
+    box_max: DVec3::ZERO,
+    error_m: 0.0,
+    first_child: NO_CHILDREN,
+    data_level: UNBUILT,
+};
+
+/// Fast multiplicative hash for the small integer keys of nodes and tiles (the keys come from
+/// the database's own layout, not from outside, so no flooding resistance is needed).
+#[derive(Clone, Copy, Default)]
+struct KeyHasher(u64);
+
+impl KeyHasher {
+    #[inline]
+    fn add(&mut self, word: u64) {
+        self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+impl Hasher for KeyHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.add(u64::from(b));
+        }
+    }
+    fn write_u8(&mut self, n: u8) {
+        self.add(u64::from(n));
+    }
+    fn write_u32(&mut self, n: u32) {
+        self.add(u64::from(n));
+    }
+    fn write_u64(&mut self, n: u64) {
+        self.add(n);
+    }
+    fn write_usize(&mut self, n: usize) {
+        self.add(n as u64);
+    }
+}
+
+type KeyHash = BuildHasherDefault<KeyHasher>;
+
+/// Memory of one selection: what it asked the tile cache, so each tile is looked up once
+/// (the cache marks a tile used at the current paging step however often it is asked).
+#[derive(Default)]
+struct Scratch {
+    stack: Vec<(u32, NodeKey, f64)>,
+    wanted: Vec<(f64, TileKey)>,
+    tiles: HashMap<TileKey, Option<Arc<Tile>>, KeyHash>,
+    seen: HashSet<TileKey, KeyHash>,
+    order: Vec<u128>,
+}
+
+impl Scratch {
+    fn resident(&mut self, cache: &TileCache, key: TileKey) -> Option<&Arc<Tile>> {
+        self.tiles
+            .entry(key)
+            .or_insert_with(|| cache.resident(key))
+            .as_ref()
+    }
+
+    /// [`TerrainLod::resident_source`] through this selection's memory.
+    fn source(
+        &mut self,
+        cache: &TileCache,
+        layout: &NodeLayout,
+        key: NodeKey,
+    ) -> Option<(TileKey, Arc<Tile>)> {
+        let mut level = key.level;
+        while level < layout.pyramid.levels {
+            let tk = layout.tile_of(key, level);
+            if let Some(t) = self.resident(cache, tk) {
+                return Some((tk, Arc::clone(t)));
+            }
+            level += 1;
+        }
+        None
+    }
+
+    /// The finest resident level holding `key` (without cloning the tile).
+    fn source_level(&mut self, cache: &TileCache, layout: &NodeLayout, key: NodeKey) -> Option<u8> {
+        let mut level = key.level;
+        while level < layout.pyramid.levels {
+            let tk = layout.tile_of(key, level);
+            if self.resident(cache, tk).is_some() {
+                return Some(level);
+            }
+            level += 1;
+        }
+        None
+    }
+}
+
+/// Where a node's box lies against the frustum.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum BoxSide {
+    /// Wholly outside one plane: every sample point is culled.
+    Outside,
+    /// Wholly inside every plane: no sample point is culled.
+    Inside,
+    /// Near a plane: the sample points decide.
+    Straddles,
+}
+
+/// Classifies an oriented box (centre and axes in the node's ENU frame, eye-relative origin)
+/// against the camera's planes, deciding only where the box clears a plane by
+/// [`CULL_MARGIN_M`].
+fn box_side(camera: &Camera, b: &NodeBox) -> BoxSide {
+    let origin_rel = b.frame_origin - camera.eye_ecef;
+    let mid = (b.box_min + b.box_max) * 0.5;
+    let half = (b.box_max - b.box_min) * 0.5;
+    let mut inside = true;
+    for plane in &camera.planes {
+        let n_axes = DVec3::new(
+            plane.normal.dot(b.axes[0]),
+            plane.normal.dot(b.axes[1]),
+            plane.normal.dot(b.axes[2]),
+        );
+        let centre = plane.normal.dot(origin_rel) + n_axes.dot(mid);
+        let extent = n_axes.abs().dot(half);
+        if centre + extent < plane.offset_m - CULL_MARGIN_M {
+            return BoxSide::Outside;
+        }
+        if centre - extent < plane.offset_m + CULL_MARGIN_M {
+            inside = false;
+        }
+    }
+    if inside {
+        BoxSide::Inside
+    } else {
+        BoxSide::Straddles
+    }
+}
+
+/// The persistent part of the selection: node boxes cached across frames, in a flat arena of
+/// slots linked as the quadtree (a node's four children sit in consecutive slots), so a visit
+/// finds its node without hashing.
 pub struct TerrainLod {
     pub layout: NodeLayout,
     geoid: GeoidLookup,
-    geometry: HashMap<NodeKey, NodeGeometry>,
+    roots: Vec<NodeKey>,
+    /// Slot `i < roots.len()` is root `i`.
+    boxes: Vec<NodeBox>,
+    /// Sample points (ECEF) at the lowest and highest heights, per slot.
+    points: Vec<[DVec3; 18]>,
+    scratch: Scratch,
 }
 
 /// Margin added to node boxes for the geoid's variation across a node and rounding, metres.
@@ -259,11 +436,17 @@ const BOX_MARGIN_M: f64 = 2.0;
 
 impl TerrainLod {
     pub fn new(layout: NodeLayout, geoid: GeoidLookup) -> TerrainLod {
-        TerrainLod {
+        let roots = layout.roots();
+        let mut lod = TerrainLod {
             layout,
             geoid,
-            geometry: HashMap::new(),
-        }
+            roots,
+            boxes: Vec::new(),
+            points: Vec::new(),
+            scratch: Scratch::default(),
+        };
+        lod.clear();
+        lod
     }
 
     pub fn geoid(&self) -> &GeoidLookup {
@@ -271,11 +454,7 @@ impl TerrainLod {
     }
 
     /// The finest resident tile holding `key` (its level, the tile), walking up the pyramid.
-    pub fn resident_source(
-        &self,
-        cache: &TileCache,
-        key: NodeKey,
-    ) -> Option<(TileKey, std::sync::Arc<cig_terrain::tile::Tile>)> {
+    pub fn resident_source(&self, cache: &TileCache, key: NodeKey) -> Option<(TileKey, Arc<Tile>)> {
         let mut level = key.level;
         while level < self.layout.pyramid.levels {
             let tk = self.layout.tile_of(key, level);
@@ -287,80 +466,33 @@ impl TerrainLod {
         None
     }
 
-    fn geometry(&mut self, cache: &TileCache, key: NodeKey) -> Option<NodeGeometry> {
-        let (tile_key, tile) = self.resident_source(cache, key)?;
-        if let Some(g) = self.geometry.get(&key) {
-            if g.data_level == tile_key.level {
-                return Some(*g);
-            }
-        }
+    /// Builds the box of `key` from the data of `data_level` into `slot`.
+    fn build(&mut self, slot: usize, key: NodeKey, tile_key: TileKey, tile: &Tile) {
         let bounds = self.layout.node_bounds_in(key, tile_key, &tile.nodes);
-        let g = self.build_geometry(key, tile_key.level, bounds);
-        self.geometry.insert(key, g);
-        Some(g)
+        let (b, points) = node_box(&self.layout, &self.geoid, key, tile_key.level, bounds);
+        if let (Some(dst), Some(dst_points)) = (self.boxes.get_mut(slot), self.points.get_mut(slot))
+        {
+            *dst = NodeBox {
+                first_child: dst.first_child,
+                ..b
+            };
+            *dst_points = points;
+        }
     }
 
-    fn build_geometry(&self, key: NodeKey, data_level: u8, bounds: NodeBounds) -> NodeGeometry {
-        let (r0, c0) = self.layout.finest_origin(key);
-        let span = self.layout.finest_span(key.level) as f64;
-        let (lat_c, lon_c) = self
-            .layout
-            .lat_lon_of_finest(r0 as f64 + span / 2.0, c0 as f64 + span / 2.0);
-        let n_c = self.geoid.undulation_m(lat_c, lon_c);
-        let (lo, hi) = if bounds.min_m <= bounds.max_m {
-            (f64::from(bounds.min_m), f64::from(bounds.max_m))
-        } else {
-            (0.0, 0.0)
-        };
-        // The surface bulges above the chords between the 9 sample points by up to
-        // D^2 / (32 R) for a node D across.
-        let span_m = span * self.layout.pyramid.grid.dlat_deg * 111_000.0;
-        let bulge_m = span_m * span_m / (32.0 * 6_356_000.0);
-        let mut points = [DVec3::ZERO; 18];
-        let mut k = 0;
-        for (fr, fc) in [
-            (0.0, 0.0),
-            (0.0, 0.5),
-            (0.0, 1.0),
-            (0.5, 0.0),
-            (0.5, 0.5),
-            (0.5, 1.0),
-            (1.0, 0.0),
-            (1.0, 0.5),
-            (1.0, 1.0),
-        ] {
-            let (lat, lon) = self
-                .layout
-                .lat_lon_of_finest(r0 as f64 + fr * span, c0 as f64 + fc * span);
-            let n = self.geoid.undulation_m(lat, lon);
-            for h in [lo - BOX_MARGIN_M, hi + BOX_MARGIN_M + bulge_m] {
-                points[k] = Geodetic::new(lat, lon, h + n).to_ecef();
-                k += 1;
-            }
+    /// Slot of the first of `slot`'s children, making room for them on first use.
+    fn children_of(&mut self, slot: usize) -> u32 {
+        let first = self.boxes.get(slot).map_or(NO_CHILDREN, |b| b.first_child);
+        if first != NO_CHILDREN {
+            return first;
         }
-        let frame = EnuFrame::new(Geodetic::new(lat_c, lon_c, n_c + (lo + hi) / 2.0));
-        let axes = [
-            frame.enu_vector_to_ecef(DVec3::X),
-            frame.enu_vector_to_ecef(DVec3::Y),
-            frame.enu_vector_to_ecef(DVec3::Z),
-        ];
-        let mut box_min = DVec3::splat(f64::INFINITY);
-        let mut box_max = DVec3::splat(f64::NEG_INFINITY);
-        for p in &points {
-            let d = *p - frame.origin_ecef();
-            let local = DVec3::new(d.dot(axes[0]), d.dot(axes[1]), d.dot(axes[2]));
-            box_min = box_min.min(local);
-            box_max = box_max.max(local);
+        let first = self.boxes.len() as u32;
+        self.boxes.extend([EMPTY_BOX; 4]);
+        self.points.extend([[DVec3::ZERO; 18]; 4]);
+        if let Some(b) = self.boxes.get_mut(slot) {
+            b.first_child = first;
         }
-        NodeGeometry {
-            data_level,
-            bounds,
-            points,
-            frame_origin: frame.origin_ecef(),
-            axes,
-            box_min,
-            box_max,
-        }
+        first
     }
 
     /// Selects the nodes to draw for one camera.
@@ -371,16 +503,338 @@ impl TerrainLod {
         settings: &LodSettings,
     ) -> Selection {
         let mut selection = Selection::default();
-        if self.geometry.len() > 50_000 {
-            self.geometry.clear();
+        if self.boxes.len() > MAX_CACHED_NODES {
+            self.clear();
         }
+        let mut scratch = std::mem::take(&mut self.scratch);
+        scratch.stack.clear();
+        scratch.wanted.clear();
+        scratch.tiles.clear();
+        scratch.seen.clear();
         let pixels_per_metre_at_1m = if settings.max_pixel_error > 0.0 {
             camera.pixels_per_tangent / settings.max_pixel_error
         } else {
             f64::INFINITY
         };
-        let mut stack: Vec<(NodeKey, f64)> = self
-            .layout
+        scratch.stack.extend(
+            self.roots
+                .iter()
+                .enumerate()
+                .map(|(slot, &key)| (slot as u32, key, f64::INFINITY)),
+        );
+        while let Some((slot, key, parent_range_m)) = scratch.stack.pop() {
+            let slot = slot as usize;
+            selection.visited += 1;
+            let Some(data_level) = scratch.source_level(cache, &self.layout, key) else {
+                scratch
+                    .wanted
+                    .push((f64::INFINITY, self.layout.tile_of(key, key.level)));
+                continue;
+            };
+            if self.boxes.get(slot).map(|b| b.data_level) != Some(data_level) {
+                if let Some((tile_key, tile)) = scratch.source(cache, &self.layout, key) {
+                    self.build(slot, key, tile_key, &tile);
+                }
+            }
+            let Some(g) = self.boxes.get(slot).copied() else {
+                continue;
+            };
+            let culled = match box_side(camera, &g) {
+                BoxSide::Outside => true,
+                BoxSide::Inside => false,
+                BoxSide::Straddles => self
+                    .points
+                    .get(slot)
+                    .is_some_and(|points| camera.culls(&points.map(|p| p - camera.eye_ecef))),
+            };
+            if culled {
+                continue;
+            }
+            let d = camera.eye_ecef - g.frame_origin;
+            let local = DVec3::new(d.dot(g.axes[0]), d.dot(g.axes[1]), d.dot(g.axes[2]));
+            let distance_m = (local.clamp(g.box_min, g.box_max) - local).length();
+            let error_m = f64::from(g.error_m.max(0.0));
+            let range_m = if error_m > 0.0 {
+                error_m * pixels_per_metre_at_1m
+            } else {
+                0.0
+            };
+            let wants_refine = key.level > 0 && distance_m < range_m * MORPH_SPAN;
+            if wants_refine {
+                let child_tile = self.layout.tile_of(key, key.level - 1);
+                if scratch.resident(cache, child_tile).is_some() {
+                    let first = self.children_of(slot);
+                    for (i, child) in key.children().into_iter().enumerate() {
+                        if self.layout.exists(child) {
+                            scratch.stack.push((first + i as u32, child, range_m));
+                        }
+                    }
+                    continue;
+                }
+                scratch.wanted.push((distance_m, child_tile));
+            }
+            let (morph_start_m, morph_end_m) = if parent_range_m.is_finite() {
+                (parent_range_m, parent_range_m * MORPH_SPAN)
+            } else {
+                (f64::INFINITY, f64::INFINITY)
+            };
+            selection.nodes.push(SelectedNode {
+                key,
+                data_level: g.data_level,
+                morph_start_m: morph_start_m as f32,
+                morph_end_m: morph_end_m as f32,
+                error_m: error_m as f32,
+                distance_m,
+            });
+        }
+        let wanted = &mut scratch.wanted;
+        wanted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        wanted.dedup_by(|a, b| a.1 == b.1);
+        let seen = &mut scratch.seen;
+        selection.wanted_tiles = wanted
+            .iter()
+            .filter(|(_, k)| seen.insert(*k))
+            .map(|(_, k)| *k)
+            .collect();
+        sort_by_distance(&mut selection.nodes, &mut scratch.order);
+        // Tiles are not kept alive past the selection.
+        scratch.tiles.clear();
+        self.scratch = scratch;
+        selection
+    }
+
+    /// Forgets cached node boxes (e.g. after tiles were evicted and reloaded at another level).
+    pub fn clear(&mut self) {
+        self.boxes.clear();
+        self.points.clear();
+        self.boxes.resize(self.roots.len(), EMPTY_BOX);
+        self.points.resize(self.roots.len(), [DVec3::ZERO; 18]);
+    }
+
+    /// Node slots held (for statistics and tests).
+    pub fn cached_nodes(&self) -> usize {
+        self.boxes.len()
+    }
+}
+
+/// Sorts `nodes` nearest first, keeping the traversal order between equal distances (a stable
+/// sort by [`f64::total_cmp`], done as an unstable sort of packed (distance, index) keys).
+fn sort_by_distance(nodes: &mut Vec<SelectedNode>, order: &mut Vec<u128>) {
+    // The bits of an f64 made unsigned-comparable in the order of `total_cmp`.
+    let key = |d: f64| {
+        let bits = d.to_bits();
+        if bits >> 63 == 1 {
+            !bits
+        } else {
+            bits | (1 << 63)
+        }
+    };
+    order.clear();
+    order.extend(
+        nodes
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (u128::from(key(n.distance_m)) << 64) | i as u128),
+    );
+    order.sort_unstable();
+    let sorted: Vec<SelectedNode> = order
+        .iter()
+        .filter_map(|k| nodes.get((k & u128::from(u64::MAX)) as usize).copied())
+        .collect();
+    *nodes = sorted;
+}
+
+/// The box of node `key` built from `bounds` read from data of `data_level`, and its 18
+/// sample points: the 9 points of a 3 x 3 grid over the node at its lowest and highest heights
+/// (with margins), and the box bounding them in the ENU frame of the node's centre.
+fn node_box(
+    layout: &NodeLayout,
+    geoid: &GeoidLookup,
+    key: NodeKey,
+    data_level: u8,
+    bounds: NodeBounds,
+) -> (NodeBox, [DVec3; 18]) {
+    let (r0, c0) = layout.finest_origin(key);
+    let span = layout.finest_span(key.level) as f64;
+    let (lo, hi) = if bounds.min_m <= bounds.max_m {
+        (f64::from(bounds.min_m), f64::from(bounds.max_m))
+    } else {
+        (0.0, 0.0)
+    };
+    // The surface bulges above the chords between the 9 sample points by up to
+    // D^2 / (32 R) for a node D across.
+    let span_m = span * layout.pyramid.grid.dlat_deg * 111_000.0;
+    let bulge_m = span_m * span_m / (32.0 * 6_356_000.0);
+    // The 3 x 3 samples share three latitudes and three longitudes (a latitude depends on the
+    // row only): the trigonometry is done once for each, on the diagonal.
+    const FRACTIONS: [f64; 3] = [0.0, 0.5, 1.0];
+    let diagonal = FRACTIONS.map(|f| {
+        let (lat, lon) = layout.lat_lon_of_finest(r0 as f64 + f * span, c0 as f64 + f * span);
+        (lat, lon, LatLonTrig::new(lat, lon))
+    });
+    let mut points = [DVec3::ZERO; 18];
+    let mut centre = None;
+    let mut k = 0;
+    for (i, &(lat, _, lat_trig)) in diagonal.iter().enumerate() {
+        for (j, &(_, lon, lon_trig)) in diagonal.iter().enumerate() {
+            let trig = lat_trig.with_lon_of(lon_trig);
+            let n = geoid.undulation_m(lat, lon);
+            if (i, j) == (1, 1) {
+                centre = Some((lat, lon, n, trig));
+            }
+            for h in [lo - BOX_MARGIN_M, hi + BOX_MARGIN_M + bulge_m] {
+                if let Some(p) = points.get_mut(k) {
+                    *p = trig.to_ecef(h + n);
+                }
+                k += 1;
+            }
+        }
+    }
+    // The centre is the middle sample (`span / 2` and `0.5 * span` are the same number).
+    let (lat_c, lon_c, n_c, trig_c) = centre.unwrap_or_else(|| {
+        let (lat, lon) = layout.lat_lon_of_finest(r0 as f64 + span / 2.0, c0 as f64 + span / 2.0);
+        (
+            lat,
+            lon,
+            geoid.undulation_m(lat, lon),
+            LatLonTrig::new(lat, lon),
+        )
+    });
+    let frame = EnuFrame::with_trig(Geodetic::new(lat_c, lon_c, n_c + (lo + hi) / 2.0), trig_c);
+    let axes = [
+        frame.enu_vector_to_ecef(DVec3::X),
+        frame.enu_vector_to_ecef(DVec3::Y),
+        frame.enu_vector_to_ecef(DVec3::Z),
+    ];
+    let mut box_min = DVec3::splat(f64::INFINITY);
+    let mut box_max = DVec3::splat(f64::NEG_INFINITY);
+    for p in &points {
+        let d = *p - frame.origin_ecef();
+        let local = DVec3::new(d.dot(axes[0]), d.dot(axes[1]), d.dot(axes[2]));
+        box_min = box_min.min(local);
+        box_max = box_max.max(local);
+    }
+    (
+        NodeBox {
+            frame_origin: frame.origin_ecef(),
+            axes,
+            box_min,
+            box_max,
+            error_m: bounds.error_m,
+            first_child: NO_CHILDREN,
+            data_level,
+        },
+        points,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::view::{FovDeg, Hpr, View};
+    use cig_terrain::build::{build_pyramid, BuildError};
+    use cig_terrain::database::{GeoidGrid, MemoryTileStore};
+    use cig_terrain::{GeoGrid, Manifest, Material, PagingConfig, Raster, TerrainDatabase};
+    use proptest::prelude::*;
+    use std::sync::OnceLock;
+
+    /// The selection as it was before the node arena (commit c2719fb): every visited node's box
+    /// rebuilt from scratch with one geodetic conversion per sample point, every point tested
+    /// against every plane, every tile asked of the cache. The new selection must give exactly
+    /// its answer.
+    fn reference_select(
+        layout: &NodeLayout,
+        geoid: &GeoidLookup,
+        cache: &TileCache,
+        camera: &Camera,
+        settings: &LodSettings,
+    ) -> Selection {
+        struct Geometry {
+            data_level: u8,
+            bounds: NodeBounds,
+            points: [DVec3; 18],
+            frame_origin: DVec3,
+            axes: [DVec3; 3],
+            box_min: DVec3,
+            box_max: DVec3,
+        }
+        let geometry = |key: NodeKey| -> Option<Geometry> {
+            let mut level = key.level;
+            let (tile_key, tile) = loop {
+                if level >= layout.pyramid.levels {
+                    return None;
+                }
+                let tk = layout.tile_of(key, level);
+                if let Some(t) = cache.resident(tk) {
+                    break (tk, t);
+                }
+                level += 1;
+            };
+            let bounds = layout.node_bounds_in(key, tile_key, &tile.nodes);
+            let (r0, c0) = layout.finest_origin(key);
+            let span = layout.finest_span(key.level) as f64;
+            let (lat_c, lon_c) =
+                layout.lat_lon_of_finest(r0 as f64 + span / 2.0, c0 as f64 + span / 2.0);
+            let n_c = geoid.undulation_m(lat_c, lon_c);
+            let (lo, hi) = if bounds.min_m <= bounds.max_m {
+                (f64::from(bounds.min_m), f64::from(bounds.max_m))
+            } else {
+                (0.0, 0.0)
+            };
+            let span_m = span * layout.pyramid.grid.dlat_deg * 111_000.0;
+            let bulge_m = span_m * span_m / (32.0 * 6_356_000.0);
+            let mut points = [DVec3::ZERO; 18];
+            let mut k = 0;
+            for (fr, fc) in [
+                (0.0, 0.0),
+                (0.0, 0.5),
+                (0.0, 1.0),
+                (0.5, 0.0),
+                (0.5, 0.5),
+                (0.5, 1.0),
+                (1.0, 0.0),
+                (1.0, 0.5),
+                (1.0, 1.0),
+            ] {
+                let (lat, lon) =
+                    layout.lat_lon_of_finest(r0 as f64 + fr * span, c0 as f64 + fc * span);
+                let n = geoid.undulation_m(lat, lon);
+                for h in [lo - BOX_MARGIN_M, hi + BOX_MARGIN_M + bulge_m] {
+                    points[k] = Geodetic::new(lat, lon, h + n).to_ecef();
+                    k += 1;
+                }
+            }
+            let frame = EnuFrame::new(Geodetic::new(lat_c, lon_c, n_c + (lo + hi) / 2.0));
+            let axes = [
+                frame.enu_vector_to_ecef(DVec3::X),
+                frame.enu_vector_to_ecef(DVec3::Y),
+                frame.enu_vector_to_ecef(DVec3::Z),
+            ];
+            let mut box_min = DVec3::splat(f64::INFINITY);
+            let mut box_max = DVec3::splat(f64::NEG_INFINITY);
+            for p in &points {
+                let d = *p - frame.origin_ecef();
+                let local = DVec3::new(d.dot(axes[0]), d.dot(axes[1]), d.dot(axes[2]));
+                box_min = box_min.min(local);
+                box_max = box_max.max(local);
+            }
+            Some(Geometry {
+                data_level: tile_key.level,
+                bounds,
+                points,
+                frame_origin: frame.origin_ecef(),
+                axes,
+                box_min,
+                box_max,
+            })
+        };
+        let mut selection = Selection::default();
+        let pixels_per_metre_at_1m = if settings.max_pixel_error > 0.0 {
+            camera.pixels_per_tangent / settings.max_pixel_error
+        } else {
+            f64::INFINITY
+        };
+        let mut stack: Vec<(NodeKey, f64)> = layout
             .roots()
             .into_iter()
             .map(|k| (k, f64::INFINITY))
@@ -388,8 +842,8 @@ impl TerrainLod {
         let mut wanted: Vec<(f64, TileKey)> = Vec::new();
         while let Some((key, parent_range_m)) = stack.pop() {
             selection.visited += 1;
-            let Some(g) = self.geometry(cache, key) else {
-                wanted.push((f64::INFINITY, self.layout.tile_of(key, key.level)));
+            let Some(g) = geometry(key) else {
+                wanted.push((f64::INFINITY, layout.tile_of(key, key.level)));
                 continue;
             };
             let rel: [DVec3; 18] = g.points.map(|p| p - camera.eye_ecef);
@@ -407,10 +861,10 @@ impl TerrainLod {
             };
             let wants_refine = key.level > 0 && distance_m < range_m * MORPH_SPAN;
             if wants_refine {
-                let child_tile = self.layout.tile_of(key, key.level - 1);
+                let child_tile = layout.tile_of(key, key.level - 1);
                 if cache.resident(child_tile).is_some() {
                     for child in key.children() {
-                        if self.layout.exists(child) {
+                        if layout.exists(child) {
                             stack.push((child, range_m));
                         }
                     }
@@ -446,8 +900,303 @@ impl TerrainLod {
         selection
     }
 
-    /// Forgets cached node boxes (e.g. after tiles were evicted and reloaded at another level).
-    pub fn clear(&mut self) {
-        self.geometry.clear();
+    const SOUTH_LAT_DEG: f64 = 36.0;
+    const WEST_LON_DEG: f64 = -121.0;
+    const POSTS: usize = 301;
+    const DLAT_DEG: f64 = 0.00027;
+    const DLON_DEG: f64 = 0.00033;
+
+    /// A 9 km database rough at the post scale (hills plus hashed noise), with a geoid that
+    /// varies across it, in 16-cell tiles so that its pyramid has five levels.
+    fn rough_database() -> Arc<TerrainDatabase> {
+        static DB: OnceLock<Arc<TerrainDatabase>> = OnceLock::new();
+        Arc::clone(DB.get_or_init(|| {
+            let grid = GeoGrid {
+                south_lat_deg: SOUTH_LAT_DEG,
+                west_lon_deg: WEST_LON_DEG,
+                dlat_deg: DLAT_DEG,
+                dlon_deg: DLON_DEG,
+                rows: POSTS,
+                cols: POSTS,
+            };
+            let mut elevation_m = Vec::with_capacity(POSTS * POSTS);
+            for row in 0..POSTS {
+                for col in 0..POSTS {
+                    let (y, x) = (row as f64 / 40.0, col as f64 / 55.0);
+                    let hills = 400.0 * (y.sin() * x.cos()).abs() + 150.0 * (0.3 * x + y).sin();
+                    let mut h = (row as u64 * 0x9E37_79B9 + col as u64 * 0x85EB_CA6B) ^ 0x5bd1e995;
+                    h = (h ^ (h >> 15)).wrapping_mul(0x2C1B_3C6D);
+                    let noise = (h % 1000) as f64 / 1000.0 * 30.0;
+                    elevation_m.push((hills + noise) as f32);
+                }
+            }
+            let raster = Raster {
+                grid,
+                elevation_m,
+                material: Some(vec![Material::Grass; POSTS * POSTS]),
+            };
+            let store = Arc::new(MemoryTileStore::new());
+            let summary = build_pyramid::<BuildError>(&raster, 16, &mut |t| {
+                store.insert(t.key, t.encode());
+                Ok(())
+            })
+            .expect("the test pyramid builds");
+            let geoid = GeoidGrid::sample(
+                SOUTH_LAT_DEG,
+                WEST_LON_DEG,
+                SOUTH_LAT_DEG + 0.1,
+                WEST_LON_DEG + 0.12,
+                0.02,
+                |lat, lon| -30.0 + 40.0 * (lat - SOUTH_LAT_DEG) - 25.0 * (lon - WEST_LON_DEG),
+            );
+            Arc::new(
+                TerrainDatabase::new(Manifest::from_build(&summary, geoid, 0, vec![]), store)
+                    .expect("the test database opens"),
+            )
+        }))
+    }
+
+    fn lod_for(db: &TerrainDatabase) -> TerrainLod {
+        let manifest = db.manifest();
+        TerrainLod::new(
+            NodeLayout::new(manifest.layout),
+            GeoidLookup::new(&manifest.geoid),
+        )
+    }
+
+    /// A cache holding the tiles of the levels `levels` and, of level 0 and 1, those whose
+    /// (row + col) is even when `checkerboard` (so nodes are drawn from coarser data and ask
+    /// for the missing tiles).
+    fn cache_with(
+        db: &Arc<TerrainDatabase>,
+        levels: std::ops::Range<u8>,
+        checkerboard: bool,
+    ) -> TileCache {
+        let cache = TileCache::new(Arc::clone(db), PagingConfig::default()).expect("cache");
+        let layout = *db.layout();
+        for level in levels {
+            let (rows, cols) = layout.tiles_at(level);
+            for row in 0..rows {
+                for col in 0..cols {
+                    if checkerboard && level < 2 && (row + col) % 2 == 1 {
+                        continue;
+                    }
+                    cache
+                        .load_now(TileKey { level, row, col })
+                        .expect("the test tile loads");
+                }
+            }
+        }
+        cache
+    }
+
+    fn view_at(
+        north: f64,
+        east: f64,
+        alt_m: f64,
+        hpr: (f64, f64, f64),
+        fov_deg: f64,
+        size: (u32, u32),
+    ) -> View {
+        View {
+            eye: Geodetic::new(
+                SOUTH_LAT_DEG + north * DLAT_DEG * (POSTS - 1) as f64,
+                WEST_LON_DEG + east * DLON_DEG * (POSTS - 1) as f64,
+                alt_m,
+            ),
+            orientation: Hpr {
+                heading_deg: hpr.0,
+                pitch_deg: hpr.1,
+                roll_deg: hpr.2,
+            },
+            fov: FovDeg::from_horizontal(fov_deg, size.0, size.1),
+            width_px: size.0,
+            height_px: size.1,
+        }
+    }
+
+    fn assert_same(new: &Selection, reference: &Selection, what: &str) {
+        assert_eq!(new.visited, reference.visited, "{what}: nodes visited");
+        assert_eq!(
+            new.wanted_tiles, reference.wanted_tiles,
+            "{what}: wanted tiles"
+        );
+        assert_eq!(
+            new.nodes.len(),
+            reference.nodes.len(),
+            "{what}: nodes selected"
+        );
+        for (a, b) in new.nodes.iter().zip(&reference.nodes) {
+            // Bit for bit: the same node, data, morph range, error and distance.
+            assert_eq!(a.key, b.key, "{what}");
+            assert_eq!(a.data_level, b.data_level, "{what}: {:?}", a.key);
+            assert_eq!(
+                a.morph_start_m.to_bits(),
+                b.morph_start_m.to_bits(),
+                "{what}"
+            );
+            assert_eq!(a.morph_end_m.to_bits(), b.morph_end_m.to_bits(), "{what}");
+            assert_eq!(a.error_m.to_bits(), b.error_m.to_bits(), "{what}");
+            assert_eq!(
+                a.distance_m.to_bits(),
+                b.distance_m.to_bits(),
+                "{what}: {:?}",
+                a.key
+            );
+        }
+    }
+
+    /// Views of every kind over the test database: low passes, high views, looking down,
+    /// looking up, rolled, narrow and wide, eyes outside the database.
+    fn views() -> Vec<(View, f64)> {
+        vec![
+            (
+                view_at(0.1, 0.1, 600.0, (45.0, -3.0, 0.0), 60.0, (640, 480)),
+                1.0,
+            ),
+            (
+                view_at(0.5, 0.5, 700.0, (200.0, -10.0, 15.0), 60.0, (320, 240)),
+                1.0,
+            ),
+            (
+                view_at(0.3, 0.8, 3000.0, (10.0, -60.0, 0.0), 90.0, (800, 600)),
+                1.0,
+            ),
+            (
+                view_at(0.5, 0.5, 9000.0, (0.0, -90.0, 0.0), 40.0, (256, 256)),
+                0.5,
+            ),
+            (
+                view_at(0.9, 0.2, 650.0, (120.0, -4.0, -20.0), 10.0, (640, 480)),
+                1.0,
+            ),
+            (
+                view_at(0.5, 0.5, 400.0, (0.0, 15.0, 0.0), 60.0, (320, 240)),
+                1.0,
+            ),
+            (
+                view_at(-0.3, -0.2, 900.0, (40.0, -5.0, 0.0), 60.0, (1920, 1080)),
+                1.0,
+            ),
+            (
+                view_at(0.6, 0.4, 800.0, (300.0, -8.0, 5.0), 70.0, (640, 480)),
+                4.0,
+            ),
+            (
+                view_at(0.2, 0.7, 620.0, (90.0, -2.0, 0.0), 60.0, (160, 120)),
+                0.0,
+            ),
+        ]
+    }
+
+    #[test]
+    fn the_node_arena_selects_exactly_what_the_reference_selection_selects() {
+        let db = rough_database();
+        let cache = cache_with(&db, 0..db.layout().levels, false);
+        let mut lod = lod_for(&db);
+        assert!(lod.layout.pyramid.levels >= 4, "a deep enough quadtree");
+        // Twice over: the first pass builds the boxes, the second reuses them.
+        for pass in 0..2 {
+            for (n, (view, px)) in views().into_iter().enumerate() {
+                let camera = view.camera();
+                let settings = LodSettings {
+                    max_pixel_error: px,
+                };
+                let new = lod.select(&cache, &camera, &settings);
+                let reference =
+                    reference_select(&lod.layout, lod.geoid(), &cache, &camera, &settings);
+                assert!(!reference.nodes.is_empty(), "view {n} sees terrain");
+                assert_same(&new, &reference, &format!("pass {pass}, view {n}"));
+            }
+        }
+    }
+
+    #[test]
+    fn boxes_follow_the_data_as_finer_tiles_arrive_and_are_evicted() {
+        let db = rough_database();
+        let mut lod = lod_for(&db);
+        let levels = db.layout().levels;
+        // Coarse data only, then a checkerboard of the finer levels, then everything, then
+        // coarse again (a fresh cache: the finer tiles gone): boxes rebuilt each time.
+        let caches = [
+            cache_with(&db, 2..levels, false),
+            cache_with(&db, 0..levels, true),
+            cache_with(&db, 0..levels, false),
+            cache_with(&db, 3..levels, false),
+            cache_with(&db, 0..0, false),
+        ];
+        for (c, cache) in caches.iter().enumerate() {
+            for (n, (view, px)) in views().into_iter().enumerate() {
+                let camera = view.camera();
+                let settings = LodSettings {
+                    max_pixel_error: px,
+                };
+                let new = lod.select(cache, &camera, &settings);
+                let reference =
+                    reference_select(&lod.layout, lod.geoid(), cache, &camera, &settings);
+                assert_same(&new, &reference, &format!("cache {c}, view {n}"));
+                if c == 1 && n == 0 {
+                    // Nodes refine only into resident tiles: where a finer tile is missing
+                    // its parent is drawn and the tile is asked for.
+                    assert!(
+                        !new.wanted_tiles.is_empty()
+                            && new.nodes.iter().any(|s| s.key.level == 0)
+                            && new.nodes.iter().any(|s| s.key.level == 1),
+                        "the checkerboard mixes levels"
+                    );
+                }
+            }
+        }
+        lod.clear();
+        assert_eq!(lod.cached_nodes(), lod.layout.roots().len());
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        /// Any view over or beside the database: the same selection as the reference.
+        #[test]
+        fn any_view_selects_as_the_reference_does(
+            north in -0.3f64..1.3, east in -0.3f64..1.3, alt_m in 0.0f64..6000.0,
+            heading in 0.0f64..360.0, pitch in -90.0f64..40.0, roll in -45.0f64..45.0,
+            fov in 2.0f64..150.0, width in 16u32..2000, height in 16u32..1200,
+            px in prop::sample::select(vec![0.0, 0.3, 1.0, 2.5, 8.0]),
+        ) {
+            let db = rough_database();
+            static CACHE: OnceLock<TileCache> = OnceLock::new();
+            let cache = CACHE.get_or_init(|| cache_with(&db, 0..db.layout().levels, true));
+            let mut lod = lod_for(&db);
+            let view = view_at(north, east, alt_m, (heading, pitch, roll), fov, (width, height));
+            prop_assume!(view.validate().is_ok());
+            let camera = view.camera();
+            let settings = LodSettings { max_pixel_error: px };
+            for _ in 0..2 {
+                let new = lod.select(cache, &camera, &settings);
+                let reference = reference_select(&lod.layout, lod.geoid(), cache, &camera, &settings);
+                assert_same(&new, &reference, "random view");
+            }
+        }
+
+        /// The packed-key sort orders as a stable sort by `f64::total_cmp` does.
+        #[test]
+        fn the_distance_sort_is_the_stable_total_order(
+            distances in prop::collection::vec(prop::sample::select(vec![0.0, -0.0, 1.5, 1.5, 2.0, 1e9, f64::INFINITY, 3.25]), 0..60),
+        ) {
+            let node = |i: usize, d: f64| SelectedNode {
+                key: NodeKey { level: 0, row: i as u32, col: 0 },
+                data_level: 0,
+                morph_start_m: 0.0,
+                morph_end_m: 0.0,
+                error_m: 0.0,
+                distance_m: d,
+            };
+            let mut nodes: Vec<SelectedNode> = distances.iter().enumerate().map(|(i, &d)| node(i, d)).collect();
+            let mut expected = nodes.clone();
+            expected.sort_by(|a, b| a.distance_m.total_cmp(&b.distance_m));
+            sort_by_distance(&mut nodes, &mut Vec::new());
+            prop_assert_eq!(
+                nodes.iter().map(|n| (n.key, n.distance_m.to_bits())).collect::<Vec<_>>(),
+                expected.iter().map(|n| (n.key, n.distance_m.to_bits())).collect::<Vec<_>>()
+            );
+        }
     }
 }
