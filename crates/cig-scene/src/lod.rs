@@ -667,8 +667,9 @@ struct TrigTable {
     lon: Vec<LatLonTrig>,
 }
 
-/// Most entries of each table (beyond, the trigonometry is done per node).
-const MAX_TRIG_ENTRIES: usize = 1 << 20;
+/// Most entries of each table, 2.6 MB (half a million posts a side with 16-cell nodes; beyond,
+/// the trigonometry is done per node).
+const MAX_TRIG_ENTRIES: usize = 1 << 16;
 
 impl TrigTable {
     fn new(layout: &NodeLayout) -> TrigTable {

@@ -143,6 +143,23 @@ fn render_frames(
     Ok(run)
 }
 
+/// Selections of the comparison frames' views back to back, with no frame drawn in between
+/// (so the rasteriser's threads neither share the cores nor evict the caches), times each.
+const SELECT_ALONE_ROUNDS: usize = 25;
+
+fn select_alone(renderer: &mut Renderer, cache: &TileCache, sample: &[FrameSnapshot]) -> Vec<f64> {
+    let mut times_ms = Vec::with_capacity(SELECT_ALONE_ROUNDS * sample.len());
+    for _ in 0..SELECT_ALONE_ROUNDS {
+        for s in sample {
+            let started = Instant::now();
+            let selection = renderer.select(cache, &s.views[0], s.max_pixel_error);
+            times_ms.push(started.elapsed().as_secs_f64() * 1e3);
+            std::hint::black_box(selection);
+        }
+    }
+    times_ms
+}
+
 fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
@@ -226,6 +243,7 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     let lod_again = render_frames(&mut renderer, &cache, &sample, &target, false)?;
 
     let lod_frame = percentile(&lod.frame_ms, 0.5).min(percentile(&lod_again.frame_ms, 0.5));
+    let select_alone_ms = select_alone(&mut renderer, &cache, &sample);
 
     // 3. The same frames with 32 plumes in view, interleaved with frames without them.
     let fires = fire_positions(&mut session, &leg)?;
@@ -304,6 +322,7 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
             "frame_ms": summary(&lod.frame_ms),
             "gpu_ms": summary(&lod.gpu_ms),
             "cpu_select_ms": summary(&lod.select_ms),
+            "cpu_select_ms_alone": summary(&select_alone_ms),
             "draw_calls_mean": mean(&lod.draw_calls),
         },
         "full_detail": {

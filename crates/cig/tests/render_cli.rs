@@ -228,6 +228,9 @@ fn bench_render_reports_both_ways_and_their_ratios() {
         .as_f64()
         .is_some());
     assert!(json["lod"]["cpu_select_ms"]["median"].as_f64().is_some());
+    // Selection is also timed on its own, with no frame drawn between selections.
+    let alone = json["lod"]["cpu_select_ms_alone"]["median"].as_f64();
+    assert!(alone.is_some_and(|ms| ms > 0.0), "{json}");
     assert!(
         json["full_detail"]["triangles_mean"].as_f64() >= json["lod"]["triangles_mean"].as_f64()
     );
