@@ -28,6 +28,7 @@ pub use error::EffectsError;
 pub use optics::{ObscurantKind, Transmittance};
 pub use seed::{effect_rng, EffectId};
 pub use system::{
-    Atmosphere, DustTrailSpec, EffectHandle, EffectSystem, EffectsConfig, PlumeKind, PlumeSource,
-    PlumeSpec, PoolStats, PuffInstance, PuffState, ServedArea, VehicleUpdate, Wind, STEP_S,
+    effect_time_s, Atmosphere, DustTrailSpec, EffectHandle, EffectSystem, EffectsConfig, PlumeKind,
+    PlumeSource, PlumeSpec, PoolStats, PuffInstance, PuffState, ServedArea, VehicleUpdate, Wind,
+    EFFECT_EPOCH_UNIX_S, STEP_S,
 };

@@ -80,6 +80,16 @@ pub const STEP_S: f64 = 1.0 / 60.0;
 pub const EPOCH_S: f64 = 120.0;
 /// Simulation times beyond this (in size) are refused, s (about 31 years).
 pub const MAX_SIM_TIME_S: f64 = 1.0e9;
+
+/// The simulation time of an effect system that runs on UTC world time: seconds since
+/// 2020-01-01T00:00:00Z, so [`MAX_SIM_TIME_S`] covers 1988-2051 and every node of an exercise
+/// that shares the world time steps on the same grid.
+pub const EFFECT_EPOCH_UNIX_S: f64 = 1_577_836_800.0;
+
+/// The effect time of a UTC instant (seconds since 1970).
+pub fn effect_time_s(unix_s: f64) -> f64 {
+    unix_s - EFFECT_EPOCH_UNIX_S
+}
 /// Most puffs a system may be built with (about 1 GB of pools).
 pub const MAX_PUFFS: usize = 4_000_000;
 /// Columns of a plume (Figure 9).

@@ -23,7 +23,6 @@
 //! standard 5 MW smoke source at its record's source (the plume record carries no fire size);
 //! articulated parts of remote entities are not read.
 
-use crate::model_table::ModelTable;
 use crate::scenario::{parse_dis_id, parse_hex_u32, DisSettings, DisTypePattern, Scenario};
 use cig_dis::dis_rs::model::EntityId;
 use cig_dis::{
@@ -42,8 +41,7 @@ use cig_terrain::{Material, QuerySession};
 use glam::DVec3;
 use std::collections::BTreeMap;
 
-/// Effect time is world time minus this (2020-01-01T00:00:00Z), seconds.
-pub const EFFECT_EPOCH_UNIX_S: f64 = 1_577_836_800.0;
+use cig_effects::effect_time_s;
 
 /// Counters of the exercise's traffic.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -196,12 +194,18 @@ impl Exercise {
         let (start_ms, rate32) = ((world_time_unix_s * 1000.0).round() as i64, rate as f32);
         let (mut time, first) =
             TimeSync::join(me, TimeSyncConfig::default(), now_s, start_ms, rate32);
+        // A master announces its own time at once rather than asking.
+        let first = if settings.time_master {
+            vec![time.set_time(now_s, start_ms, rate32)]
+        } else {
+            first
+        };
         let mut exercise = Exercise {
             settings: settings.clone(),
             version,
             remote,
             owned,
-            time: time.clone(),
+            time,
             remote_effects: BTreeMap::new(),
             remote_processes: BTreeMap::new(),
             process_sent: BTreeMap::new(),
@@ -209,15 +213,7 @@ impl Exercise {
             outgoing: Vec::new(),
             counters: ExerciseCounters::default(),
         };
-        if settings.time_master {
-            // A master announces its own time at once rather than asking.
-            let set = time.set_time(now_s, start_ms, rate32);
-            exercise.time = time;
-            exercise.queue_time(now_s, &[set]);
-        } else {
-            exercise.time = time;
-            exercise.queue_time(now_s, &first);
-        }
+        exercise.queue_time(now_s, &first);
         exercise
     }
 
@@ -274,9 +270,6 @@ impl Exercise {
 
     pub fn counters(&self) -> ExerciseCounters {
         self.counters
-    }
-    pub fn settings(&self) -> &DisSettings {
-        &self.settings
     }
     pub fn remote_len(&self) -> usize {
         self.remote.len()
@@ -337,8 +330,8 @@ impl Exercise {
                 DisMessage::Detonation(d) => {
                     self.counters.detonations += 1;
                     if let Some(start) = impact_effect(d) {
-                        let at_s = self.event_time_unix_s(now_s, pdu.header.timestamp)
-                            - EFFECT_EPOCH_UNIX_S;
+                        let at_s =
+                            effect_time_s(self.event_time_unix_s(now_s, pdu.header.timestamp));
                         if self.start_impact(at_s, &start, effects) {
                             self.counters.impacts_started += 1;
                         }
@@ -502,7 +495,7 @@ impl Exercise {
     }
 
     fn effect_time_s(&self, now_s: f64) -> f64 {
-        self.world_time_unix_s(now_s) - EFFECT_EPOCH_UNIX_S
+        effect_time_s(self.world_time_unix_s(now_s))
     }
 
     /// Starts smoke and flame at an impact, at effect time `t`.
@@ -649,11 +642,6 @@ impl Exercise {
         std::mem::take(&mut self.outgoing)
     }
 
-    /// Remote entities at `now_s`.
-    pub fn remote_entities(&self, now_s: f64) -> Vec<RemoteEntitySnapshot> {
-        self.remote.snapshot(now_s)
-    }
-
     /// Remote entities at `now_s` within `radius_m` of any of `eyes_ecef_m`.
     pub fn remote_entities_near(
         &self,
@@ -665,11 +653,6 @@ impl Exercise {
         self.remote.snapshot_where(now_s, |p| {
             eyes_ecef_m.iter().any(|e| e.distance_squared(p) <= r2)
         })
-    }
-
-    /// The model for a remote entity.
-    pub fn model_for(models: &ModelTable, t: &EntityTypeCode) -> String {
-        models.model_for_dis(t).to_string()
     }
 }
 

@@ -23,7 +23,8 @@ pub mod scenario;
 pub mod session;
 pub mod world;
 
-pub use exercise::{Exercise, ExerciseCounters, EFFECT_EPOCH_UNIX_S};
+pub use cig_effects::EFFECT_EPOCH_UNIX_S;
+pub use exercise::{Exercise, ExerciseCounters};
 pub use model_table::{CigiEntityType, ModelTable};
 pub use pose::{BodyOffset, Pose};
 pub use scenario::{DisSettings, Scenario, ScenarioError, SmokeSource};

@@ -197,6 +197,20 @@ pub struct IgView {
     pub fov: Option<FovDeg>,
 }
 
+impl IgView {
+    /// A view on an entity, with no offset, no relative orientation and no frustum yet.
+    pub fn new(id: u16, group_id: u8, entity_id: u16) -> IgView {
+        IgView {
+            id,
+            group_id,
+            entity_id,
+            offset: BodyOffset::default(),
+            orientation: Hpr::default(),
+            fov: None,
+        }
+    }
+}
+
 /// A sensor's selected mode.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SensorMode {
@@ -845,31 +859,22 @@ impl IgSession {
         if c.entity_state == 2 {
             return self.destroy(c.entity_id);
         }
-        if !finite3(c.lat_deg_or_x_m, c.lon_deg_or_y_m, c.alt_m_or_z_m) {
-            return false;
-        }
-        let Some(orientation) = hpr_f32(c.yaw_deg, c.pitch_deg, c.roll_deg) else {
+        let values = [c.lat_deg_or_x_m, c.lon_deg_or_y_m, c.alt_m_or_z_m];
+        let Some(orientation) =
+            checked_orientation(c.attach, values, c.yaw_deg, c.pitch_deg, c.roll_deg)
+        else {
             return false;
         };
-        if !c.attach && (c.lat_deg_or_x_m.abs() > 90.0 || c.lon_deg_or_y_m.abs() > 360.0) {
-            return false;
-        }
         let Some(e) = self.entity_or_create(c.entity_id, CigiEntityType::Short(c.entity_type))
         else {
             return false;
         };
-        e.life = if c.entity_state == 1 {
-            EntityLife::Active
-        } else {
-            EntityLife::Inactive
-        };
-        e.alpha = c.alpha;
-        e.collision_detection = c.collision_detection_enable;
+        set_state(e, c.entity_state, c.alpha, c.collision_detection_enable);
         set_placement(
             e,
             c.attach,
             c.parent_id,
-            [c.lat_deg_or_x_m, c.lon_deg_or_y_m, c.alt_m_or_z_m],
+            values,
             orientation,
             c.ground_ocean_clamp,
         );
@@ -877,15 +882,12 @@ impl IgSession {
     }
 
     fn apply_entity_position(&mut self, p: &EntityPosition) -> bool {
-        if !finite3(p.lat_deg_or_x_m, p.lon_deg_or_y_m, p.alt_m_or_z_m) {
-            return false;
-        }
-        let Some(orientation) = hpr_f32(p.yaw_deg, p.pitch_deg, p.roll_deg) else {
+        let values = [p.lat_deg_or_x_m, p.lon_deg_or_y_m, p.alt_m_or_z_m];
+        let Some(orientation) =
+            checked_orientation(p.attach, values, p.yaw_deg, p.pitch_deg, p.roll_deg)
+        else {
             return false;
         };
-        if !p.attach && (p.lat_deg_or_x_m.abs() > 90.0 || p.lon_deg_or_y_m.abs() > 360.0) {
-            return false;
-        }
         let entity_type = self
             .entities
             .get(&p.entity_id)
@@ -897,7 +899,7 @@ impl IgSession {
             e,
             p.attach,
             p.parent_id,
-            [p.lat_deg_or_x_m, p.lon_deg_or_y_m, p.alt_m_or_z_m],
+            values,
             orientation,
             p.ground_ocean_clamp,
         );
@@ -924,13 +926,7 @@ impl IgSession {
         let Some(e) = self.entity_or_create(c.entity_id, entity_type) else {
             return false;
         };
-        e.life = if c.entity_state == 1 {
-            EntityLife::Active
-        } else {
-            EntityLife::Inactive
-        };
-        e.alpha = c.alpha;
-        e.collision_detection = c.collision_detection_enable;
+        set_state(e, c.entity_state, c.alpha, c.collision_detection_enable);
         true
     }
 
@@ -1013,14 +1009,10 @@ impl IgSession {
             return false;
         }
         for id in targets {
-            let view = self.views.entry(id).or_insert(IgView {
-                id,
-                group_id: 0,
-                entity_id: v.entity_id,
-                offset: BodyOffset::default(),
-                orientation: Hpr::default(),
-                fov: None,
-            });
+            let view = self
+                .views
+                .entry(id)
+                .or_insert_with(|| IgView::new(id, 0, v.entity_id));
             view.entity_id = v.entity_id;
             set_enabled(
                 &mut view.offset,
@@ -1039,14 +1031,10 @@ impl IgSession {
     }
 
     fn apply_view_definition(&mut self, d: &ViewDefinition) -> bool {
-        let view = self.views.entry(d.view_id).or_insert(IgView {
-            id: d.view_id,
-            group_id: d.group_id,
-            entity_id: 0,
-            offset: BodyOffset::default(),
-            orientation: Hpr::default(),
-            fov: None,
-        });
+        let view = self
+            .views
+            .entry(d.view_id)
+            .or_insert_with(|| IgView::new(d.view_id, d.group_id, 0));
         view.group_id = d.group_id;
         let mut fov = view.fov.unwrap_or(FovDeg::symmetric(60.0, 45.0));
         let set = |enable: bool, value: f32, slot: &mut f64| {
@@ -1884,6 +1872,36 @@ impl IgSession {
         self.environment
             .visibility_above_ground_fog_m(point, self.config.default_visibility_m)
     }
+}
+
+/// The orientation of a host's placement, when its numbers can be used: all finite, and a
+/// geodetic (unattached) position on the globe.
+fn checked_orientation(
+    attach: bool,
+    values: [f64; 3],
+    yaw: f32,
+    pitch: f32,
+    roll: f32,
+) -> Option<Hpr> {
+    if !finite3(values[0], values[1], values[2]) {
+        return None;
+    }
+    if !attach && (values[0].abs() > 90.0 || values[1].abs() > 360.0) {
+        return None;
+    }
+    hpr_f32(yaw, pitch, roll)
+}
+
+/// Entity state (1 active, other values inactive; 2, destroyed, is handled before), alpha
+/// and collision detection, as Entity Control (3.3 and 4.0) give them.
+fn set_state(e: &mut IgEntity, state: u8, alpha: u8, collision_detection: bool) {
+    e.life = if state == 1 {
+        EntityLife::Active
+    } else {
+        EntityLife::Inactive
+    };
+    e.alpha = alpha;
+    e.collision_detection = collision_detection;
 }
 
 /// Sets the offset (x, y, z) and orientation (roll, pitch, yaw) fields whose enable flag is

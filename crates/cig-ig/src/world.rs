@@ -25,12 +25,13 @@
 //! time is world time since 2020-01-01 and the effect system accepts ±1e9 s of it, so worlds
 //! before 1988 or after 2051 cannot be built.
 
-use crate::exercise::{Exercise, OwnedProcess, OwnedTruth, EFFECT_EPOCH_UNIX_S};
+use crate::exercise::{Exercise, OwnedProcess, OwnedTruth};
 use crate::model_table::{CigiEntityType, ModelTable};
 use crate::pose::{azimuth_elevation_deg, child_pose, wrap_deg, BodyOffset, Pose};
 use crate::scenario::{DisTypePattern, Scenario, ScenarioEntity, SmokeSource};
 use crate::session::{EntityLife, IgEntity, IgSession, Placement, SessionConfig};
 use cig_cigi::{decode_message, CigiError, Message};
+use cig_effects::effect_time_s;
 use cig_effects::{
     EffectHandle, EffectId, EffectSystem, EffectsConfig, EffectsError, PlumeKind, PlumeSource,
     PlumeSpec,
@@ -174,7 +175,6 @@ pub struct IgWorld {
     dust_trails: BTreeMap<u16, cig_effects::EffectHandle>,
     /// The effects could not advance to the world time (told once until they can again).
     effects_stalled: bool,
-    operator_plumes_stopped_by_jump_told: bool,
 }
 
 /// Models of ground vehicles that raise dust when they move on soil.
@@ -251,7 +251,7 @@ impl IgWorld {
             })
             .collect();
         let mut effects = EffectSystem::new(config.effects)?;
-        effects.advance_to(start_unix_s - EFFECT_EPOCH_UNIX_S)?;
+        effects.advance_to(effect_time_s(start_unix_s))?;
         Ok(IgWorld {
             session,
             scenario,
@@ -277,7 +277,6 @@ impl IgWorld {
             operator_plumes_started: 0,
             dust_trails: BTreeMap::new(),
             effects_stalled: false,
-            operator_plumes_stopped_by_jump_told: false,
         })
     }
 
@@ -398,7 +397,7 @@ impl IgWorld {
         }
         self.session.advance(dt, query);
         self.session.resolve_poses(query);
-        let effect_time_s = self.clock.now().unix_seconds() - EFFECT_EPOCH_UNIX_S;
+        let effect_time_s = effect_time_s(self.clock.now().unix_seconds());
         if self
             .effects
             .time_s()
@@ -420,12 +419,9 @@ impl IgWorld {
                         x.forget_effects();
                     }
                     self.last_air_update_s = f64::NEG_INFINITY;
-                    if !self.operator_plumes_stopped_by_jump_told {
-                        self.session.tell_host(
-                            "the simulation time went back: obscurants start over".into(),
-                        );
-                        self.operator_plumes_stopped_by_jump_told = true;
-                    }
+                    // Told once: the host hears each problem once.
+                    self.session
+                        .tell_host("the simulation time went back: obscurants start over".into());
                 }
                 Err(e) => tracing::warn!("effects cannot start over: {e}"),
             }
@@ -507,20 +503,8 @@ impl IgWorld {
         if let Some(eye) = self.scenario.view.as_ref().and_then(|v| v.eye) {
             self.fixed_eye_geoid_m = query.geoid_undulation_m(eye[0], eye[1]);
         }
-        self.first_eye = self
-            .views(
-                1,
-                1,
-                &View {
-                    eye: Geodetic::new(0.0, 0.0, 0.0),
-                    orientation: Hpr::default(),
-                    fov: FovDeg::symmetric(60.0, 45.0),
-                    width_px: 1,
-                    height_px: 1,
-                },
-            )
-            .first()
-            .map(|v| v.eye);
+        // The eye of the world's first view (none when only the caller's fallback is drawn).
+        self.first_eye = self.world_views(1, 1).first().map(|v| v.eye);
         self.eye_geoid_m = self
             .first_eye
             .map_or(0.0, |e| query.geoid_undulation_m(e.lat_deg, e.lon_deg));
@@ -591,7 +575,7 @@ impl IgWorld {
     ) -> Result<u32, EffectsError> {
         self.operator_plumes_started += 1;
         let number = self.operator_plumes_started;
-        let t = self.clock.now().unix_seconds() - EFFECT_EPOCH_UNIX_S;
+        let t = effect_time_s(self.clock.now().unix_seconds());
         let handle = self.effects.start_plume(&PlumeSpec {
             id: EffectId(cig_dis::detonation::splitmix64(
                 0x4f50_0000_0000 | u64::from(number),
@@ -613,7 +597,7 @@ impl IgWorld {
 
     /// Stops every operator plume (their puffs age out).
     pub fn stop_operator_plumes(&mut self) {
-        let t = self.clock.now().unix_seconds() - EFFECT_EPOCH_UNIX_S;
+        let t = effect_time_s(self.clock.now().unix_seconds());
         for h in self.operator_plumes.drain(..) {
             let _ = self.effects.stop(h, t);
         }
@@ -807,7 +791,7 @@ impl IgWorld {
             .dis
             .as_ref()
             .map_or((0, 0), |d| (d.site, d.application));
-        let start_effect_s = self.start_unix_s - EFFECT_EPOCH_UNIX_S;
+        let start_effect_s = effect_time_s(self.start_unix_s);
         for s in self
             .smoke
             .iter_mut()
@@ -867,6 +851,19 @@ impl IgWorld {
 
     /// The views to draw: the host's, else the scenario's, else `fallback`.
     pub fn views(&self, width_px: u32, height_px: u32, fallback: &View) -> Vec<View> {
+        let mut views = self.world_views(width_px, height_px);
+        if views.is_empty() {
+            views.push(View {
+                width_px,
+                height_px,
+                ..*fallback
+            });
+        }
+        views
+    }
+
+    /// The host's views, else the scenario's; empty when neither gives one.
+    fn world_views(&self, width_px: u32, height_px: u32) -> Vec<View> {
         let default_fov = FovDeg::from_horizontal(60.0, width_px, height_px);
         let mut views: Vec<View> = self
             .session
@@ -918,13 +915,6 @@ impl IgWorld {
                     });
                 }
             }
-        }
-        if views.is_empty() {
-            views.push(View {
-                width_px,
-                height_px,
-                ..*fallback
-            });
         }
         views
     }
@@ -1015,7 +1005,7 @@ impl IgWorld {
 fn smoke_processes(
     smoke: &[SmokeState],
     effects: &EffectSystem,
-    effect_time_s: f64,
+    now_effect_s: f64,
     start_unix_s: f64,
 ) -> Vec<OwnedProcess> {
     let puffs = effects.puff_states();
@@ -1032,10 +1022,10 @@ fn smoke_processes(
                 extent[1] = extent[1].max(4.0 * p.sigma_m);
                 extent[2] = extent[2].max(v.z + 2.0 * p.sigma_m);
             }
-            let begins = start_unix_s - EFFECT_EPOCH_UNIX_S + s.source.start_s;
+            let begins = effect_time_s(start_unix_s) + s.source.start_s;
             let active = effects.is_live(handle)
-                && effect_time_s >= begins
-                && effect_time_s < begins + s.source.duration_s;
+                && now_effect_s >= begins
+                && now_effect_s < begins + s.source.duration_s;
             Some(OwnedProcess {
                 number: s.source.id,
                 position,

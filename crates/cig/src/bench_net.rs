@@ -511,22 +511,9 @@ fn measure_cigi_decode(context: &BenchContext) -> anyhow::Result<Value> {
             check.packets.len() == CIGI_ENTITIES + 1 && check.warnings.is_empty(),
             "the benchmark message does not decode whole"
         );
-        let (mut decode_us, mut copy_us) = (Vec::new(), Vec::new());
-        let mut buffer = Vec::with_capacity(datagram.len());
-        for _ in 0..ROUNDS {
-            let per_s = rate(budget / ROUNDS as u32, 1, || {
-                let _ = black_box(cig_cigi::decode_message(black_box(&datagram)));
-            });
-            decode_us.push(1e6 / per_s);
-            let per_s = rate(budget / ROUNDS as u32, 1, || {
-                buffer.clear();
-                buffer.extend_from_slice(black_box(&datagram));
-                black_box(&buffer);
-            });
-            copy_us.push(1e6 / per_s);
-        }
-        let decode = median(decode_us);
-        let copy = median(copy_us);
+        let (decode, copy) = per_call_against_copy(budget, &datagram, || {
+            let _ = black_box(cig_cigi::decode_message(black_box(&datagram)));
+        });
         cases.insert(
             name.to_string(),
             json!({
@@ -541,6 +528,24 @@ fn measure_cigi_decode(context: &BenchContext) -> anyhow::Result<Value> {
     cases.insert("entity_packets".into(), json!(CIGI_ENTITIES));
     cases.insert("apply_budget_ms".into(), json!(CIGI_APPLY_BUDGET_MS));
     Ok(Value::Object(cases))
+}
+
+/// Medians over [`ROUNDS`] rounds of `budget` in all: microseconds per call of `work`, and per
+/// copy of `datagram` (the same-run baseline), interleaved.
+fn per_call_against_copy(budget: Duration, datagram: &[u8], mut work: impl FnMut()) -> (f64, f64) {
+    let (mut work_us, mut copy_us) = (Vec::new(), Vec::new());
+    let mut buffer = Vec::with_capacity(datagram.len());
+    for _ in 0..ROUNDS {
+        work_us.push(1e6 / rate(budget / ROUNDS as u32, 1, &mut work));
+        copy_us.push(
+            1e6 / rate(budget / ROUNDS as u32, 1, || {
+                buffer.clear();
+                buffer.extend_from_slice(black_box(datagram));
+                black_box(&buffer);
+            }),
+        );
+    }
+    (median(work_us), median(copy_us))
 }
 
 /// A host message of IG Control and [`CIGI_ENTITIES`] entity controls (3.3 Entity Control or
@@ -633,22 +638,9 @@ fn measure_cigi_apply(context: &BenchContext) -> anyhow::Result<Value> {
             world.session().entities().len() == CIGI_ENTITIES,
             "the benchmark message does not create every entity"
         );
-        let (mut apply_us, mut copy_us) = (Vec::new(), Vec::new());
-        let mut buffer = Vec::with_capacity(datagram.len());
-        for _ in 0..ROUNDS {
-            let per_s = rate(budget / ROUNDS as u32, 1, || {
-                let _ = black_box(world.receive_cigi(black_box(&datagram)));
-            });
-            apply_us.push(1e6 / per_s);
-            let per_s = rate(budget / ROUNDS as u32, 1, || {
-                buffer.clear();
-                buffer.extend_from_slice(black_box(&datagram));
-                black_box(&buffer);
-            });
-            copy_us.push(1e6 / per_s);
-        }
-        let apply = median(apply_us);
-        let copy = median(copy_us);
+        let (apply, copy) = per_call_against_copy(budget, &datagram, || {
+            let _ = black_box(world.receive_cigi(black_box(&datagram)));
+        });
         cases.insert(
             name.to_string(),
             json!({

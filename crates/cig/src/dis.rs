@@ -511,15 +511,9 @@ pub fn pdu_line(pdu: &DecodedPdu, from: SocketAddr) -> String {
 
 fn delivery_of(broadcast: bool, multicast: Option<&str>, option: &str) -> anyhow::Result<Delivery> {
     if let Some(group) = multicast {
-        let group: Ipv4Addr = group
-            .trim()
-            .parse()
-            .map_err(|_| anyhow::anyhow!("{option} {group:?} is not an IPv4 address"))?;
-        anyhow::ensure!(
-            group.is_multicast(),
-            "{option} {group} is not a multicast group (224.0.0.0 to 239.255.255.255)"
-        );
-        return Ok(Delivery::Multicast(group));
+        return Ok(Delivery::Multicast(crate::net::parse_multicast_group(
+            group, option,
+        )?));
     }
     Ok(if broadcast {
         Delivery::Broadcast

@@ -250,6 +250,19 @@ pub enum Delivery {
     Multicast(Ipv4Addr),
 }
 
+/// Parses an IPv4 multicast group (224.0.0.0/4); `what` names the value in errors.
+pub fn parse_multicast_group(text: &str, what: &str) -> anyhow::Result<Ipv4Addr> {
+    let group: Ipv4Addr = text
+        .trim()
+        .parse()
+        .map_err(|_| anyhow::anyhow!("{what} {text:?} is not an IPv4 address"))?;
+    anyhow::ensure!(
+        group.is_multicast(),
+        "{what} {group} is not a multicast group (224.0.0.0 to 239.255.255.255)"
+    );
+    Ok(group)
+}
+
 /// What to open.
 #[derive(Clone, Debug)]
 pub struct EndpointConfig {

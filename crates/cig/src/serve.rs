@@ -32,12 +32,7 @@ pub fn parse_delivery(text: &str, port: u16) -> anyhow::Result<(Delivery, Option
         return Ok((Delivery::Broadcast, None));
     }
     if let Some(group) = text.strip_prefix("multicast:") {
-        let group: std::net::Ipv4Addr = group
-            .parse()
-            .with_context(|| format!("delivery {text:?}: {group:?} is not an IPv4 address"))?;
-        if !group.is_multicast() {
-            bail!("delivery {text:?}: {group} is not a multicast group (224.0.0.0/4)");
-        }
+        let group = crate::net::parse_multicast_group(group, "delivery multicast group")?;
         return Ok((
             Delivery::Multicast(group),
             Some(SocketAddr::from((group, port))),
@@ -121,6 +116,8 @@ struct Totals {
     /// Entities and obscurant puffs in the last frame drawn.
     entities_drawn: u32,
     puffs_drawn: u32,
+    /// User-defined CIGI packets received (no extension handles them yet: counted, dropped).
+    user_defined_packets: u64,
 }
 
 pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
@@ -377,6 +374,7 @@ impl LoopState {
                 world.receive_dis(&d.bytes, query);
             }
         }
+        totals.user_defined_packets += world.session_mut().take_user_packets().len() as u64;
         world.step(dt_s, query);
         let ticks = ((now - self.started).as_micros() / 10) as u32;
         let mut message = world.host_message(query, ticks);
@@ -543,6 +541,7 @@ fn report(
             "collisions_reported": c.collisions_reported,
             "queue_dropped": cigi.stats().dropped_queue_full,
             "problems_noted": totals.problems_noted,
+            "user_defined_packets": totals.user_defined_packets,
             "warnings_logged": totals.warnings_logged,
             "entities": world.session().entities().len(),
             "address": cigi.local_addr().to_string(),

@@ -107,10 +107,6 @@ pub enum ObscurantOrder {
     SetWind { speed_mps: f64, from_deg: f64 },
 }
 
-/// Effect time of the stand-alone viewer's own obscurants: seconds since 2020-01-01 UTC (the
-/// IG's effect epoch), so the effect system's ±1e9 s covers the dates the panel allows.
-const VIEWER_EFFECT_EPOCH_UNIX_S: f64 = 1_577_836_800.0;
-
 /// Where the camera's view axis meets the terrain, within 30 km.
 fn ground_ahead(cache: &Arc<TileCache>, camera: &FlyCamera) -> Option<Geodetic> {
     let mut q = cig_terrain::QuerySession::new(Arc::clone(cache));
@@ -683,7 +679,7 @@ impl App {
                     &mut self.effects,
                     &mut self.operator_plumes,
                     &orders,
-                    self.panel.unix_time_s - VIEWER_EFFECT_EPOCH_UNIX_S,
+                    cig_effects::effect_time_s(self.panel.unix_time_s),
                     (self.panel.wind_speed_mps, self.panel.wind_from_deg),
                 );
                 if let Some(note) = note {
