@@ -324,6 +324,8 @@ struct LoopState {
     reply_to: Option<SocketAddr>,
     overframing: bool,
     period_s: f64,
+    /// The frame's encoded message, its allocation kept from frame to frame.
+    outgoing: Vec<u8>,
 }
 
 impl LoopState {
@@ -337,6 +339,7 @@ impl LoopState {
             reply_to: None,
             overframing: false,
             period_s: 1.0 / rate_hz,
+            outgoing: Vec::with_capacity(4096),
         }
     }
 
@@ -381,12 +384,13 @@ impl LoopState {
         if let Some(cig_cigi::Packet::StartOfFrame(sof)) = message.packets.first_mut() {
             sof.overframing = std::mem::take(&mut self.overframing);
         }
-        let mut bytes = Vec::with_capacity(1024);
-        match encode_message(&message, &mut bytes) {
+        let bytes = &mut self.outgoing;
+        bytes.clear();
+        match encode_message(&message, bytes) {
             Ok(()) => {
                 let sent = match (cigi.destination(), self.reply_to) {
-                    (Some(_), _) => Some(cigi.send(&bytes)),
-                    (None, Some(to)) => Some(cigi.send_to(&bytes, to)),
+                    (Some(_), _) => Some(cigi.send(bytes)),
+                    (None, Some(to)) => Some(cigi.send_to(bytes, to)),
                     // No host yet: nobody to tell.
                     (None, None) => None,
                 };
