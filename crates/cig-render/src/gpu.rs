@@ -161,3 +161,30 @@ pub fn map_for_reading(gpu: &Gpu, slice: &wgpu::BufferSlice<'_>) -> Result<(), R
         .map_err(|e| RenderError::Readback(e.to_string()))?
         .map_err(|e| RenderError::Readback(e.to_string()))
 }
+
+/// A 2-D render target of `size` pixels: `format`, `sample_count` samples, usable as a render
+/// attachment and for `usage`, also viewable through `view_formats`.
+pub(crate) fn render_target(
+    device: &wgpu::Device,
+    label: &str,
+    (width, height): (u32, u32),
+    format: wgpu::TextureFormat,
+    sample_count: u32,
+    usage: wgpu::TextureUsages,
+    view_formats: &[wgpu::TextureFormat],
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
+        view_formats,
+    })
+}

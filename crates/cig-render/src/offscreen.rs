@@ -78,20 +78,15 @@ pub fn render_image_with(
     crate::gpu::check_frame_size(renderer.gpu(), view.width_px, view.height_px)?;
     let (width, height) = (view.width_px, view.height_px);
     let gpu = renderer.gpu().clone();
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("frame"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: FRAME_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let texture = crate::gpu::render_target(
+        &gpu.device,
+        "frame",
+        (width, height),
+        FRAME_FORMAT,
+        1,
+        wgpu::TextureUsages::COPY_SRC,
+        &[],
+    );
     let target = texture.create_view(&Default::default());
     let stats = renderer.render(cache, snapshot, view_index, &target, options)?;
     let image = read_rgba(&gpu, &texture)?;

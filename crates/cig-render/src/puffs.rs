@@ -367,22 +367,16 @@ impl PuffPass {
         }
         let device = &gpu.device;
         let make = |label, sample_count, usage| {
-            device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width: size.0,
-                        height: size.1,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: ACCUMULATION_FORMAT,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
-                    view_formats: &[],
-                })
-                .create_view(&Default::default())
+            crate::gpu::render_target(
+                device,
+                label,
+                size,
+                ACCUMULATION_FORMAT,
+                sample_count,
+                usage,
+                &[],
+            )
+            .create_view(&Default::default())
         };
         let sampled = wgpu::TextureUsages::TEXTURE_BINDING;
         let scatter = make("puff scatter sum", 1, sampled);

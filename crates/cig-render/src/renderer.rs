@@ -594,21 +594,7 @@ impl Renderer {
         if self.targets.as_ref().map(|t| t.size) != Some(size) {
             let device = &self.gpu.device;
             let make = |label, format, usage| {
-                device
-                    .create_texture(&wgpu::TextureDescriptor {
-                        label: Some(label),
-                        size: wgpu::Extent3d {
-                            width: size.0,
-                            height: size.1,
-                            depth_or_array_layers: 1,
-                        },
-                        mip_level_count: 1,
-                        sample_count: MSAA_SAMPLES,
-                        dimension: wgpu::TextureDimension::D2,
-                        format,
-                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
-                        view_formats: &[],
-                    })
+                crate::gpu::render_target(device, label, size, format, MSAA_SAMPLES, usage, &[])
                     .create_view(&Default::default())
             };
             let targets = Targets {

@@ -99,26 +99,6 @@ fn frame_with_puffs(unix_time_s: f64, view: cig_scene::View, sys: &EffectSystem)
     snapshot
 }
 
-fn check_golden(name: &str, image: &Image) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/golden")
-        .join(format!("{name}.png"));
-    write_png(image, &out_dir().join(format!("{name}.png")));
-    if std::env::var_os("CIG_UPDATE_GOLDENS").is_some() {
-        write_png(image, &path);
-        return;
-    }
-    let golden = read_png(&path).unwrap_or_else(|| panic!("missing golden {}", path.display()));
-    assert_eq!((golden.width, golden.height), (image.width, image.height));
-    let flip = flip_mean(&golden, image);
-    assert!(
-        flip < 0.05,
-        "{name}: mean FLIP error {flip:.4} against {} (image written to {})",
-        path.display(),
-        out_dir().display()
-    );
-}
-
 fn srgb_to_linear(v: u8) -> f64 {
     let c = f64::from(v) / 255.0;
     if c <= 0.04045 {

@@ -23,26 +23,6 @@ fn hills_eye(north_m: f64, east_m: f64, agl_m: f64) -> Geodetic {
     Geodetic::new(g.lat_deg, g.lon_deg, ground.height_ellipsoid_m() + agl_m)
 }
 
-fn check_golden(name: &str, image: &Image) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/golden")
-        .join(format!("{name}.png"));
-    write_png(image, &out_dir().join(format!("{name}.png")));
-    if std::env::var_os("CIG_UPDATE_GOLDENS").is_some() {
-        write_png(image, &path);
-        return;
-    }
-    let golden = read_png(&path).unwrap_or_else(|| panic!("missing golden {}", path.display()));
-    assert_eq!((golden.width, golden.height), (image.width, image.height));
-    let flip = flip_mean(&golden, image);
-    assert!(
-        flip < 0.05,
-        "{name}: mean FLIP error {flip:.4} against {} (image written to {})",
-        path.display(),
-        out_dir().display()
-    );
-}
-
 #[test]
 fn golden_images_match_in_daylight_and_at_dusk_with_fog_and_models() {
     let db = hills();

@@ -812,20 +812,15 @@ impl Running {
         };
         let (width, height) = (view.width_px, view.height_px);
         let device = &self.gpu.device;
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("screenshot"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: self.formats.surface,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &self.formats.extra_view_formats(),
-        });
+        let texture = crate::gpu::render_target(
+            device,
+            "screenshot",
+            (width, height),
+            self.formats.surface,
+            1,
+            wgpu::TextureUsages::COPY_SRC,
+            &self.formats.extra_view_formats(),
+        );
         let targets = self.formats.views(&texture);
         self.draw(&last, &targets)?;
         let image = crate::offscreen::read_rgba(&self.gpu, &texture)?;

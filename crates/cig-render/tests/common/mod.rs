@@ -182,3 +182,25 @@ pub fn out_dir() -> std::path::PathBuf {
     std::fs::create_dir_all(&dir).expect("out dir");
     dir
 }
+
+/// Compares an image with its golden (`tests/golden/NAME.png`) by mean FLIP error; with
+/// `CIG_UPDATE_GOLDENS` set, writes the golden instead.
+pub fn check_golden(name: &str, image: &Image) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden")
+        .join(format!("{name}.png"));
+    write_png(image, &out_dir().join(format!("{name}.png")));
+    if std::env::var_os("CIG_UPDATE_GOLDENS").is_some() {
+        write_png(image, &path);
+        return;
+    }
+    let golden = read_png(&path).unwrap_or_else(|| panic!("missing golden {}", path.display()));
+    assert_eq!((golden.width, golden.height), (image.width, image.height));
+    let flip = flip_mean(&golden, image);
+    assert!(
+        flip < 0.05,
+        "{name}: mean FLIP error {flip:.4} against {} (image written to {})",
+        path.display(),
+        out_dir().display()
+    );
+}
