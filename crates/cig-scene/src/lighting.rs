@@ -117,6 +117,10 @@ pub fn sun_direction_ecef(unix_time_s: f64, eye: Geodetic) -> DVec3 {
         .normalize()
 }
 
+/// Light colours per lux of illuminance: the scale between the natural illuminance
+/// (`cig_environment::natural_illuminance`, lux) and the frame's light colours.
+pub const LIGHTING_UNITS_PER_LUX: f64 = 1.0 / 100_000.0;
+
 /// Light and sky of one frame, in linear RGB (not sRGB), scene-referred (1.0 = white paper in
 /// full daylight).
 #[derive(Clone, Copy, Debug, PartialEq)]

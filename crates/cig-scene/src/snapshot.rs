@@ -114,6 +114,9 @@ pub struct FrameSnapshot {
     /// ECEF point the puff positions are relative to, m (best: near the eyes, so the f32
     /// offsets stay small).
     pub puff_origin_ecef_m: glam::DVec3,
+    /// Fraction of the sky covered by cloud, 0..1 (the natural illuminance's sky-condition
+    /// input; set from the cloud layers).
+    pub cloud_cover_fraction: f64,
 }
 
 impl FrameSnapshot {
@@ -129,6 +132,7 @@ impl FrameSnapshot {
             entities: Vec::new(),
             puffs: Vec::new(),
             puff_origin_ecef_m: glam::DVec3::ZERO,
+            cloud_cover_fraction: 0.0,
         }
     }
 }

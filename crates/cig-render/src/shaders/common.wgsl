@@ -83,6 +83,13 @@ fn apply_fog_at(colour: vec3<f32>, rel: vec3<f32>) -> vec3<f32> {
     return f * colour + (1.0 - f) * g.fog_colour.rgb;
 }
 
+// Every pass writes pre-exposed linear radiance: the scene's radiance (in the units of the
+// frame's light colours) times the frame's exposure, so the colour target's range holds a moonless
+// night and noon alike. The environment's exposure control sets `g.flags.y`.
+fn exposed(radiance: vec3<f32>) -> vec3<f32> {
+    return radiance * g.flags.y;
+}
+
 fn lit(albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let diffuse = max(dot(n, g.sun_dir.xyz), 0.0);
     let sky = 0.6 + 0.4 * dot(n, g.eye_up.xyz);

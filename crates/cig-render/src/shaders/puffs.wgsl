@@ -128,7 +128,7 @@ fn fs_main(in: PuffOut) -> Accumulated {
     let f = fog_factor(distance_m) * fog_layer_transmittance(dir * distance_m);
     let radiance = f * in.albedo_tau.rgb * (sun + sky) + (1.0 - f) * g.fog_colour.rgb;
     var out: Accumulated;
-    out.scatter = vec4<f32>(radiance * tau, tau);
-    out.emission = vec4<f32>(in.emission.rgb * (f * (1.0 - exp(-tau))), 0.0);
+    out.scatter = vec4<f32>(exposed(radiance) * tau, tau);
+    out.emission = vec4<f32>(exposed(in.emission.rgb) * (f * (1.0 - exp(-tau))), 0.0);
     return out;
 }

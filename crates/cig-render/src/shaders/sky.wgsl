@@ -47,5 +47,5 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
         }
         colour = t * colour + (1.0 - t) * g.fog_colour.rgb;
     }
-    return vec4<f32>(colour, 1.0);
+    return vec4<f32>(exposed(colour), 1.0);
 }
