@@ -102,6 +102,8 @@ struct Globals {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct InstanceRecord {
+    /// Columns of the body-to-ECEF rotation; `col0.w..col1.w` is the share of the model's
+    /// pixels (dither thresholds) this draw covers, for level-of-detail blending.
     col0: [f32; 4],
     col1: [f32; 4],
     col2: [f32; 4],
@@ -140,7 +142,6 @@ pub struct Renderer {
     model_indices: wgpu::Buffer,
     models: HashMap<String, GpuModel>,
     /// Level each entity had last frame, per view (hysteresis).
-    model_lod_memory: HashMap<(usize, u32), usize>,
     /// When each drawn node of each view first appeared, and the frame it was last drawn.
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
@@ -511,7 +512,6 @@ impl Renderer {
             model_pipeline,
             sky_pipeline,
             models: HashMap::new(),
-            model_lod_memory: HashMap::new(),
             node_first_seen: HashMap::new(),
             targets: None,
             puffs,
@@ -687,7 +687,7 @@ impl Renderer {
                 .queue
                 .write_buffer(&self.node_records, 0, bytemuck::cast_slice(&records));
         }
-        let draws = self.entity_draws(&camera, snapshot, view_index);
+        let draws = self.entity_draws(&camera, snapshot);
         let instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
         if !instance_records.is_empty() {
             self.gpu.queue.write_buffer(
@@ -800,7 +800,8 @@ impl Renderer {
                     stats.model_triangles += u64::from(tris);
                 }
                 stats.draw_calls += draws.len() as u32;
-                stats.entities_drawn = draws.len() as u32;
+                // A model blending two levels is drawn twice; count it once.
+                stats.entities_drawn = draws.iter().filter(|d| d.1.col0[3] == 0.0).count() as u32;
             }
         }
         if puff_count > 0 {
@@ -940,14 +941,8 @@ impl Renderer {
         &mut self,
         camera: &Camera,
         snapshot: &FrameSnapshot,
-        view_index: usize,
     ) -> Vec<((u32, u32, i32, u32), InstanceRecord)> {
         let mut out = Vec::new();
-        // Forget entities this view no longer has.
-        let present: std::collections::HashSet<u32> =
-            snapshot.entities.iter().map(|e| e.id).collect();
-        self.model_lod_memory
-            .retain(|(v, id), _| *v != view_index || present.contains(id));
         for entity in snapshot.entities.iter().take(MAX_INSTANCES) {
             let Some(model) = self.models.get(&entity.model) else {
                 continue;
@@ -955,42 +950,48 @@ impl Renderer {
             let origin = entity.position.to_ecef();
             let rel = origin - camera.eye_ecef;
             let radius = f64::from(model.model.bounding_radius_m);
-            let pts = [rel];
             // Cull by the bounding sphere: outside any plane by more than the radius.
             if camera
                 .planes
                 .iter()
-                .any(|p| p.normal.dot(pts[0]) < p.offset_m - radius)
+                .any(|p| p.normal.dot(rel) < p.offset_m - radius)
             {
                 continue;
             }
             let distance = rel.length().max(1.0);
             let diameter_px = 2.0 * radius * camera.pixels_per_tangent / distance;
-            let previous = self.model_lod_memory.get(&(view_index, entity.id)).copied();
-            let lod = model.model.select_lod(diameter_px, previous);
-            self.model_lod_memory.insert((view_index, entity.id), lod);
-            let Some(range) = model.lods.get(lod).copied() else {
-                continue;
-            };
+            let blend = model.model.lod_blend(diameter_px);
+            // (level, share of the pixels [from, to) in dither thresholds)
+            let mut levels = vec![(blend.finer, 0.0, blend.finer_share)];
+            if let Some(coarser) = blend.coarser {
+                levels.push((coarser, blend.finer_share, 1.0));
+            } else {
+                levels[0].2 = 2.0;
+            }
             let enu = cig_geo::EnuFrame::new(Geodetic::new(
                 entity.position.lat_deg,
                 entity.position.lon_deg,
                 entity.position.alt_m,
             ));
             let (forward, right, up) = entity.orientation.axes_enu();
-            let col = |v: glam::DVec3| {
+            let col = |v: glam::DVec3, w: f32| {
                 let e = enu.enu_vector_to_ecef(v);
-                [e.x as f32, e.y as f32, e.z as f32, 0.0]
+                [e.x as f32, e.y as f32, e.z as f32, w]
             };
-            out.push((
-                range,
-                InstanceRecord {
-                    col0: col(right),
-                    col1: col(forward),
-                    col2: col(up),
-                    origin: [rel.x as f32, rel.y as f32, rel.z as f32, 0.0],
-                },
-            ));
+            for (level, share_from, share_to) in levels {
+                let Some(range) = model.lods.get(level).copied() else {
+                    continue;
+                };
+                out.push((
+                    range,
+                    InstanceRecord {
+                        col0: col(right, share_from),
+                        col1: col(forward, share_to),
+                        col2: col(up, 0.0),
+                        origin: [rel.x as f32, rel.y as f32, rel.z as f32, 0.0],
+                    },
+                ));
+            }
         }
         out
     }

@@ -628,3 +628,74 @@ fn a_ground_fog_layer_fills_the_valleys_and_leaves_the_hills_clear() {
     assert!(valley > 25.0, "the valley floor is fogged: {valley}");
     assert!(hill < 6.0, "the hilltop above the layer is clear: {hill}");
 }
+
+/// A box whose finest level is red and coarser levels blue, to see which level covers a pixel.
+fn two_tone_box() -> Model {
+    let level = |colour: [u8; 4]| {
+        let mut mesh = ModelMesh::default();
+        mesh.add_box(Vec3::new(-6.0, -8.0, 0.0), Vec3::new(6.0, 8.0, 7.5), colour);
+        mesh
+    };
+    let blue = level([30, 40, 220, 255]);
+    Model::new(
+        "two_tone",
+        vec![level([220, 30, 30, 255]), blue.clone(), blue],
+    )
+}
+
+#[test]
+fn model_levels_dissolve_into_each_other_across_the_switching_size() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let model = two_tone_box();
+    let radius_m = f64::from(model.bounding_radius_m);
+    renderer.set_models(vec![model]);
+    let size = (320, 240);
+    let base = Geodetic::new(36.01, -121.2, 1500.0);
+    let frame = EnuFrame::new(base);
+    let box_view = view(base, (0.0, 0.0, 0.0), 30.0, size);
+    let pixels_per_tangent = box_view.camera().pixels_per_tangent;
+    // (share of red among the box's pixels) at a projected diameter.
+    let mut red_share = |diameter_px: f64| {
+        let distance_m = 2.0 * radius_m * pixels_per_tangent / diameter_px;
+        let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
+        snapshot.entities = vec![EntityInstance {
+            id: 1,
+            model: "two_tone".into(),
+            position: frame.enu_to_geodetic(DVec3::new(0.0, distance_m, -3.75)),
+            orientation: Hpr::default(),
+        }];
+        let (image, _) = render(&mut renderer, &cache, &snapshot, true);
+        let (mut red, mut blue) = (0u32, 0u32);
+        for px in image.rgba.chunks_exact(4) {
+            if is_key(px) {
+                continue;
+            }
+            let (r, b) = (i32::from(px[0]), i32::from(px[2]));
+            if r > b + 20 {
+                red += 1;
+            } else if b > r + 20 {
+                blue += 1;
+            }
+        }
+        assert!(red + blue > 30, "box not drawn at {diameter_px} px");
+        f64::from(red) / f64::from(red + blue)
+    };
+    let switch_px = cig_scene::models::LOD_SWITCH_PX[0];
+    assert!(
+        red_share(switch_px * 1.4) > 0.97,
+        "finest level whole above the band"
+    );
+    assert!(
+        red_share(switch_px / 1.4) < 0.03,
+        "coarser level whole below the band"
+    );
+    let half = red_share(switch_px);
+    assert!((0.35..0.65).contains(&half), "half way: red share {half}");
+    let inner = red_share(switch_px * 1.15);
+    assert!(
+        inner > half + 0.1,
+        "nearer the finer end: {inner} vs {half}"
+    );
+}

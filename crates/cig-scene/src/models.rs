@@ -4,12 +4,14 @@
 //! Algorithm: models are assembled from boxes, prisms, cylinders and cones with flat-shaded
 //! faces (one normal per face), in a body frame with +X right, +Y forward and +Z up and the
 //! origin on the ground under the model's centre. Each level of detail is selected by the
-//! model's projected size in pixels with a 20 % hysteresis band so a model does not flicker
-//! between levels (GE study, source 004 section 4.7: the detail of an object follows its
-//! projected size; its Table 4 hysteresis for overload control).
+//! model's projected size in pixels (GE study, source 004 section 4.7: the detail of an object
+//! follows its projected size), and within a band around each switching size the two levels
+//! blend: each covers a complementary share of the model's pixels (a screen-door dissolve,
+//! the GE study's gradual transition, section 2), so a level change never pops.
 //!
-//! Limits: levels switch, they do not blend; the procedural models are recognisable shapes,
-//! not training-grade models.
+//! Limits: the dissolve is an ordered 4x4 dither (16 steps), visible as a fine pattern while a
+//! model sits in a band; the procedural models are recognisable shapes, not training-grade
+//! models.
 
 use glam::Vec3;
 
@@ -174,32 +176,61 @@ impl Model {
         }
     }
 
-    /// The level to draw for a projected diameter, given the level drawn last frame (for
-    /// hysteresis).
-    pub fn select_lod(&self, projected_diameter_px: f64, previous: Option<usize>) -> usize {
+    /// The levels to draw for a projected diameter, and how they share the model's pixels.
+    ///
+    /// Outside the blend bands one level is drawn whole. Within a band (a factor
+    /// [`LOD_BLEND_FACTOR`] either side of a switching size) the finer and the coarser level
+    /// are both drawn, each on a complementary share of the pixels; the finer level's share
+    /// falls from 1 to 0 linearly in log-size across the band, so as a model recedes its detail
+    /// dissolves into the coarser level and never pops. The choice depends on the size alone
+    /// (no memory of the last frame), so every frame and every IG agrees.
+    pub fn lod_blend(&self, projected_diameter_px: f64) -> LodBlend {
         let last = self.lods.len().saturating_sub(1);
-        let mut lod = LOD_SWITCH_PX
+        let size = if projected_diameter_px.is_finite() {
+            projected_diameter_px.max(0.0)
+        } else {
+            f64::MAX
+        };
+        let level = LOD_SWITCH_PX
             .iter()
             .take(last)
-            .filter(|&&threshold| projected_diameter_px < threshold)
-            .count();
-        if let Some(prev) = previous {
-            // Keep the previous level while within 20 % of the switching size.
-            let keep = match prev.cmp(&lod) {
-                std::cmp::Ordering::Less => LOD_SWITCH_PX
-                    .get(prev)
-                    .is_some_and(|&t| projected_diameter_px > t * 0.8),
-                std::cmp::Ordering::Greater => LOD_SWITCH_PX
-                    .get(prev - 1)
-                    .is_some_and(|&t| projected_diameter_px < t * 1.2),
-                std::cmp::Ordering::Equal => false,
-            };
-            if keep {
-                lod = prev;
+            .filter(|&&threshold| size < threshold)
+            .count()
+            .min(last);
+        // The band around the switch into this level (its finer neighbour's) or out of it.
+        for (switch, &threshold) in LOD_SWITCH_PX.iter().enumerate().take(last) {
+            let low = threshold / LOD_BLEND_FACTOR;
+            let high = threshold * LOD_BLEND_FACTOR;
+            if size > low && size < high {
+                let finer_share = (size / low).ln() / (high / low).ln();
+                return LodBlend {
+                    finer: switch,
+                    coarser: Some((switch + 1).min(last)),
+                    finer_share: finer_share.clamp(0.0, 1.0) as f32,
+                };
             }
         }
-        lod.min(last)
+        LodBlend {
+            finer: level,
+            coarser: None,
+            finer_share: 1.0,
+        }
     }
+}
+
+/// Factor either side of a switching size over which two levels blend (1.25: from 0.8 to
+/// 1.25 times the switching size, the band the old hysteresis held).
+pub const LOD_BLEND_FACTOR: f64 = 1.25;
+
+/// Which levels of a model to draw and how they share its pixels (see [`Model::lod_blend`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LodBlend {
+    /// The finer level drawn (the only one when `coarser` is `None`).
+    pub finer: usize,
+    /// The coarser level blended in, within a band.
+    pub coarser: Option<usize>,
+    /// Share of the model's pixels the finer level covers, 0..1 (1 without a blend).
+    pub finer_share: f32,
 }
 
 const OLIVE: [u8; 4] = [86, 92, 58, 255];
@@ -381,19 +412,53 @@ mod tests {
     }
 
     #[test]
-    fn lod_selection_follows_size_with_hysteresis() {
+    fn lod_blend_follows_size_and_dissolves_across_each_switch() {
         let m = builtin("tank").expect("tank");
-        assert_eq!(m.select_lod(500.0, None), 0);
-        assert_eq!(m.select_lod(60.0, None), 1);
-        assert_eq!(m.select_lod(5.0, None), 2);
-        // Just below the switch: stays at the finer level it had.
-        assert_eq!(m.select_lod(110.0, Some(0)), 0);
-        assert_eq!(m.select_lod(90.0, Some(0)), 1);
-        assert_eq!(m.select_lod(130.0, Some(1)), 1);
-        assert_eq!(m.select_lod(150.0, Some(1)), 0);
-        // A jump from the coarsest level to a large size goes straight to the finest.
-        assert_eq!(m.select_lod(130.0, Some(2)), 0);
-        assert_eq!(m.select_lod(26.0, Some(2)), 2);
+        let single = |size: f64, level: usize| {
+            assert_eq!(
+                m.lod_blend(size),
+                LodBlend {
+                    finer: level,
+                    coarser: None,
+                    finer_share: 1.0
+                },
+                "{size} px"
+            );
+        };
+        single(500.0, 0);
+        single(60.0, 1);
+        single(5.0, 2);
+        single(f64::NAN, 0);
+        single(-3.0, 2);
+        // Across the first switch (120 px) the finer share falls from 1 to 0.
+        let mut last_share = 1.0;
+        for step in 0..=40 {
+            let size = 150.0 - f64::from(step) * 1.5;
+            let blend = m.lod_blend(size);
+            let share = if blend.coarser.is_some() {
+                assert_eq!((blend.finer, blend.coarser), (0, Some(1)), "{size} px");
+                blend.finer_share
+            } else if blend.finer == 0 {
+                1.0
+            } else {
+                0.0
+            };
+            assert!(
+                share <= last_share + 1e-6,
+                "{size} px: {share} after {last_share}"
+            );
+            assert!(
+                last_share - share < 0.1,
+                "{size} px: jumps from {last_share} to {share}"
+            );
+            last_share = share;
+        }
+        assert_eq!(last_share, 0.0);
+        // Half way (in log size) the two levels share the pixels equally.
+        let mid = m.lod_blend(120.0);
+        assert!((mid.finer_share - 0.5).abs() < 1e-6, "{mid:?}");
+        let second = m.lod_blend(24.0);
+        assert_eq!((second.finer, second.coarser), (1, Some(2)));
     }
 }
 

@@ -13,7 +13,17 @@ struct ModelOut {
     @location(0) rel: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) colour: vec3<f32>,
+    // Share of the model's pixels this draw covers, [x, y) in dither thresholds.
+    @location(3) @interpolate(flat) share: vec2<f32>,
 };
+
+// Ordered 4x4 (Bayer) dither threshold of a pixel, in (0, 1).
+fn dither_threshold(pixel: vec2<f32>) -> f32 {
+    let bayer = array<f32, 16>(0.0, 8.0, 2.0, 10.0, 12.0, 4.0, 14.0, 6.0, 3.0, 11.0, 1.0, 9.0, 15.0, 7.0, 13.0, 5.0);
+    let x = u32(pixel.x) & 3u;
+    let y = u32(pixel.y) & 3u;
+    return (bayer[y * 4u + x] + 0.5) / 16.0;
+}
 
 @vertex
 fn vs_main(
@@ -29,11 +39,17 @@ fn vs_main(
     out.rel = rel;
     out.normal = normalize(m.col0.xyz * normal.x + m.col1.xyz * normal.y + m.col2.xyz * normal.z);
     out.colour = pow(colour.rgb, vec3<f32>(2.2));
+    out.share = vec2<f32>(m.col0.w, m.col1.w);
     return out;
 }
 
 @fragment
 fn fs_main(in: ModelOut) -> @location(0) vec4<f32> {
+    // Level-of-detail blending: two levels cover complementary shares of the pixels.
+    let threshold = dither_threshold(in.clip.xy);
+    if (threshold < in.share.x || threshold >= in.share.y) {
+        discard;
+    }
     if (g.flags.x > 0.5) {
         return vec4<f32>(1.0, 0.6, 0.2, 1.0);
     }
