@@ -313,7 +313,8 @@ pub struct FrameOptions {
     /// Node meshes built at most per frame (`usize::MAX` for one-off frames that must be
     /// complete).
     pub mesh_budget: usize,
-    /// Paint the sky in pure magenta, so tests can see where the background shows through.
+    /// Paint the sky in pure magenta, so tests can see where the background shows through; the
+    /// tone map then passes the pre-exposed linear radiance through (clamped to 1).
     pub key_background: bool,
     /// Seconds over which a node that newly replaces its parent morphs from the parent's shape
     /// into its own (finer data fades in rather than pops); 0 for one-off frames.

@@ -17,12 +17,12 @@
 //!
 //! Exposure ([`exposure_for_illuminance`]) is a pure function of the natural illuminance
 //! (sun, moon, night sky, with the cloud cover), never of transients such as a lightning flash:
-//! a grey card (albedo 0.18) under the natural illuminance `E` is shown at a key value that is
-//! log-linear in `E` (after the log-compressed key of G. Krawczyk, K. Myszkowski, H.-P.
+//! a grey card (albedo 0.18) under the natural illuminance `E` is shown at a key value that
+//! falls with `log E` (after the log-compressed key of G. Krawczyk, K. Myszkowski, H.-P.
 //! Seidel, "Lightness Perception in Tone Reproduction for High Dynamic Range Images", 2005):
-//! 0.18 at 10⁵ lux, 0.05 at a full moon's 0.3 lux, clamped to [0.015, 0.6]. So noon, dusk and a
-//! moonlit night each look right, the night darker than the day but readable. Below 0.1 lux the
-//! tone map shifts toward the scotopic blue ([`scotopic_fraction`], 1 at 0.001 lux).
+//! 0.18 at 10⁵ lux, 0.05 at a full moon's 0.3 lux, 0.012 at a moonless night's 0.002 lux,
+//! constant beyond (piecewise log-linear). So noon, dusk and a moonlit night each look right,
+//! the night darker than the day but readable. Below 0.1 lux the tone map shifts toward the scotopic blue ([`scotopic_fraction`], 1 at 0.001 lux).
 //!
 //! Fog follows the classic fixed-function factors of the NPSNET thesis (source 000, Eq 13-16,
 //! as restored in INDEX.md): linear `f = (end - z)/(end - start)`, exponential `f = exp(-d z)`,
@@ -131,10 +131,9 @@ pub const LIGHTING_UNITS_PER_LUX: f64 = 1.0 / 100_000.0;
 /// Reflectance of the grey card the exposure keys on.
 pub const EXPOSURE_GREY_ALBEDO: f64 = 0.18;
 
-/// (natural illuminance lux, key) anchors of the log-linear exposure key.
-const KEY_DAY: (f64, f64) = (1.0e5, 0.18);
-const KEY_MOON: (f64, f64) = (0.3, 0.05);
-const KEY_RANGE: (f64, f64) = (0.015, 0.6);
+/// (natural illuminance lux, key) anchors of the log-linear exposure key: noon, a full moon,
+/// a clear moonless night.
+const KEY_ANCHORS: [(f64, f64); 3] = [(1.0e5, 0.18), (0.3, 0.05), (0.002, 0.012)];
 
 /// Incident-light exposure value of an illuminance: `log2(E / 2.5)` (ISO 2720 incident-meter
 /// calibration C = 250 with ISO 100).
@@ -148,16 +147,21 @@ pub fn illuminance_for_exposure_value(ev: f64) -> f64 {
 }
 
 /// The display value a grey card shows under natural illuminance `illuminance_lux`
-/// (log-linear between the day and full-moon anchors, clamped).
+/// (piecewise log-linear between the noon, full-moon and moonless anchors, constant beyond).
 pub fn exposure_key(illuminance_lux: f64) -> f64 {
-    let e = if illuminance_lux.is_finite() {
-        illuminance_lux.max(1e-6)
+    let log_e = if illuminance_lux.is_finite() {
+        illuminance_lux.max(1e-9).log10()
     } else {
-        KEY_DAY.0
+        KEY_ANCHORS[0].0.log10()
     };
-    let slope = (KEY_DAY.1 / KEY_MOON.1).log10() / (KEY_DAY.0 / KEY_MOON.0).log10();
-    let key = KEY_MOON.1 * 10f64.powf(slope * (e / KEY_MOON.0).log10());
-    key.clamp(KEY_RANGE.0, KEY_RANGE.1)
+    let [day, moon, dark] = KEY_ANCHORS;
+    let (hi, lo) = if log_e >= moon.0.log10() {
+        (day, moon)
+    } else {
+        (moon, dark)
+    };
+    let t = ((log_e - lo.0.log10()) / (hi.0.log10() - lo.0.log10())).clamp(0.0, 1.0);
+    10f64.powf(lo.1.log10() + t * (hi.1.log10() - lo.1.log10()))
 }
 
 /// The frame's exposure (the factor `exposed()` applies to radiance in light units) for a
@@ -166,7 +170,7 @@ pub fn exposure_for_illuminance(illuminance_lux: f64, compensation_ev: f64) -> f
     let e = if illuminance_lux.is_finite() {
         illuminance_lux.max(1e-6)
     } else {
-        KEY_DAY.0
+        KEY_ANCHORS[0].0
     };
     let ev = if compensation_ev.is_finite() {
         compensation_ev.clamp(-10.0, 10.0)

@@ -23,7 +23,8 @@ struct Globals {
     noise0: vec4<f32>,
     noise1: vec4<f32>,
     noise2: vec4<f32>,
-    // x: wireframe flag, y: exposure, z: key the background, w: pixels per unit tangent.
+    // x: wireframe flag, y: exposure, z: key the background (and a linear tone map), w: pixels
+    // per unit tangent.
     flags: vec4<f32>,
     // Ground fog layer: top height relative to the eye (m), extinction (1/m), enabled, unused.
     fog_layer: vec4<f32>,
@@ -43,9 +44,9 @@ struct Globals {
 
 @group(0) @binding(0) var<uniform> g: Globals;
 
-// The sky's keyed background (tests): red and blue at this radiance (where the filmic curve
-// saturates) leave the tone map as pure magenta.
-const KEY_RADIANCE: f32 = 8.0;
+// The sky's keyed background (tests): pure magenta; with the key on, the tone map passes
+// linear radiance through unchanged (clamped to 1), so tests can read it back.
+const KEY_RADIANCE: f32 = 1.0;
 
 fn fog_factor(distance_m: f32) -> f32 {
     let mode = i32(g.fog.x + 0.5);

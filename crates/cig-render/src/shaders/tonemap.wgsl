@@ -31,16 +31,19 @@ fn srgb_encode(c: vec3<f32>) -> vec3<f32> {
 @fragment
 fn fs_main(in: ToneOut) -> @location(0) vec4<f32> {
     var c = max(textureLoad(scene, vec2<i32>(in.clip.xy), 0).rgb, vec3<f32>(0.0));
-    if (g.flags.z > 0.5 && c.r >= KEY_RADIANCE && c.b >= KEY_RADIANCE && c.g == 0.0) {
-        return vec4<f32>(1.0, 0.0, 1.0, 1.0);
+    var out: vec3<f32>;
+    if (g.flags.z > 0.5) {
+        // Keyed test frames: linear radiance, clamped.
+        out = min(c, vec3<f32>(1.0));
+    } else {
+        let s = g.tonemap.y;
+        if (s > 0.0) {
+            // Rod response over the sRGB primaries (peak near 507 nm), shown blue-grey.
+            let rods = dot(c, vec3<f32>(0.06, 0.55, 0.39));
+            c = mix(c, rods * vec3<f32>(0.80, 0.95, 1.30), s);
+        }
+        out = aces(c);
     }
-    let s = g.tonemap.y;
-    if (s > 0.0) {
-        // Rod response over the sRGB primaries (peak near 507 nm), shown blue-grey.
-        let rods = dot(c, vec3<f32>(0.06, 0.55, 0.39));
-        c = mix(c, rods * vec3<f32>(0.80, 0.95, 1.30), s);
-    }
-    var out = aces(c);
     if (g.tonemap.x > 0.5) {
         out = srgb_encode(out);
     }
