@@ -117,8 +117,7 @@ impl AtmosphereParams {
     }
 
     fn horizon_h(&self) -> f64 {
-        (self.top_radius_m * self.top_radius_m - self.bottom_radius_m * self.bottom_radius_m)
-            .sqrt()
+        (self.top_radius_m * self.top_radius_m - self.bottom_radius_m * self.bottom_radius_m).sqrt()
     }
 }
 
@@ -326,7 +325,8 @@ impl Atmosphere {
     /// sun along the unit `sun_dir`: single and multiple scattering, without the sun's disc.
     /// Rays that meet the ground stop there (the ground itself is not added).
     pub fn sky_radiance(&self, altitude_m: f64, view_dir: [f64; 3], sun_dir: [f64; 3]) -> [f64; 3] {
-        self.march(altitude_m, view_dir, sun_dir, f64::INFINITY, 32).0
+        self.march(altitude_m, view_dir, sun_dir, f64::INFINITY, 32)
+            .0
     }
 
     /// In-scattered radiance and transmittance along `view_dir` from `altitude_m` up to
@@ -500,7 +500,9 @@ impl Atmosphere {
 /// Bruneton's mapping from (r, μ) to transmittance-table coordinates.
 pub fn transmittance_r_mu_to_uv(p: &AtmosphereParams, r: f64, mu: f64) -> (f64, f64) {
     let h = p.horizon_h();
-    let rho = (r * r - p.bottom_radius_m * p.bottom_radius_m).max(0.0).sqrt();
+    let rho = (r * r - p.bottom_radius_m * p.bottom_radius_m)
+        .max(0.0)
+        .sqrt();
     let d = distance_to_sphere_far(r, mu.clamp(-1.0, 1.0), p.top_radius_m).unwrap_or(0.0);
     let d_min = p.top_radius_m - r;
     let d_max = rho + h;
@@ -579,7 +581,12 @@ mod tests {
         });
         let t = earth().sun_transmittance(0.0, 90.0);
         for c in 0..3 {
-            assert!((t[c] - closed[c]).abs() < 2e-3, "{c}: {} vs {}", t[c], closed[c]);
+            assert!(
+                (t[c] - closed[c]).abs() < 2e-3,
+                "{c}: {} vs {}",
+                t[c],
+                closed[c]
+            );
         }
         // Blue is dimmed most at the zenith.
         assert!(t[2] < t[1] && t[1] < t[0]);
@@ -643,7 +650,10 @@ mod tests {
     fn multiple_scattering_brightens_the_sky() {
         let single_only = {
             let mut a = earth().clone();
-            a.multi_scattering.texels.iter_mut().for_each(|t| *t = [0.0; 4]);
+            a.multi_scattering
+                .texels
+                .iter_mut()
+                .for_each(|t| *t = [0.0; 4]);
             a.sky_radiance(0.0, [0.0, 0.0, 1.0], dir(0.0, 30.0))
         };
         let full = earth().sky_radiance(0.0, [0.0, 0.0, 1.0], dir(0.0, 30.0));

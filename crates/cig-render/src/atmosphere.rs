@@ -210,7 +210,11 @@ impl AtmosphereGpu {
         let device = &gpu.device;
         let atmosphere = Atmosphere::earth();
         let transmittance = upload_lut(gpu, "transmittance table", &atmosphere.transmittance);
-        let multi = upload_lut(gpu, "multiple-scattering table", &atmosphere.multi_scattering);
+        let multi = upload_lut(
+            gpu,
+            "multiple-scattering table",
+            &atmosphere.multi_scattering,
+        );
         let placeholder = upload_lut(
             gpu,
             "sky-view placeholder",
@@ -359,7 +363,11 @@ pub(crate) struct ToneMap {
 }
 
 impl ToneMap {
-    pub fn new(gpu: &Gpu, globals_layout: &wgpu::BindGroupLayout, target: wgpu::TextureFormat) -> ToneMap {
+    pub fn new(
+        gpu: &Gpu,
+        globals_layout: &wgpu::BindGroupLayout,
+        target: wgpu::TextureFormat,
+    ) -> ToneMap {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tone map"),

@@ -232,11 +232,7 @@ fn pipeline(
         .device
         .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(spec.label),
-            bind_group_layouts: &spec
-                .layouts
-                .iter()
-                .map(|l| Some(*l))
-                .collect::<Vec<_>>(),
+            bind_group_layouts: &spec.layouts.iter().map(|l| Some(*l)).collect::<Vec<_>>(),
             immediate_size: 0,
         });
     gpu.device
@@ -1022,7 +1018,11 @@ impl Renderer {
             ],
             night_sky: c4(lighting.night_sky_colour),
             tonemap: [
-                if self.colour_format.is_srgb() { 0.0 } else { 1.0 },
+                if self.colour_format.is_srgb() {
+                    0.0
+                } else {
+                    1.0
+                },
                 lighting.scotopic_fraction as f32,
                 lighting.natural_illuminance_lux as f32,
                 0.0,

@@ -1,5 +1,5 @@
 // The frame's tone map: pre-exposed linear radiance (the HDR scene target) to display values.
-// Below 0.1 lux the colour shifts toward the scotopic blue-grey (rods see no colour; the
+// Below 10 lux the colour shifts toward the scotopic blue-grey (rods see no colour; the
 // blue-shift of H. W. Jensen et al., "A Night Rendering", 2000); then the ACES filmic curve
 // (K. Narkowicz's fit, 2015) per channel; the sRGB curve is applied here when the target is
 // not an sRGB format (the hardware encodes sRGB targets).
