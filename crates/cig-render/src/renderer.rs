@@ -60,6 +60,11 @@ pub mod serde_like {
         /// GPU time of the puff passes (timestamp queries; 0 without them or without puffs).
         pub puff_gpu_ms: f64,
         pub gpu_timed_by: &'static str,
+        /// Natural illuminance of the frame (the exposure's input), lux.
+        pub illuminance_lux: f64,
+        /// The exposure the frame was drawn at, as an incident-light EV (`log2(lux / 2.5)`,
+        /// compensation included).
+        pub exposure_ev: f64,
     }
 }
 
@@ -760,6 +765,9 @@ impl Renderer {
             tiles_resident: cache.stats().resident_tiles as u32,
             tiles_wanted: selection.wanted_tiles.len() as u32,
             cpu_select_ms,
+            illuminance_lux: lighting.natural_illuminance_lux,
+            exposure_ev: cig_scene::lighting::exposure_value(lighting.adapted_illuminance_lux)
+                - snapshot.sky.exposure_compensation_ev,
             ..Default::default()
         };
         self.targets(size);
