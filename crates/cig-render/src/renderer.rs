@@ -526,7 +526,7 @@ impl Renderer {
             )
         });
         // The puffs composite onto the resolved scene before the tone map.
-        let puffs = PuffPass::new(&gpu, HDR_FORMAT);
+        let puffs = PuffPass::new(&gpu, HDR_FORMAT, &atmosphere.layout);
         let mut renderer = Renderer {
             model_vertices: empty("model vertices", wgpu::BufferUsages::VERTEX),
             model_indices: empty("model indices", wgpu::BufferUsages::INDEX),
@@ -877,6 +877,7 @@ impl Renderer {
                 &targets.hdr,
                 &targets.depth,
                 puff_count,
+                &self.atmosphere.scene_bind,
                 self.timestamps.as_ref().map(|(set, _, _)| (set, 2, 3)),
             );
             stats.puffs_drawn = puff_count as u32;
