@@ -269,7 +269,7 @@ impl Atmosphere {
     /// the table (0 where the ray meets the ground).
     pub fn transmittance_to_top(&self, r: f64, mu: f64) -> [f64; 3] {
         let p = &self.params;
-        if let Some(_) = distance_to_ground(r, mu, p.bottom_radius_m) {
+        if distance_to_ground(r, mu, p.bottom_radius_m).is_some() {
             return [0.0; 3];
         }
         let (u, v) = transmittance_r_mu_to_uv(p, r, mu);

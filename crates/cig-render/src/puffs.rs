@@ -197,11 +197,13 @@ impl PuffPass {
         };
         let accumulate_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("puff accumulate"),
-            layout: Some(&device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("puff accumulate"),
-                bind_group_layouts: &[Some(&accumulate_layout), Some(atmosphere_layout)],
-                immediate_size: 0,
-            })),
+            layout: Some(
+                &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("puff accumulate"),
+                    bind_group_layouts: &[Some(&accumulate_layout), Some(atmosphere_layout)],
+                    immediate_size: 0,
+                }),
+            ),
             vertex: wgpu::VertexState {
                 module: &accumulate_module,
                 entry_point: Some("vs_main"),

@@ -1,17 +1,26 @@
-//! The frame: sky, terrain and models of one view drawn into a multisampled target.
+//! The frame: sky, terrain and models of one view drawn as pre-exposed radiance into a
+//! multisampled half-float target, puffs composited, then tone-mapped into the caller's target.
 //!
 //! Algorithm: per view, the CPU selects terrain nodes (`cig_scene::lod`), refreshes the meshes
 //! of nodes whose data changed, writes one record per node and one per entity with positions
-//! relative to the eye (differences taken in f64, then rounded), and records one render pass:
-//! the sky as a full-screen triangle, then every node (one indexed draw each, sharing one vertex
-//! pool, index buffer and bind group), then entity models. Depth is reversed (1 at the near
-//! plane, 0 at infinity) in a 32-bit float buffer with a `Greater` test; colour is rendered
-//! with 4x multisampling and resolved (the edge smoothing of source 001). When the snapshot
-//! has obscurant puffs in view, the depth samples are kept and two more passes accumulate the
-//! puffs and composite them onto the resolved frame ([`crate::puffs`]).
+//! relative to the eye (differences taken in f64, then rounded), computes the frame's light and
+//! exposure (`cig_scene::Lighting::with_sky`: sun and moon from the ephemeris, colours from the
+//! physical atmosphere, exposure from the natural illuminance), and records: the sky-view table
+//! of the physical atmosphere ([`crate::atmosphere`], Hillaire 2020); one render pass with the
+//! sky as a full-screen triangle (the sky-view table, the limb-darkened sun disc through the
+//! atmosphere's transmittance), then every node (one indexed draw each, sharing one vertex pool,
+//! index buffer and bind group), then entity models, terrain and models with the aerial
+//! perspective, the classic fog and the ground fog layer; the obscurant puffs
+//! ([`crate::puffs`]) composited onto the resolved scene; and the tone map (scotopic shift at
+//! night, ACES filmic curve, sRGB) into the caller's target. Every pass writes pre-exposed
+//! linear radiance (`exposed()` in common.wgsl) into Rgba16Float, so a moonless night and noon
+//! keep their precision alike. Depth is reversed (1 at the near plane, 0 at infinity) in a
+//! 32-bit float buffer with a `Greater` test; colour is rendered with 4x multisampling and
+//! resolved (the edge smoothing of source 001).
 //!
-//! Limits: one scene pass per view, no shadows; the sky is a gradient until the environment's
-//! atmosphere lands.
+//! Limits: one scene pass per view, no shadows (mountains do not shade the air or each other);
+//! the aerial perspective is the cheap sky-view approximation of [`crate::atmosphere`], not a
+//! froxel volume; exposure follows the natural light instantly (no adaptation time).
 
 use crate::atmosphere::{atmosphere_shader, AtmosphereGpu, ToneMap, HDR_FORMAT};
 use crate::gpu::{Gpu, RenderError};

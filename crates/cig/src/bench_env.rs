@@ -25,7 +25,10 @@ use std::time::Instant;
 
 /// The measured environment configurations: name, and what it changes in a baseline
 /// (flat sky, no fog) snapshot. The clouds' pass adds its own line here.
-const VARIANTS: &[(&str, fn(&mut FrameSnapshot))] = &[("sky_and_fog", physical_sky_and_fog)];
+const VARIANTS: &[(&str, SnapshotChange)] = &[("sky_and_fog", physical_sky_and_fog)];
+
+/// A change made to a baseline snapshot.
+type SnapshotChange = fn(&mut FrameSnapshot);
 
 /// The physical sky with aerial perspective and the default exponential fog (40 km).
 fn physical_sky_and_fog(s: &mut FrameSnapshot) {
