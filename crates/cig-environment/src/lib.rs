@@ -23,6 +23,9 @@
 //! - [`illuminance`]: the USNO/Brown (1952) cubic fits of sun and moon
 //!   illuminance in altitude, the moon's phase law and distance, 0.002 lux of
 //!   night sky, a cloud-cover divisor.
+//! - [`atmosphere`]: the Bruneton (2017) / Hillaire (2020) clear-sky
+//!   atmosphere: transmittance and multiple-scattering tables, sky radiance
+//!   and sky irradiance (Rayleigh, Mie, ozone; three wavelengths).
 //! - [`clock`]: the simulation clock (start, rate, pause) and the light state
 //!   (directions, colours, illuminance) that the renderer reads every frame.
 //! - [`lightning`]: the NPS thesis's branching bolt (V.A.4, appendix F), made
@@ -33,6 +36,7 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod atmosphere;
 pub mod clock;
 pub mod ephemeris;
 pub mod events;
@@ -44,6 +48,7 @@ pub mod sun;
 pub mod time;
 pub mod vsop87;
 
+pub use atmosphere::{Atmosphere, AtmosphereParams, SUN_ILLUMINANCE_TOA_LUX};
 pub use clock::{light_state, BodyLight, LightState, SimClock};
 pub use ephemeris::{ephemeris, BodyPosition, Ephemeris, Observer};
 pub use events::{day_events, DayEvents};

@@ -13,6 +13,7 @@
 //! visibility_m = 20000
 //! fog = "exp"                          # off, linear, exp, exp2
 //! ground_fog = { top_m = 250, visibility_m = 400 }   # a fogged valley (top above MSL)
+//! sky = { model = "physical", exposure_compensation_ev = 0.5 }  # or fixed_exposure_ev = 12
 //! default_model = "truck"              # for entity types the table does not name
 //!
 //! [[models]]                           # the entity-type table
@@ -128,6 +129,25 @@ pub struct Scenario {
     /// Smoke and fire sources (processes, published as DIS Environmental Process PDUs).
     #[serde(default)]
     pub smoke: Vec<SmokeSource>,
+    /// The sky model and the exposure.
+    #[serde(default)]
+    pub sky: Option<SkySection>,
+}
+
+/// `[sky]`: the sky model and the exposure.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkySection {
+    /// "physical" (default) or "flat".
+    #[serde(default)]
+    pub model: Option<String>,
+    /// Added to the automatic exposure, EV (-10..10).
+    #[serde(default)]
+    pub exposure_compensation_ev: f64,
+    /// Expose for this incident-light EV (`log2(lux / 2.5)`, -20..20) instead of the natural
+    /// illuminance.
+    #[serde(default)]
+    pub fixed_exposure_ev: Option<f64>,
 }
 
 /// A smoke or fire source the scenario starts.
@@ -471,6 +491,25 @@ impl Scenario {
             check_finite("ground_fog.top_m", g.top_m, -500.0, 10_000.0)?;
             check_finite("ground_fog.visibility_m", g.visibility_m, 1.0, 1.0e6)?;
         }
+        if let Some(sky) = &self.sky {
+            check_finite(
+                "sky.exposure_compensation_ev",
+                sky.exposure_compensation_ev,
+                -10.0,
+                10.0,
+            )?;
+            if let Some(ev) = sky.fixed_exposure_ev {
+                check_finite("sky.fixed_exposure_ev", ev, -20.0, 20.0)?;
+            }
+            if let Some(m) = &sky.model {
+                if sky_model(m).is_none() {
+                    return Err(value_error(
+                        "sky.model",
+                        format!("\"{m}\" is not physical or flat"),
+                    ));
+                }
+            }
+        }
         if let Some(f) = &self.fog {
             if FogMode::parse(f).is_none() {
                 return Err(value_error(
@@ -639,9 +678,29 @@ impl Scenario {
             .and_then(|t| UtcTime::parse_iso8601(t).ok())
     }
 
+    /// The sky settings the scenario asks for (defaults without `[sky]`).
+    pub fn sky_settings(&self) -> cig_scene::lighting::SkySettings {
+        let mut settings = cig_scene::lighting::SkySettings::default();
+        if let Some(sky) = &self.sky {
+            settings.model = sky.model.as_deref().and_then(sky_model).unwrap_or_default();
+            settings.exposure_compensation_ev = sky.exposure_compensation_ev;
+            settings.fixed_exposure_ev = sky.fixed_exposure_ev;
+        }
+        settings
+    }
+
     /// The fog mode, when the scenario gives one.
     pub fn fog_mode(&self) -> Option<FogMode> {
         self.fog.as_deref().and_then(FogMode::parse)
+    }
+}
+
+/// Parses a sky model name.
+fn sky_model(name: &str) -> Option<cig_scene::lighting::SkyModel> {
+    match name.to_ascii_lowercase().as_str() {
+        "physical" => Some(cig_scene::lighting::SkyModel::Physical),
+        "flat" => Some(cig_scene::lighting::SkyModel::Flat),
+        _ => None,
     }
 }
 
@@ -685,6 +744,35 @@ delivery = "multicast:239.1.2.3"
         assert_eq!(s.dis.as_ref().map(|d| d.exercise), Some(3));
         assert_eq!(s.fog_mode(), Some(FogMode::ExponentialSquared));
         assert!(s.start().is_some());
+    }
+
+    #[test]
+    fn the_sky_section_sets_the_exposure_and_refuses_bad_values() {
+        let with_sky = FULL.replace(
+            "fog = \"exp2\"\n",
+            "fog = \"exp2\"\nsky = { model = \"flat\", exposure_compensation_ev = 1.5 }\n",
+        );
+        let s = Scenario::from_toml(&with_sky).expect("parses");
+        let sky = s.sky_settings();
+        assert_eq!(sky.model, cig_scene::lighting::SkyModel::Flat);
+        assert_eq!(sky.exposure_compensation_ev, 1.5);
+        assert_eq!(sky.fixed_exposure_ev, None);
+        assert_eq!(
+            Scenario::from_toml(FULL).expect("parses").sky_settings(),
+            cig_scene::lighting::SkySettings::default()
+        );
+        for (text, key) in [
+            (
+                "sky = { exposure_compensation_ev = 40 }",
+                "sky.exposure_compensation_ev",
+            ),
+            ("sky = { fixed_exposure_ev = nan }", "sky.fixed_exposure_ev"),
+            ("sky = { model = \"cartoon\" }", "sky.model"),
+        ] {
+            let bad = FULL.replace("fog = \"exp2\"\n", &format!("fog = \"exp2\"\n{text}\n"));
+            let e = Scenario::from_toml(&bad).expect_err("refused").to_string();
+            assert!(e.starts_with(key), "{e}");
+        }
     }
 
     #[test]

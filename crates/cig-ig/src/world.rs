@@ -923,6 +923,7 @@ impl IgWorld {
     pub fn snapshot(&self, width_px: u32, height_px: u32, fallback: &View) -> FrameSnapshot {
         let views = self.views(width_px, height_px, fallback);
         let mut snapshot = FrameSnapshot::new(self.unix_time_s(), views.clone());
+        snapshot.sky = self.scenario.sky_settings();
         let mut visibility_m = 40_000.0;
         if let Some(first) = views.first() {
             // Weather layers are given above MSL.

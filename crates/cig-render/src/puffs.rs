@@ -86,7 +86,13 @@ fn instance_buffer(gpu: &Gpu, capacity: usize) -> wgpu::Buffer {
 }
 
 impl PuffPass {
-    pub(crate) fn new(gpu: &Gpu, colour_format: wgpu::TextureFormat) -> PuffPass {
+    /// `atmosphere_layout`: group 1 of the accumulation (the atmosphere's tables, for the
+    /// aerial perspective).
+    pub(crate) fn new(
+        gpu: &Gpu,
+        colour_format: wgpu::TextureFormat,
+        atmosphere_layout: &wgpu::BindGroupLayout,
+    ) -> PuffPass {
         let device = &gpu.device;
         let mode = if gpu.info.backend == wgpu::Backend::Gl {
             DepthMode::Test
@@ -145,7 +151,8 @@ impl PuffPass {
             "const NEAR_PLANE_M: f32 = {NEAR_PLANE_M:?};\nconst SCENE_SAMPLES: i32 = {MSAA_SAMPLES};\n{depth_source}\n{}",
             include_str!("shaders/puffs.wgsl")
         );
-        let accumulate_module = shader(gpu, "puff accumulate", &source);
+        let accumulate_module =
+            crate::atmosphere::atmosphere_shader(gpu, "puff accumulate", &source);
         let composite_module = shader(
             gpu,
             "puff composite",
@@ -190,7 +197,13 @@ impl PuffPass {
         };
         let accumulate_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("puff accumulate"),
-            layout: Some(&layout("puff accumulate", &accumulate_layout)),
+            layout: Some(
+                &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("puff accumulate"),
+                    bind_group_layouts: &[Some(&accumulate_layout), Some(atmosphere_layout)],
+                    immediate_size: 0,
+                }),
+            ),
             vertex: wgpu::VertexState {
                 module: &accumulate_module,
                 entry_point: Some("vs_main"),
@@ -447,6 +460,7 @@ impl PuffPass {
         target: &wgpu::TextureView,
         depth: &wgpu::TextureView,
         count: usize,
+        atmosphere_bind: &wgpu::BindGroup,
         timestamps: Option<(&wgpu::QuerySet, u32, u32)>,
     ) -> u32 {
         let Some(targets) = self.targets.as_ref() else {
@@ -503,6 +517,7 @@ impl PuffPass {
             });
             pass.set_pipeline(&self.accumulate_pipeline);
             pass.set_bind_group(0, &targets.accumulate_bind, &[]);
+            pass.set_bind_group(1, atmosphere_bind, &[]);
             let bytes = (count * std::mem::size_of::<PuffInstance>()) as u64;
             pass.set_vertex_buffer(0, self.instances.slice(..bytes));
             pass.draw(0..6, 0..count as u32);

@@ -1,23 +1,33 @@
-//! The frame: sky, terrain and models of one view drawn into a multisampled target.
+//! The frame: sky, terrain and models of one view drawn as pre-exposed radiance into a
+//! multisampled half-float target, puffs composited, then tone-mapped into the caller's target.
 //!
 //! Algorithm: per view, the CPU selects terrain nodes (`cig_scene::lod`), refreshes the meshes
 //! of nodes whose data changed, writes one record per node and one per entity with positions
-//! relative to the eye (differences taken in f64, then rounded), and records one render pass:
-//! the sky as a full-screen triangle, then every node (one indexed draw each, sharing one vertex
-//! pool, index buffer and bind group), then entity models. Depth is reversed (1 at the near
-//! plane, 0 at infinity) in a 32-bit float buffer with a `Greater` test; colour is rendered
-//! with 4x multisampling and resolved (the edge smoothing of source 001). When the snapshot
-//! has obscurant puffs in view, the depth samples are kept and two more passes accumulate the
-//! puffs and composite them onto the resolved frame ([`crate::puffs`]).
+//! relative to the eye (differences taken in f64, then rounded), computes the frame's light and
+//! exposure (`cig_scene::Lighting::with_sky`: sun and moon from the ephemeris, colours from the
+//! physical atmosphere, exposure from the natural illuminance), and records: the sky-view table
+//! of the physical atmosphere ([`crate::atmosphere`], Hillaire 2020); one render pass with the
+//! sky as a full-screen triangle (the sky-view table, the limb-darkened sun disc through the
+//! atmosphere's transmittance), then every node (one indexed draw each, sharing one vertex pool,
+//! index buffer and bind group), then entity models, terrain and models with the aerial
+//! perspective, the classic fog and the ground fog layer; the obscurant puffs
+//! ([`crate::puffs`]) composited onto the resolved scene; and the tone map (scotopic shift at
+//! night, ACES filmic curve, sRGB) into the caller's target. Every pass writes pre-exposed
+//! linear radiance (`exposed()` in common.wgsl) into Rgba16Float, so a moonless night and noon
+//! keep their precision alike. Depth is reversed (1 at the near plane, 0 at infinity) in a
+//! 32-bit float buffer with a `Greater` test; colour is rendered with 4x multisampling and
+//! resolved (the edge smoothing of source 001).
 //!
-//! Limits: one scene pass per view, no shadows; the sky is a gradient until the environment's
-//! atmosphere lands.
+//! Limits: one scene pass per view, no shadows (mountains do not shade the air or each other);
+//! the aerial perspective is the cheap sky-view approximation of [`crate::atmosphere`], not a
+//! froxel volume; exposure follows the natural light instantly (no adaptation time).
 
+use crate::atmosphere::{atmosphere_shader, AtmosphereGpu, ToneMap, HDR_FORMAT};
 use crate::gpu::{Gpu, RenderError};
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainGpu};
 use cig_geo::Geodetic;
-use cig_scene::lighting::{FogMode, Lighting};
+use cig_scene::lighting::{FogMode, Lighting, SkyModel};
 use cig_scene::lod::{LodSettings, NodeLayout, TerrainLod};
 use cig_scene::models::{Model, ModelVertex};
 use cig_scene::{Camera, FrameSnapshot};
@@ -59,6 +69,11 @@ pub mod serde_like {
         /// GPU time of the puff passes (timestamp queries; 0 without them or without puffs).
         pub puff_gpu_ms: f64,
         pub gpu_timed_by: &'static str,
+        /// Natural illuminance of the frame (the exposure's input), lux.
+        pub illuminance_lux: f64,
+        /// The exposure the frame was drawn at, as an incident-light EV (`log2(lux / 2.5)`,
+        /// compensation included).
+        pub exposure_ev: f64,
     }
 }
 
@@ -97,6 +112,13 @@ struct Globals {
     noise2: [f32; 4],
     flags: [f32; 4],
     fog_layer: [f32; 4],
+    moon_dir: [f32; 4],
+    moon_colour: [f32; 4],
+    sun_toa: [f32; 4],
+    moon_toa: [f32; 4],
+    atmos: [f32; 4],
+    night_sky: [f32; 4],
+    tonemap: [f32; 4],
 }
 
 #[repr(C)]
@@ -119,6 +141,9 @@ struct GpuModel {
 struct Targets {
     size: (u32, u32),
     msaa_colour: wgpu::TextureView,
+    /// The resolved scene: pre-exposed radiance, read by the tone map.
+    hdr: wgpu::TextureView,
+    tone_map_bind: wgpu::BindGroup,
     depth: wgpu::TextureView,
 }
 
@@ -138,6 +163,8 @@ pub struct Renderer {
     terrain_wire_pipeline: Option<wgpu::RenderPipeline>,
     model_pipeline: wgpu::RenderPipeline,
     sky_pipeline: wgpu::RenderPipeline,
+    atmosphere: AtmosphereGpu,
+    tone_map: ToneMap,
     model_vertices: wgpu::Buffer,
     model_indices: wgpu::Buffer,
     models: HashMap<String, GpuModel>,
@@ -146,7 +173,7 @@ pub struct Renderer {
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
     puffs: PuffPass,
-    /// Queries: 0 the frame's start, 1 its end, 2 the start of the puff passes.
+    /// Queries: 0 the frame's start, 1 its end, 2 and 3 the start and end of the puff passes.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: u64,
 }
@@ -202,7 +229,8 @@ fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
 struct PipelineSpec<'a> {
     label: &'a str,
     module: &'a wgpu::ShaderModule,
-    layout: &'a wgpu::BindGroupLayout,
+    /// Bind group layouts, group 0 first.
+    layouts: &'a [&'a wgpu::BindGroupLayout],
     buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     depth_write: bool,
     depth_compare: wgpu::CompareFunction,
@@ -219,7 +247,7 @@ fn pipeline(
         .device
         .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(spec.label),
-            bind_group_layouts: &[Some(spec.layout)],
+            bind_group_layouts: &spec.layouts.iter().map(|l| Some(*l)).collect::<Vec<_>>(),
             immediate_size: 0,
         });
     gpu.device
@@ -266,13 +294,38 @@ fn pipeline(
         })
 }
 
+/// The sky pipeline: group 0 the frame's globals, group 1 the atmosphere's tables. Built here
+/// only (the celestial sky adds its group 2 to this list).
+fn sky_pipeline(
+    gpu: &Gpu,
+    globals_layout: &wgpu::BindGroupLayout,
+    atmosphere_layout: &wgpu::BindGroupLayout,
+) -> wgpu::RenderPipeline {
+    let module = atmosphere_shader(gpu, "sky", include_str!("shaders/sky.wgsl"));
+    pipeline(
+        gpu,
+        HDR_FORMAT,
+        &PipelineSpec {
+            label: "sky",
+            module: &module,
+            layouts: &[globals_layout, atmosphere_layout],
+            buffers: &[],
+            depth_write: false,
+            depth_compare: wgpu::CompareFunction::Always,
+            polygon_mode: wgpu::PolygonMode::Fill,
+            cull: None,
+        },
+    )
+}
+
 /// Options of one frame.
 #[derive(Clone, Copy, Debug)]
 pub struct FrameOptions {
     /// Node meshes built at most per frame (`usize::MAX` for one-off frames that must be
     /// complete).
     pub mesh_budget: usize,
-    /// Paint the sky in pure magenta, so tests can see where the background shows through.
+    /// Paint the sky in pure magenta, so tests can see where the background shows through; the
+    /// tone map then passes the pre-exposed linear radiance through (clamped to 1).
     pub key_background: bool,
     /// Seconds over which a node that newly replaces its parent morphs from the parent's shape
     /// into its own (finer data fades in rather than pops); 0 for one-off frames.
@@ -396,9 +449,11 @@ impl Renderer {
                 resource: globals.as_entire_binding(),
             }],
         });
-        let terrain_module = shader(&gpu, "terrain", include_str!("shaders/terrain.wgsl"));
-        let model_module = shader(&gpu, "model", include_str!("shaders/model.wgsl"));
-        let sky_module = shader(&gpu, "sky", include_str!("shaders/sky.wgsl"));
+        let atmosphere = AtmosphereGpu::new(&gpu, &sky_layout, sky_bind.clone());
+        let tone_map = ToneMap::new(&gpu, &sky_layout, colour_format);
+        let terrain_module =
+            atmosphere_shader(&gpu, "terrain", include_str!("shaders/terrain.wgsl"));
+        let model_module = atmosphere_shader(&gpu, "model", include_str!("shaders/model.wgsl"));
         let terrain_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<cig_scene::terrain_mesh::TerrainVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
@@ -412,14 +467,14 @@ impl Renderer {
         let terrain_spec = PipelineSpec {
             label: "terrain",
             module: &terrain_module,
-            layout: &terrain_layout,
+            layouts: &[&terrain_layout, &atmosphere.layout],
             buffers: &terrain_buffers,
             depth_write: true,
             depth_compare: wgpu::CompareFunction::Greater,
             polygon_mode: wgpu::PolygonMode::Fill,
             cull: None,
         };
-        let terrain_pipeline = pipeline(&gpu, colour_format, &terrain_spec);
+        let terrain_pipeline = pipeline(&gpu, HDR_FORMAT, &terrain_spec);
         let terrain_wire_pipeline = gpu
             .device
             .features()
@@ -427,7 +482,7 @@ impl Renderer {
             .then(|| {
                 pipeline(
                     &gpu,
-                    colour_format,
+                    HDR_FORMAT,
                     &PipelineSpec {
                         label: "terrain wireframe",
                         polygon_mode: wgpu::PolygonMode::Line,
@@ -438,11 +493,11 @@ impl Renderer {
             });
         let model_pipeline = pipeline(
             &gpu,
-            colour_format,
+            HDR_FORMAT,
             &PipelineSpec {
                 label: "model",
                 module: &model_module,
-                layout: &model_layout,
+                layouts: &[&model_layout, &atmosphere.layout],
                 buffers: &model_buffers,
                 depth_write: true,
                 depth_compare: wgpu::CompareFunction::Greater,
@@ -450,20 +505,7 @@ impl Renderer {
                 cull: None,
             },
         );
-        let sky_pipeline = pipeline(
-            &gpu,
-            colour_format,
-            &PipelineSpec {
-                label: "sky",
-                module: &sky_module,
-                layout: &sky_layout,
-                buffers: &[],
-                depth_write: false,
-                depth_compare: wgpu::CompareFunction::Always,
-                polygon_mode: wgpu::PolygonMode::Fill,
-                cull: None,
-            },
-        );
+        let sky_pipeline = sky_pipeline(&gpu, &sky_layout, &atmosphere.layout);
         let empty = |label, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -477,23 +519,24 @@ impl Renderer {
                 device.create_query_set(&wgpu::QuerySetDescriptor {
                     label: Some("frame time"),
                     ty: wgpu::QueryType::Timestamp,
-                    count: 3,
+                    count: 4,
                 }),
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("timestamps"),
-                    size: 24,
+                    size: 32,
                     usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 }),
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("timestamps readback"),
-                    size: 24,
+                    size: 32,
                     usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
             )
         });
-        let puffs = PuffPass::new(&gpu, colour_format);
+        // The puffs composite onto the resolved scene before the tone map.
+        let puffs = PuffPass::new(&gpu, HDR_FORMAT, &atmosphere.layout);
         let mut renderer = Renderer {
             model_vertices: empty("model vertices", wgpu::BufferUsages::VERTEX),
             model_indices: empty("model indices", wgpu::BufferUsages::INDEX),
@@ -511,6 +554,8 @@ impl Renderer {
             terrain_wire_pipeline,
             model_pipeline,
             sky_pipeline,
+            atmosphere,
+            tone_map,
             models: HashMap::new(),
             node_first_seen: HashMap::new(),
             targets: None,
@@ -597,13 +642,21 @@ impl Renderer {
                 crate::gpu::render_target(device, label, size, format, MSAA_SAMPLES, usage, &[])
                     .create_view(&Default::default())
             };
+            let hdr = crate::gpu::render_target(
+                device,
+                "scene",
+                size,
+                HDR_FORMAT,
+                1,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+                &[],
+            )
+            .create_view(&Default::default());
             let targets = Targets {
                 size,
-                msaa_colour: make(
-                    "msaa colour",
-                    self.colour_format,
-                    wgpu::TextureUsages::empty(),
-                ),
+                msaa_colour: make("msaa colour", HDR_FORMAT, wgpu::TextureUsages::empty()),
+                tone_map_bind: self.tone_map.bind(&self.gpu, &hdr),
+                hdr,
                 // The puff pass may read the depth samples.
                 depth: make("depth", DEPTH_FORMAT, self.puffs.depth_usage()),
             };
@@ -679,7 +732,13 @@ impl Renderer {
             self.frame,
             options.mesh_budget,
         );
-        let lighting = Lighting::at(snapshot.unix_time_s, view.eye);
+        let lighting = Lighting::with_sky(
+            snapshot.unix_time_s,
+            view.eye,
+            snapshot.cloud_cover_fraction,
+            &snapshot.sky,
+        );
+        let physical_sky = snapshot.sky.model == SkyModel::Physical;
         let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
         self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
         if !records.is_empty() {
@@ -715,19 +774,31 @@ impl Renderer {
             tiles_resident: cache.stats().resident_tiles as u32,
             tiles_wanted: selection.wanted_tiles.len() as u32,
             cpu_select_ms,
+            illuminance_lux: lighting.natural_illuminance_lux,
+            exposure_ev: cig_scene::lighting::exposure_value(lighting.adapted_illuminance_lux)
+                - snapshot.sky.exposure_compensation_ev,
             ..Default::default()
         };
         self.targets(size);
+        // The frame starts with the sky-view table's pass (physical sky) or the scene pass.
+        let begin = |set| wgpu::RenderPassTimestampWrites {
+            query_set: set,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: None,
+        };
+        if physical_sky {
+            self.atmosphere.encode_sky_view(
+                &mut encoder,
+                self.timestamps.as_ref().map(|(set, _, _)| begin(set)),
+            );
+            stats.draw_calls += 1;
+        }
         {
-            let timestamp_writes =
-                self.timestamps
-                    .as_ref()
-                    .map(|(set, _, _)| wgpu::RenderPassTimestampWrites {
-                        query_set: set,
-                        beginning_of_pass_write_index: Some(0),
-                        // With puffs, the frame ends after their passes.
-                        end_of_pass_write_index: (puff_count == 0).then_some(1),
-                    });
+            let timestamp_writes = self
+                .timestamps
+                .as_ref()
+                .filter(|_| !physical_sky)
+                .map(|(set, _, _)| begin(set));
             let terrain_pipeline = if wire {
                 self.terrain_wire_pipeline
                     .as_ref()
@@ -743,7 +814,7 @@ impl Renderer {
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: &targets.msaa_colour,
                     depth_slice: None,
-                    resolve_target: Some(target),
+                    resolve_target: Some(&targets.hdr),
                     ops: wgpu::Operations {
                         load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
                         store: wgpu::StoreOp::Discard,
@@ -767,11 +838,13 @@ impl Renderer {
             });
             pass.set_pipeline(&self.sky_pipeline);
             pass.set_bind_group(0, &self.sky_bind, &[]);
+            pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
             pass.draw(0..3, 0..1);
             stats.draw_calls += 1;
 
             pass.set_pipeline(terrain_pipeline);
             pass.set_bind_group(0, &self.terrain_bind, &[]);
+            pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
             pass.set_vertex_buffer(0, self.terrain.vertex_pool.slice(..));
             pass.set_index_buffer(
                 self.terrain.index_buffer.slice(..),
@@ -792,6 +865,7 @@ impl Renderer {
             if !draws.is_empty() {
                 pass.set_pipeline(&self.model_pipeline);
                 pass.set_bind_group(0, &self.model_bind, &[]);
+                pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
                 pass.set_vertex_buffer(0, self.model_vertices.slice(..));
                 pass.set_index_buffer(self.model_indices.slice(..), wgpu::IndexFormat::Uint32);
                 for (i, (range, _)) in draws.iter().enumerate() {
@@ -810,14 +884,34 @@ impl Renderer {
             };
             stats.draw_calls += self.puffs.encode(
                 &mut encoder,
-                target,
+                &targets.hdr,
                 &targets.depth,
                 puff_count,
-                self.timestamps.as_ref().map(|(set, _, _)| (set, 2, 1)),
+                &self.atmosphere.scene_bind,
+                self.timestamps.as_ref().map(|(set, _, _)| (set, 2, 3)),
             );
             stats.puffs_drawn = puff_count as u32;
         }
-        let queries = if puff_count > 0 { 3 } else { 2 };
+        {
+            let Some(targets) = self.targets.as_ref() else {
+                return Err(RenderError::Gpu("render targets missing".into()));
+            };
+            self.tone_map.encode(
+                &mut encoder,
+                &self.sky_bind,
+                &targets.tone_map_bind,
+                target,
+                self.timestamps
+                    .as_ref()
+                    .map(|(set, _, _)| wgpu::RenderPassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: None,
+                        end_of_pass_write_index: Some(1),
+                    }),
+            );
+            stats.draw_calls += 1;
+        }
+        let queries = if puff_count > 0 { 4 } else { 2 };
         if let Some((set, resolve, readback)) = &self.timestamps {
             encoder.resolve_query_set(set, 0..queries, resolve, 0);
             encoder.copy_buffer_to_buffer(resolve, 0, readback, 0, u64::from(queries) * 8);
@@ -844,20 +938,21 @@ impl Renderer {
         let (_, _, readback) = self.timestamps.as_ref()?;
         let slice = readback.slice(..);
         crate::gpu::map_for_reading(&self.gpu, &slice).ok()?;
-        let ticks: [u64; 3] = {
+        let ticks: [u64; 4] = {
             let data = slice.get_mapped_range().ok()?;
             let v: &[u64] = bytemuck::cast_slice(&data);
             [
                 v.first().copied()?,
                 v.get(1).copied()?,
                 v.get(2).copied().unwrap_or(0),
+                v.get(3).copied().unwrap_or(0),
             ]
         };
         readback.unmap();
         let period_ms = f64::from(self.gpu.queue.get_timestamp_period()) / 1e6;
         let frame_ms = ticks[1].saturating_sub(ticks[0]) as f64 * period_ms;
         let puff_ms = if with_puffs {
-            ticks[1].saturating_sub(ticks[2]) as f64 * period_ms
+            ticks[3].saturating_sub(ticks[2]) as f64 * period_ms
         } else {
             0.0
         };
@@ -913,7 +1008,7 @@ impl Renderer {
             noise2: noise(NOISE_CELLS_M[2]),
             flags: [
                 if wire { 1.0 } else { 0.0 },
-                1.0,
+                lighting.exposure as f32,
                 if key_background { 1.0 } else { 0.0 },
                 camera.pixels_per_tangent as f32,
             ],
@@ -926,6 +1021,31 @@ impl Renderer {
                 ],
                 _ => [0.0; 4],
             },
+            moon_dir: v4(lighting.moon_direction, lighting.moon_elevation_deg),
+            moon_colour: c4(lighting.moon_colour),
+            sun_toa: c4(lighting.sun_toa_colour),
+            moon_toa: c4(lighting.moon_toa_colour),
+            atmos: [
+                (cig_environment::AtmosphereParams::EARTH.bottom_radius_m
+                    + camera.view.eye.alt_m.clamp(1.0, 99_000.0)) as f32,
+                match snapshot.sky.model {
+                    SkyModel::Physical => 0.0,
+                    SkyModel::Flat => 1.0,
+                },
+                0.0,
+                0.0,
+            ],
+            night_sky: c4(lighting.night_sky_colour),
+            tonemap: [
+                if self.colour_format.is_srgb() {
+                    0.0
+                } else {
+                    1.0
+                },
+                lighting.scotopic_fraction as f32,
+                lighting.natural_illuminance_lux as f32,
+                0.0,
+            ],
         };
         self.gpu
             .queue

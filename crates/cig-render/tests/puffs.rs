@@ -488,8 +488,10 @@ fn puffs_fade_softly_into_the_ground_with_no_intersection_line() {
             jump = jump.max((d[y * w + x] - d[(y - 1) * w + x]).abs());
         }
     }
+    // (The filmic tone curve steepens mid-tones against the saturating puff centre: a hard
+    // line would still be a step of half the contrast.)
     assert!(
-        jump < 0.2 * contrast,
+        jump < 0.25 * contrast,
         "a step of {jump} (of {contrast}) between rows: a hard line"
     );
     // The half in front of the centre still shows, fading toward the eye.
@@ -554,10 +556,20 @@ fn flames_glow_at_night_and_smoke_does_not() {
     let snapshot = frame_with_puffs(NIGHT_UNIX_S, v, &sys);
     let (image, _) = render(&mut renderer, &cache, &snapshot, false);
     write_png(&image, &out_dir().join("night_fire.png"));
+    // The night itself is exposed to be readable: compare with the same frame without puffs.
+    let mut clear = snapshot.clone();
+    clear.puffs.clear();
+    let (background, _) = render(&mut renderer, &cache, &clear, false);
     let half = SIZE.0 as usize / 2;
     let (mut flame_max, mut smoke_max) = (0.0f64, 0.0f64);
-    for (i, px) in image.rgba.chunks_exact(4).enumerate() {
-        let l = luminance(px);
+    for (i, (px, behind)) in image
+        .rgba
+        .chunks_exact(4)
+        .zip(background.rgba.chunks_exact(4))
+        .enumerate()
+    {
+        // How much brighter the puffs make the pixel.
+        let l = luminance(px) - luminance(behind);
         if i % SIZE.0 as usize <= half {
             flame_max = flame_max.max(l);
         } else {

@@ -1,17 +1,42 @@
-//! Sun direction, light colours, sky gradient and fog of a frame.
+//! Sun and moon light, sky light, fog and exposure of a frame, in physical units.
 //!
-//! Algorithm: the sun's direction comes from `cig-environment`'s ephemeris (Meeus: truncated
-//! VSOP87, nutation, aberration, topocentric at the eye), good to 0.01 degree from 1900 to 2100;
-//! outside those years the light stays at the nearest year's. Sun and sky colours are interpolated in the sun's elevation between day, golden
-//! hour, dusk and night palettes. Fog follows the classic fixed-function factors of the NPSNET
-//! thesis (source 000, Eq 13-16, as restored in INDEX.md): linear `f = (end - z)/(end - start)`,
-//! exponential `f = exp(-d z)`, exponential-squared `f = exp(-(d z)^2)`, with the final colour
-//! `f * object + (1 - f) * fog`. A visibility `V` in metres sets the parameters through
-//! Koschmieder's law (2 % contrast at `V`): `d = 3.912 / V` for exponential,
-//! `d = sqrt(3.912) / V` for exponential-squared, `end = V / 0.98` with `start = 0` for linear.
+//! Algorithm: the sun's and the moon's directions come from `cig-environment`'s ephemeris
+//! (Meeus: truncated VSOP87 and ELP, nutation, aberration, topocentric at the eye), good to 0.01
+//! and 0.05 degree from 1900 to 2100; outside those years the light stays at the nearest
+//! year's. The light colours come from the physical atmosphere (`cig_environment::atmosphere`,
+//! Bruneton 2017 / Hillaire 2020): the sun's colour is the solar illuminance at the top of the
+//! atmosphere times the atmosphere's transmittance to the eye (so it reddens and dims as the
+//! sun sinks); the moon's is its illuminance at the zenith for its phase and distance
+//! (`cig_environment::illuminance`, USNO fits) times the same transmittance relative to the
+//! zenith's; the ambient light is the sky irradiance of the sun-lit and moon-lit sky plus the
+//! night-sky background (0.002 lux); the fog colour is the sky's radiance toward the horizon,
+//! averaged over eight azimuths. The cloud cover's sky-condition divisor dims them all. Light
+//! colours are illuminance times [`LIGHTING_UNITS_PER_LUX`]; sky colours are radiance `L` shown
+//! as `π L` times the same constant (what a white Lambert surface under illuminance `π L`
+//! shows).
 //!
-//! Limits: no atmosphere model — the sky is a gradient and the sun's colour a palette; no moon
-//! light (the environment issue brings the physical sky, the moon and exposure).
+//! Exposure ([`exposure_for_illuminance`]) is a pure function of the natural illuminance
+//! (sun, moon, sky, with the cloud cover) as this model lights the ground — so the exposure
+//! matches the light actually drawn — never of transients such as a lightning flash:
+//! a grey card (albedo 0.18) under the natural illuminance `E` is shown at a key value that
+//! falls with `log E` (after the log-compressed key of G. Krawczyk, K. Myszkowski, H.-P.
+//! Seidel, "Lightness Perception in Tone Reproduction for High Dynamic Range Images", 2005):
+//! 0.18 at 10⁵ lux, 0.05 at a full moon's 0.3 lux, 0.012 at a moonless night's 0.002 lux,
+//! constant beyond (piecewise log-linear). So noon, dusk and a moonlit night each look right,
+//! the night darker than the day but readable. Below 10 lux the tone map shifts toward the
+//! scotopic blue ([`scotopic_fraction`], wholly at 0.01 lux).
+//!
+//! Fog follows the classic fixed-function factors of the NPSNET thesis (source 000, Eq 13-16,
+//! as restored in INDEX.md): linear `f = (end - z)/(end - start)`, exponential `f = exp(-d z)`,
+//! exponential-squared `f = exp(-(d z)^2)`, with the final colour `f * object + (1 - f) * fog`.
+//! A visibility `V` in metres sets the parameters through Koschmieder's law (2 % contrast at
+//! `V`): `d = 3.912 / V` for exponential, `d = sqrt(3.912) / V` for exponential-squared,
+//! `end = V / 0.98` with `start = 0` for linear.
+//!
+//! Limits: a clear standard atmosphere at three wavelengths; the moon lights the sky as the sun
+//! would at the same altitude (its own spectrum is not modelled); the cloud cover dims direct
+//! and diffuse light alike (no overcast diffusion of the sun); exposure is instantaneous (no
+//! eye-adaptation time constant).
 
 use cig_geo::{EnuFrame, Geodetic};
 use glam::DVec3;
@@ -94,134 +119,307 @@ impl Fog {
 
 /// Unit vector from `eye` towards the sun (ECEF), at `unix_time_s` (UTC), topocentric.
 pub fn sun_direction_ecef(unix_time_s: f64, eye: Geodetic) -> DVec3 {
-    // The ephemeris covers 1900..=2100; clamp into it rather than fail a frame.
+    let frame = EnuFrame::new(eye);
+    let enu = ephemeris_at(unix_time_s, eye).map_or([0.0, 0.0, 1.0], |e| e.sun.direction_enu);
+    frame.enu_vector_to_ecef(DVec3::from_array(enu)).normalize()
+}
+
+/// Light colours per lux of illuminance: the scale between the natural illuminance
+/// (`cig_environment::natural_illuminance`, lux) and the frame's light colours. 1.0 is about
+/// daylight (10⁵ lux). Pre-exposed values do not depend on it (exposure divides it out); it
+/// keeps the un-exposed light colours near 1 by day and well inside f32 range at night.
+pub const LIGHTING_UNITS_PER_LUX: f64 = 1.0 / 100_000.0;
+
+/// Reflectance of the grey card the exposure keys on.
+pub const EXPOSURE_GREY_ALBEDO: f64 = 0.18;
+
+/// (natural illuminance lux, key) anchors of the log-linear exposure key: noon, a full moon,
+/// a clear moonless night.
+const KEY_ANCHORS: [(f64, f64); 3] = [(1.0e5, 0.18), (0.3, 0.05), (0.002, 0.012)];
+
+/// Incident-light exposure value of an illuminance: `log2(E / 2.5)` (ISO 2720 incident-meter
+/// calibration C = 250 with ISO 100).
+pub fn exposure_value(illuminance_lux: f64) -> f64 {
+    (illuminance_lux.max(1e-9) / 2.5).log2()
+}
+
+/// The illuminance an exposure value stands for (the inverse of [`exposure_value`]).
+pub fn illuminance_for_exposure_value(ev: f64) -> f64 {
+    2.5 * 2f64.powf(ev)
+}
+
+/// The display value a grey card shows under natural illuminance `illuminance_lux`
+/// (piecewise log-linear between the noon, full-moon and moonless anchors, constant beyond).
+pub fn exposure_key(illuminance_lux: f64) -> f64 {
+    let log_e = if illuminance_lux.is_finite() {
+        illuminance_lux.max(1e-9).log10()
+    } else {
+        KEY_ANCHORS[0].0.log10()
+    };
+    let [day, moon, dark] = KEY_ANCHORS;
+    let (hi, lo) = if log_e >= moon.0.log10() {
+        (day, moon)
+    } else {
+        (moon, dark)
+    };
+    let t = ((log_e - lo.0.log10()) / (hi.0.log10() - lo.0.log10())).clamp(0.0, 1.0);
+    10f64.powf(lo.1.log10() + t * (hi.1.log10() - lo.1.log10()))
+}
+
+/// The frame's exposure (the factor `exposed()` applies to radiance in light units) for a
+/// natural illuminance and an exposure compensation in EV.
+pub fn exposure_for_illuminance(illuminance_lux: f64, compensation_ev: f64) -> f64 {
+    let e = if illuminance_lux.is_finite() {
+        illuminance_lux.max(1e-6)
+    } else {
+        KEY_ANCHORS[0].0
+    };
+    let ev = if compensation_ev.is_finite() {
+        compensation_ev.clamp(-10.0, 10.0)
+    } else {
+        0.0
+    };
+    exposure_key(e) / (EXPOSURE_GREY_ALBEDO * e * LIGHTING_UNITS_PER_LUX) * 2f64.powf(ev)
+}
+
+/// How far the tone map shifts toward scotopic (rod) vision: 0 above 10 lux, 1 below 0.01 lux,
+/// smooth in log illuminance between (ground lit by 10 lux has about 0.6 cd/m², inside the
+/// mesopic range of 0.005-5 cd/m² where the rods take over).
+pub fn scotopic_fraction(illuminance_lux: f64) -> f64 {
+    let x = ((1.0 - illuminance_lux.max(1e-9).log10()) / 3.0).clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// How the sky and the aerial perspective are drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SkyModel {
+    /// The physical atmosphere: sky-view table, sun disc, aerial perspective.
+    #[default]
+    Physical,
+    /// A flat sky of the fog colour and the classic fog only (the benchmark's baseline).
+    Flat,
+}
+
+/// Sky and exposure settings of a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SkySettings {
+    pub model: SkyModel,
+    /// Added to the automatic exposure, EV (+1 doubles the picture's brightness).
+    pub exposure_compensation_ev: f64,
+    /// Expose for this incident-light EV (`log2(E / 2.5)`) instead of the natural illuminance.
+    pub fixed_exposure_ev: Option<f64>,
+}
+
+impl Default for SkySettings {
+    fn default() -> Self {
+        SkySettings {
+            model: SkyModel::Physical,
+            exposure_compensation_ev: 0.0,
+            fixed_exposure_ev: None,
+        }
+    }
+}
+
+/// Light, sky and exposure of one frame, in linear RGB (not sRGB), scene-referred: light
+/// colours are illuminance × [`LIGHTING_UNITS_PER_LUX`] (1.0 ≈ white paper in full daylight).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lighting {
+    /// Towards the sun, ECEF unit vector.
+    pub sun_direction: DVec3,
+    /// Sun elevation above the eye's horizon (geometric), degrees.
+    pub sun_elevation_deg: f64,
+    /// Direct sunlight on a surface facing the sun.
+    pub sun_colour: [f32; 3],
+    /// Skylight on a horizontal surface (sun-lit and moon-lit sky, night-sky background).
+    pub ambient_colour: [f32; 3],
+    /// The sky straight up and toward the horizon (π L × units).
+    pub sky_zenith: [f32; 3],
+    pub sky_horizon: [f32; 3],
+    /// The classic fog's colour: the horizon sky.
+    pub fog_colour: [f32; 3],
+    /// Towards the moon, ECEF unit vector.
+    pub moon_direction: DVec3,
+    pub moon_elevation_deg: f64,
+    /// Direct moonlight on a surface facing the moon.
+    pub moon_colour: [f32; 3],
+    /// Moon phase angle (0 full, 180 new) and illuminated fraction.
+    pub moon_phase_angle_deg: f64,
+    pub moon_illuminated_fraction: f64,
+    /// Solar illuminance at the top of the atmosphere × units (what the sky tables multiply).
+    pub sun_toa_colour: [f32; 3],
+    /// The moon's illuminance above the atmosphere × units.
+    pub moon_toa_colour: [f32; 3],
+    /// The night-sky background's radiance (π L × units), in every direction.
+    pub night_sky_colour: [f32; 3],
+    /// Natural illuminance on horizontal ground (direct sun and moon, sun-lit and moon-lit sky,
+    /// night sky, cloud cover applied) as the atmosphere model lights the frame, lux.
+    pub natural_illuminance_lux: f64,
+    /// The same from `cig_environment::natural_illuminance` (the USNO fits), lux: the model
+    /// agrees with it within 10 % by day and is up to 3.5 times brighter in civil twilight.
+    pub usno_illuminance_lux: f64,
+    /// The illuminance the exposure is set for (the natural one or the fixed EV's), lux.
+    pub adapted_illuminance_lux: f64,
+    /// The factor `exposed()` applies (see [`exposure_for_illuminance`]).
+    pub exposure: f64,
+    /// Scotopic blend of the tone map, 0..1.
+    pub scotopic_fraction: f64,
+}
+
+fn rgb(c: [f64; 3], scale: f64) -> [f32; 3] {
+    c.map(|v| (v * scale) as f32)
+}
+
+fn luminance(c: [f64; 3]) -> f64 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+impl Lighting {
+    /// The light at `unix_time_s` seen from `eye`, clear sky, automatic exposure.
+    pub fn at(unix_time_s: f64, eye: Geodetic) -> Lighting {
+        Lighting::with_sky(unix_time_s, eye, 0.0, &SkySettings::default())
+    }
+
+    /// The light at `unix_time_s` seen from `eye` under `cloud_cover_fraction` (clamped to
+    /// [0, 1]) with the sky settings' exposure.
+    pub fn with_sky(
+        unix_time_s: f64,
+        eye: Geodetic,
+        cloud_cover_fraction: f64,
+        sky: &SkySettings,
+    ) -> Lighting {
+        use cig_environment::illuminance as lux;
+        let frame = EnuFrame::new(eye);
+        let cover = if cloud_cover_fraction.is_finite() {
+            cloud_cover_fraction.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let divisor = lux::sky_condition_divisor(cover).unwrap_or(1.0);
+        let atmosphere = cig_environment::Atmosphere::earth();
+        let altitude_m = if eye.alt_m.is_finite() {
+            eye.alt_m.clamp(0.0, 99_000.0)
+        } else {
+            0.0
+        };
+        let ephemeris = ephemeris_at(unix_time_s, eye);
+        let (sun_enu, sun_alt, moon_enu, moon_alt, phase, fraction, moon_zenith_lux, natural) =
+            match &ephemeris {
+                Some(e) => (
+                    e.sun.direction_enu,
+                    e.sun.altitude_deg,
+                    e.moon.direction_enu,
+                    e.moon.altitude_deg,
+                    e.moon_phase_angle_deg,
+                    e.moon_illuminated_fraction,
+                    lux::moon_illuminance_lux(90.0, e.moon_phase_angle_deg, e.moon.distance_m),
+                    cig_environment::natural_illuminance(e, cover)
+                        .map(|i| i.total_lux)
+                        .unwrap_or(lux::NIGHT_SKY_LUX),
+                ),
+                None => (
+                    [0.0, 0.0, 1.0],
+                    90.0,
+                    [0.0, 0.0, -1.0],
+                    -90.0,
+                    180.0,
+                    0.0,
+                    0.0,
+                    1e5,
+                ),
+            };
+        let units = LIGHTING_UNITS_PER_LUX / divisor;
+        let sun_toa = cig_environment::SUN_ILLUMINANCE_TOA_LUX;
+        // The moon above the atmosphere: its zenith illuminance over the zenith transmittance.
+        let zenith_t = luminance(atmosphere.sun_transmittance(0.0, 90.0)).max(1e-6);
+        let moon_toa = moon_zenith_lux / zenith_t;
+        let sun_t = atmosphere.sun_transmittance(altitude_m, sun_alt);
+        let moon_t = atmosphere.sun_transmittance(altitude_m, moon_alt);
+        let sky_sun = atmosphere.sky_irradiance(altitude_m, sun_alt);
+        let sky_moon = atmosphere.sky_irradiance(altitude_m, moon_alt);
+        // The night-sky background, slightly blue (airglow and starlight).
+        let night = [0.8, 0.9, 1.2].map(|c| c * lux::NIGHT_SKY_LUX);
+        let ambient: [f64; 3] =
+            std::array::from_fn(|c| sky_sun[c] * sun_toa + sky_moon[c] * moon_toa + night[c]);
+        // Sky radiance toward the zenith and (averaged over azimuth) the horizon, shown as π L.
+        let pi = std::f64::consts::PI;
+        let sky_at = |view: [f64; 3]| -> [f64; 3] {
+            let s = atmosphere.sky_radiance(altitude_m, view, sun_enu);
+            let m = if moon_toa > 0.0 && moon_alt > -10.0 {
+                atmosphere.sky_radiance(altitude_m, view, moon_enu)
+            } else {
+                [0.0; 3]
+            };
+            std::array::from_fn(|c| pi * (s[c] * sun_toa + m[c] * moon_toa) + night[c])
+        };
+        let zenith = sky_at([0.0, 0.0, 1.0]);
+        let mut horizon = [0.0; 3];
+        let elevation = 1.5f64.to_radians();
+        for k in 0..8 {
+            let az = f64::from(k) * pi / 4.0;
+            let v = [
+                elevation.cos() * az.sin(),
+                elevation.cos() * az.cos(),
+                elevation.sin(),
+            ];
+            let l = sky_at(v);
+            for c in 0..3 {
+                horizon[c] += l[c] / 8.0;
+            }
+        }
+        // The natural illuminance on horizontal ground as this model lights it: direct sun and
+        // moon, the sun-lit and moon-lit sky and the night-sky background.
+        let sun_lum = luminance(sun_t) * sun_toa * sun_alt.to_radians().sin().max(0.0);
+        let moon_lum = luminance(moon_t) * moon_toa * moon_alt.to_radians().sin().max(0.0);
+        let modelled = (sun_lum + moon_lum + luminance(ambient)) / divisor;
+        let adapted = match sky.fixed_exposure_ev {
+            Some(ev) if ev.is_finite() => illuminance_for_exposure_value(ev.clamp(-20.0, 20.0)),
+            _ => modelled,
+        };
+        let sky_horizon = rgb(horizon, units);
+        let to_ecef = |v: [f64; 3]| frame.enu_vector_to_ecef(DVec3::from_array(v)).normalize();
+        Lighting {
+            sun_direction: to_ecef(sun_enu),
+            sun_elevation_deg: sun_alt,
+            sun_colour: rgb(sun_t.map(|t| t * sun_toa), units),
+            ambient_colour: rgb(ambient, units),
+            sky_zenith: rgb(zenith, units),
+            sky_horizon,
+            fog_colour: sky_horizon,
+            moon_direction: to_ecef(moon_enu),
+            moon_elevation_deg: moon_alt,
+            moon_colour: rgb(moon_t.map(|t| t * moon_toa), units),
+            moon_phase_angle_deg: phase,
+            moon_illuminated_fraction: fraction,
+            sun_toa_colour: rgb([sun_toa; 3], units),
+            moon_toa_colour: rgb([moon_toa; 3], units),
+            night_sky_colour: rgb(night, units),
+            natural_illuminance_lux: modelled,
+            usno_illuminance_lux: natural,
+            adapted_illuminance_lux: adapted,
+            exposure: exposure_for_illuminance(adapted, sky.exposure_compensation_ev),
+            scotopic_fraction: scotopic_fraction(adapted),
+        }
+    }
+}
+
+/// The ephemeris at the eye, the time clamped into 1900..=2100 (None for an eye the ephemeris
+/// cannot take).
+fn ephemeris_at(unix_time_s: f64, eye: Geodetic) -> Option<cig_environment::Ephemeris> {
     let lo =
         cig_environment::UtcTime::from_calendar(1900, 1, 1, 0, 0, 0.0).map(|t| t.unix_seconds());
     let hi = cig_environment::UtcTime::from_calendar(2100, 12, 31, 23, 59, 59.0)
         .map(|t| t.unix_seconds());
     let t = match (lo, hi) {
-        (Ok(lo), Ok(hi)) => unix_time_s.clamp(lo, hi),
-        _ => unix_time_s,
+        (Ok(lo), Ok(hi)) if unix_time_s.is_finite() => unix_time_s.clamp(lo, hi),
+        (Ok(lo), _) => lo,
+        _ => return None,
     };
     let lat = eye.lat_deg.clamp(-90.0, 90.0);
     let alt = eye.alt_m.clamp(-1000.0, 1.0e7);
-    let (Ok(time), Ok(observer)) = (
-        cig_environment::UtcTime::from_unix_seconds(t),
-        cig_environment::Observer::new(lat, eye.lon_deg, alt),
-    ) else {
-        return EnuFrame::new(eye).enu_vector_to_ecef(DVec3::Z);
-    };
-    let sun = cig_environment::ephemeris(&observer, time).sun;
-    EnuFrame::new(eye)
-        .enu_vector_to_ecef(DVec3::from_array(sun.direction_enu))
-        .normalize()
-}
-
-/// Light colours per lux of illuminance: the scale between the natural illuminance
-/// (`cig_environment::natural_illuminance`, lux) and the frame's light colours.
-pub const LIGHTING_UNITS_PER_LUX: f64 = 1.0 / 100_000.0;
-
-/// Light and sky of one frame, in linear RGB (not sRGB), scene-referred (1.0 = white paper in
-/// full daylight).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Lighting {
-    /// Towards the sun, ECEF unit vector.
-    pub sun_direction: DVec3,
-    /// Sun elevation above the eye's horizon, degrees.
-    pub sun_elevation_deg: f64,
-    pub sun_colour: [f32; 3],
-    pub ambient_colour: [f32; 3],
-    pub sky_zenith: [f32; 3],
-    pub sky_horizon: [f32; 3],
-    pub fog_colour: [f32; 3],
-}
-
-fn lerp3(a: [f32; 3], b: [f32; 3], t: f64) -> [f32; 3] {
-    let t = t.clamp(0.0, 1.0) as f32;
-    [
-        a[0] + (b[0] - a[0]) * t,
-        a[1] + (b[1] - a[1]) * t,
-        a[2] + (b[2] - a[2]) * t,
-    ]
-}
-
-/// Palette key: (sun elevation, sun colour, ambient, zenith, horizon).
-type PaletteKey = (f64, [f32; 3], [f32; 3], [f32; 3], [f32; 3]);
-
-const PALETTE: [PaletteKey; 5] = [
-    (
-        -18.0,
-        [0.0, 0.0, 0.0],
-        [0.004, 0.005, 0.010],
-        [0.001, 0.0015, 0.004],
-        [0.004, 0.005, 0.010],
-    ),
-    (
-        -6.0,
-        [0.0, 0.0, 0.0],
-        [0.03, 0.035, 0.06],
-        [0.02, 0.03, 0.08],
-        [0.12, 0.08, 0.10],
-    ),
-    (
-        0.0,
-        [0.55, 0.28, 0.10],
-        [0.10, 0.10, 0.14],
-        [0.10, 0.16, 0.35],
-        [0.70, 0.42, 0.25],
-    ),
-    (
-        10.0,
-        [1.00, 0.78, 0.55],
-        [0.22, 0.25, 0.32],
-        [0.16, 0.32, 0.70],
-        [0.62, 0.66, 0.72],
-    ),
-    (
-        40.0,
-        [1.00, 0.96, 0.90],
-        [0.30, 0.34, 0.42],
-        [0.14, 0.30, 0.72],
-        [0.62, 0.70, 0.82],
-    ),
-];
-
-impl Lighting {
-    /// The light at `unix_time_s` seen from `eye`.
-    pub fn at(unix_time_s: f64, eye: Geodetic) -> Lighting {
-        let local_up = EnuFrame::new(eye).enu_vector_to_ecef(DVec3::Z);
-        let sun_direction = sun_direction_ecef(unix_time_s, eye);
-        let sun_elevation_deg = sun_direction
-            .dot(local_up)
-            .clamp(-1.0, 1.0)
-            .asin()
-            .to_degrees();
-        let e = sun_elevation_deg;
-        let (mut lo, mut hi) = (PALETTE[0], PALETTE[PALETTE.len() - 1]);
-        for w in PALETTE.windows(2) {
-            if e >= w[0].0 && e <= w[1].0 {
-                (lo, hi) = (w[0], w[1]);
-            }
-        }
-        if e < PALETTE[0].0 {
-            hi = lo;
-        }
-        let t = if hi.0 > lo.0 {
-            (e - lo.0) / (hi.0 - lo.0)
-        } else {
-            0.0
-        };
-        let sky_horizon = lerp3(lo.4, hi.4, t);
-        Lighting {
-            sun_direction,
-            sun_elevation_deg,
-            sun_colour: lerp3(lo.1, hi.1, t),
-            ambient_colour: lerp3(lo.2, hi.2, t),
-            sky_zenith: lerp3(lo.3, hi.3, t),
-            sky_horizon,
-            fog_colour: sky_horizon,
-        }
-    }
+    let time = cig_environment::UtcTime::from_unix_seconds(t).ok()?;
+    let observer = cig_environment::Observer::new(lat, eye.lon_deg, alt).ok()?;
+    Some(cig_environment::ephemeris(&observer, time))
 }
 
 #[cfg(test)]
@@ -248,6 +446,102 @@ mod tests {
         let midnight = Lighting::at(unix(2026, 6, 21, 8.07), site);
         assert!(midnight.sun_elevation_deg < -25.0);
         assert!(noon.sky_zenith[2] > midnight.sky_zenith[2] * 10.0);
+    }
+
+    fn lum(c: [f32; 3]) -> f64 {
+        0.2126 * f64::from(c[0]) + 0.7152 * f64::from(c[1]) + 0.0722 * f64::from(c[2])
+    }
+
+    #[test]
+    fn the_sun_is_white_and_bright_at_noon_and_red_and_dim_at_sunset() {
+        let site = Geodetic::new(36.0, -121.0, 0.0);
+        let noon = Lighting::at(unix(2026, 6, 21, 20.07), site);
+        let sun_lux = lum(noon.sun_colour) / LIGHTING_UNITS_PER_LUX;
+        assert!((80_000.0..125_000.0).contains(&sun_lux), "{sun_lux}");
+        let sky_lux = lum(noon.ambient_colour) / LIGHTING_UNITS_PER_LUX;
+        assert!((8_000.0..30_000.0).contains(&sky_lux), "{sky_lux}");
+        assert!(noon.ambient_colour[2] > noon.ambient_colour[0]);
+        // Sunset at 36 N, 121 W on 21 June: about 03:30 UTC the next day; a sun 1-2 degrees up.
+        let mut low = noon;
+        for minutes in 0..240 {
+            let l = Lighting::at(unix(2026, 6, 22, 2.0 + f64::from(minutes) / 60.0), site);
+            if l.sun_elevation_deg < 2.0 {
+                low = l;
+                break;
+            }
+        }
+        assert!(low.sun_elevation_deg > 0.0 && low.sun_elevation_deg < 2.0);
+        assert!(
+            low.sun_colour[0] > 2.0 * low.sun_colour[2],
+            "{:?}",
+            low.sun_colour
+        );
+        assert!(lum(low.sun_colour) < 0.3 * lum(noon.sun_colour));
+        // Fog (the horizon sky) is lighter at noon than at night.
+        let midnight = Lighting::at(unix(2026, 6, 21, 8.07), site);
+        assert!(lum(noon.fog_colour) > 1000.0 * lum(midnight.fog_colour));
+        assert_eq!(midnight.sun_colour, [0.0; 3]);
+    }
+
+    #[test]
+    fn the_full_moon_lights_the_night() {
+        // Full moon 2024-06-22 01:08 UTC; local midnight at 121 W is about 08:00 UTC.
+        let site = Geodetic::new(36.0, -121.0, 0.0);
+        let night = Lighting::at(unix(2024, 6, 22, 8.0), site);
+        assert!(night.sun_elevation_deg < -18.0);
+        assert!(
+            night.moon_elevation_deg > 15.0,
+            "{}",
+            night.moon_elevation_deg
+        );
+        let moon_lux = lum(night.moon_colour) / LIGHTING_UNITS_PER_LUX;
+        assert!((0.05..0.5).contains(&moon_lux), "{moon_lux}");
+        assert!(lum(night.moon_colour) > lum(night.ambient_colour));
+        assert!((0.05..0.6).contains(&night.natural_illuminance_lux));
+        // The key light by day is the sun: the moon adds next to nothing.
+        let day = Lighting::at(unix(2024, 6, 21, 20.0), site);
+        assert!(lum(day.moon_colour) < 1e-4 * lum(day.sun_colour));
+    }
+
+    #[test]
+    fn exposure_orders_noon_dusk_moonlight_and_a_moonless_night() {
+        let shown = |lux: f64| {
+            EXPOSURE_GREY_ALBEDO * lux * LIGHTING_UNITS_PER_LUX * exposure_for_illuminance(lux, 0.0)
+        };
+        let (noon, dusk, moon, dark) = (shown(1.1e5), shown(3.4), shown(0.3), shown(0.002));
+        assert!(
+            noon > dusk && dusk > moon && moon > dark,
+            "{noon} {dusk} {moon} {dark}"
+        );
+        assert!((0.15..0.25).contains(&noon), "{noon}");
+        // A moonlit night is readable: a grey card shows at least a tenth of its noon value.
+        assert!(moon > 0.2 * noon && moon > 0.03, "{moon}");
+        // Compensation doubles per EV.
+        let e = exposure_for_illuminance(1000.0, 1.0) / exposure_for_illuminance(1000.0, 0.0);
+        assert!((e - 2.0).abs() < 1e-9);
+        assert!(scotopic_fraction(1e4) == 0.0 && scotopic_fraction(1e-4) == 1.0);
+        assert!(exposure_for_illuminance(f64::NAN, f64::NAN).is_finite());
+        assert!((exposure_value(2.5 * 8.0) - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_fixed_exposure_ignores_the_natural_light() {
+        let site = Geodetic::new(36.0, -121.0, 0.0);
+        let sky = SkySettings {
+            fixed_exposure_ev: Some(exposure_value(1000.0)),
+            ..SkySettings::default()
+        };
+        let noon = Lighting::with_sky(unix(2026, 6, 21, 20.07), site, 0.0, &sky);
+        let night = Lighting::with_sky(unix(2026, 6, 21, 8.07), site, 0.0, &sky);
+        assert!((noon.exposure / night.exposure - 1.0).abs() < 1e-9);
+        assert!((noon.adapted_illuminance_lux - 1000.0).abs() < 1e-6);
+        // Cloud cover dims the natural light and so raises the automatic exposure.
+        let clear = Lighting::at(unix(2026, 6, 21, 20.07), site);
+        let cloudy =
+            Lighting::with_sky(unix(2026, 6, 21, 20.07), site, 1.0, &SkySettings::default());
+        assert!(cloudy.natural_illuminance_lux < clear.natural_illuminance_lux / 5.0);
+        assert!(cloudy.exposure > clear.exposure);
+        assert!(lum(cloudy.sun_colour) < lum(clear.sun_colour) / 5.0);
     }
 
     #[test]

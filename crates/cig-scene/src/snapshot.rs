@@ -8,7 +8,7 @@
 //! Limits: clamping uses the finest surface; where a far entity's terrain is drawn coarser,
 //! it may float or sink by at most the terrain's allowed screen error (under a pixel).
 
-use crate::lighting::{Fog, FogMode};
+use crate::lighting::{Fog, FogMode, SkySettings};
 use crate::view::{Hpr, View};
 use cig_geo::Geodetic;
 use cig_terrain::{QueryError, QuerySession};
@@ -117,6 +117,8 @@ pub struct FrameSnapshot {
     /// Fraction of the sky covered by cloud, 0..1 (the natural illuminance's sky-condition
     /// input; set from the cloud layers).
     pub cloud_cover_fraction: f64,
+    /// Sky model and exposure (compensation, fixed exposure).
+    pub sky: SkySettings,
 }
 
 impl FrameSnapshot {
@@ -133,6 +135,7 @@ impl FrameSnapshot {
             puffs: Vec::new(),
             puff_origin_ecef_m: glam::DVec3::ZERO,
             cloud_cover_fraction: 0.0,
+            sky: SkySettings::default(),
         }
     }
 }

@@ -240,6 +240,28 @@ pub enum BenchCommand {
     /// requests a frame, CIGI decoding, and (with --flood) a 100,000 PDU/s flood at 60 Hz.
     #[command(allow_negative_numbers = true)]
     Net(BenchNetArgs),
+    /// Environment: ephemeris cost per update, and the physical sky, aerial perspective and fog
+    /// against a flat sky in the same run (share of the frame).
+    Env(BenchEnvArgs),
+}
+
+#[derive(Args)]
+pub struct BenchEnvArgs {
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Terrain database; default: the demo database "demo-db", built when missing.
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Frame size.
+    #[arg(long, default_value = "640x480")]
+    pub size: String,
+    /// Frames along the pass, each drawn both ways every round.
+    #[arg(long, default_value_t = 12)]
+    pub frames: usize,
+    /// Interleaved rounds.
+    #[arg(long, default_value_t = 3)]
+    pub rounds: usize,
 }
 
 #[derive(Args)]
@@ -407,6 +429,16 @@ pub struct RenderArgs {
     /// `--eye`) the visibility is VISIBILITY_M, so valleys are fogged and hills clear.
     #[arg(long, value_name = "TOP_M,VISIBILITY_M", allow_hyphen_values = true)]
     pub ground_fog: Option<String>,
+    /// Sky: physical (atmosphere, sun disc, aerial perspective) or flat (the fog colour).
+    #[arg(long, default_value = "physical")]
+    pub sky: String,
+    /// Exposure compensation, EV (added to the exposure the natural light sets; -10..10).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure_ev: f64,
+    /// Expose for this incident-light EV (log2(lux / 2.5), -20..20) instead of the natural
+    /// light.
+    #[arg(long, allow_hyphen_values = true)]
+    pub fixed_exposure_ev: Option<f64>,
     /// Draw the terrain as a wireframe.
     #[arg(long)]
     pub wireframe: bool,

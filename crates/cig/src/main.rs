@@ -2,6 +2,7 @@
 //! configuration, calls the library crates, prints results. See `ARCHITECTURE.md`.
 
 mod bench;
+mod bench_env;
 mod bench_net;
 mod bench_particles;
 mod bench_render;
@@ -72,6 +73,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Bench(cli::BenchCommand::Particles(args)) => bench_particles::run(&args),
         cli::Command::Bench(cli::BenchCommand::Render(args)) => bench_render::run(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Net(args)) => bench_net::run(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Env(args)) => bench_env::run(&args, &config),
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),

@@ -240,6 +240,8 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "entities_drawn": stats.entities_drawn,
         "puffs_drawn": stats.puffs_drawn,
         "puff_gpu_ms": stats.puff_gpu_ms,
+        "illuminance_lux": stats.illuminance_lux,
+        "exposure_ev": stats.exposure_ev,
         "adapter": gpu.describe(),
         "size": [view.width_px, view.height_px],
     })
@@ -315,6 +317,19 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .transpose()?;
     let fog_mode = FogMode::parse(&args.fog)
         .with_context(|| format!("--fog \"{}\" is not off, linear, exp or exp2", args.fog))?;
+    let sky_model = match args.sky.to_ascii_lowercase().as_str() {
+        "physical" => cig_scene::lighting::SkyModel::Physical,
+        "flat" => cig_scene::lighting::SkyModel::Flat,
+        other => bail!("--sky \"{other}\" is not physical or flat"),
+    };
+    if !(args.exposure_ev.is_finite() && (-10.0..=10.0).contains(&args.exposure_ev)) {
+        bail!("--exposure-ev {} must lie in -10..10", args.exposure_ev);
+    }
+    if let Some(ev) = args.fixed_exposure_ev {
+        if !(ev.is_finite() && (-20.0..=20.0).contains(&ev)) {
+            bail!("--fixed-exposure-ev {ev} must lie in -20..20");
+        }
+    }
     let specs: Vec<EntitySpec> = args
         .entities
         .iter()
@@ -355,6 +370,11 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     let mut snapshot = FrameSnapshot::new(unix_time_s, vec![view]);
     snapshot.fog = Fog::from_visibility(fog_mode, args.visibility);
     snapshot.ground_fog = ground_fog;
+    snapshot.sky = cig_scene::lighting::SkySettings {
+        model: sky_model,
+        exposure_compensation_ev: args.exposure_ev,
+        fixed_exposure_ev: args.fixed_exposure_ev,
+    };
     snapshot.max_pixel_error = args.max_pixel_error;
     snapshot.wireframe = args.wireframe;
     snapshot.entities = entities;

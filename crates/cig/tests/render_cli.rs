@@ -95,6 +95,9 @@ fn bad_render_input_gives_one_line_errors() {
         (vec!["--ground-fog", "300"], "--ground-fog"),
         (vec!["--ground-fog", "300,0"], "--ground-fog"),
         (vec!["--ground-fog", "1e6,100"], "--ground-fog"),
+        (vec!["--sky", "cartoon"], "--sky"),
+        (vec!["--exposure-ev", "40"], "--exposure-ev"),
+        (vec!["--fixed-exposure-ev", "NaN"], "--fixed-exposure-ev"),
     ];
     for (extra, expect) in cases {
         let mut args = render_args(&db, &out);
@@ -200,6 +203,88 @@ fn bad_smoke_and_wind_values_give_one_line_errors() {
         assert!(line.contains(expect), "{option} {value}: {line}");
     }
     assert!(!out.exists(), "no frame written after an error");
+}
+
+#[test]
+fn render_reports_the_exposure_and_its_sky_and_exposure_options_change_the_frame() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let frame = |name: &str, extra: &[&str]| -> (Vec<u8>, Value) {
+        let out = dir.path().join(format!("{name}.png"));
+        let stats = dir.path().join(format!("{name}.json"));
+        cig()
+            .args(render_args(&db, &out))
+            .args(["--stats", &stats.display().to_string()])
+            .args(extra)
+            .assert()
+            .success();
+        let json = serde_json::from_slice(&std::fs::read(&stats).expect("stats")).expect("json");
+        (read_rgba(&out), json)
+    };
+    let mean = |px: &[u8]| px.iter().map(|&v| f64::from(v)).sum::<f64>() / px.len() as f64;
+    let (physical, stats) = frame("physical", &[]);
+    // Daylight: about 10^5 lux, EV about 15.
+    let lux = stats["illuminance_lux"].as_f64().unwrap_or(0.0);
+    assert!((5.0e4..1.5e5).contains(&lux), "{stats}");
+    let ev = stats["exposure_ev"].as_f64().unwrap_or(0.0);
+    assert!((14.0..16.5).contains(&ev), "{stats}");
+    let (brighter, _) = frame("brighter", &["--exposure-ev", "1.5"]);
+    assert!(mean(&brighter) > mean(&physical) * 1.2);
+    let (flat, _) = frame("flat", &["--sky", "flat"]);
+    assert_ne!(flat, physical);
+    // A fixed exposure for a moonlit night burns the daylight frame out.
+    let (burnt, stats) = frame("burnt", &["--fixed-exposure-ev", "-3"]);
+    assert!(mean(&burnt) > 240.0, "{}", mean(&burnt));
+    assert!(
+        (stats["exposure_ev"].as_f64().unwrap_or(0.0) + 3.0).abs() < 1e-6,
+        "{stats}"
+    );
+}
+
+#[test]
+fn bench_env_reports_the_ephemeris_cost_and_the_sky_share() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let out = cig()
+        .args(["bench", "env", "--json", "--db", &db.display().to_string()])
+        .args(["--size", "96x64", "--frames", "3", "--rounds", "1"])
+        .assert()
+        .success();
+    let json: Value = serde_json::from_slice(&out.get_output().stdout).expect("json");
+    let us = json["ephemeris_us_per_update"].as_f64().unwrap_or(0.0);
+    assert!(us > 0.0 && us < 10_000.0, "{json}");
+    assert!(
+        json["lighting_us_per_view"].as_f64().unwrap_or(0.0) > 0.0,
+        "{json}"
+    );
+    let pass = &json["passes"]["sky_and_fog"];
+    assert!(
+        pass["frame_ms_median"].as_f64().unwrap_or(0.0) > 0.0,
+        "{json}"
+    );
+    assert!(
+        pass["share_of_frame"].as_f64().is_some_and(f64::is_finite),
+        "{json}"
+    );
+    assert!(
+        json["flat_frame_ms_median"].as_f64().unwrap_or(0.0) > 0.0,
+        "{json}"
+    );
+    assert_eq!(json["frames"].as_u64(), Some(3));
+    let line = one_line_error(
+        &cig()
+            .args([
+                "bench",
+                "env",
+                "--db",
+                &db.display().to_string(),
+                "--frames",
+                "1",
+            ])
+            .assert()
+            .failure(),
+    );
+    assert!(line.contains("--frames"), "{line}");
 }
 
 #[test]

@@ -23,13 +23,30 @@ struct Globals {
     noise0: vec4<f32>,
     noise1: vec4<f32>,
     noise2: vec4<f32>,
-    // x: wireframe flag, y: exposure, z: key the background, w: pixels per unit tangent.
+    // x: wireframe flag, y: exposure, z: key the background (and a linear tone map), w: pixels
+    // per unit tangent.
     flags: vec4<f32>,
     // Ground fog layer: top height relative to the eye (m), extinction (1/m), enabled, unused.
     fog_layer: vec4<f32>,
+    // Towards the moon; w = moon elevation (degrees). Direct moonlight (light units).
+    moon_dir: vec4<f32>,
+    moon_colour: vec4<f32>,
+    // Sun's and moon's illuminance above the atmosphere (light units).
+    sun_toa: vec4<f32>,
+    moon_toa: vec4<f32>,
+    // x: eye radius from the planet's centre (m), y: sky model (0 physical, 1 flat).
+    atmos: vec4<f32>,
+    // Night-sky background radiance (π L, light units).
+    night_sky: vec4<f32>,
+    // x: encode sRGB in the tone map, y: scotopic blend, z: natural illuminance (lux).
+    tonemap: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;
+
+// The sky's keyed background (tests): pure magenta; with the key on, the tone map passes
+// linear radiance through unchanged (clamped to 1), so tests can read it back.
+const KEY_RADIANCE: f32 = 1.0;
 
 fn fog_factor(distance_m: f32) -> f32 {
     let mode = i32(g.fog.x + 0.5);
@@ -93,5 +110,6 @@ fn exposed(radiance: vec3<f32>) -> vec3<f32> {
 fn lit(albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let diffuse = max(dot(n, g.sun_dir.xyz), 0.0);
     let sky = 0.6 + 0.4 * dot(n, g.eye_up.xyz);
-    return albedo * (g.sun_colour.rgb * diffuse + g.ambient.rgb * sky);
+    let moon = max(dot(n, g.moon_dir.xyz), 0.0);
+    return albedo * (g.sun_colour.rgb * diffuse + g.moon_colour.rgb * moon + g.ambient.rgb * sky);
 }

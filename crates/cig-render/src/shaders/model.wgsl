@@ -55,5 +55,5 @@ fn fs_main(in: ModelOut) -> @location(0) vec4<f32> {
     }
     var n = normalize(in.normal);
     let colour = lit(in.colour, n);
-    return vec4<f32>(exposed(apply_fog_at(colour, in.rel)), 1.0);
+    return vec4<f32>(apply_atmosphere_exposed(exposed(colour), in.rel), 1.0);
 }

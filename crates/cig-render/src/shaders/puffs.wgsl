@@ -123,12 +123,14 @@ fn fs_main(in: PuffOut) -> Accumulated {
         n = (dir * (s0 - sqrt(r * r - b2)) - c) / r;
     }
     let sun = g.sun_colour.rgb * (0.5 + 0.5 * dot(n, g.sun_dir.xyz));
+    let moon = g.moon_colour.rgb * (0.5 + 0.5 * dot(n, g.moon_dir.xyz));
     let sky = g.ambient.rgb * (0.6 + 0.4 * dot(n, g.eye_up.xyz));
     let distance_m = max(s0, 0.0);
     let f = fog_factor(distance_m) * fog_layer_transmittance(dir * distance_m);
-    let radiance = f * in.albedo_tau.rgb * (sun + sky) + (1.0 - f) * g.fog_colour.rgb;
+    // Aerial perspective, the fog and the ground fog layer, as on the terrain.
+    let shown = apply_atmosphere_exposed(exposed(in.albedo_tau.rgb * (sun + moon + sky)), dir * distance_m);
     var out: Accumulated;
-    out.scatter = vec4<f32>(exposed(radiance) * tau, tau);
+    out.scatter = vec4<f32>(shown * tau, tau);
     out.emission = vec4<f32>(exposed(in.emission.rgb) * (f * (1.0 - exp(-tau))), 0.0);
     return out;
 }

@@ -1,3 +1,7 @@
+// The sky: the sky-view table along each pixel's direction, the sun's disc (limb darkened,
+// its radiance the solar illuminance through the atmosphere's transmittance), the ground fog
+// layer. The flat sky model paints the fog colour.
+
 struct SkyOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) ndc: vec2<f32>,
@@ -12,40 +16,49 @@ fn vs_main(@builtin(vertex_index) i: u32) -> SkyOut {
     return out;
 }
 
+// Limb darkening coefficient of the sun's disc, I(μ) = 1 - u (1 - μ) (a linear law near 550 nm).
+const SUN_LIMB_U: f32 = 0.6;
+
 @fragment
 fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
     if (g.flags.z > 0.5) {
-        return vec4<f32>(1.0, 0.0, 1.0, 1.0);
+        // The key colour, bright enough that the tone map passes it as pure magenta.
+        return vec4<f32>(KEY_RADIANCE, 0.0, KEY_RADIANCE, 1.0);
     }
     let t = g.tangents;
     let x_tan = mix(-t.x, t.y, in.ndc.x * 0.5 + 0.5);
     let y_tan = mix(-t.z, t.w, in.ndc.y * 0.5 + 0.5);
     let dir = normalize(g.cam_forward.xyz + g.cam_right.xyz * x_tan + g.cam_up.xyz * y_tan);
-    // Elevation above the apparent (dipped) horizon.
-    let elevation = asin(clamp(dot(dir, g.eye_up.xyz), -1.0, 1.0)) + g.eye_up.w;
-    var colour: vec3<f32>;
-    if (elevation >= 0.0) {
-        let k = pow(clamp(elevation / 1.5707963, 0.0, 1.0), 0.45);
-        colour = mix(g.sky_horizon.rgb, g.sky_zenith.rgb, k);
-    } else {
-        colour = g.sky_horizon.rgb * mix(0.8, 0.35, clamp(-elevation * 6.0, 0.0, 1.0));
-    }
-    let cos_sun = dot(dir, g.sun_dir.xyz);
-    let glow = pow(max(cos_sun, 0.0), 64.0) * 0.5 + pow(max(cos_sun, 0.0), 8.0) * 0.12;
-    colour += g.sun_colour.rgb * glow;
-    // Sun disc (0.53 degree across).
-    if (cos_sun > 0.999957) {
-        colour = max(colour, g.sun_colour.rgb * 4.0);
+    var colour = exposed(g.fog_colour.rgb);
+    if (g.atmos.y < 0.5) {
+        colour = sky_radiance(dir);
+        let r = eye_radius();
+        let mu = dot(dir, g.eye_up.xyz);
+        // What the air lets through toward space along this ray (0 into the ground).
+        let view_t = transmittance_to_top(r, mu);
+        // The sun's disc: mean radiance E / (π α²), limb darkened, through the atmosphere.
+        let cos_sun = dot(dir, g.sun_dir.xyz);
+        let cos_radius = cos(ATM_SUN_RADIUS);
+        if (cos_sun > cos_radius) {
+            let x = sqrt(max(1.0 - cos_sun * cos_sun, 0.0)) / sin(ATM_SUN_RADIUS);
+            let mu_limb = sqrt(max(1.0 - x * x, 0.0));
+            let limb = (1.0 - SUN_LIMB_U * (1.0 - mu_limb)) / (1.0 - SUN_LIMB_U / 3.0);
+            let solid_angle = PI * ATM_SUN_RADIUS * ATM_SUN_RADIUS;
+            // Shown as π L (the contract's emitter convention).
+            colour += exposed(g.sun_toa.rgb * view_t * (limb / solid_angle));
+        }
+        // Moon and stars (celestial): add `colour += view_t * celestial_radiance(dir);` here,
+        // with its pipeline's @group(2); they are seen through the air and under the fog below.
     }
     // Inside the ground fog layer, the sky is seen through the rest of it: up to its top for
     // rays that climb out, through all of it for the others.
     if (g.fog_layer.z > 0.5 && g.fog_layer.x > 0.0) {
         let rise = dot(dir, g.eye_up.xyz);
-        var t = 0.0;
+        var through = 0.0;
         if (rise > 1e-4) {
-            t = exp(-g.fog_layer.y * g.fog_layer.x / rise);
+            through = exp(-g.fog_layer.y * g.fog_layer.x / rise);
         }
-        colour = t * colour + (1.0 - t) * g.fog_colour.rgb;
+        colour = through * colour + (1.0 - through) * exposed(g.fog_colour.rgb);
     }
-    return vec4<f32>(exposed(colour), 1.0);
+    return vec4<f32>(min(colour, vec3<f32>(60000.0)), 1.0);
 }

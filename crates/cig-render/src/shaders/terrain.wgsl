@@ -122,5 +122,5 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let h = normalize(view_dir + g.sun_dir.xyz);
     let spec = pow(max(dot(n, h), 0.0), 80.0) * base.a;
     colour += g.sun_colour.rgb * spec * 0.8;
-    return vec4<f32>(exposed(apply_fog_at(colour, in.rel)), 1.0);
+    return vec4<f32>(apply_atmosphere_exposed(exposed(colour), in.rel), 1.0);
 }

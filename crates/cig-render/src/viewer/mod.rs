@@ -696,6 +696,7 @@ impl App {
         };
         snapshot.max_pixel_error = self.panel.max_pixel_error;
         snapshot.wireframe = self.panel.wireframe;
+        snapshot.sky.exposure_compensation_ev += self.panel.exposure_compensation_ev;
         let last = LastFrame {
             snapshot,
             paint_jobs,

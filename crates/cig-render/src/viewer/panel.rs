@@ -89,6 +89,8 @@ pub struct PanelState {
     pub ground_fog: bool,
     pub ground_fog_top_m: f64,
     pub ground_fog_visibility_m: f64,
+    /// Added to the automatic exposure, EV.
+    pub exposure_compensation_ev: f64,
     /// Heat release of the next plume the operator starts, MW.
     pub plume_heat_mw: f64,
     /// The next plume is a fire (flame) rather than smoke.
@@ -155,6 +157,7 @@ impl PanelState {
             ground_fog: false,
             ground_fog_top_m: 300.0,
             ground_fog_visibility_m: 300.0,
+            exposure_compensation_ev: 0.0,
             plume_heat_mw: 5.0,
             plume_flame: false,
             wind_speed_mps: 3.0,
@@ -216,7 +219,7 @@ impl PanelState {
             .show(ctx, |ui| {
                 self.time_ui(ui);
                 ui.separator();
-                self.atmosphere_ui(ui);
+                self.atmosphere_ui(ui, info);
                 ui.separator();
                 self.detail_ui(ui, info);
                 ui.separator();
@@ -287,8 +290,17 @@ impl PanelState {
         });
     }
 
-    fn atmosphere_ui(&mut self, ui: &mut egui::Ui) {
+    fn atmosphere_ui(&mut self, ui: &mut egui::Ui, info: &FrameInfo) {
         ui.strong("Atmosphere");
+        ui.label(format!(
+            "natural light {:.3} lux, exposure EV {:.1}",
+            info.stats.illuminance_lux, info.stats.exposure_ev
+        ));
+        ui.add(
+            egui::Slider::new(&mut self.exposure_compensation_ev, -4.0..=4.0)
+                .text("exposure compensation")
+                .suffix(" EV"),
+        );
         ui.add(
             egui::Slider::new(
                 &mut self.visibility_m,

@@ -1,0 +1,460 @@
+//! The physical sky on the GPU: the atmosphere's tables, the per-frame sky-view table, and the
+//! frame's exposure and tone map.
+//!
+//! Algorithm: S. Hillaire, "A Scalable and Production Ready Sky and Atmosphere Rendering
+//! Technique" (EGSR 2020). The transmittance (256 × 64, Bruneton's mapping) and
+//! multiple-scattering (32 × 32) tables are computed once on the CPU by
+//! [`cig_environment::atmosphere`] and uploaded as half floats. Each frame a 192 × 108 sky-view
+//! table (latitude concentrated at the horizon, longitude from the sun's azimuth, full circle
+//! so the moon-lit sky fits too) is ray marched in 24 steps by a full-screen fragment pass; the
+//! sky pass, the aerial perspective of terrain and models and the horizon fog colour sample
+//! it (`shaders/atmosphere.wgsl`). Aerial perspective: the transmittance between the eye and a
+//! surface is the flat-layer closed form of the exponential Rayleigh and Mie profiles, and the
+//! in-scattered light is the sky-view radiance along the ray times the share of the whole
+//! ray's in-scattering that lies in front of the surface, `(1 − T(d)) / (1 − T(ray))` — one
+//! table sample instead of Hillaire's 32³ froxel volume. The scene is drawn into a half-float
+//! target as pre-exposed radiance; [`ToneMap`] maps it to the caller's target (scotopic blue
+//! shift at night, ACES filmic curve, sRGB encoding where the target is not sRGB).
+//!
+//! Limits: the aerial perspective's in-scattering assumes it grows along the ray as the
+//! extinction does (good for horizontal and descending rays, too bright in the earth's shadow
+//! at dusk by at most the shadowed share); no volumetric shadows (mountains do not shade the
+//! air); the moon-lit sky uses the sun's spectrum.
+
+use crate::gpu::Gpu;
+use cig_environment::atmosphere::{Atmosphere, Lut, SUN_ANGULAR_RADIUS_DEG};
+
+/// Format of the scene target (pre-exposed linear radiance).
+pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Sky-view table size (Hillaire: 192 × 108).
+pub const SKY_VIEW_SIZE: (u32, u32) = (192, 108);
+
+/// The WGSL constants of the Earth's atmosphere and the table sizes, from the same values the
+/// CPU model uses.
+pub(crate) fn wgsl_constants() -> String {
+    let p = cig_environment::AtmosphereParams::EARTH;
+    let v3 = |v: [f64; 3]| format!("vec3<f32>({:e}, {:e}, {:e})", v[0], v[1], v[2]);
+    format!(
+        "const ATM_BOTTOM: f32 = {:.1};\nconst ATM_TOP: f32 = {:.1};\n\
+         const ATM_RAYLEIGH: vec3<f32> = {};\nconst ATM_RAYLEIGH_H: f32 = {:.1};\n\
+         const ATM_MIE_SCAT: f32 = {:e};\nconst ATM_MIE_EXT: f32 = {:e};\n\
+         const ATM_MIE_H: f32 = {:.1};\nconst ATM_MIE_G: f32 = {};\n\
+         const ATM_OZONE: vec3<f32> = {};\nconst ATM_OZONE_PEAK: f32 = {:.1};\n\
+         const ATM_OZONE_HALF: f32 = {:.1};\nconst ATM_SUN_RADIUS: f32 = {:e};\n\
+         const SKY_VIEW_SIZE: vec2<f32> = vec2<f32>({:.1}, {:.1});\n",
+        p.bottom_radius_m,
+        p.top_radius_m,
+        v3(p.rayleigh_scattering_per_m),
+        p.rayleigh_scale_height_m,
+        p.mie_scattering_per_m,
+        p.mie_extinction_per_m,
+        p.mie_scale_height_m,
+        p.mie_g,
+        v3(p.ozone_absorption_per_m),
+        p.ozone_peak_altitude_m,
+        p.ozone_half_width_m,
+        SUN_ANGULAR_RADIUS_DEG.to_radians(),
+        SKY_VIEW_SIZE.0,
+        SKY_VIEW_SIZE.1,
+    )
+}
+
+/// A shader of common.wgsl, the atmosphere's constants and functions, and `body`.
+pub(crate) fn atmosphere_shader(gpu: &Gpu, label: &str, body: &str) -> wgpu::ShaderModule {
+    let source = format!(
+        "{}\n{}\n{}\n{}",
+        include_str!("shaders/common.wgsl"),
+        wgsl_constants(),
+        include_str!("shaders/atmosphere.wgsl"),
+        body
+    );
+    gpu.device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        })
+}
+
+fn upload_lut(gpu: &Gpu, label: &str, lut: &Lut) -> wgpu::TextureView {
+    let texels: Vec<half_bits::F16x4> = lut.texels.iter().map(|t| half_bits::pack(*t)).collect();
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: lut.width as u32,
+            height: lut.height as u32,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: HDR_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    gpu.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytemuck::cast_slice(&texels),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(lut.width as u32 * 8),
+            rows_per_image: Some(lut.height as u32),
+        },
+        wgpu::Extent3d {
+            width: lut.width as u32,
+            height: lut.height as u32,
+            depth_or_array_layers: 1,
+        },
+    );
+    texture.create_view(&Default::default())
+}
+
+/// IEEE half floats without a dependency: round-to-nearest-even conversion of finite values.
+mod half_bits {
+    pub type F16x4 = [u16; 4];
+
+    pub fn pack(v: [f32; 4]) -> F16x4 {
+        v.map(to_f16)
+    }
+
+    pub fn to_f16(x: f32) -> u16 {
+        let bits = x.to_bits();
+        let sign = ((bits >> 16) & 0x8000) as u16;
+        if !x.is_finite() {
+            return sign | 0x7c00;
+        }
+        let a = x.abs();
+        if a >= 65504.0 {
+            return sign | 0x7bff;
+        }
+        if a < 6.103_515_6e-5 {
+            // Subnormal: units of 2^-24.
+            let m = (a * 16_777_216.0).round_ties_even() as u16;
+            return sign | m;
+        }
+        let exp = ((bits >> 23) & 0xff) as i32 - 127 + 15;
+        let mant = bits & 0x7f_ffff;
+        let mut h = ((exp as u32) << 10) | (mant >> 13);
+        let rest = mant & 0x1fff;
+        if rest > 0x1000 || (rest == 0x1000 && (h & 1) == 1) {
+            h += 1;
+        }
+        sign | h as u16
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::to_f16;
+
+        #[test]
+        fn half_floats_match_known_encodings() {
+            assert_eq!(to_f16(1.0), 0x3c00);
+            assert_eq!(to_f16(-2.0), 0xc000);
+            assert_eq!(to_f16(0.5), 0x3800);
+            assert_eq!(to_f16(65504.0), 0x7bff);
+            assert_eq!(to_f16(1e9), 0x7bff);
+            assert_eq!(to_f16(0.0), 0);
+            assert_eq!(to_f16(5.960_464_5e-8), 1);
+            assert_eq!(to_f16(0.333_333_34), 0x3555);
+        }
+    }
+}
+
+/// The atmosphere's GPU resources: the tables and the sky-view pass.
+pub(crate) struct AtmosphereGpu {
+    /// Layout of `@group(1)` of the sky, terrain and model pipelines (and the sky-view pass).
+    pub layout: wgpu::BindGroupLayout,
+    /// Group 1 for the scene's pipelines (samples the sky-view table).
+    pub scene_bind: wgpu::BindGroup,
+    sky_view: wgpu::TextureView,
+    /// Group 1 for the sky-view pass (a placeholder in the sky-view slot).
+    lut_bind: wgpu::BindGroup,
+    sky_view_pipeline: wgpu::RenderPipeline,
+    globals_bind: wgpu::BindGroup,
+}
+
+fn sampled_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+        count: None,
+    }
+}
+
+impl AtmosphereGpu {
+    /// Uploads the tables (computed once per process) and builds the sky-view pass;
+    /// `globals_layout` and `globals_bind` are group 0 (the frame's `Globals`).
+    pub fn new(
+        gpu: &Gpu,
+        globals_layout: &wgpu::BindGroupLayout,
+        globals_bind: wgpu::BindGroup,
+    ) -> AtmosphereGpu {
+        let device = &gpu.device;
+        let atmosphere = Atmosphere::earth();
+        let transmittance = upload_lut(gpu, "transmittance table", &atmosphere.transmittance);
+        let multi = upload_lut(
+            gpu,
+            "multiple-scattering table",
+            &atmosphere.multi_scattering,
+        );
+        let placeholder = upload_lut(
+            gpu,
+            "sky-view placeholder",
+            &Lut {
+                width: 1,
+                height: 1,
+                texels: vec![[0.0; 4]],
+            },
+        );
+        let sky_view = crate::gpu::render_target(
+            device,
+            "sky-view table",
+            SKY_VIEW_SIZE,
+            HDR_FORMAT,
+            1,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+            &[],
+        )
+        .create_view(&Default::default());
+        let clamp = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("atmosphere tables"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let wrap = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("sky-view table"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("atmosphere"),
+            entries: &[
+                sampled_entry(0),
+                sampled_entry(1),
+                sampled_entry(2),
+                sampler_entry(3),
+                sampler_entry(4),
+            ],
+        });
+        let bind = |label, first: &wgpu::TextureView| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(first),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&transmittance),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(&multi),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::Sampler(&clamp),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::Sampler(&wrap),
+                    },
+                ],
+            })
+        };
+        let scene_bind = bind("atmosphere (scene)", &sky_view);
+        let lut_bind = bind("atmosphere (sky-view pass)", &placeholder);
+        let module = atmosphere_shader(gpu, "sky view", include_str!("shaders/sky_view.wgsl"));
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("sky view"),
+            bind_group_layouts: &[Some(globals_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let sky_view_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("sky view"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: HDR_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        AtmosphereGpu {
+            layout,
+            scene_bind,
+            sky_view,
+            lut_bind,
+            sky_view_pipeline,
+            globals_bind,
+        }
+    }
+
+    /// Records the sky-view table's pass (the frame's globals must be written).
+    pub fn encode_sky_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("sky view"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.sky_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes,
+            ..Default::default()
+        });
+        pass.set_pipeline(&self.sky_view_pipeline);
+        pass.set_bind_group(0, &self.globals_bind, &[]);
+        pass.set_bind_group(1, &self.lut_bind, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
+
+/// The tone-map pass: the HDR scene target to the caller's target.
+pub(crate) struct ToneMap {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl ToneMap {
+    pub fn new(
+        gpu: &Gpu,
+        globals_layout: &wgpu::BindGroupLayout,
+        target: wgpu::TextureFormat,
+    ) -> ToneMap {
+        let device = &gpu.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tone map"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let module = crate::renderer::shader(gpu, "tone map", include_str!("shaders/tonemap.wgsl"));
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("tone map"),
+            bind_group_layouts: &[Some(globals_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("tone map"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: target,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        ToneMap { layout, pipeline }
+    }
+
+    /// The bind group that reads `scene` (the resolved HDR target).
+    pub fn bind(&self, gpu: &Gpu, scene: &wgpu::TextureView) -> wgpu::BindGroup {
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("tone map"),
+            layout: &self.layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(scene),
+            }],
+        })
+    }
+
+    /// Records the tone map of the scene (bound by `scene_bind`) into `target`.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        globals_bind: &wgpu::BindGroup,
+        scene_bind: &wgpu::BindGroup,
+        target: &wgpu::TextureView,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("tone map"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes,
+            ..Default::default()
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, globals_bind, &[]);
+        pass.set_bind_group(1, scene_bind, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

@@ -1,0 +1,182 @@
+// The physical atmosphere on the GPU (included after common.wgsl by the sky, sky-view,
+// terrain and model shaders; the ATM_* constants are generated from
+// cig_environment::AtmosphereParams::EARTH by crate::atmosphere). Same maths as
+// cig_environment::atmosphere (Bruneton 2017 mapping, Hillaire 2020 sky-view table).
+
+@group(1) @binding(0) var sky_view_lut: texture_2d<f32>;
+@group(1) @binding(1) var transmittance_lut: texture_2d<f32>;
+@group(1) @binding(2) var multi_scattering_lut: texture_2d<f32>;
+@group(1) @binding(3) var lut_sampler: sampler;
+@group(1) @binding(4) var sky_view_sampler: sampler;
+
+const PI: f32 = 3.14159265;
+
+// The unit range [0, 1] onto texel centres (first and last texel hold the ends).
+fn unit_to_tex(u: f32, n: f32) -> f32 {
+    return 0.5 / n + clamp(u, 0.0, 1.0) * (1.0 - 1.0 / n);
+}
+
+fn distance_to_top(r: f32, mu: f32) -> f32 {
+    let disc = r * r * (mu * mu - 1.0) + ATM_TOP * ATM_TOP;
+    return max(-r * mu + sqrt(max(disc, 0.0)), 0.0);
+}
+
+// Distance to the ground, or -1 when the ray misses it.
+fn distance_to_ground(r: f32, mu: f32) -> f32 {
+    let disc = r * r * (mu * mu - 1.0) + ATM_BOTTOM * ATM_BOTTOM;
+    if (mu < 0.0 && disc >= 0.0) {
+        return max(-r * mu - sqrt(disc), 0.0);
+    }
+    return -1.0;
+}
+
+fn transmittance_uv(r: f32, mu: f32) -> vec2<f32> {
+    let h = sqrt(ATM_TOP * ATM_TOP - ATM_BOTTOM * ATM_BOTTOM);
+    let rho = sqrt(max(r * r - ATM_BOTTOM * ATM_BOTTOM, 0.0));
+    let d = distance_to_top(r, mu);
+    let d_min = ATM_TOP - r;
+    let d_max = rho + h;
+    let x_mu = (d - d_min) / max(d_max - d_min, 1.0);
+    let x_r = rho / h;
+    let size = vec2<f32>(textureDimensions(transmittance_lut));
+    return vec2<f32>(unit_to_tex(x_mu, size.x), unit_to_tex(x_r, size.y));
+}
+
+// Transmittance from radius r along zenith cosine mu to the top (0 into the ground).
+fn transmittance_to_top(r: f32, mu: f32) -> vec3<f32> {
+    if (distance_to_ground(r, mu) >= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return textureSampleLevel(transmittance_lut, lut_sampler, transmittance_uv(r, mu), 0.0).rgb;
+}
+
+// Sunlight reaching radius r with the sun at zenith cosine mu_s, the disc fading through the
+// horizon.
+fn sun_transmittance(r: f32, mu_s: f32) -> vec3<f32> {
+    let sin_h = ATM_BOTTOM / r;
+    let cos_h = -sqrt(max(1.0 - sin_h * sin_h, 0.0));
+    let visible = clamp((mu_s - cos_h) / (2.0 * ATM_SUN_RADIUS * sin_h) + 0.5, 0.0, 1.0);
+    let t = textureSampleLevel(transmittance_lut, lut_sampler, transmittance_uv(r, max(mu_s, cos_h)), 0.0).rgb;
+    return t * visible;
+}
+
+fn multi_scattering(r: f32, mu_s: f32) -> vec3<f32> {
+    let size = vec2<f32>(textureDimensions(multi_scattering_lut));
+    let uv = vec2<f32>(
+        unit_to_tex(mu_s * 0.5 + 0.5, size.x),
+        unit_to_tex((r - ATM_BOTTOM) / (ATM_TOP - ATM_BOTTOM), size.y),
+    );
+    return textureSampleLevel(multi_scattering_lut, lut_sampler, uv, 0.0).rgb;
+}
+
+// Eye radius from the planet's centre.
+fn eye_radius() -> f32 {
+    return g.atmos.x;
+}
+
+// The sky-view frame: local up, the horizontal toward the sun's azimuth and the third axis.
+fn sky_frame() -> mat3x3<f32> {
+    let up = g.eye_up.xyz;
+    var toward = g.sun_dir.xyz - up * dot(g.sun_dir.xyz, up);
+    if (dot(toward, toward) < 1e-8) {
+        var other = vec3<f32>(0.0, 0.0, 1.0);
+        if (abs(up.z) > 0.9) {
+            other = vec3<f32>(1.0, 0.0, 0.0);
+        }
+        toward = other - up * dot(other, up);
+    }
+    let x = normalize(toward);
+    return mat3x3<f32>(x, cross(up, x), up);
+}
+
+// Hillaire's latitude mapping (concentrated at the horizon) for the eye's radius.
+fn horizon_zenith_angle(r: f32) -> f32 {
+    let cos_beta = sqrt(max(r * r - ATM_BOTTOM * ATM_BOTTOM, 0.0)) / r;
+    return PI - acos(clamp(cos_beta, -1.0, 1.0));
+}
+
+// Sky-view table coordinates of a world direction.
+fn sky_view_uv(dir: vec3<f32>) -> vec2<f32> {
+    let f = sky_frame();
+    let local = vec3<f32>(dot(dir, f[0]), dot(dir, f[1]), dot(dir, f[2]));
+    let zenith = acos(clamp(local.z, -1.0, 1.0));
+    let zh = horizon_zenith_angle(eye_radius());
+    let beta = PI - zh;
+    var v: f32;
+    if (zenith < zh) {
+        v = 0.5 * (1.0 - sqrt(max(1.0 - zenith / zh, 0.0)));
+    } else {
+        v = 0.5 + 0.5 * sqrt(clamp((zenith - zh) / beta, 0.0, 1.0));
+    }
+    let azimuth = atan2(local.y, local.x);
+    return vec2<f32>(fract(azimuth / (2.0 * PI) + 1.0), v);
+}
+
+// World direction of sky-view table coordinates.
+fn sky_view_dir(uv: vec2<f32>) -> vec3<f32> {
+    let zh = horizon_zenith_angle(eye_radius());
+    let beta = PI - zh;
+    var zenith: f32;
+    if (uv.y < 0.5) {
+        let c = 1.0 - 2.0 * uv.y;
+        zenith = zh * (1.0 - c * c);
+    } else {
+        let c = uv.y * 2.0 - 1.0;
+        zenith = zh + beta * c * c;
+    }
+    let azimuth = uv.x * 2.0 * PI;
+    let f = sky_frame();
+    let s = sin(zenith);
+    return normalize(f[0] * (s * cos(azimuth)) + f[1] * (s * sin(azimuth)) + f[2] * cos(zenith));
+}
+
+// Pre-exposed sky radiance (π L × light units × exposure) along a world direction.
+fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
+    return textureSampleLevel(sky_view_lut, sky_view_sampler, sky_view_uv(dir), 0.0).rgb;
+}
+
+// Optical depth along a straight path of length d from altitude h0 to h1 (flat-layer
+// exponential profiles, exact for a plane-parallel atmosphere; ozone omitted near the ground).
+fn optical_depth(h0: f32, h1: f32, d: f32) -> vec3<f32> {
+    let dh = h1 - h0;
+    var kr = d;
+    var km = d;
+    if (abs(dh) > 1.0) {
+        kr = d * ATM_RAYLEIGH_H / dh * (1.0 - exp(-dh / ATM_RAYLEIGH_H));
+        km = d * ATM_MIE_H / dh * (1.0 - exp(-dh / ATM_MIE_H));
+    }
+    let h = max(h0, 0.0);
+    return ATM_RAYLEIGH * exp(-h / ATM_RAYLEIGH_H) * kr + vec3<f32>(ATM_MIE_EXT * exp(-h / ATM_MIE_H) * km);
+}
+
+// Aerial perspective on a pre-exposed surface colour at the eye-relative point `rel`: the
+// atmosphere's transmittance over the path and the in-scattered light, taken as the sky-view
+// radiance along the ray scaled by the fraction of the whole ray's in-scattering that lies in
+// front of the surface, (1 - T(d)) / (1 - T(ray)). Then the classic fog and the ground fog
+// layer toward the horizon sky of that azimuth.
+fn apply_atmosphere_exposed(exposed_colour: vec3<f32>, rel: vec3<f32>) -> vec3<f32> {
+    let d = length(rel);
+    let dir = rel / max(d, 1e-3);
+    var colour = exposed_colour;
+    var fog_colour = exposed(g.fog_colour.rgb);
+    if (g.atmos.y < 0.5) {
+        let r = eye_radius();
+        let h0 = r - ATM_BOTTOM;
+        let h1 = h0 + height_above_eye(rel);
+        let t = exp(-optical_depth(h0, h1, d));
+        let mu = dot(dir, g.eye_up.xyz);
+        let ground = distance_to_ground(r, mu);
+        var t_ray: vec3<f32>;
+        if (ground >= 0.0) {
+            t_ray = exp(-optical_depth(h0, 0.0, ground));
+        } else {
+            t_ray = transmittance_to_top(r, mu);
+        }
+        let share = clamp((1.0 - t) / max(1.0 - t_ray, vec3<f32>(1e-4)), vec3<f32>(0.0), vec3<f32>(1.0));
+        colour = colour * t + sky_radiance(dir) * share;
+        let horizontal = normalize(dir - g.eye_up.xyz * (mu - 0.02));
+        fog_colour = sky_radiance(horizontal);
+    }
+    let f = fog_factor(d) * fog_layer_transmittance(rel);
+    return f * colour + (1.0 - f) * fog_colour;
+}

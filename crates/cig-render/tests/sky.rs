@@ -1,0 +1,237 @@
+//! The physical sky, exposure and aerial perspective through the real renderer (lavapipe when
+//! there is no GPU): behaviour compared within each test, never absolute colours.
+
+mod common;
+
+use cig_geo::{EnuFrame, Geodetic};
+use cig_render::Image;
+use cig_scene::lighting::{Fog, FogMode, SkyModel};
+use cig_scene::models::{Model, ModelMesh};
+use cig_scene::{EntityInstance, FrameSnapshot, Hpr};
+use common::*;
+use glam::{DVec3, Vec3};
+
+fn unix(y: i32, m: u32, d: u32, h: f64) -> f64 {
+    cig_environment::UtcTime::from_calendar(y, m, d, 0, 0, 0.0)
+        .expect("a date")
+        .unix_seconds()
+        + h * 3600.0
+}
+
+/// The sun's (azimuth, altitude) in degrees at `eye` and `unix_s`.
+fn sun_at(eye: Geodetic, unix_s: f64) -> (f64, f64) {
+    let observer =
+        cig_environment::Observer::new(eye.lat_deg, eye.lon_deg, eye.alt_m).expect("observer");
+    let time = cig_environment::UtcTime::from_unix_seconds(unix_s).expect("time");
+    let e = cig_environment::ephemeris(&observer, time);
+    (e.sun.azimuth_deg, e.sun.altitude_deg)
+}
+
+/// The first minute after `from_unix_s` at which the sun sinks below `altitude_deg`.
+fn sun_sinks_below(eye: Geodetic, from_unix_s: f64, altitude_deg: f64) -> f64 {
+    (0..24 * 60)
+        .map(|m| from_unix_s + 60.0 * f64::from(m))
+        .find(|&t| sun_at(eye, t).1 < altitude_deg)
+        .expect("the sun sets within a day")
+}
+
+fn pixel(image: &Image, x: u32, y: u32) -> [f64; 3] {
+    let i = ((y * image.width + x) * 4) as usize;
+    [0, 1, 2].map(|c| f64::from(image.rgba[i + c]))
+}
+
+fn mean(image: &Image) -> f64 {
+    let n = image.rgba.len() / 4;
+    image
+        .rgba
+        .chunks_exact(4)
+        .map(|p| (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2])) / 3.0)
+        .sum::<f64>()
+        / n as f64
+}
+
+#[test]
+fn the_sky_is_blue_overhead_at_noon_and_red_toward_the_setting_sun() {
+    let db = sea();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let eye = Geodetic::new(36.0, -122.0, 10.0);
+    let noon = unix(2026, 6, 21, 20.1);
+    let mut snapshot = FrameSnapshot::new(noon, vec![view(eye, (0.0, 80.0, 0.0), 40.0, (96, 64))]);
+    snapshot.fog = Fog::from_visibility(FogMode::Off, 1e6);
+    let (up, _) = render(&mut renderer, &cache, &snapshot, false);
+    write_png(&up, &out_dir().join("sky_noon_up.png"));
+    let [r, _, b] = pixel(&up, 48, 32);
+    assert!(b > r + 40.0, "overhead at noon: red {r}, blue {b}");
+
+    // Sunset: the sun half a degree up; look at it from just above the horizon.
+    let sunset = sun_sinks_below(eye, unix(2026, 6, 22, 1.0), 0.5);
+    let (azimuth, _) = sun_at(eye, sunset);
+    snapshot.unix_time_s = sunset;
+    snapshot.views[0] = view(eye, (azimuth, 3.0, 0.0), 40.0, (96, 64));
+    let (toward, _) = render(&mut renderer, &cache, &snapshot, false);
+    write_png(&toward, &out_dir().join("sky_sunset_toward.png"));
+    // A column beside the sun, from the horizon up: the low sky glows red.
+    let [r, _, b] = pixel(&toward, 20, 34);
+    assert!(r > b + 20.0, "toward the setting sun: red {r}, blue {b}");
+    let flat = {
+        snapshot.sky.model = SkyModel::Flat;
+        render(&mut renderer, &cache, &snapshot, false).0
+    };
+    assert!(
+        mean(&toward) != mean(&flat),
+        "the flat sky differs from the physical one"
+    );
+}
+
+#[test]
+fn exposure_orders_noon_dusk_moonlight_and_a_moonless_night_and_the_moon_lights_the_ground() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let site = Geodetic::new(36.0159, -121.1854, 0.0);
+    let frame = EnuFrame::new(site);
+    let g = frame.enu_to_geodetic(DVec3::new(-1500.0, -1500.0, 0.0));
+    let ground = cig_terrain::QuerySession::new(cache.clone())
+        .hot(g.lat_deg, g.lon_deg)
+        .expect("inside the test database")
+        .height_ellipsoid_m();
+    let eye = Geodetic::new(g.lat_deg, g.lon_deg, ground + 250.0);
+    let v = view(eye, (40.0, -10.0, 0.0), 60.0, (96, 64));
+    let shot = |renderer: &mut cig_render::Renderer, unix_s: f64| {
+        let snapshot = FrameSnapshot::new(unix_s, vec![v]);
+        render(renderer, &cache, &snapshot, false).0
+    };
+    let noon_s = unix(2024, 6, 21, 20.0);
+    // Civil dusk (sun 5 degrees down) that evening.
+    let dusk_s = sun_sinks_below(site, unix(2024, 6, 22, 1.0), -5.0);
+    // Full moon 2024-06-22 01:08 UTC, high at local midnight; new moon 2024-07-05 22:57 UTC.
+    let moonlit_s = unix(2024, 6, 22, 8.0);
+    let moonless_s = unix(2024, 7, 6, 8.0);
+    let noon = shot(&mut renderer, noon_s);
+    let dusk = shot(&mut renderer, dusk_s);
+    let moonlit = shot(&mut renderer, moonlit_s);
+    let moonless = shot(&mut renderer, moonless_s);
+    for (name, image) in [
+        ("noon", &noon),
+        ("dusk", &dusk),
+        ("moonlit", &moonlit),
+        ("moonless", &moonless),
+    ] {
+        write_png(image, &out_dir().join(format!("exposure_{name}.png")));
+    }
+    // The ground (the lower half of the frame): the sky is always brighter than the ground it
+    // lights at dusk, so the whole frame's mean depends on the framing.
+    let ground = |i: &Image| {
+        let half = (i.rgba.len() / 8) * 4;
+        mean(&Image {
+            width: i.width,
+            height: i.height / 2,
+            rgba: i.rgba[half..].to_vec(),
+        })
+    };
+    let (n, d, m, k) = (
+        ground(&noon),
+        ground(&dusk),
+        ground(&moonlit),
+        ground(&moonless),
+    );
+    assert!(
+        n > d && d > m && m > k,
+        "noon {n}, dusk {d}, moonlit {m}, moonless {k}"
+    );
+    // A moonlit night is readable, not black.
+    assert!(m > 25.0, "moonlit mean {m}");
+    // The night is bluer than the day (the scotopic shift).
+    let blueness = |i: &Image| {
+        i.rgba
+            .chunks_exact(4)
+            .map(|p| f64::from(p[2]) - f64::from(p[0]))
+            .sum::<f64>()
+            / (i.rgba.len() / 4) as f64
+    };
+    assert!(
+        blueness(&moonlit) > blueness(&noon),
+        "{} vs {}",
+        blueness(&moonlit),
+        blueness(&noon)
+    );
+}
+
+#[test]
+fn exposure_compensation_and_a_fixed_exposure_act_on_the_frame() {
+    let db = sea();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let eye = Geodetic::new(36.0, -122.0, 20.0);
+    let v = view(eye, (0.0, 0.0, 0.0), 60.0, (64, 48));
+    let mut snapshot = FrameSnapshot::new(unix(2024, 7, 6, 8.0), vec![v]);
+    let (auto, _) = render(&mut renderer, &cache, &snapshot, false);
+    snapshot.sky.exposure_compensation_ev = 2.0;
+    let (brighter, _) = render(&mut renderer, &cache, &snapshot, false);
+    assert!(
+        mean(&brighter) > mean(&auto) * 1.3,
+        "{} vs {}",
+        mean(&brighter),
+        mean(&auto)
+    );
+    // Exposed for daylight, the moonless night is black.
+    snapshot.sky.exposure_compensation_ev = 0.0;
+    snapshot.sky.fixed_exposure_ev = Some(cig_scene::lighting::exposure_value(1.0e5));
+    let (daylight, _) = render(&mut renderer, &cache, &snapshot, false);
+    assert!(mean(&daylight) < 2.0, "{}", mean(&daylight));
+}
+
+fn white_block() -> Model {
+    let mut mesh = ModelMesh::default();
+    mesh.add_box(
+        Vec3::new(-150.0, -150.0, 0.0),
+        Vec3::new(150.0, 150.0, 300.0),
+        [180, 180, 180, 255],
+    );
+    Model::new("block", vec![mesh.clone(), mesh.clone(), mesh])
+}
+
+#[test]
+fn aerial_perspective_takes_far_objects_toward_the_sky_colour() {
+    let db = sea();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    renderer.set_models(vec![white_block()]);
+    let eye = Geodetic::new(36.0, -122.0, 150.0);
+    let frame = EnuFrame::new(Geodetic::new(36.0, -122.0, 0.0));
+    // The same block 3 km and 30 km north, seen at the same size (fields of view in ratio).
+    let measure = |renderer: &mut cig_render::Renderer, distance_m: f64, fov_deg: f64| {
+        let at = frame.enu_to_geodetic(DVec3::new(0.0, distance_m, 0.0));
+        let mut snapshot = FrameSnapshot::new(
+            unix(2026, 6, 21, 20.0),
+            vec![view(eye, (0.0, 0.0, 0.0), fov_deg, (64, 64))],
+        );
+        snapshot.fog = Fog::from_visibility(FogMode::Off, 1e6);
+        snapshot.entities = vec![EntityInstance {
+            id: 1,
+            model: "block".into(),
+            position: Geodetic::new(at.lat_deg, at.lon_deg, 0.0),
+            orientation: Hpr::default(),
+        }];
+        let (image, _) = render(renderer, &cache, &snapshot, false);
+        write_png(&image, &out_dir().join(format!("aerial_{distance_m}.png")));
+        // The block's face (below the centre: the eye is at half its height) and the sky
+        // straight above it (the top rows).
+        let block = pixel(&image, 32, 33);
+        let sky = pixel(&image, 32, 2);
+        (block, sky)
+    };
+    let (near, near_sky) = measure(&mut renderer, 3000.0, 10.0);
+    let (far, far_sky) = measure(&mut renderer, 30_000.0, 1.0);
+    let distance = |a: [f64; 3], b: [f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    let (dn, df) = (distance(near, near_sky), distance(far, far_sky));
+    assert!(df < 0.7 * dn, "block to sky: near {dn:.1}, far {df:.1}");
+    // Blue-grey by day: the far block is bluer than the near one.
+    assert!(
+        far[2] - far[0] > near[2] - near[0],
+        "near {near:?}, far {far:?}"
+    );
+}

@@ -1,0 +1,241 @@
+//! `cig bench env`: what the environment costs — the ephemeris and natural illuminance per
+//! update, the frame's light and exposure (`Lighting::with_sky`) per view, and the share of
+//! the frame the physical sky, aerial perspective and fog take on the GPU.
+//!
+//! The frame share is a same-run baseline ratio: the same frames along a fixed low pass over
+//! the database (every tile resident, meshes built) drawn with the physical sky and fog and
+//! with the sky and fog reduced to a flat colour (`SkyModel::Flat`, fog off), interleaved in
+//! rounds, medians compared: `share = (physical − flat) / physical`. More environment passes
+//! (the cloud layers) go into [`VARIANTS`]: each is a named change to the snapshot whose cost
+//! is measured against the same flat baseline.
+
+use crate::bench::{date_utc, machine};
+use crate::cli::BenchEnvArgs;
+use crate::config::Config;
+use anyhow::Context;
+use cig_render::{FrameOptions, Renderer};
+use cig_scene::lighting::{Fog, FogMode, SkyModel};
+use cig_scene::FrameSnapshot;
+use cig_terrain::{QuerySession, TileCache};
+use serde_json::json;
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The measured environment configurations: name, and what it changes in a baseline
+/// (flat sky, no fog) snapshot. The clouds' pass adds its own line here.
+const VARIANTS: &[(&str, SnapshotChange)] = &[("sky_and_fog", physical_sky_and_fog)];
+
+/// A change made to a baseline snapshot.
+type SnapshotChange = fn(&mut FrameSnapshot);
+
+/// The physical sky with aerial perspective and the default exponential fog (40 km).
+fn physical_sky_and_fog(s: &mut FrameSnapshot) {
+    s.sky.model = SkyModel::Physical;
+    s.fog = Fog::from_visibility(FogMode::Exponential, 40_000.0);
+}
+
+fn flat(s: &mut FrameSnapshot) {
+    s.sky.model = SkyModel::Flat;
+    s.fog = Fog::from_visibility(FogMode::Off, 40_000.0);
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// Median microseconds per call of `f` over `rounds` rounds of `per_round` calls.
+fn time_us(rounds: usize, per_round: usize, mut f: impl FnMut(usize)) -> f64 {
+    let mut per_call = Vec::with_capacity(rounds);
+    for r in 0..rounds {
+        let started = Instant::now();
+        for i in 0..per_round {
+            f(r * per_round + i);
+        }
+        per_call.push(started.elapsed().as_secs_f64() * 1e6 / per_round as f64);
+    }
+    median(&per_call)
+}
+
+fn database(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<PathBuf> {
+    let path = args.db.clone().unwrap_or_else(|| PathBuf::from("demo-db"));
+    if args.db.is_none() && !path.exists() {
+        tracing::warn!(
+            "bench env: building the demo database (50 km x 50 km, 30 m posts) at {}",
+            path.display()
+        );
+        crate::db::synthesize_database(&crate::demo::demo_params(), &path, false, config)?;
+    }
+    Ok(path)
+}
+
+pub fn run(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
+    let size = crate::render::parse_size(&args.size)?;
+    anyhow::ensure!(
+        (2..=1000).contains(&args.frames),
+        "--frames {} must be between 2 and 1000",
+        args.frames
+    );
+    anyhow::ensure!(
+        (1..=100).contains(&args.rounds),
+        "--rounds {} must be between 1 and 100",
+        args.rounds
+    );
+    let time = crate::render::parse_time("2026-06-21T19:00:00Z")?;
+
+    // 1. Ephemeris and natural illuminance per update, over a day of instants.
+    let observer = cig_environment::Observer::new(36.0, -121.0, 100.0)?;
+    let start = cig_environment::UtcTime::from_unix_seconds(time)?;
+    let instants: Vec<cig_environment::UtcTime> = (0..1440)
+        .map(|m| cig_environment::UtcTime::from_unix_seconds(time + 60.0 * f64::from(m)))
+        .collect::<Result<_, _>>()?;
+    let ephemeris_us = time_us(9, 1000, |i| {
+        let t = instants[i % instants.len()];
+        let e = cig_environment::ephemeris(&observer, t);
+        black_box(cig_environment::natural_illuminance(&e, 0.0).ok());
+    });
+    // The frame's light (ephemeris, atmosphere transmittance, sky irradiance, 18 sky
+    // radiances), once per view per frame; the atmosphere's tables are built before timing.
+    let eye = observer.geodetic();
+    let settings = cig_scene::lighting::SkySettings::default();
+    let table_started = Instant::now();
+    black_box(cig_environment::Atmosphere::earth());
+    let tables_ms = table_started.elapsed().as_secs_f64() * 1e3;
+    let lighting_us = time_us(5, 100, |i| {
+        let t = time + 60.0 * (i % 1440) as f64;
+        black_box(cig_scene::Lighting::with_sky(t, eye, 0.0, &settings));
+    });
+    black_box(start);
+
+    // 2. The frame share, on the GPU.
+    let path = database(args, config)?;
+    let db = Arc::new(cig_terrain_io::store::open_database(&path)?);
+    let gpu = cig_render::Gpu::headless()?;
+    let target_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("bench target"),
+        size: wgpu::Extent3d {
+            width: size.0,
+            height: size.1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: cig_render::FRAME_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let target = target_texture.create_view(&Default::default());
+    let cache = Arc::new(TileCache::new(Arc::clone(&db), config.paging.clone())?);
+    let mut session = QuerySession::new(Arc::clone(&cache));
+    // The render benchmark's pass, sampled at `frames` points over 10 s.
+    let leg = crate::bench_render::pass_leg(&db, 300.0, 10.0);
+    let dt_s = 10.0 / args.frames as f64;
+    let views = crate::flight::views_along(&mut session, &leg, dt_s, 60.0, size)
+        .context("the benchmark path")?;
+    let base: Vec<FrameSnapshot> = views
+        .iter()
+        .take(args.frames)
+        .map(|v| {
+            let mut s = FrameSnapshot::new(time, vec![*v]);
+            flat(&mut s);
+            s
+        })
+        .collect();
+    let mut renderer = Renderer::new(Arc::clone(&gpu), &cache, cig_render::FRAME_FORMAT);
+    for s in &base {
+        cig_render::load_for_view(&mut renderer, &cache, s, 0, 64)?;
+    }
+    let options = FrameOptions {
+        mesh_budget: usize::MAX,
+        key_background: false,
+        fade_in_s: 0.0,
+    };
+    let draw = |renderer: &mut Renderer, frames: &[FrameSnapshot]| -> anyhow::Result<Vec<f64>> {
+        let mut ms = Vec::with_capacity(frames.len());
+        for s in frames {
+            let started = Instant::now();
+            renderer.render(&cache, s, 0, &target, options)?;
+            ms.push(started.elapsed().as_secs_f64() * 1e3);
+        }
+        Ok(ms)
+    };
+    let variants: Vec<(&str, Vec<FrameSnapshot>)> = VARIANTS
+        .iter()
+        .map(|(name, change)| {
+            let frames = base
+                .iter()
+                .map(|s| {
+                    let mut s = s.clone();
+                    change(&mut s);
+                    s
+                })
+                .collect();
+            (*name, frames)
+        })
+        .collect();
+    // Warm every configuration (pipelines, meshes), then interleave the rounds.
+    draw(&mut renderer, &base)?;
+    for (_, frames) in &variants {
+        draw(&mut renderer, frames)?;
+    }
+    let mut flat_ms = Vec::new();
+    let mut variant_ms: Vec<Vec<f64>> = vec![Vec::new(); variants.len()];
+    for _ in 0..args.rounds {
+        flat_ms.extend(draw(&mut renderer, &base)?);
+        for (i, (_, frames)) in variants.iter().enumerate() {
+            variant_ms[i].extend(draw(&mut renderer, frames)?);
+        }
+    }
+    let flat_median = median(&flat_ms);
+    let mut passes = serde_json::Map::new();
+    for (i, (name, _)) in variants.iter().enumerate() {
+        let m = median(&variant_ms[i]);
+        passes.insert(
+            (*name).to_string(),
+            json!({
+                "frame_ms_median": m,
+                "share_of_frame": (m - flat_median) / m,
+            }),
+        );
+    }
+    let environment_ms = variant_ms
+        .iter()
+        .map(|v| median(v))
+        .fold(flat_median, f64::max);
+    let report = json!({
+        "machine": machine(),
+        "date_utc": date_utc(),
+        "commit": option_env!("CIG_GIT_COMMIT").unwrap_or("unknown"),
+        "adapter": gpu.describe(),
+        "database": path.display().to_string(),
+        "size": [size.0, size.1],
+        "frames": base.len(),
+        "rounds": args.rounds,
+        "ephemeris_us_per_update": ephemeris_us,
+        "lighting_us_per_view": lighting_us,
+        "atmosphere_tables_ms": tables_ms,
+        "flat_frame_ms_median": flat_median,
+        "passes": passes,
+        "environment_share_of_frame": (environment_ms - flat_median) / environment_ms,
+        "targets": {
+            "environment_share_of_frame_at_most": 0.20,
+            "ephemeris_us_per_update_at_most": 20.0,
+        },
+    });
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "ephemeris + illuminance {:.2} us per update; light of a view {:.1} us; frame {:.2} ms flat, environment {:.0}% of the frame",
+            ephemeris_us,
+            lighting_us,
+            flat_median,
+            100.0 * (environment_ms - flat_median) / environment_ms
+        );
+    }
+    Ok(())
+}
