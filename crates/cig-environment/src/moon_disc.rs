@@ -41,7 +41,7 @@ pub const EARTHSHINE_FRACTION: f64 = 2.5e-4;
 
 /// Angular radius of the moon seen from `distance_m`, degrees.
 pub fn moon_angular_radius_deg(distance_m: f64) -> f64 {
-    if !(distance_m > MOON_RADIUS_M) {
+    if distance_m.is_nan() || distance_m <= MOON_RADIUS_M {
         return 90.0;
     }
     (MOON_RADIUS_M / distance_m).asin().to_degrees()
@@ -71,7 +71,10 @@ pub fn position_angle_deg(centre: DVec3, toward: DVec3) -> f64 {
     let east = DVec3::Z.cross(centre).normalize_or_zero();
     let north = centre.cross(east);
     let d = toward - centre * toward.dot(centre);
-    d.dot(east).atan2(d.dot(north)).to_degrees().rem_euclid(360.0)
+    d.dot(east)
+        .atan2(d.dot(north))
+        .to_degrees()
+        .rem_euclid(360.0)
 }
 
 /// Illuminated fraction of the disc for a phase angle in degrees (Meeus 48.1).
@@ -207,7 +210,10 @@ mod tests {
         for a in [0.0, 30.0, 60.0, 90.0, 120.0, 150.0] {
             let numeric = integral(a);
             let closed = lommel_seeliger_phase_function(a);
-            assert!((numeric - closed).abs() < 0.01, "{a}: {numeric} vs {closed}");
+            assert!(
+                (numeric - closed).abs() < 0.01,
+                "{a}: {numeric} vs {closed}"
+            );
         }
     }
 

@@ -305,7 +305,10 @@ mod tests {
         assert!((polaris.ra_deg - (2.0 + 31.0 / 60.0 + 49.09 / 3600.0) * 15.0).abs() < 5e-3);
         assert!((polaris.dec_deg - (89.0 + 15.0 / 60.0 + 50.8 / 3600.0)).abs() < 2e-4);
         // Bad lines are skipped, not fatal.
-        assert_eq!(parse_table("# c\n1,2,3\nx,1,2,3,4,5,6\n7,1,2,3,4,5,\n").len(), 1);
+        assert_eq!(
+            parse_table("# c\n1,2,3\nx,1,2,3,4,5,6\n7,1,2,3,4,5,\n").len(),
+            1
+        );
     }
 
     #[test]
@@ -442,7 +445,10 @@ mod tests {
         assert!(blue[2] > blue[0], "{blue:?}");
         assert!(red[0] > 2.0 * red[2], "{red:?}");
         // The sun (5770 K) is near white: channels within 25 % of each other.
-        assert!(sun.iter().all(|c| (c - sun[1]).abs() < 0.25 * sun[1]), "{sun:?}");
+        assert!(
+            sun.iter().all(|c| (c - sun[1]).abs() < 0.25 * sun[1]),
+            "{sun:?}"
+        );
         // Unit luminance.
         for c in [blue, sun, red] {
             let y = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
@@ -462,7 +468,7 @@ mod tests {
             let d = star_direction_ecef(&star, time);
             prop_assert!((d.length() - 1.0).abs() < 1e-12);
             // One sidereal day (86164.0905 s) later the star is back within 0.01°.
-            let later = star_direction_ecef(&star, time.plus_seconds(86_164.0905));
+            let later = star_direction_ecef(&star, time.plus_seconds(86_164.090_5));
             prop_assert!(d.angle_between(later).to_degrees() < 0.01);
             // Declination of date is the angle from the ECEF equator, unchanged by rotation.
             let noon = star_direction_ecef(&star, time.plus_seconds(43_200.0));

@@ -5,6 +5,7 @@
 //! [`cig_scene::FrameSnapshot`] and the terrain [`cig_terrain::TileCache`]). Any wgpu backend
 //! works (Vulkan, Metal, DX12, GL); with no GPU, Mesa's lavapipe renders the same frames.
 
+pub mod celestial;
 pub mod gltf_model;
 pub mod gpu;
 pub mod offscreen;

@@ -13,6 +13,7 @@
 //! Limits: one scene pass per view, no shadows; the sky is a gradient until the environment's
 //! atmosphere lands.
 
+use crate::celestial::CelestialPass;
 use crate::gpu::{Gpu, RenderError};
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainGpu};
@@ -145,6 +146,8 @@ pub struct Renderer {
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
     puffs: PuffPass,
+    /// The moon and stars of the sky pass (its `@group(2)`).
+    celestial: CelestialPass,
     /// Queries: 0 the frame's start, 1 its end, 2 the start of the puff passes.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: u64,
@@ -214,11 +217,21 @@ fn pipeline(
     format: wgpu::TextureFormat,
     spec: &PipelineSpec<'_>,
 ) -> wgpu::RenderPipeline {
+    pipeline_with_groups(gpu, format, spec, &[Some(spec.layout)])
+}
+
+/// [`pipeline`] with the bind group layouts of every group (`spec.layout` unused).
+fn pipeline_with_groups(
+    gpu: &Gpu,
+    format: wgpu::TextureFormat,
+    spec: &PipelineSpec<'_>,
+    groups: &[Option<&wgpu::BindGroupLayout>],
+) -> wgpu::RenderPipeline {
     let layout = gpu
         .device
         .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(spec.label),
-            bind_group_layouts: &[Some(spec.layout)],
+            bind_group_layouts: groups,
             immediate_size: 0,
         });
     gpu.device
@@ -397,7 +410,12 @@ impl Renderer {
         });
         let terrain_module = shader(&gpu, "terrain", include_str!("shaders/terrain.wgsl"));
         let model_module = shader(&gpu, "model", include_str!("shaders/model.wgsl"));
-        let sky_module = shader(&gpu, "sky", include_str!("shaders/sky.wgsl"));
+        let sky_module = shader(
+            &gpu,
+            "sky",
+            &[crate::celestial::WGSL, include_str!("shaders/sky.wgsl")].concat(),
+        );
+        let celestial = CelestialPass::new(&gpu);
         let terrain_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<cig_scene::terrain_mesh::TerrainVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
@@ -449,7 +467,7 @@ impl Renderer {
                 cull: None,
             },
         );
-        let sky_pipeline = pipeline(
+        let sky_pipeline = pipeline_with_groups(
             &gpu,
             colour_format,
             &PipelineSpec {
@@ -462,6 +480,7 @@ impl Renderer {
                 polygon_mode: wgpu::PolygonMode::Fill,
                 cull: None,
             },
+            &[Some(&sky_layout), None, Some(celestial.layout())],
         );
         let empty = |label, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -515,6 +534,7 @@ impl Renderer {
             node_first_seen: HashMap::new(),
             targets: None,
             puffs,
+            celestial,
             timestamps,
             frame: 0,
         };
@@ -682,6 +702,12 @@ impl Renderer {
         let lighting = Lighting::at(snapshot.unix_time_s, view.eye);
         let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
         self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
+        self.celestial.prepare(
+            &self.gpu,
+            snapshot.unix_time_s,
+            view.eye,
+            snapshot.stars_visible,
+        );
         if !records.is_empty() {
             self.gpu
                 .queue
@@ -767,6 +793,7 @@ impl Renderer {
             });
             pass.set_pipeline(&self.sky_pipeline);
             pass.set_bind_group(0, &self.sky_bind, &[]);
+            pass.set_bind_group(2, self.celestial.bind_group(), &[]);
             pass.draw(0..3, 0..1);
             stats.draw_calls += 1;
 

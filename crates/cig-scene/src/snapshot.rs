@@ -117,6 +117,8 @@ pub struct FrameSnapshot {
     /// Fraction of the sky covered by cloud, 0..1 (the natural illuminance's sky-condition
     /// input; set from the cloud layers).
     pub cloud_cover_fraction: f64,
+    /// Draw the stars (the moon is always drawn; both fade by themselves in daylight).
+    pub stars_visible: bool,
 }
 
 impl FrameSnapshot {
@@ -133,6 +135,7 @@ impl FrameSnapshot {
             puffs: Vec::new(),
             puff_origin_ecef_m: glam::DVec3::ZERO,
             cloud_cover_fraction: 0.0,
+            stars_visible: true,
         }
     }
 }

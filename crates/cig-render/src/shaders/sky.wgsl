@@ -37,6 +37,7 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
     if (cos_sun > 0.999957) {
         colour = max(colour, g.sun_colour.rgb * 4.0);
     }
+    colour += celestial_radiance(dir);
     // Inside the ground fog layer, the sky is seen through the rest of it: up to its top for
     // rays that climb out, through all of it for the others.
     if (g.fog_layer.z > 0.5 && g.fog_layer.x > 0.0) {
