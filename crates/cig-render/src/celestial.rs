@@ -7,8 +7,11 @@
 //! lit by the sun, each pixel of the disc taking the sphere's normal there and the
 //! Lommel–Seeliger law `2 cos i / (cos i + cos e)` times the surface luminance of
 //! `cig_environment::moon_disc` (so the phase, the bright limb's orientation and the terminator
-//! follow from the geometry), plus earthshine; the disc's edge is antialiased by its pixel
-//! coverage. Stars: the 904 catalogue stars (`cig_environment::stars`) are kept on the GPU as
+//! follow from the geometry), plus earthshine, times a schematic albedo map: the 13 large
+//! near-side maria as soft discs at their selenographic places and sizes (albedo 0.57 of the
+//! highlands', scaled so the near side's mean is 1 and the disc's total stays the phase law's),
+//! oriented by the moon's axis (taken as the ecliptic's pole) and the sub-Earth point (the disc's
+//! centre); the disc's edge is antialiased by its pixel coverage. Stars: the 904 catalogue stars (`cig_environment::stars`) are kept on the GPU as
 //! J2000 directions (proper motion to the date, refreshed when the date moves) with their
 //! illuminance `E = 10^(−0.4 (V + 13.99))` lux and colour; the pixel's direction is turned from
 //! ECEF to J2000 by the transpose of the precession–nutation–sidereal-time matrix of the
@@ -19,12 +22,14 @@
 //! below the eye's point-source threshold against the sky's luminance (Schaefer 1990; today the
 //! zenith colour of `Globals`), so stars come out at dusk and vanish by day without any gate on
 //! the sun's altitude. Moon and stars are dimmed by the atmosphere's extinction along the air
-//! mass of Kasten and Young (1989), 0.13/0.20/0.32 magnitudes per air mass in R/G/B (a clear
-//! sea-level sky), hidden below the apparent horizon, and then pass through the sky's ground fog
+//! mass of Kasten and Young (1989), 0.13/0.20/0.34 magnitudes per air mass in R/G/B for a clear
+//! sky at sea level (Rayleigh, λ⁻⁴, scale height 8 km, plus grey aerosol, 1.2 km; less above a
+//! high eye), hidden below the apparent horizon, and then pass through the sky's ground fog
 //! like the sky itself (sky.wgsl adds them before its fog). Radiance is physical: a luminance of
 //! L cd/m² shows `π L LIGHTING_UNITS_PER_LUX` ([`radiance_per_cd_per_m2`]).
 //!
-//! Limits: no maria, libration or surface roughness (a uniform Lommel–Seeliger sphere); the
+//! Limits: the maria are a schematic of discs, not a map; libration (up to 8°), the axis's 1.5°
+//! tilt from the ecliptic pole and surface roughness are left out (a Lommel–Seeliger sphere); the
 //! moon and stars are not refracted (geometric directions, like the sun disc), and the
 //! extinction is a fixed clear-sky one, not the atmosphere model's; a star's point spread is the
 //! pixel's, not the eye's; no planets, Milky Way or zodiacal light.
@@ -42,8 +47,26 @@ pub const STAR_GRID: usize = 32;
 const CELL_MARGIN_RAD: f64 = 0.017_453_3;
 /// Point-spread sigma of a star, pixels.
 const STAR_SIGMA_PX: f32 = 0.6;
-/// Atmospheric extinction in R, G, B, magnitudes per air mass (clear sky at sea level).
-const EXTINCTION_MAG_PER_AIR_MASS: [f32; 3] = [0.13, 0.20, 0.32];
+/// Rayleigh extinction in R, G, B at sea level, magnitudes per air mass (λ⁻⁴ from 0.12 at
+/// 550 nm), and its scale height.
+const RAYLEIGH_MAG_PER_AIR_MASS: [f64; 3] = [0.05, 0.12, 0.26];
+const RAYLEIGH_SCALE_HEIGHT_M: f64 = 8_000.0;
+/// Aerosol extinction of a clear sky at sea level (grey), and its scale height.
+const AEROSOL_MAG_PER_AIR_MASS: f64 = 0.08;
+const AEROSOL_SCALE_HEIGHT_M: f64 = 1_200.0;
+
+/// Extinction (magnitudes per air mass) in R, G, B above an eye at `altitude_m`: the Rayleigh
+/// and aerosol parts thin out with their scale heights (0.13/0.20/0.34 at sea level).
+pub fn extinction_mag_per_air_mass(altitude_m: f64) -> [f64; 3] {
+    let h = if altitude_m.is_finite() {
+        altitude_m.max(0.0)
+    } else {
+        0.0
+    };
+    let rayleigh = (-h / RAYLEIGH_SCALE_HEIGHT_M).exp();
+    let aerosol = AEROSOL_MAG_PER_AIR_MASS * (-h / AEROSOL_SCALE_HEIGHT_M).exp();
+    RAYLEIGH_MAG_PER_AIR_MASS.map(|k| k * rayleigh + aerosol)
+}
 /// The moon's colour index B−V (its colour is sunlight's, slightly reddened).
 const MOON_B_MINUS_V: f64 = 0.92;
 
@@ -61,6 +84,7 @@ struct CelestialUniform {
     moon_dir: [f32; 4],
     moon_sun: [f32; 4],
     moon_colour: [f32; 4],
+    moon_north: [f32; 4],
     ecef_to_celestial: [[f32; 4]; 3],
     stars: [f32; 4],
     extinction: [f32; 4],
@@ -303,12 +327,10 @@ impl CelestialPass {
                 STAR_SIGMA_PX,
                 0.0,
             ],
-            extinction: [
-                EXTINCTION_MAG_PER_AIR_MASS[0],
-                EXTINCTION_MAG_PER_AIR_MASS[1],
-                EXTINCTION_MAG_PER_AIR_MASS[2],
-                1.0,
-            ],
+            extinction: {
+                let k = extinction_mag_per_air_mass(eye.alt_m);
+                [k[0] as f32, k[1] as f32, k[2] as f32, 1.0]
+            },
             ..Default::default()
         };
         let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
@@ -331,6 +353,9 @@ impl CelestialPass {
         }
         if let Some(time) = frame_time(unix_time_s) {
             let m = stars::celestial_to_ecef(time);
+            // The moon's axis is within 1.5° of the ecliptic's pole (J2000 obliquity).
+            let eps = 23.439_28_f64.to_radians();
+            u.moon_north = v4(m * DVec3::new(0.0, -eps.sin(), eps.cos()), 1.0);
             // Rows of the inverse (the transpose) are the columns of `m`.
             u.ecef_to_celestial = [v4(m.x_axis, 0.0), v4(m.y_axis, 0.0), v4(m.z_axis, 0.0)];
             let years = stars::julian_years_since_j2000(time);
@@ -394,6 +419,17 @@ mod tests {
             prop_assume!(d.length() > 1e-3);
             prop_assert!(cell_of(d.normalize()) < 6 * STAR_GRID * STAR_GRID);
         }
+    }
+
+    #[test]
+    fn extinction_is_bluest_and_thins_out_with_height() {
+        let sea = extinction_mag_per_air_mass(0.0);
+        assert!(sea[2] > sea[1] && sea[1] > sea[0]);
+        // V-band extinction at a clear sea-level site is about 0.2 mag per air mass.
+        assert!((sea[1] - 0.20).abs() < 0.01);
+        let high = extinction_mag_per_air_mass(10_000.0);
+        assert!(high.iter().zip(sea).all(|(h, s)| *h < 0.35 * s), "{high:?}");
+        assert_eq!(extinction_mag_per_air_mass(f64::NAN), sea);
     }
 
     #[test]

@@ -7,6 +7,8 @@ struct Celestial {
     moon_sun: vec4<f32>,
     // rgb: the moon's colour (unit luminance); w: earthshine radiance.
     moon_colour: vec4<f32>,
+    // xyz: unit direction of the moon's rotation axis (north, ECEF); w: 1 to paint the maria.
+    moon_north: vec4<f32>,
     // Rows of the matrix from ECEF to the J2000 frame of the star records.
     ecef_to_celestial0: vec4<f32>,
     ecef_to_celestial1: vec4<f32>,
@@ -32,6 +34,51 @@ struct StarRecord {
 @group(2) @binding(3) var<storage, read> star_index: array<u32>;
 
 const STAR_GRID: u32 = 32u;
+
+// The large near-side maria: selenographic latitude, longitude (east toward Mare Crisium),
+// angular radius (degrees); Procellarum and Frigoris as chains of discs.
+const MARIA_COUNT: u32 = 17u;
+const MARIA = array<vec3<f32>, 17>(
+    vec3<f32>(32.8, -15.6, 18.9),  // Imbrium
+    vec3<f32>(28.0, 17.5, 11.1),   // Serenitatis
+    vec3<f32>(8.5, 31.4, 14.4),    // Tranquillitatis
+    vec3<f32>(17.0, 59.1, 9.2),    // Crisium
+    vec3<f32>(-7.8, 51.3, 12.0),   // Fecunditatis
+    vec3<f32>(-15.2, 35.5, 5.5),   // Nectaris
+    vec3<f32>(-21.3, -16.6, 11.8), // Nubium
+    vec3<f32>(-24.4, -38.6, 6.4),  // Humorum
+    vec3<f32>(13.3, 3.6, 4.0),     // Vaporum
+    vec3<f32>(-3.0, -20.0, 8.0),   // Insularum / Cognitum
+    vec3<f32>(5.0, -45.0, 15.0),   // Procellarum, south
+    vec3<f32>(20.0, -55.0, 15.0),  // Procellarum, middle
+    vec3<f32>(35.0, -50.0, 10.0),  // Procellarum, north
+    vec3<f32>(56.0, -30.0, 6.0),   // Frigoris, west
+    vec3<f32>(57.0, -5.0, 6.0),    // Frigoris, middle
+    vec3<f32>(56.0, 20.0, 6.0),    // Frigoris, east
+    vec3<f32>(-5.0, -2.0, 3.0),    // Sinus Medii
+);
+
+// Relative albedo of the moon at the unit normal `n`, for the moon seen along `m` (ECEF): the
+// maria at 0.57 of the highlands, scaled so the near side's mean is about 1.
+fn moon_albedo(n: vec3<f32>, m: vec3<f32>) -> f32 {
+    if (cel.moon_north.w < 0.5) {
+        return 1.0;
+    }
+    let z = -m;
+    let north = normalize(cel.moon_north.xyz - z * dot(cel.moon_north.xyz, z));
+    let x = cross(north, z);
+    var mare = 0.0;
+    for (var i = 0u; i < MARIA_COUNT; i = i + 1u) {
+        let p = MARIA[i];
+        let lat = radians(p.x);
+        let lon = radians(p.y);
+        let c = cos(lat) * (sin(lon) * x + cos(lon) * z) + sin(lat) * north;
+        let angle = acos(clamp(dot(n, c), -1.0, 1.0));
+        let r = radians(p.z);
+        mare = max(mare, 1.0 - smoothstep(0.6 * r, 1.25 * r, angle));
+    }
+    return 1.15 - 0.5 * mare;
+}
 const PI_CEL: f32 = 3.14159265;
 
 // The cube-map cell of a direction (same layout as celestial.rs's `cell_of`).
@@ -113,6 +160,7 @@ fn celestial_radiance(dir: vec3<f32>) -> vec3<f32> {
             if (cos_i > 0.0) {
                 lit += cel.moon_sun.w * 2.0 * cos_i / (cos_i + cos_e);
             }
+            lit *= moon_albedo(n, m);
             out += cel.moon_colour.rgb * lit * moon_cover;
         }
     }

@@ -696,6 +696,7 @@ impl App {
         };
         snapshot.max_pixel_error = self.panel.max_pixel_error;
         snapshot.wireframe = self.panel.wireframe;
+        snapshot.stars_visible = self.panel.stars;
         let last = LastFrame {
             snapshot,
             paint_jobs,
