@@ -16,7 +16,8 @@
 //! illuminance `E = 10^(−0.4 (V + 13.99))` lux and colour; the pixel's direction is turned from
 //! ECEF to J2000 by the transpose of the precession–nutation–sidereal-time matrix of the
 //! frame, and looked up in a cube map of 6 × 32 × 32 cells in which every star is listed in each
-//! cell within 1° of it, so each pixel tests only the stars of its cell (1.2 on average). A star
+//! cell within 0.6° of it, so each pixel tests only the stars of its cell (0.6 on average); by
+//! day, when the eye's threshold is above every star, the lookup is skipped. A star
 //! is a gaussian of unit integral and σ = 0.6 pixel (so its total is the same at any field of
 //! view and it does not flicker as it drifts across pixels) times its illuminance; it fades out
 //! below the eye's point-source threshold against the sky's luminance (Schaefer 1990; today the
@@ -43,8 +44,10 @@ use glam::DVec3;
 
 /// Cells along each edge of a cube-map face (the shader's `STAR_GRID`).
 pub const STAR_GRID: usize = 32;
-/// Every star is listed in each cell within this angle of it (the reach of its point spread).
-const CELL_MARGIN_RAD: f64 = 0.017_453_3;
+/// Every star is listed in each cell within this angle of it: the reach (4 σ) of its point
+/// spread in pixels up to 0.15° (a 90° view 600 pixels across; a coarser view clips the spread
+/// of a star at a cell's edge).
+const CELL_MARGIN_RAD: f64 = 0.010_472;
 /// Point-spread sigma of a star, pixels.
 const STAR_SIGMA_PX: f32 = 0.6;
 /// Rayleigh extinction in R, G, B at sea level, magnitudes per air mass (λ⁻⁴ from 0.12 at
@@ -119,8 +122,6 @@ pub fn cell_of(d: DVec3) -> usize {
 pub fn bin_stars(directions: &[DVec3]) -> (Vec<[u32; 2]>, Vec<u32>) {
     let cells = 6 * STAR_GRID * STAR_GRID;
     let mut lists: Vec<Vec<u32>> = vec![Vec::new(); cells];
-    // uv grows at most 3x faster than the angle on a face (at its corners).
-    let margin_uv = 3.0 * CELL_MARGIN_RAD;
     let cell_uv = 2.0 / STAR_GRID as f64;
     for (i, d) in directions.iter().enumerate() {
         for face in 0..6 {
@@ -138,6 +139,9 @@ pub fn bin_stars(directions: &[DVec3]) -> (Vec<[u32; 2]>, Vec<u32>) {
                 continue;
             }
             let (u, v) = (u / major, v / major);
+            // The gnomonic face's scale is at most sec² of the angle from its centre, 1 + u² + v²
+            // (taken a little wider, for the margin's own extent).
+            let margin_uv = CELL_MARGIN_RAD * (1.0 + u * u + v * v) * 1.1;
             let range = |t: f64| {
                 let lo = (((t - margin_uv) + 1.0) / cell_uv).floor().max(0.0) as usize;
                 let hi = (((t + margin_uv) + 1.0) / cell_uv).floor().max(0.0) as usize;
@@ -394,16 +398,16 @@ mod tests {
             .collect();
         let (ranges, index) = bin_stars(&dirs);
         assert_eq!(ranges.len(), 6 * STAR_GRID * STAR_GRID);
-        // About one star per cell on average (what each sky pixel tests).
+        // Under one star per cell on average (what each sky pixel tests).
         let mean = index.len() as f64 / ranges.len() as f64;
-        assert!(mean < 1.5, "{mean}");
-        // Directions 0.9° from every star, in 8 directions, find it in their cell.
+        assert!(mean < 0.8, "{mean}");
+        // Directions 0.55° from every star, in 8 directions, find it in their cell.
         for (i, d) in dirs.iter().enumerate() {
             let east = DVec3::Z.cross(*d).normalize_or(DVec3::X);
             let north = d.cross(east);
             for k in 0..8 {
                 let a = f64::from(k) * std::f64::consts::FRAC_PI_4;
-                let off = (east * a.cos() + north * a.sin()) * 0.9f64.to_radians();
+                let off = (east * a.cos() + north * a.sin()) * 0.55f64.to_radians();
                 let p = (*d + off).normalize();
                 let [first, count] = ranges[cell_of(p)];
                 let list = &index[first as usize..(first + count) as usize];
