@@ -325,35 +325,39 @@ fn bright_stars_show_at_their_predicted_pixel_at_night_and_vanish_by_day() {
 }
 
 #[test]
-fn stars_are_faded_by_the_eye_threshold_so_only_bright_ones_show_in_twilight() {
-    // Physics of the fade (cig-environment): what a pixel shows follows the limiting magnitude
-    // of the sky's luminance; here a faint star (Polaris, V 2.0) in the same night view as the
-    // threshold allows shows nothing while Sirius (V -1.46) does, in the renderer's night sky.
-    let night = find_time(
-        UtcTime::from_calendar(2026, 1, 10, 0, 0, 0.0).expect("in range"),
-        600.0,
-        6 * 24 * 3,
-        |e| e.sun.altitude_deg < -18.0,
-    );
+fn sirius_comes_out_after_sunset_with_no_gate_on_the_sun() {
+    // The same star, the same narrow view: hidden while the sun is still a few degrees up (the
+    // sky's brightness is over the eye's threshold), seen once the sky is dark.
+    let sirius = 2491;
+    let start = UtcTime::from_calendar(2026, 3, 1, 0, 0, 0.0).expect("in range");
+    let dusk = find_time(start, 300.0, 12 * 24 * 10, |e| {
+        (2.0..5.0).contains(&e.sun.altitude_deg) && altitude_deg(star_dir(sirius, e.time)) > 20.0
+    });
+    let dark = find_time(dusk, 300.0, 12 * 24, |e| {
+        e.sun.altitude_deg < -18.0 && altitude_deg(star_dir(sirius, e.time)) > 20.0
+    });
     let mut scene = scene();
-    let polaris = star_dir(424, night);
-    let view = aimed(polaris, STAR_FOV_DEG, STAR_SIZE_PX);
-    let image = render(&mut scene, night, view, true);
-    let (peak, background, _, _) = peak_and_centroid(&image);
-    let lighting = cig_scene::lighting::Lighting::at(night.unix_seconds(), site());
-    let z = lighting.sky_zenith;
+    let mut peaks = Vec::new();
+    for (name, time) in [("dusk", dusk), ("dark", dark)] {
+        let view = aimed(star_dir(sirius, time), STAR_FOV_DEG, STAR_SIZE_PX);
+        let image = render(&mut scene, time, view, true);
+        write(&image, &format!("sirius-{name}"));
+        let (peak, background, _, _) = peak_and_centroid(&image);
+        peaks.push(peak.saturating_sub(background));
+    }
+    assert!(
+        peaks[0] <= 3,
+        "Sirius at dusk, sun up: {} above the sky",
+        peaks[0]
+    );
+    assert!(
+        peaks[1] > 24,
+        "Sirius after dark: {} above the sky",
+        peaks[1]
+    );
+    // The catalogue's physics agrees: only in the dark is its magnitude under the limit.
+    let z = cig_scene::lighting::Lighting::at(dark.unix_seconds(), site()).sky_zenith;
     let sky_cd = f64::from(0.2126 * z[0] + 0.7152 * z[1] + 0.0722 * z[2])
         / cig_render::celestial::radiance_per_cd_per_m2();
-    let limit = stars::limiting_magnitude(sky_cd);
-    if limit < 1.5 {
-        assert!(
-            peak <= background + 3,
-            "Polaris under a sky of limit {limit:.2}: {peak}"
-        );
-    } else {
-        assert!(
-            peak > background + 12,
-            "Polaris under a sky of limit {limit:.2}: {peak}"
-        );
-    }
+    assert!(stars::limiting_magnitude(sky_cd) > -1.46);
 }
