@@ -40,6 +40,7 @@ use cig_environment::moon_disc;
 use cig_environment::stars::{self, Star};
 use cig_environment::{Observer, UtcTime};
 use cig_geo::Geodetic;
+use cig_scene::FrameSnapshot;
 use glam::DVec3;
 
 /// Cells along each edge of a cube-map face (the shader's `STAR_GRID`).
@@ -320,16 +321,27 @@ impl CelestialPass {
         &self.bind_group
     }
 
-    /// Writes the frame's moon, sun and sky rotation for a view from `eye` at `unix_time_s`,
-    /// and the stars' proper motion when the date has moved by more than a few days.
-    pub(crate) fn prepare(&mut self, gpu: &Gpu, unix_time_s: f64, eye: Geodetic, stars_on: bool) {
+    /// Writes the frame's moon, sun and sky rotation for a view of `snapshot` from `eye` (its
+    /// time, moon and star switches), and the stars' proper motion when the date has moved by
+    /// more than a few days.
+    pub(crate) fn prepare(&mut self, gpu: &Gpu, snapshot: &FrameSnapshot, eye: Geodetic) {
+        let unix_time_s = snapshot.unix_time_s;
         let units = radiance_per_cd_per_m2();
+        let intensity = if snapshot.star_intensity.is_finite() {
+            snapshot.star_intensity.clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
         let mut u = CelestialUniform {
             stars: [
                 units as f32,
-                if stars_on { 1.0 } else { 0.0 },
+                if snapshot.stars_visible && intensity > 0.0 {
+                    1.0
+                } else {
+                    0.0
+                },
                 STAR_SIGMA_PX,
-                0.0,
+                intensity as f32,
             ],
             extinction: {
                 let k = extinction_mag_per_air_mass(eye.alt_m);
@@ -338,7 +350,7 @@ impl CelestialPass {
             ..Default::default()
         };
         let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
-        if let Some(moon) = moon_view(unix_time_s, eye) {
+        if let Some(moon) = moon_view(unix_time_s, eye).filter(|_| snapshot.moon_visible) {
             let colour = stars::star_colour_linear_srgb(Some(MOON_B_MINUS_V));
             u.moon_dir = v4(
                 moon.direction_ecef,

@@ -702,12 +702,7 @@ impl Renderer {
         let lighting = Lighting::at(snapshot.unix_time_s, view.eye);
         let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
         self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
-        self.celestial.prepare(
-            &self.gpu,
-            snapshot.unix_time_s,
-            view.eye,
-            snapshot.stars_visible,
-        );
+        self.celestial.prepare(&self.gpu, snapshot, view.eye);
         if !records.is_empty() {
             self.gpu
                 .queue

@@ -85,8 +85,17 @@ fn scene() -> Scene {
 }
 
 fn render(scene: &mut Scene, time: UtcTime, view: View, stars_visible: bool) -> Image {
+    render_with(scene, time, view, |s| s.stars_visible = stars_visible)
+}
+
+fn render_with(
+    scene: &mut Scene,
+    time: UtcTime,
+    view: View,
+    adjust: impl FnOnce(&mut FrameSnapshot),
+) -> Image {
     let mut snapshot = FrameSnapshot::new(time.unix_seconds(), vec![view]);
-    snapshot.stars_visible = stars_visible;
+    adjust(&mut snapshot);
     common::render(&mut scene.renderer, &scene.cache, &snapshot, false).0
 }
 
@@ -146,8 +155,15 @@ fn the_full_moon_is_a_whole_disc_of_its_predicted_size_at_its_predicted_place() 
             && e.sun.altitude_deg < -18.0
     });
     let mut scene = scene();
-    let (image, _, (cx, cy), radius_px) = moon_frame(&mut scene, time);
+    let (image, view, (cx, cy), radius_px) = moon_frame(&mut scene, time);
     write(&image, "moon-full");
+    // The host can switch it off.
+    let off = render_with(&mut scene, time, view, |s| s.moon_visible = false);
+    let b_off = brightness(&off);
+    assert!(
+        b_off.iter().max() <= Some(&(median(&b_off) + 3)),
+        "moon switched off"
+    );
     let b = brightness(&image);
     let peak = *b.iter().max().expect("in range");
     let background = median(&b);
@@ -301,6 +317,14 @@ fn bright_stars_show_at_their_predicted_pixel_at_night_and_vanish_by_day() {
             })
             .count();
         assert_eq!(far_bright, 0, "HR {hr}: a lone point");
+        // A dimmer star field (the host's intensity) shows it dimmer, or not at all once it
+        // falls under the eye's threshold.
+        let dim = render_with(&mut scene, night, view, |s| s.star_intensity = 0.3);
+        let (peak_dim, background_dim, _, _) = peak_and_centroid(&dim);
+        assert!(
+            peak_dim.saturating_sub(background_dim) + 8 < peak - background,
+            "HR {hr} at 30 %: {peak_dim} vs {peak}"
+        );
         // Switched off, it is gone.
         let off = render(&mut scene, night, view, false);
         let (peak_off, background_off, _, _) = peak_and_centroid(&off);

@@ -117,8 +117,12 @@ pub struct FrameSnapshot {
     /// Fraction of the sky covered by cloud, 0..1 (the natural illuminance's sky-condition
     /// input; set from the cloud layers).
     pub cloud_cover_fraction: f64,
-    /// Draw the stars (the moon is always drawn; both fade by themselves in daylight).
+    /// Draw the stars (they also fade by themselves in daylight).
     pub stars_visible: bool,
+    /// Brightness of the star field, 0..1 of the catalogue's (CIGI's star field intensity).
+    pub star_intensity: f64,
+    /// Draw the moon.
+    pub moon_visible: bool,
 }
 
 impl FrameSnapshot {
@@ -136,6 +140,8 @@ impl FrameSnapshot {
             puff_origin_ecef_m: glam::DVec3::ZERO,
             cloud_cover_fraction: 0.0,
             stars_visible: true,
+            star_intensity: 1.0,
+            moon_visible: true,
         }
     }
 }

@@ -14,7 +14,7 @@ struct Celestial {
     ecef_to_celestial1: vec4<f32>,
     ecef_to_celestial2: vec4<f32>,
     // x: light units per lux times pi (radiance of 1 cd/m2); y: stars on (1) or off (0);
-    // z: point-spread sigma in pixels; w: unused.
+    // z: point-spread sigma in pixels; w: star field intensity (0..1).
     stars: vec4<f32>,
     // rgb: atmospheric extinction, magnitudes per air mass; w: 1 to apply it.
     extinction: vec4<f32>,
@@ -186,7 +186,7 @@ fn celestial_radiance(dir: vec3<f32>) -> vec3<f32> {
             let off = c - sd * cos_s;
             let d2 = dot(off, off);
             if (cos_s > 0.0 && d2 < 16.0 * sigma * sigma) {
-                let lux = star.dir_lux.w;
+                let lux = star.dir_lux.w * cel.stars.w;
                 // Seen when brighter than the threshold: a ramp over about one magnitude.
                 let seen = clamp(log2(lux / threshold) * 0.75 + 0.5, 0.0, 1.0);
                 stars += star.colour.rgb * (lux * seen * norm * exp(-d2 * inv_two_sigma2));
