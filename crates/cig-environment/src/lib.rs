@@ -30,6 +30,11 @@
 //!   (directions, colours, illuminance) that the renderer reads every frame.
 //! - [`lightning`]: the NPS thesis's branching bolt (V.A.4, appendix F), made
 //!   iterative with a hard segment cap and seeded, and the flash envelope.
+//! - [`stars`]: the 904 stars to magnitude 4.5 (Yale Bright Star Catalogue 5 with
+//!   Hipparcos positions), precession (Meeus 21), nutation and sidereal rotation to
+//!   ECEF, colour from B−V, the eye's threshold against a bright sky (Schaefer 1990).
+//! - [`moon_disc`]: the moon's angular radius, bright-limb position angle (Meeus
+//!   48.5), illuminated fraction and Lommel–Seeliger surface brightness.
 //!
 //! Conventions: degrees at every interface, metres, UTC; azimuth from true
 //! north through east; directions in the observer's east-north-up frame.
@@ -43,7 +48,9 @@ pub mod events;
 pub mod illuminance;
 pub mod lightning;
 pub mod moon;
+pub mod moon_disc;
 pub mod nutation;
+pub mod stars;
 pub mod sun;
 pub mod time;
 pub mod vsop87;

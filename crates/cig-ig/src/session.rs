@@ -22,7 +22,9 @@
 //!   articulated parts to move.
 //! - View Control and View Definition: views attach to entities with offsets and relative
 //!   orientation, and take asymmetric frusta (left, right, bottom, top half-angles).
-//! - Celestial Sphere: date and time of day set the simulation clock. Atmosphere, Weather
+//! - Celestial Sphere: date and time of day set the simulation clock; the moon and star field
+//!   switches and the star field intensity (clamped to 0..100 %, reported) reach the renderer.
+//!   Atmosphere, Weather
 //!   (global, regional and entity layers), Environmental Region, Maritime and Terrestrial
 //!   Surface Conditions, Wave Control: kept; visibility and fog come from them.
 //! - Sensor Control: sensor modes per view (on/off, polarity, gain, level, track mode).
@@ -756,7 +758,20 @@ impl IgSession {
                         }
                     }
                 }
-                self.environment.celestial = Some(c.clone());
+                let mut c = c.clone();
+                let pct = c.star_field_intensity_pct;
+                if !(0.0..=100.0).contains(&pct) {
+                    let clamped = if pct.is_nan() {
+                        100.0
+                    } else {
+                        pct.clamp(0.0, 100.0)
+                    };
+                    self.tell_host(format!(
+                        "Celestial Sphere Control: star field intensity {pct}% is outside [0, 100]; {clamped}% used"
+                    ));
+                    c.star_field_intensity_pct = clamped;
+                }
+                self.environment.celestial = Some(c);
                 true
             }
             Packet::AtmosphereControl(a) => {

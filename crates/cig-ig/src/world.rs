@@ -950,6 +950,13 @@ impl IgWorld {
             }
             snapshot.fog = Fog::from_visibility(self.fog_mode, visibility_m);
         }
+        // The host's moon and star field switches and the star field's intensity.
+        if let Some(c) = &self.session.environment().celestial {
+            snapshot.moon_visible = c.moon_enable;
+            snapshot.stars_visible = c.star_field_enable;
+            snapshot.star_intensity =
+                (f64::from(c.star_field_intensity_pct) / 100.0).clamp(0.0, 1.0);
+        }
         if let Some(first) = views.first() {
             let origin = first.eye.to_ecef();
             self.effects.snapshot(origin, &mut snapshot.puffs);

@@ -3,9 +3,9 @@
 //! reset, clamping, line of sight, views, and two IGs sharing a DIS exercise.
 
 use cig_cigi::{
-    decode_message, encode_message, ByteOrder, EntityControl, EntityControl4, EntityPosition,
-    HatHotRequest, IgControl, LosSegmentRequest, Message, Packet, PositionRequest, RateControl,
-    Version, ViewControl, ViewDefinition,
+    decode_message, encode_message, ByteOrder, CelestialSphereControl, EntityControl,
+    EntityControl4, EntityPosition, HatHotRequest, IgControl, LosSegmentRequest, Message, Packet,
+    PositionRequest, RateControl, Version, ViewControl, ViewDefinition,
 };
 use cig_effects::EffectsConfig;
 use cig_environment::UtcTime;
@@ -1188,4 +1188,52 @@ fn the_hosts_ground_fog_layer_reaches_the_renderer_as_a_layer() {
         w.session().visibility_at_m(Geodetic::new(lat, lon, 120.0)),
         200.0
     );
+}
+
+#[test]
+fn the_hosts_moon_and_star_switches_reach_the_frame_and_a_bad_intensity_is_clamped_and_told() {
+    let mut q = query();
+    let mut w = world("");
+    let (lat, lon) = (lat_of_row(30.0), lon_of_col(30.0));
+    let fallback = View {
+        eye: Geodetic::new(lat, lon, 1000.0),
+        orientation: Hpr::default(),
+        fov: FovDeg::symmetric(60.0, 45.0),
+        width_px: 64,
+        height_px: 48,
+    };
+    let before = w.snapshot(64, 48, &fallback);
+    assert!(before.stars_visible && before.moon_visible);
+    assert_eq!(before.star_intensity, 1.0);
+    for (frame_number, (stars, moon, pct)) in [(false, false, 250.0f32), (true, true, 40.0)]
+        .into_iter()
+        .enumerate()
+    {
+        send(
+            &mut w,
+            Version::V3_3,
+            ByteOrder::LittleEndian,
+            frame_number as u32 + 1,
+            vec![Packet::CelestialSphereControl(CelestialSphereControl {
+                moon_enable: moon,
+                star_field_enable: stars,
+                star_field_intensity_pct: pct,
+                ..CelestialSphereControl::default()
+            })],
+        );
+        let reply = frame(&mut w, &mut q);
+        let snapshot = w.snapshot(64, 48, &fallback);
+        assert_eq!(snapshot.stars_visible, stars);
+        assert_eq!(snapshot.moon_visible, moon);
+        let told = reply.packets.iter().any(|p| {
+            matches!(p, Packet::ImageGeneratorMessage(m) if m.text.contains("star field intensity"))
+        });
+        if pct > 100.0 {
+            assert_eq!(snapshot.star_intensity, 1.0);
+            assert!(told, "the clamp is reported");
+        } else {
+            assert!((snapshot.star_intensity - 0.4).abs() < 1e-6);
+            assert!(!told);
+        }
+    }
 }

@@ -8,6 +8,7 @@
 //! works (Vulkan, Metal, DX12, GL); with no GPU, Mesa's lavapipe renders the same frames.
 
 pub mod atmosphere;
+pub mod celestial;
 pub mod gltf_model;
 pub mod gpu;
 pub mod offscreen;

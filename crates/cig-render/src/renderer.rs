@@ -23,6 +23,7 @@
 //! froxel volume; exposure follows the natural light instantly (no adaptation time).
 
 use crate::atmosphere::{atmosphere_shader, AtmosphereGpu, ToneMap, HDR_FORMAT};
+use crate::celestial::CelestialPass;
 use crate::gpu::{Gpu, RenderError};
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainGpu};
@@ -173,6 +174,8 @@ pub struct Renderer {
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
     puffs: PuffPass,
+    /// The moon and stars of the sky pass (its `@group(2)`).
+    celestial: CelestialPass,
     /// Queries: 0 the frame's start, 1 its end, 2 and 3 the start and end of the puff passes.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: u64,
@@ -300,15 +303,20 @@ fn sky_pipeline(
     gpu: &Gpu,
     globals_layout: &wgpu::BindGroupLayout,
     atmosphere_layout: &wgpu::BindGroupLayout,
+    celestial_layout: &wgpu::BindGroupLayout,
 ) -> wgpu::RenderPipeline {
-    let module = atmosphere_shader(gpu, "sky", include_str!("shaders/sky.wgsl"));
+    let module = atmosphere_shader(
+        gpu,
+        "sky",
+        &[crate::celestial::WGSL, include_str!("shaders/sky.wgsl")].concat(),
+    );
     pipeline(
         gpu,
         HDR_FORMAT,
         &PipelineSpec {
             label: "sky",
             module: &module,
-            layouts: &[globals_layout, atmosphere_layout],
+            layouts: &[globals_layout, atmosphere_layout, celestial_layout],
             buffers: &[],
             depth_write: false,
             depth_compare: wgpu::CompareFunction::Always,
@@ -454,6 +462,7 @@ impl Renderer {
         let terrain_module =
             atmosphere_shader(&gpu, "terrain", include_str!("shaders/terrain.wgsl"));
         let model_module = atmosphere_shader(&gpu, "model", include_str!("shaders/model.wgsl"));
+        let celestial = CelestialPass::new(&gpu);
         let terrain_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<cig_scene::terrain_mesh::TerrainVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
@@ -505,7 +514,7 @@ impl Renderer {
                 cull: None,
             },
         );
-        let sky_pipeline = sky_pipeline(&gpu, &sky_layout, &atmosphere.layout);
+        let sky_pipeline = sky_pipeline(&gpu, &sky_layout, &atmosphere.layout, celestial.layout());
         let empty = |label, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -560,6 +569,7 @@ impl Renderer {
             node_first_seen: HashMap::new(),
             targets: None,
             puffs,
+            celestial,
             timestamps,
             frame: 0,
         };
@@ -741,6 +751,7 @@ impl Renderer {
         let physical_sky = snapshot.sky.model == SkyModel::Physical;
         let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
         self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
+        self.celestial.prepare(&self.gpu, snapshot, view.eye);
         if !records.is_empty() {
             self.gpu
                 .queue
@@ -839,6 +850,7 @@ impl Renderer {
             pass.set_pipeline(&self.sky_pipeline);
             pass.set_bind_group(0, &self.sky_bind, &[]);
             pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
+            pass.set_bind_group(2, self.celestial.bind_group(), &[]);
             pass.draw(0..3, 0..1);
             stats.draw_calls += 1;
 

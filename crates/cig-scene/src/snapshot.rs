@@ -119,6 +119,12 @@ pub struct FrameSnapshot {
     pub cloud_cover_fraction: f64,
     /// Sky model and exposure (compensation, fixed exposure).
     pub sky: SkySettings,
+    /// Draw the stars (they also fade by themselves in daylight).
+    pub stars_visible: bool,
+    /// Brightness of the star field, 0..1 of the catalogue's (CIGI's star field intensity).
+    pub star_intensity: f64,
+    /// Draw the moon.
+    pub moon_visible: bool,
 }
 
 impl FrameSnapshot {
@@ -136,6 +142,9 @@ impl FrameSnapshot {
             puff_origin_ecef_m: glam::DVec3::ZERO,
             cloud_cover_fraction: 0.0,
             sky: SkySettings::default(),
+            stars_visible: true,
+            star_intensity: 1.0,
+            moon_visible: true,
         }
     }
 }

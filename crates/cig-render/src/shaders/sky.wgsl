@@ -47,8 +47,9 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
             // Shown as π L (the contract's emitter convention).
             colour += exposed(g.sun_toa.rgb * view_t * (limb / solid_angle));
         }
-        // Moon and stars (celestial): add `colour += view_t * celestial_radiance(dir);` here,
-        // with its pipeline's @group(2); they are seen through the air and under the fog below.
+        // Moon and stars (celestial.wgsl, the pipeline's @group(2)), dimmed by their own
+        // extinction model and hidden below the apparent horizon, under the fog below.
+        colour += exposed(celestial_radiance(dir));
     }
     // Inside the ground fog layer, the sky is seen through the rest of it: up to its top for
     // rays that climb out, through all of it for the others.

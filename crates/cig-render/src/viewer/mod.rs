@@ -697,6 +697,7 @@ impl App {
         snapshot.max_pixel_error = self.panel.max_pixel_error;
         snapshot.wireframe = self.panel.wireframe;
         snapshot.sky.exposure_compensation_ev += self.panel.exposure_compensation_ev;
+        snapshot.stars_visible = self.panel.stars;
         let last = LastFrame {
             snapshot,
             paint_jobs,

@@ -91,6 +91,8 @@ pub struct PanelState {
     pub ground_fog_visibility_m: f64,
     /// Added to the automatic exposure, EV.
     pub exposure_compensation_ev: f64,
+    /// Draw the stars (they still fade by themselves in daylight).
+    pub stars: bool,
     /// Heat release of the next plume the operator starts, MW.
     pub plume_heat_mw: f64,
     /// The next plume is a fire (flame) rather than smoke.
@@ -158,6 +160,7 @@ impl PanelState {
             ground_fog_top_m: 300.0,
             ground_fog_visibility_m: 300.0,
             exposure_compensation_ev: 0.0,
+            stars: true,
             plume_heat_mw: 5.0,
             plume_flame: false,
             wind_speed_mps: 3.0,
@@ -220,6 +223,8 @@ impl PanelState {
                 self.time_ui(ui);
                 ui.separator();
                 self.atmosphere_ui(ui, info);
+                ui.separator();
+                self.celestial_ui(ui);
                 ui.separator();
                 self.detail_ui(ui, info);
                 ui.separator();
@@ -335,6 +340,12 @@ impl PanelState {
                 .text("in the layer")
                 .suffix(" m"),
         );
+    }
+
+    fn celestial_ui(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Sky");
+        ui.checkbox(&mut self.stars, "stars")
+            .on_hover_text("the moon is always drawn; stars fade out by themselves in daylight");
     }
 
     fn obscurants_ui(&mut self, ui: &mut egui::Ui) {
