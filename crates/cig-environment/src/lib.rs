@@ -25,6 +25,9 @@
 //!   night sky, a cloud-cover divisor.
 //! - [`clock`]: the simulation clock (start, rate, pause) and the light state
 //!   (directions, colours, illuminance) that the renderer reads every frame.
+//! - [`clouds`]: cloud layers as a seeded, tileable, rank-equalised fractal value-noise
+//!   cover field advected by the wind, shaped by each kind's vertical profile; optical depth,
+//!   the sun's transmittance (shade) and the sky's cover fraction. Two-dimensional cover, flat.
 //! - [`lightning`]: the NPS thesis's branching bolt (V.A.4, appendix F), made
 //!   iterative with a hard segment cap and seeded, and the flash envelope.
 //!
@@ -34,6 +37,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod clock;
+pub mod clouds;
 pub mod ephemeris;
 pub mod events;
 pub mod illuminance;
@@ -45,6 +49,7 @@ pub mod time;
 pub mod vsop87;
 
 pub use clock::{light_state, BodyLight, LightState, SimClock};
+pub use clouds::{cloud_cover_fraction, CloudField, CloudKind, CloudLayer, CloudOrigin};
 pub use ephemeris::{ephemeris, BodyPosition, Ephemeris, Observer};
 pub use events::{day_events, DayEvents};
 pub use illuminance::{natural_illuminance, Illuminance};
