@@ -1,10 +1,11 @@
 //! The wgpu renderer of cig: round-earth terrain with continuous level of detail, entity
-//! models, sky and fog, obscurant puffs (smoke, flame, dust), for off-screen frames and windows alike.
+//! models, sky and fog, cloud layers, obscurant puffs (smoke, flame, dust), for off-screen frames and windows alike.
 //!
 //! The renderer owns every GPU resource; the world reaches it as plain data (a
 //! [`cig_scene::FrameSnapshot`] and the terrain [`cig_terrain::TileCache`]). Any wgpu backend
 //! works (Vulkan, Metal, DX12, GL); with no GPU, Mesa's lavapipe renders the same frames.
 
+pub mod clouds;
 pub mod gltf_model;
 pub mod gpu;
 pub mod offscreen;

@@ -13,6 +13,7 @@
 //! Limits: one scene pass per view, no shadows; the sky is a gradient until the environment's
 //! atmosphere lands.
 
+use crate::clouds::CloudPass;
 use crate::gpu::{Gpu, RenderError};
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainGpu};
@@ -58,6 +59,10 @@ pub mod serde_like {
         pub gpu_ms: f64,
         /// GPU time of the puff passes (timestamp queries; 0 without them or without puffs).
         pub puff_gpu_ms: f64,
+        /// Cloud layers drawn.
+        pub cloud_layers_drawn: u32,
+        /// GPU time of the cloud pass (timestamp queries; 0 without them or without clouds).
+        pub cloud_gpu_ms: f64,
         pub gpu_timed_by: &'static str,
     }
 }
@@ -97,6 +102,17 @@ struct Globals {
     noise2: [f32; 4],
     flags: [f32; 4],
     fog_layer: [f32; 4],
+}
+
+/// Timestamp queries of the frame: 0 start, 1 end, then pass starts and ends as needed.
+const QUERY_COUNT: u32 = 5;
+
+/// Which timestamp queries a frame wrote: how many, and the (begin, end) of the puff passes
+/// and of the cloud pass.
+struct PassQueries {
+    count: u32,
+    puff: Option<(u32, u32)>,
+    cloud: Option<(u32, u32)>,
 }
 
 #[repr(C)]
@@ -145,7 +161,9 @@ pub struct Renderer {
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
     puffs: PuffPass,
-    /// Queries: 0 the frame's start, 1 its end, 2 the start of the puff passes.
+    clouds: CloudPass,
+    /// Queries: 0 the frame's start, 1 its end, then as needed the starts of the puff and cloud
+    /// passes and the end of the puff passes when the clouds follow them.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: u64,
 }
@@ -476,23 +494,24 @@ impl Renderer {
                 device.create_query_set(&wgpu::QuerySetDescriptor {
                     label: Some("frame time"),
                     ty: wgpu::QueryType::Timestamp,
-                    count: 3,
+                    count: QUERY_COUNT,
                 }),
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("timestamps"),
-                    size: 24,
+                    size: u64::from(QUERY_COUNT) * 8,
                     usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 }),
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("timestamps readback"),
-                    size: 24,
+                    size: u64::from(QUERY_COUNT) * 8,
                     usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
             )
         });
         let puffs = PuffPass::new(&gpu, colour_format);
+        let clouds = CloudPass::new(&gpu, colour_format);
         let mut renderer = Renderer {
             model_vertices: empty("model vertices", wgpu::BufferUsages::VERTEX),
             model_indices: empty("model indices", wgpu::BufferUsages::INDEX),
@@ -515,6 +534,7 @@ impl Renderer {
             node_first_seen: HashMap::new(),
             targets: None,
             puffs,
+            clouds,
             timestamps,
             frame: 0,
         };
@@ -605,10 +625,15 @@ impl Renderer {
                     wgpu::TextureUsages::empty(),
                 ),
                 // The puff pass may read the depth samples.
-                depth: make("depth", DEPTH_FORMAT, self.puffs.depth_usage()),
+                depth: make(
+                    "depth",
+                    DEPTH_FORMAT,
+                    self.puffs.depth_usage() | self.clouds.depth_usage(),
+                ),
             };
             self.puffs
                 .resize(&self.gpu, size, &targets.depth, &self.globals);
+            self.clouds.resize(&self.gpu, &targets.depth, &self.globals);
             self.targets = Some(targets);
         }
     }
@@ -698,6 +723,22 @@ impl Renderer {
         }
 
         let puff_count = self.puffs.prepare(&self.gpu, &camera, snapshot);
+        let cloud_count = self.clouds.prepare(&self.gpu, &camera, snapshot);
+        // Below the clouds, the puffs are nearer: clouds first. Timestamp queries are numbered
+        // in the order passes need them, so the written ones are 0..queries.
+        let clouds_first = cloud_count > 0 && (puff_count == 0 || self.clouds.eye_below_clouds());
+        let mut queries = 2u32;
+        let mut next_query = || {
+            queries += 1;
+            queries - 1
+        };
+        let puff_start = (puff_count > 0).then(&mut next_query);
+        let cloud_start = (cloud_count > 0).then(&mut next_query);
+        let puff_end = match (puff_count > 0, cloud_count > 0 && !clouds_first) {
+            (true, true) => Some(next_query()),
+            (true, false) => Some(1),
+            _ => None,
+        };
         let size = (view.width_px, view.height_px);
         let mut encoder = self
             .gpu
@@ -725,8 +766,8 @@ impl Renderer {
                     .map(|(set, _, _)| wgpu::RenderPassTimestampWrites {
                         query_set: set,
                         beginning_of_pass_write_index: Some(0),
-                        // With puffs, the frame ends after their passes.
-                        end_of_pass_write_index: (puff_count == 0).then_some(1),
+                        // With puffs or clouds, the frame ends after their passes.
+                        end_of_pass_write_index: (puff_count == 0 && cloud_count == 0).then_some(1),
                     });
             let terrain_pipeline = if wire {
                 self.terrain_wire_pipeline
@@ -753,8 +794,8 @@ impl Renderer {
                     view: &targets.depth,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(0.0),
-                        // Kept for the puff pass, which reads it.
-                        store: if puff_count > 0 {
+                        // Kept for the puff and cloud passes, which read it.
+                        store: if puff_count > 0 || cloud_count > 0 {
                             wgpu::StoreOp::Store
                         } else {
                             wgpu::StoreOp::Discard
@@ -803,6 +844,15 @@ impl Renderer {
                 stats.entities_drawn = draws.len() as u32;
             }
         }
+        let set = self.timestamps.as_ref().map(|(set, _, _)| set);
+        if clouds_first {
+            let end = (puff_count == 0).then_some(1);
+            stats.draw_calls += self.clouds.encode(
+                &mut encoder,
+                target,
+                set.zip(cloud_start).map(|(s, b)| (s, b, end)),
+            );
+        }
         if puff_count > 0 {
             let Some(targets) = self.targets.as_ref() else {
                 return Err(RenderError::Gpu("render targets missing".into()));
@@ -812,11 +862,19 @@ impl Renderer {
                 target,
                 &targets.depth,
                 puff_count,
-                self.timestamps.as_ref().map(|(set, _, _)| (set, 2, 1)),
+                set.zip(puff_start.zip(puff_end))
+                    .map(|(s, (b, e))| (s, b, e)),
             );
             stats.puffs_drawn = puff_count as u32;
         }
-        let queries = if puff_count > 0 { 3 } else { 2 };
+        if cloud_count > 0 && !clouds_first {
+            stats.draw_calls += self.clouds.encode(
+                &mut encoder,
+                target,
+                set.zip(cloud_start).map(|(s, b)| (s, b, Some(1))),
+            );
+        }
+        stats.cloud_layers_drawn = cloud_count as u32;
         if let Some((set, resolve, readback)) = &self.timestamps {
             encoder.resolve_query_set(set, 0..queries, resolve, 0);
             encoder.copy_buffer_to_buffer(resolve, 0, readback, 0, u64::from(queries) * 8);
@@ -830,37 +888,54 @@ impl Renderer {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| RenderError::Gpu(e.to_string()))?;
         let wall_gpu_ms = submit_started.elapsed().as_secs_f64() * 1e3;
-        (stats.gpu_ms, stats.puff_gpu_ms, stats.gpu_timed_by) =
-            match self.read_timestamps(puff_count > 0) {
-                Some((frame_ms, puff_ms)) => (frame_ms, puff_ms, "timestamp_query"),
-                None => (wall_gpu_ms, 0.0, "submit_to_completion"),
-            };
+        let spans = PassQueries {
+            count: queries,
+            puff: puff_start.zip(puff_end),
+            // Clouds end at the puffs' start when they go first, else at the frame's end.
+            cloud: cloud_start.map(|b| {
+                (
+                    b,
+                    if clouds_first {
+                        puff_start.unwrap_or(1)
+                    } else {
+                        1
+                    },
+                )
+            }),
+        };
+        (
+            stats.gpu_ms,
+            stats.puff_gpu_ms,
+            stats.cloud_gpu_ms,
+            stats.gpu_timed_by,
+        ) = match self.read_timestamps(&spans) {
+            Some((frame_ms, puff_ms, cloud_ms)) => (frame_ms, puff_ms, cloud_ms, "timestamp_query"),
+            None => (wall_gpu_ms, 0.0, 0.0, "submit_to_completion"),
+        };
         Ok(stats)
     }
 
-    /// (frame, puff passes) GPU milliseconds from the timestamp queries.
-    fn read_timestamps(&self, with_puffs: bool) -> Option<(f64, f64)> {
+    /// (frame, puff passes, cloud pass) GPU milliseconds from the timestamp queries.
+    fn read_timestamps(&self, spans: &PassQueries) -> Option<(f64, f64, f64)> {
         let (_, _, readback) = self.timestamps.as_ref()?;
         let slice = readback.slice(..);
         crate::gpu::map_for_reading(&self.gpu, &slice).ok()?;
-        let ticks: [u64; 3] = {
+        let ticks: Vec<u64> = {
             let data = slice.get_mapped_range().ok()?;
             let v: &[u64] = bytemuck::cast_slice(&data);
-            [
-                v.first().copied()?,
-                v.get(1).copied()?,
-                v.get(2).copied().unwrap_or(0),
-            ]
+            v.iter().take(spans.count as usize).copied().collect()
         };
         readback.unmap();
         let period_ms = f64::from(self.gpu.queue.get_timestamp_period()) / 1e6;
-        let frame_ms = ticks[1].saturating_sub(ticks[0]) as f64 * period_ms;
-        let puff_ms = if with_puffs {
-            ticks[1].saturating_sub(ticks[2]) as f64 * period_ms
-        } else {
-            0.0
+        let span = |(begin, end): (u32, u32)| -> f64 {
+            let at = |i: u32| ticks.get(i as usize).copied().unwrap_or(0);
+            at(end).saturating_sub(at(begin)) as f64 * period_ms
         };
-        Some((frame_ms, puff_ms))
+        Some((
+            span((0, 1)),
+            spans.puff.map_or(0.0, span),
+            spans.cloud.map_or(0.0, span),
+        ))
     }
 
     fn write_globals(

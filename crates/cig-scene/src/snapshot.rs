@@ -117,6 +117,11 @@ pub struct FrameSnapshot {
     /// Fraction of the sky covered by cloud, 0..1 (the natural illuminance's sky-condition
     /// input; set from the cloud layers).
     pub cloud_cover_fraction: f64,
+    /// Cloud layers to draw (at most `cig_environment::clouds::MAX_CLOUD_LAYERS`; bases
+    /// above the WGS84 ellipsoid — the world adds the geoid to the layers' MSL heights).
+    pub cloud_layers: Vec<cig_environment::clouds::CloudLayer>,
+    /// The world-fixed origin of the clouds' noise plane (keep it fixed while the eye moves).
+    pub cloud_origin: cig_environment::clouds::CloudOrigin,
 }
 
 impl FrameSnapshot {
@@ -133,6 +138,8 @@ impl FrameSnapshot {
             puffs: Vec::new(),
             puff_origin_ecef_m: glam::DVec3::ZERO,
             cloud_cover_fraction: 0.0,
+            cloud_layers: Vec::new(),
+            cloud_origin: cig_environment::clouds::CloudOrigin::default(),
         }
     }
 }
