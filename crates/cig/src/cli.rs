@@ -407,6 +407,16 @@ pub struct RenderArgs {
     /// `--eye`) the visibility is VISIBILITY_M, so valleys are fogged and hills clear.
     #[arg(long, value_name = "TOP_M,VISIBILITY_M", allow_hyphen_values = true)]
     pub ground_fog: Option<String>,
+    /// A cloud layer "BASE_M,THICKNESS_M,COVERAGE[,KIND[,WIND_MPS,FROM_DEG]]": base above the
+    /// WGS84 ellipsoid (as `--eye`), coverage 0..1, kind cumulus (default), stratus,
+    /// stratocumulus, nimbostratus, cumulonimbus, altocumulus, altostratus, cirrus,
+    /// cirrocumulus or cirrostratus; the layer drifts with its wind for --time. Repeatable (4).
+    #[arg(
+        long = "cloud",
+        value_name = "BASE_M,THICKNESS_M,COVERAGE[,KIND[,WIND_MPS,FROM_DEG]]",
+        allow_hyphen_values = true
+    )]
+    pub clouds: Vec<String>,
     /// Draw the terrain as a wireframe.
     #[arg(long)]
     pub wireframe: bool,
