@@ -15,8 +15,9 @@
 //! chapter VII). The cover strength `w` is 0 where the uniform noise value `u < 1 - coverage`
 //! and ramps to 1 over `EDGE`, so the covered area fraction is `coverage` (exact for the texel
 //! values). Inside the slab the kind's vertical profile shapes it: heaped kinds (cumulus ...)
-//! fill the slab from its base up to `w^0.5` of its thickness, sheet kinds (stratus ...) fill
-//! all of it with soft top and bottom; the extinction coefficient is the kind's times `w`.
+//! fill the slab from its base up to `sqrt(h)` of its thickness, `h = (u - (1 - coverage)) /
+//! coverage` (domes, tallest where the noise peaks), sheet kinds (stratus ...) fill all of it
+//! with soft top and bottom; the extinction coefficient is the kind's times `w`.
 //! Optical depth along a segment is integrated numerically (midpoint rule, steps under half a
 //! texel and a sixteenth of the slab), the sun's transmittance to a ground point is
 //! `exp(-optical depth along the sun ray)`, and the sky's cloud cover for the natural
@@ -311,19 +312,32 @@ impl CloudLayer {
         )
     }
 
-    /// Density profile over the slab: the extinction coefficient, 1/m, for cover strength `w`
-    /// at `zn` (0 at the base, 1 at the top).
-    pub fn profile_per_m(&self, w: f64, zn: f64) -> f64 {
+    /// Density profile over the slab: the extinction coefficient, 1/m, for the noise value
+    /// `u` at `zn` (0 at the base, 1 at the top): the cover strength `w` times the kind's
+    /// extinction where the profile fills the slab. A heaped kind's column rises to
+    /// `sqrt(h)` of the slab, `h` the noise value's height above the cover threshold over the
+    /// coverage (domes, highest where the noise is); a sheet fills the slab, soft at its top
+    /// and bottom.
+    pub fn profile_per_m(&self, u: f64, zn: f64) -> f64 {
+        let w = cover_strength(u, self.coverage);
         if !(0.0..=1.0).contains(&zn) || w <= 0.0 {
             return 0.0;
         }
         let params = self.kind.params();
         let fill = match params.shape {
-            CloudShape::Heap => ((w.sqrt() - zn) * 10.0).clamp(0.0, 1.0),
+            CloudShape::Heap => {
+                ((heap_height(u, self.coverage).sqrt() - zn) * 10.0).clamp(0.0, 1.0)
+            }
             CloudShape::Sheet => (zn.min(1.0 - zn) * 10.0).clamp(0.0, 1.0),
         };
         params.extinction_per_m * w * fill
     }
+}
+
+/// Height strength of a heaped column (0..1): how far the noise value lies above the cover
+/// threshold, over the coverage.
+pub fn heap_height(u: f64, coverage: f64) -> f64 {
+    ((u - (1.0 - coverage)) / coverage.max(1e-6)).clamp(0.0, 1.0)
 }
 
 /// Cover strength for a uniform noise value `u` and a coverage: 0 where `u < 1 - coverage`,
@@ -522,13 +536,21 @@ impl CloudField {
         self.layers.iter().map(|(l, _)| l)
     }
 
-    /// Cover strength (0..1) of layer `index` over a plane point at a time; 0 for no layer.
-    pub fn cover_at(&self, index: usize, east_m: f64, north_m: f64, t_s: f64) -> f64 {
+    /// The uniform noise value (0..1) of layer `index` over a plane point at a time; 0 for no
+    /// layer.
+    pub fn noise_at(&self, index: usize, east_m: f64, north_m: f64, t_s: f64) -> f64 {
         let Some((layer, noise)) = self.layers.get(index) else {
             return 0.0;
         };
         let (x, y) = layer.noise_coords(east_m, north_m, t_s);
-        cover_strength(noise.sample(x, y), layer.coverage)
+        noise.sample(x, y)
+    }
+
+    /// Cover strength (0..1) of layer `index` over a plane point at a time; 0 for no layer.
+    pub fn cover_at(&self, index: usize, east_m: f64, north_m: f64, t_s: f64) -> f64 {
+        self.layers.get(index).map_or(0.0, |(layer, _)| {
+            cover_strength(self.noise_at(index, east_m, north_m, t_s), layer.coverage)
+        })
     }
 
     /// Extinction coefficient of all layers at a point and time, 1/m.
@@ -539,8 +561,8 @@ impl CloudField {
             if !(0.0..=1.0).contains(&zn) {
                 continue;
             }
-            let w = self.cover_at(i, p.east_m, p.north_m, t_s);
-            sum += layer.profile_per_m(w, zn);
+            let u = self.noise_at(i, p.east_m, p.north_m, t_s);
+            sum += layer.profile_per_m(u, zn);
         }
         sum
     }
@@ -579,8 +601,8 @@ impl CloudField {
             for k in 0..steps {
                 let p = va + d * (lo + (k as f64 + 0.5) * ds);
                 let zn = ((p.z - layer.base_m) / layer.thickness_m).clamp(0.0, 1.0);
-                let w = self.cover_at(i, p.x, p.y, t_s);
-                tau += layer.profile_per_m(w, zn) * ds * length;
+                let u = self.noise_at(i, p.x, p.y, t_s);
+                tau += layer.profile_per_m(u, zn) * ds * length;
             }
         }
         tau

@@ -173,10 +173,7 @@ fn one_u64() -> u64 {
 impl Scenario {
     /// The scenario's cloud layers (checked when the scenario was parsed).
     pub fn cloud_layers(&self) -> Vec<cig_environment::clouds::CloudLayer> {
-        self.clouds
-            .iter()
-            .filter_map(|c| c.layer().ok())
-            .collect()
+        self.clouds.iter().filter_map(|c| c.layer().ok()).collect()
     }
 }
 
@@ -197,14 +194,24 @@ impl ScenarioCloud {
 
     fn check(&self, key: &str) -> Result<(), ScenarioError> {
         use cig_environment::clouds::{BASE_RANGE_M, MAX_THICKNESS_M, MAX_WIND_SPEED_MPS};
-        check_finite(&format!("{key}.base_m"), self.base_m, BASE_RANGE_M.0, BASE_RANGE_M.1)?;
+        check_finite(
+            &format!("{key}.base_m"),
+            self.base_m,
+            BASE_RANGE_M.0,
+            BASE_RANGE_M.1,
+        )?;
         if !(self.thickness_m.is_finite() && self.thickness_m > 0.0) {
             return Err(value_error(
                 format!("{key}.thickness_m"),
                 format!("{} is not above 0", self.thickness_m),
             ));
         }
-        check_finite(&format!("{key}.thickness_m"), self.thickness_m, 0.0, MAX_THICKNESS_M)?;
+        check_finite(
+            &format!("{key}.thickness_m"),
+            self.thickness_m,
+            0.0,
+            MAX_THICKNESS_M,
+        )?;
         check_finite(&format!("{key}.coverage"), self.coverage, 0.0, 1.0)?;
         check_finite(
             &format!("{key}.wind_speed_mps"),
@@ -212,7 +219,12 @@ impl ScenarioCloud {
             0.0,
             MAX_WIND_SPEED_MPS,
         )?;
-        check_finite(&format!("{key}.wind_from_deg"), self.wind_from_deg, -360.0, 360.0)?;
+        check_finite(
+            &format!("{key}.wind_from_deg"),
+            self.wind_from_deg,
+            -360.0,
+            360.0,
+        )?;
         self.layer()
             .map_err(|reason| value_error(format!("{key}.kind"), reason))?;
         Ok(())
@@ -854,7 +866,10 @@ kind = "Cirrus"
         assert_eq!(layers.len(), 2);
         assert_eq!(layers[0].kind, CloudKind::Stratocumulus);
         assert_eq!((layers[0].base_m, layers[0].thickness_m), (1200.0, 600.0));
-        assert_eq!((layers[0].wind_speed_mps, layers[0].wind_from_deg), (8.0, 270.0));
+        assert_eq!(
+            (layers[0].wind_speed_mps, layers[0].wind_from_deg),
+            (8.0, 270.0)
+        );
         assert_eq!(layers[0].seed, 3);
         assert_eq!(layers[1].kind, CloudKind::Cirrus);
         assert_eq!((layers[1].wind_speed_mps, layers[1].seed), (0.0, 1));
@@ -864,10 +879,26 @@ kind = "Cirrus"
     #[test]
     fn bad_cloud_values_name_the_key() {
         let cases = [
-            ("coverage = 0.5", "coverage = 1.5", "clouds[0].coverage: 1.5 is outside 0..1"),
-            ("thickness_m = 600", "thickness_m = 0", "clouds[0].thickness_m: 0 is not above 0"),
-            ("base_m = 7000", "base_m = 90000", "clouds[1].base_m: 90000 is outside -500..25000"),
-            ("kind = \"Cirrus\"", "kind = \"fog\"", "clouds[1].kind: \"fog\" is not a cloud type"),
+            (
+                "coverage = 0.5",
+                "coverage = 1.5",
+                "clouds[0].coverage: 1.5 is outside 0..1",
+            ),
+            (
+                "thickness_m = 600",
+                "thickness_m = 0",
+                "clouds[0].thickness_m: 0 is not above 0",
+            ),
+            (
+                "base_m = 7000",
+                "base_m = 90000",
+                "clouds[1].base_m: 90000 is outside -500..25000",
+            ),
+            (
+                "kind = \"Cirrus\"",
+                "kind = \"fog\"",
+                "clouds[1].kind: \"fog\" is not a cloud type",
+            ),
             (
                 "wind_speed_mps = 8",
                 "wind_speed_mps = -2",
@@ -886,7 +917,10 @@ kind = "Cirrus"
         }
         let bad = CLOUDS.replace("seed = 3", "seed = 3\ncolour = 1");
         let e = Scenario::from_toml(&bad).expect_err("refused").to_string();
-        assert!(e.contains("unknown field `colour`") && !e.contains('\n'), "{e}");
+        assert!(
+            e.contains("unknown field `colour`") && !e.contains('\n'),
+            "{e}"
+        );
         let five = CLOUDS.repeat(3);
         let e = Scenario::from_toml(&five).expect_err("refused").to_string();
         assert_eq!(e, "clouds: 6 layers; at most 4");

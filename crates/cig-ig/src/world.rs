@@ -1040,10 +1040,12 @@ impl IgWorld {
             .collect();
         snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&self.clouds);
         snapshot.cloud_origin = self.cloud_origin.unwrap_or_else(|| {
-            views.first().map_or(CloudOrigin::default(), |v| CloudOrigin {
-                lat_deg: v.eye.lat_deg.round(),
-                lon_deg: v.eye.lon_deg.round(),
-            })
+            views
+                .first()
+                .map_or(CloudOrigin::default(), |v| CloudOrigin {
+                    lat_deg: v.eye.lat_deg.round(),
+                    lon_deg: v.eye.lon_deg.round(),
+                })
         });
         if let Some(first) = views.first() {
             let origin = first.eye.to_ecef();

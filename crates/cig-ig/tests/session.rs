@@ -1256,7 +1256,10 @@ fn the_hosts_cloud_layers_reach_the_snapshot_clamped_and_reported() {
     let (a, b) = (s.cloud_layers[0], s.cloud_layers[1]);
     assert_eq!((a.kind, b.kind), (CloudKind::Stratus, CloudKind::Cumulus));
     assert_eq!((a.coverage, b.coverage), (1.0, 0.4));
-    assert!((a.base_m - (2000.0 + f64::from(GEOID_M))).abs() < 1e-3, "{a:?}");
+    assert!(
+        (a.base_m - (2000.0 + f64::from(GEOID_M))).abs() < 1e-3,
+        "{a:?}"
+    );
     assert_eq!((a.thickness_m, a.wind_speed_mps), (800.0, 12.0));
     assert_eq!(a.wind_from_deg, 90.0, "the direction wraps into 0..360");
     assert_eq!(s.cloud_cover_fraction, 1.0);

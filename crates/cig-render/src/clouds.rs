@@ -10,11 +10,13 @@
 //! of the multisampled depth, as the puff pass reads it) and, per pixel, finds the nearest part
 //! of the view ray inside each slab (heights along the ray with the earth's curvature, the
 //! `height_above_eye` parabola of common.wgsl), cut at the scene and at `FAR_M`, and marches it
-//! with 8 midpoint samples: extinction from the same cover strength and vertical profile as the
+//! with 8 samples, offset per pixel by interleaved gradient noise (Jimenez, "Next generation
+//! post processing in Call of Duty: Advanced Warfare", SIGGRAPH 2014) so the slices of a
+//! fixed-step march show as fine noise rather than bands: extinction from the same cover strength and vertical profile as the
 //! CPU model, single scattering of the sun (a two-lobe Henyey-Greenstein phase, forward peak
 //! g = 0.6) dimmed by the depth into the layer toward the sun with a floor for multiple
 //! scattering, plus the sky's ambient light; accumulated front to back (Beer-Lambert). Clouds
-//! fade with the frame's fog at their mean distance. For terrain pixels the same pass dims the
+//! take the frame's fog at their mean distance, as the terrain does. For terrain pixels the same pass dims the
 //! sun's share of the light (sun against ambient luminance) by the transmittance of the slant
 //! column through each layer above at the layer's mid-height. Output blends as
 //! `clouds + scene * (transmittance * shade)`, pre-exposed. With the eye inside a slab the
@@ -26,7 +28,7 @@
 //! multiple-scattering floor and the height-fraction profiles are theirs in spirit, much
 //! simplified; the NPS thesis (source 000, chapter VII) lists its clouds' lack of motion.
 //!
-//! Limits: 8 samples per layer give banding in thick clouds seen edge-on; the field is 2-D
+//! Limits: 8 samples per layer leave fine noise on thick clouds seen edge-on; the field is 2-D
 //! (no overhangs); self-shadowing is by height only; the shade ignores the terrain's normal and
 //! uses one column per layer; only depth sample 0 is read (cloud edges in front of terrain
 //! edges are not smoothed); clouds beyond `FAR_M` (80 km) are not drawn; on wgpu's GL backend,
@@ -40,6 +42,8 @@ use cig_scene::{Camera, FrameSnapshot};
 
 /// Farthest distance along a ray that clouds are drawn, metres.
 pub const FAR_M: f64 = 80_000.0;
+/// Format of the half-resolution cloud frame (radiance, and what the scene keeps).
+const HALF_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -62,13 +66,18 @@ pub(crate) struct CloudPass {
     usable: bool,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::RenderPipeline,
+    composite_layout: wgpu::BindGroupLayout,
+    composite_pipeline: wgpu::RenderPipeline,
     uniform: wgpu::Buffer,
     noise: wgpu::Texture,
     noise_view: wgpu::TextureView,
     sampler: wgpu::Sampler,
+    /// Bilinear, clamped: the composite's upsampling.
+    half_sampler: wgpu::Sampler,
     /// Seeds of the noise now in the texture's channels.
     seeds: Vec<u64>,
-    bind: Option<wgpu::BindGroup>,
+    /// The half-resolution frame and the bind groups of the march and the composite.
+    targets: Option<(wgpu::TextureView, wgpu::BindGroup, wgpu::BindGroup)>,
     /// Lowest base of this frame's layers above the eye, metres (for the order against puffs).
     lowest_base_above_eye_m: f64,
 }
@@ -119,49 +128,60 @@ impl CloudPass {
             "const NEAR_PLANE_M: f32 = {NEAR_PLANE_M:?};\n{}",
             include_str!("shaders/clouds.wgsl")
         );
-        let module = shader(gpu, "clouds", &source);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("clouds"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
+        let composite_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("clouds composite"),
+            entries: &[
+                uniform_entry(0),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("clouds"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: colour_format,
-                    // frame = clouds + frame * alpha; the frame's alpha stays.
-                    blend: Some(wgpu::BlendState {
-                        color: wgpu::BlendComponent {
-                            src_factor: wgpu::BlendFactor::One,
-                            dst_factor: wgpu::BlendFactor::SrcAlpha,
-                            operation: wgpu::BlendOperation::Add,
-                        },
-                        alpha: wgpu::BlendComponent {
-                            src_factor: wgpu::BlendFactor::Zero,
-                            dst_factor: wgpu::BlendFactor::One,
-                            operation: wgpu::BlendOperation::Add,
-                        },
-                    }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
+        let pipeline = full_screen_pipeline(
+            gpu,
+            "clouds",
+            &shader(gpu, "clouds", &source),
+            &layout,
+            HALF_FORMAT,
+            None,
+        );
+        let composite_pipeline = full_screen_pipeline(
+            gpu,
+            "clouds composite",
+            &shader(
+                gpu,
+                "clouds composite",
+                include_str!("shaders/clouds_composite.wgsl"),
+            ),
+            &composite_layout,
+            colour_format,
+            // frame = clouds + frame * alpha; the frame's alpha stays.
+            Some(wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::SrcAlpha,
+                    operation: wgpu::BlendOperation::Add,
+                },
+                alpha: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::Zero,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                },
             }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("clouds"),
             size: std::mem::size_of::<CloudsUniform>() as u64,
@@ -191,16 +211,25 @@ impl CloudPass {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
+        let half_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("clouds half frame"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
         CloudPass {
+            half_sampler,
             usable,
             layout,
             pipeline,
+            composite_layout,
+            composite_pipeline,
             uniform,
             noise,
             noise_view,
             sampler,
             seeds: Vec::new(),
-            bind: None,
+            targets: None,
             lowest_base_above_eye_m: f64::INFINITY,
         }
     }
@@ -214,12 +243,30 @@ impl CloudPass {
         }
     }
 
-    /// Binds the frame's multisampled depth; called whenever the renderer makes its targets.
-    pub(crate) fn resize(&mut self, gpu: &Gpu, depth: &wgpu::TextureView, globals: &wgpu::Buffer) {
+    /// Makes the half-resolution frame for frames of `size` and binds the frame's
+    /// multisampled depth; called whenever the renderer makes its targets.
+    pub(crate) fn resize(
+        &mut self,
+        gpu: &Gpu,
+        size: (u32, u32),
+        depth: &wgpu::TextureView,
+        globals: &wgpu::Buffer,
+    ) {
         if !self.usable {
             return;
         }
-        self.bind = Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let device = &gpu.device;
+        let half = crate::gpu::render_target(
+            device,
+            "clouds half frame",
+            (size.0.div_ceil(2).max(1), size.1.div_ceil(2).max(1)),
+            HALF_FORMAT,
+            1,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+            &[],
+        )
+        .create_view(&Default::default());
+        let march = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("clouds"),
             layout: &self.layout,
             entries: &[
@@ -244,7 +291,26 @@ impl CloudPass {
                     resource: wgpu::BindingResource::TextureView(depth),
                 },
             ],
-        }));
+        });
+        let composite = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("clouds composite"),
+            layout: &self.composite_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: globals.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&half),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.half_sampler),
+                },
+            ],
+        });
+        self.targets = Some((half, march, composite));
     }
 
     /// Uploads the snapshot's layers for a view (invalid layers are left out; the world
@@ -356,38 +422,106 @@ impl CloudPass {
         self.lowest_base_above_eye_m > 0.0
     }
 
-    /// Records the pass onto `target` (the resolved frame). Returns the draw calls recorded.
+    /// Records the march into the half-resolution frame and its composite onto `target`
+    /// (the resolved frame). Returns the draw calls recorded.
     pub(crate) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
         timestamps: Option<(&wgpu::QuerySet, u32, Option<u32>)>,
     ) -> u32 {
-        let Some(bind) = self.bind.as_ref() else {
+        let Some((half, march, composite)) = self.targets.as_ref() else {
             return 0;
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("clouds"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: timestamps.map(|(set, begin, end)| wgpu::RenderPassTimestampWrites {
-                query_set: set,
-                beginning_of_pass_write_index: Some(begin),
-                end_of_pass_write_index: end,
-            }),
-            ..Default::default()
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, bind, &[]);
-        pass.draw(0..3, 0..1);
-        1
+        let passes = [
+            (
+                half,
+                march,
+                &self.pipeline,
+                wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+            ),
+            (
+                target,
+                composite,
+                &self.composite_pipeline,
+                wgpu::LoadOp::Load,
+            ),
+        ];
+        for (i, (view, bind, pipeline, load)) in passes.into_iter().enumerate() {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("clouds"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: timestamps.and_then(|(set, begin, end)| {
+                    let (b, e) = if i == 0 {
+                        (Some(begin), None)
+                    } else {
+                        (None, end)
+                    };
+                    (b.is_some() || e.is_some()).then_some(wgpu::RenderPassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: b,
+                        end_of_pass_write_index: e,
+                    })
+                }),
+                ..Default::default()
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, bind, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        2
     }
+}
+
+/// A full-screen triangle pipeline (`vs_main`, `fs_main`) into one single-sample target.
+fn full_screen_pipeline(
+    gpu: &Gpu,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::BindGroupLayout,
+    format: wgpu::TextureFormat,
+    blend: Option<wgpu::BlendState>,
+) -> wgpu::RenderPipeline {
+    let pipeline_layout = gpu
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(layout)],
+            immediate_size: 0,
+        });
+    gpu.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format,
+                    blend,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
 }

@@ -633,7 +633,8 @@ impl Renderer {
             };
             self.puffs
                 .resize(&self.gpu, size, &targets.depth, &self.globals);
-            self.clouds.resize(&self.gpu, &targets.depth, &self.globals);
+            self.clouds
+                .resize(&self.gpu, size, &targets.depth, &self.globals);
             self.targets = Some(targets);
         }
     }

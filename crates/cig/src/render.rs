@@ -153,10 +153,7 @@ pub fn parse_smoke(text: &str) -> anyhow::Result<FireSpec> {
 
 /// Parses a `--cloud` layer "BASE_M,THICKNESS_M,COVERAGE[,KIND[,WIND_MPS,FROM_DEG]]" (the
 /// `seed` of the layer's pattern given).
-pub fn parse_cloud(
-    text: &str,
-    seed: u64,
-) -> anyhow::Result<cig_environment::clouds::CloudLayer> {
+pub fn parse_cloud(text: &str, seed: u64) -> anyhow::Result<cig_environment::clouds::CloudLayer> {
     use cig_environment::clouds::{CloudKind, CloudLayer};
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
     let form = "BASE_M,THICKNESS_M,COVERAGE[,KIND[,WIND_MPS,FROM_DEG]]";

@@ -225,7 +225,10 @@ fn bad_cloud_values_give_one_line_errors() {
         let mut args = render_args(&db, &out);
         args.extend(["--cloud".to_string(), value.to_string()]);
         let line = one_line_error(&cig().args(&args).assert().failure());
-        assert!(line.contains(expect) && line.contains("--cloud"), "{value}: {line}");
+        assert!(
+            line.contains(expect) && line.contains("--cloud"),
+            "{value}: {line}"
+        );
     }
     let mut args = render_args(&db, &out);
     for _ in 0..5 {

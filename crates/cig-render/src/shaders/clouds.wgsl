@@ -1,7 +1,8 @@
 // Cloud layers (see clouds.rs): a full-screen pass that marches each view ray's segment inside
 // every layer's slab, limited by the scene's depth, and darkens terrain in the clouds' shade.
-// Output with blending `src + dst * src_alpha`: rgb the clouds' pre-exposed in-scattered
-// radiance, alpha what the scene behind keeps (transmittance times shade).
+// Drawn at half resolution into a float target: rgb the clouds' pre-exposed in-scattered
+// radiance, alpha what the scene behind keeps (transmittance times shade); `fs_composite`
+// upsamples it onto the frame with blending `src + dst * src_alpha`.
 
 struct CloudLayerGpu {
     // x, y: the eye's noise coordinates (texels); z: base relative to the eye (m); w: thickness.
@@ -51,24 +52,30 @@ fn cover(u: f32, coverage: f32, width: f32) -> f32 {
     return clamp((u - threshold) / width, 0.0, 1.0);
 }
 
-// Extinction for cover strength w at zn in the slab (clouds.rs `profile_per_m`).
-fn profile(layer: CloudLayerGpu, w: f32, zn: f32) -> f32 {
+// Height strength of a heaped column (clouds.rs `heap_height`).
+fn heap_height(u: f32, coverage: f32) -> f32 {
+    return clamp((u - (1.0 - coverage)) / max(coverage, 1e-6), 0.0, 1.0);
+}
+
+// Extinction for noise value u at zn in the slab (clouds.rs `profile_per_m`).
+fn profile(layer: CloudLayerGpu, u: f32, zn: f32) -> f32 {
+    let w = cover(u, layer.params.w, layer.shape.y);
     if (zn < 0.0 || zn > 1.0 || w <= 0.0) {
         return 0.0;
     }
     var fill: f32;
     if (layer.shape.x > 0.5) {
-        fill = clamp((sqrt(w) - zn) * 10.0, 0.0, 1.0);
+        fill = clamp((sqrt(heap_height(u, layer.params.w)) - zn) * 10.0, 0.0, 1.0);
     } else {
         fill = clamp(min(zn, 1.0 - zn) * 10.0, 0.0, 1.0);
     }
     return layer.params.z * w * fill;
 }
 
-// Fraction of the slab's thickness a column of cover strength w fills (the profile's integral).
-fn column_fill(layer: CloudLayerGpu, w: f32) -> f32 {
+// Fraction of the slab's thickness a column of noise value u fills (the profile's integral).
+fn column_fill(layer: CloudLayerGpu, u: f32) -> f32 {
     if (layer.shape.x > 0.5) {
-        let top = sqrt(w);
+        let top = sqrt(heap_height(u, layer.params.w));
         if (top >= 0.1) {
             return top - 0.05;
         }
@@ -77,13 +84,14 @@ fn column_fill(layer: CloudLayerGpu, w: f32) -> f32 {
     return 0.9;
 }
 
-fn cover_at(index: i32, layer: CloudLayerGpu, rel: vec3<f32>) -> f32 {
+// The layer's uniform noise value over an eye-relative point.
+fn noise_at(index: i32, layer: CloudLayerGpu, rel: vec3<f32>) -> f32 {
     let coords = layer.place.xy + vec2<f32>(
         dot(rel, c.east.xyz) * layer.params.x,
         dot(rel, c.north.xyz) * layer.params.y,
     );
     let texel = textureSampleLevel(noise, noise_sampler, coords / 256.0, 0.0);
-    return cover(texel[index], layer.params.w, layer.shape.y);
+    return texel[index];
 }
 
 // Roots (smaller, larger) of height_above_eye(dir * s) = h along a ray rising `dz`: the
@@ -141,7 +149,8 @@ fn luminance(c_: vec3<f32>) -> f32 {
 
 @fragment
 fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
-    let pixel = vec2<i32>(in.clip.xy);
+    // This pass runs at half resolution: the scene pixel under the centre of this one.
+    let pixel = min(vec2<i32>(in.clip.xy * 2.0), vec2<i32>(textureDimensions(scene_depth)) - 1);
     let t = g.tangents;
     let x_tan = mix(-t.x, t.y, in.ndc.x * 0.5 + 0.5);
     let y_tan = mix(-t.z, t.w, in.ndc.y * 0.5 + 0.5);
@@ -161,6 +170,9 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
     let cos_sun = dot(dir, sun);
     let phase = 0.6 * henyey_greenstein(cos_sun, 0.6) + 0.4 * henyey_greenstein(cos_sun, -0.2);
 
+    // Each pixel's samples start at its own fraction of a step (interleaved gradient noise,
+    // Jimenez 2014): the slices of a fixed-step march become fine noise instead of bands.
+    let jitter = fract(52.9829189 * fract(dot(in.clip.xy, vec2<f32>(0.06711056, 0.00583715))));
     var transmittance = 1.0;
     var radiance = vec3<f32>(0.0);
     var distance_sum = 0.0;
@@ -175,11 +187,10 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
         }
         let ds = (s1 - s0) / f32(STEPS);
         for (var k = 0; k < STEPS; k++) {
-            let s = s0 + (f32(k) + 0.5) * ds;
+            let s = s0 + (f32(k) + jitter) * ds;
             let rel = dir * s;
             let zn = (height_above_eye(rel) - layer.place.z) / layer.place.w;
-            let w = cover_at(i, layer, rel);
-            let sigma = profile(layer, w, zn);
+            let sigma = profile(layer, noise_at(i, layer, rel), zn);
             if (sigma <= 0.0) {
                 continue;
             }
@@ -195,11 +206,15 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
             transmittance *= 1.0 - a;
         }
     }
-    // Distant clouds fade into the fog and out before the farthest distance marched.
+    // Clouds are fogged as the terrain is, at their mean distance, and fade out before the
+    // farthest distance marched.
     var keep = 1.0;
+    var fogged = radiance;
     if (weight_sum > 1e-6) {
         let mean_m = distance_sum / weight_sum;
-        keep = fog_factor(mean_m) * (1.0 - smoothstep(0.7 * far_m, far_m, mean_m));
+        let f = fog_factor(mean_m);
+        fogged = f * radiance + (1.0 - f) * (1.0 - transmittance) * g.fog_colour.rgb;
+        keep = 1.0 - smoothstep(0.7 * far_m, far_m, mean_m);
     }
     var behind = 1.0 - keep * (1.0 - transmittance);
 
@@ -216,13 +231,15 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
                 continue;
             }
             let q = point + sun * (rise / sun_up);
-            let w = cover_at(i, layer, q);
-            let tau = layer.params.z * w * column_fill(layer, w) * layer.place.w / sun_up;
+            let u = noise_at(i, layer, q);
+            let w = cover(u, layer.params.w, layer.shape.y);
+            let tau = layer.params.z * w * column_fill(layer, u) * layer.place.w / sun_up;
             shade *= exp(-tau);
         }
         let direct = luminance(g.sun_colour.rgb) * sun_up;
         let share = direct / max(direct + luminance(g.ambient.rgb), 1e-6);
         behind *= mix(1.0, shade, share * fog_factor(scene_m));
     }
-    return vec4<f32>(exposed(radiance * keep), behind);
+    return vec4<f32>(exposed(fogged * keep), behind);
 }
+
