@@ -610,16 +610,12 @@ impl IgWorld {
             from_deg: f64::from(a.wind_direction_deg).rem_euclid(360.0),
         });
         let at = self.first_eye.unwrap_or(Geodetic::new(0.0, 0.0, 0.0));
-        let (cover, ceiling_m) = environment
-            .weather
-            .values()
-            .filter(|w| w.weather_enable && (1..=3).contains(&w.layer_id))
-            .map(|w| {
-                (
-                    (f64::from(w.coverage_pct) / 100.0).clamp(0.0, 1.0),
-                    f64::from(w.base_elevation_m),
-                )
-            })
+        // Cloud cover and ceiling from this frame's cloud layers (the operator's, the host's
+        // CIGI cloud layers over the eye, or the scenario's; clamped, "no cloud" types left out).
+        let (cover, ceiling_m) = self
+            .clouds
+            .iter()
+            .map(|l| (l.coverage, l.base_m))
             .fold((0.0, 10_000.0), |(c, b), (c2, b2)| {
                 (f64::max(c, c2), f64::min(b, b2))
             });
