@@ -6,11 +6,12 @@
 //! metres from the snapshot's world-fixed origin minus the wind's displacement at the frame's
 //! time, reduced modulo the tile in f64), the texels per metre (with the equirectangular
 //! stretch at the eye), the slab's base and thickness relative to the eye, extinction, coverage
-//! and profile. After the opaque scene, one full-screen pass reads the scene's depth (sample 0
-//! of the multisampled depth, as the puff pass reads it) and, per pixel, finds the nearest part
+//! and profile. After the opaque scene, a full-screen pass at half resolution (a quarter of
+//! the pixels, into a float target) reads the scene's depth (sample 0 of the multisampled
+//! depth, as the puff pass reads it) and, per pixel, finds the nearest part
 //! of the view ray inside each slab (heights along the ray with the earth's curvature, the
 //! `height_above_eye` parabola of common.wgsl), cut at the scene and at `FAR_M`, and marches it
-//! with 8 samples, offset per pixel by interleaved gradient noise (Jimenez, "Next generation
+//! with 3 to 8 samples (one per half thickness of path), offset per pixel by interleaved gradient noise (Jimenez, "Next generation
 //! post processing in Call of Duty: Advanced Warfare", SIGGRAPH 2014) so the slices of a
 //! fixed-step march show as fine noise rather than bands: extinction from the same cover strength and vertical profile as the
 //! CPU model, single scattering of the sun (a two-lobe Henyey-Greenstein phase, forward peak
@@ -18,8 +19,9 @@
 //! scattering, plus the sky's ambient light; accumulated front to back (Beer-Lambert). Clouds
 //! take the frame's fog at their mean distance, as the terrain does. For terrain pixels the same pass dims the
 //! sun's share of the light (sun against ambient luminance) by the transmittance of the slant
-//! column through each layer above at the layer's mid-height. Output blends as
-//! `clouds + scene * (transmittance * shade)`, pre-exposed. With the eye inside a slab the
+//! column through each layer above at the layer's mid-height. A second full-screen pass
+//! upsamples the half-resolution result with a four-tap tent filter and blends it onto the
+//! frame as `clouds + scene * (transmittance * shade)`, pre-exposed. With the eye inside a slab the
 //! segment starts at the eye, so flying into a cloud fogs the view and flying out clears it.
 //!
 //! Sources: Beer-Lambert and single scattering as in Hillaire, "Physically based sky, atmosphere
@@ -28,10 +30,10 @@
 //! multiple-scattering floor and the height-fraction profiles are theirs in spirit, much
 //! simplified; the NPS thesis (source 000, chapter VII) lists its clouds' lack of motion.
 //!
-//! Limits: 8 samples per layer leave fine noise on thick clouds seen edge-on; the field is 2-D
+//! Limits: at most 8 samples per layer leave fine noise on thick clouds seen edge-on; the field is 2-D
 //! (no overhangs); self-shadowing is by height only; the shade ignores the terrain's normal and
-//! uses one column per layer; only depth sample 0 is read (cloud edges in front of terrain
-//! edges are not smoothed); clouds beyond `FAR_M` (80 km) are not drawn; on wgpu's GL backend,
+//! uses one column per layer; the half resolution and the tent filter soften cloud edges
+//! against terrain silhouettes (a halo of up to two pixels) and the shade's edges; clouds beyond `FAR_M` (80 km) are not drawn; on wgpu's GL backend,
 //! which cannot sample multisampled depth, clouds are not drawn at all (logged once).
 
 use crate::gpu::Gpu;

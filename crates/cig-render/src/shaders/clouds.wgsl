@@ -27,7 +27,9 @@ struct Clouds {
 @group(0) @binding(4) var scene_depth: texture_multisampled_2d<f32>;
 
 const EARTH_R: f32 = 6371000.0;
-const STEPS: i32 = 8;
+// Samples per layer: one per half thickness of path, 3 to 8.
+const MIN_STEPS: f32 = 3.0;
+const MAX_STEPS: f32 = 8.0;
 
 struct CloudOut {
     @builtin(position) clip: vec4<f32>,
@@ -185,8 +187,12 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
         if (s1 <= s0 || transmittance < 0.01) {
             continue;
         }
-        let ds = (s1 - s0) / f32(STEPS);
-        for (var k = 0; k < STEPS; k++) {
+        let steps = i32(clamp(ceil(2.0 * (s1 - s0) / layer.place.w), MIN_STEPS, MAX_STEPS));
+        let ds = (s1 - s0) / f32(steps);
+        for (var k = 0; k < steps; k++) {
+            if (transmittance < 0.01) {
+                break;
+            }
             let s = s0 + (f32(k) + jitter) * ds;
             let rel = dir * s;
             let zn = (height_above_eye(rel) - layer.place.z) / layer.place.w;
