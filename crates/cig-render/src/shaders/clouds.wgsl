@@ -200,11 +200,15 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
             if (sigma <= 0.0) {
                 continue;
             }
-            // Self-shadow: the sun's light crosses the cloud above the sample; a floor stands
+            // Self-shadow: the sun's light crosses the cloud above the part of the step that
+            // is seen (the step's start plus the mean free path, at most half the step), so a
+            // long step's brightness does not depend on where its sample fell; a floor stands
             // in for multiple scattering.
-            let to_top_m = (1.0 - zn) * layer.place.w / max(sun_up, 0.1);
+            let seen = s0 + f32(k) * ds + min(1.0 / sigma, 0.5 * ds);
+            let zn_seen = clamp((height_above_eye(dir * seen) - layer.place.z) / layer.place.w, 0.0, 1.0);
+            let to_top_m = (1.0 - zn_seen) * layer.place.w / max(sun_up, 0.1);
             let direct = max(exp(-sigma * to_top_m), 0.25 * exp(-0.1 * sigma * to_top_m));
-            let light = g.sun_colour.rgb * phase * direct + g.ambient.rgb * (0.7 + 0.3 * zn);
+            let light = g.sun_colour.rgb * phase * direct + g.ambient.rgb * (0.7 + 0.3 * zn_seen);
             let a = 1.0 - exp(-sigma * ds);
             radiance += transmittance * a * light;
             distance_sum += transmittance * a * s;
