@@ -67,9 +67,10 @@ struct CloudsUniform {
 pub(crate) struct CloudPass {
     usable: bool,
     layout: wgpu::BindGroupLayout,
-    pipeline: wgpu::RenderPipeline,
     composite_layout: wgpu::BindGroupLayout,
-    composite_pipeline: wgpu::RenderPipeline,
+    /// The march and the composite (none where the pass is not usable: their shaders read
+    /// multisampled depth, which GL cannot).
+    pipelines: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     uniform: wgpu::Buffer,
     noise: wgpu::Texture,
     noise_view: wgpu::TextureView,
@@ -152,38 +153,19 @@ impl CloudPass {
                 },
             ],
         });
-        let pipeline = full_screen_pipeline(
-            gpu,
-            "clouds",
-            &shader(gpu, "clouds", &source),
-            &layout,
-            HALF_FORMAT,
-            None,
-        );
-        let composite_pipeline = full_screen_pipeline(
-            gpu,
-            "clouds composite",
-            &shader(
-                gpu,
-                "clouds composite",
-                include_str!("shaders/clouds_composite.wgsl"),
-            ),
-            &composite_layout,
-            colour_format,
-            // frame = clouds + frame * alpha; the frame's alpha stays.
-            Some(wgpu::BlendState {
-                color: wgpu::BlendComponent {
-                    src_factor: wgpu::BlendFactor::One,
-                    dst_factor: wgpu::BlendFactor::SrcAlpha,
-                    operation: wgpu::BlendOperation::Add,
-                },
-                alpha: wgpu::BlendComponent {
-                    src_factor: wgpu::BlendFactor::Zero,
-                    dst_factor: wgpu::BlendFactor::One,
-                    operation: wgpu::BlendOperation::Add,
-                },
-            }),
-        );
+        let pipelines = usable.then(|| {
+            (
+                full_screen_pipeline(
+                    gpu,
+                    "clouds",
+                    &shader(gpu, "clouds", &source),
+                    &layout,
+                    HALF_FORMAT,
+                    None,
+                ),
+                composite_pipeline(gpu, &composite_layout, colour_format),
+            )
+        });
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("clouds"),
             size: std::mem::size_of::<CloudsUniform>() as u64,
@@ -223,9 +205,8 @@ impl CloudPass {
             half_sampler,
             usable,
             layout,
-            pipeline,
             composite_layout,
-            composite_pipeline,
+            pipelines,
             uniform,
             noise,
             noise_view,
@@ -432,22 +413,19 @@ impl CloudPass {
         target: &wgpu::TextureView,
         timestamps: Option<(&wgpu::QuerySet, u32, Option<u32>)>,
     ) -> u32 {
-        let Some((half, march, composite)) = self.targets.as_ref() else {
+        let (Some((half, march, composite)), Some((pipeline, composite_pipeline))) =
+            (self.targets.as_ref(), self.pipelines.as_ref())
+        else {
             return 0;
         };
         let passes = [
             (
                 half,
                 march,
-                &self.pipeline,
+                pipeline,
                 wgpu::LoadOp::Clear(wgpu::Color::WHITE),
             ),
-            (
-                target,
-                composite,
-                &self.composite_pipeline,
-                wgpu::LoadOp::Load,
-            ),
+            (target, composite, composite_pipeline, wgpu::LoadOp::Load),
         ];
         for (i, (view, bind, pipeline, load)) in passes.into_iter().enumerate() {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -526,4 +504,36 @@ fn full_screen_pipeline(
             multiview_mask: None,
             cache: None,
         })
+}
+
+/// The composite: upsamples the half-resolution frame onto a `colour_format` target.
+fn composite_pipeline(
+    gpu: &Gpu,
+    layout: &wgpu::BindGroupLayout,
+    colour_format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    full_screen_pipeline(
+        gpu,
+        "clouds composite",
+        &shader(
+            gpu,
+            "clouds composite",
+            include_str!("shaders/clouds_composite.wgsl"),
+        ),
+        layout,
+        colour_format,
+        // frame = clouds + frame * alpha; the frame's alpha stays.
+        Some(wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::SrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+        }),
+    )
 }
