@@ -299,3 +299,90 @@ fn invalid_layers_are_left_out_without_harming_the_frame() {
     assert_eq!(stats.cloud_layers_drawn, 0);
     assert_eq!(mean_abs_diff(&a, &b), 0.0);
 }
+
+/// A dark, nearly opaque puff at an east-north-up offset from the view's eye.
+fn with_puff(snapshot: &FrameSnapshot, offset_enu: DVec3, radius_m: f32) -> FrameSnapshot {
+    let eye = snapshot.views[0].eye;
+    let e = EnuFrame::new(eye).enu_vector_to_ecef(offset_enu);
+    let mut s = snapshot.clone();
+    s.puff_origin_ecef_m = eye.to_ecef();
+    s.puffs = vec![cig_effects::PuffInstance {
+        position_eye_m: [e.x as f32, e.y as f32, e.z as f32],
+        radius_m,
+        colour_rgb: [0.05, 0.05, 0.05],
+        opacity: 0.95,
+        emissive: 0.0,
+        temperature_k: 288.0,
+        kind: 0,
+        effect: 0,
+    }];
+    s
+}
+
+#[test]
+fn puffs_below_the_clouds_are_in_front_of_them_from_below_and_behind_them_from_above() {
+    let db = sea();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    // From below: the eye at 2 km, an overcast from 2.5 km; the puff 400 m ahead shows.
+    let eye = Geodetic::new(36.0, -122.0, 2000.0);
+    let below = with_clouds(
+        &FrameSnapshot::new(
+            MORNING_UNIX_S,
+            vec![view(eye, (0.0, 10.0, 0.0), 40.0, SIZE)],
+        ),
+        &[overcast(2500.0, 500.0)],
+    );
+    let ahead = DVec3::new(0.0, 400.0, 400.0 * 10f64.to_radians().tan());
+    let (clouds_only, _) = render(&mut renderer, &cache, &below, false);
+    let (with_smoke, stats) = render(
+        &mut renderer,
+        &cache,
+        &with_puff(&below, ahead, 40.0),
+        false,
+    );
+    write_png(&with_smoke, &out_dir().join("clouds_puff_below.png"));
+    assert_eq!((stats.puffs_drawn, stats.cloud_layers_drawn), (1, 1));
+    let centre = ((SIZE.1 / 2 * SIZE.0 + SIZE.0 / 2) * 4) as usize;
+    let pixel = |image: &Image| luminance(&image.rgba[centre..centre + 4]);
+    assert!(
+        pixel(&with_smoke) < 0.5 * pixel(&clouds_only),
+        "the puff in front of the clouds is hidden: {:.3} against {:.3}",
+        pixel(&with_smoke),
+        pixel(&clouds_only)
+    );
+    // From above: the eye at 2 km over an overcast at 1-1.5 km; a puff under it is hidden.
+    let above = with_clouds(
+        &FrameSnapshot::new(
+            MORNING_UNIX_S,
+            vec![view(eye, (0.0, -30.0, 0.0), 40.0, SIZE)],
+        ),
+        &[overcast(1000.0, 500.0)],
+    );
+    let under = DVec3::new(0.0, 3000.0 * 30f64.to_radians().cos(), -1500.0);
+    let (clouds_only, _) = render(&mut renderer, &cache, &above, false);
+    let (with_smoke, stats) = render(
+        &mut renderer,
+        &cache,
+        &with_puff(&above, under, 150.0),
+        false,
+    );
+    assert_eq!((stats.puffs_drawn, stats.cloud_layers_drawn), (1, 1));
+    let changed = (pixel(&with_smoke) - pixel(&clouds_only)).abs() / pixel(&clouds_only);
+    assert!(
+        changed < 0.02,
+        "the puff under the overcast shows through: {changed:.3}"
+    );
+    // Without the overcast the same puff is plain to see.
+    let mut clear = above.clone();
+    clear.cloud_layers.clear();
+    let (sea_only, _) = render(&mut renderer, &cache, &clear, false);
+    let (smoke_on_sea, _) = render(
+        &mut renderer,
+        &cache,
+        &with_puff(&clear, under, 150.0),
+        false,
+    );
+    let seen = (pixel(&smoke_on_sea) - pixel(&sea_only)).abs() / pixel(&sea_only);
+    assert!(seen > 0.1, "the puff is not in view: {seen:.3}");
+}
