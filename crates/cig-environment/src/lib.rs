@@ -28,6 +28,9 @@
 //!   and sky irradiance (Rayleigh, Mie, ozone; three wavelengths).
 //! - [`clock`]: the simulation clock (start, rate, pause) and the light state
 //!   (directions, colours, illuminance) that the renderer reads every frame.
+//! - [`clouds`]: cloud layers as a seeded, tileable, rank-equalised fractal value-noise
+//!   cover field advected by the wind, shaped by each kind's vertical profile; optical depth,
+//!   the sun's transmittance (shade) and the sky's cover fraction. Two-dimensional cover, flat.
 //! - [`lightning`]: the NPS thesis's branching bolt (V.A.4, appendix F), made
 //!   iterative with a hard segment cap and seeded, and the flash envelope.
 //! - [`stars`]: the 904 stars to magnitude 4.5 (Yale Bright Star Catalogue 5 with
@@ -43,6 +46,7 @@
 
 pub mod atmosphere;
 pub mod clock;
+pub mod clouds;
 pub mod ephemeris;
 pub mod events;
 pub mod illuminance;
@@ -57,6 +61,7 @@ pub mod vsop87;
 
 pub use atmosphere::{Atmosphere, AtmosphereParams, SUN_ILLUMINANCE_TOA_LUX};
 pub use clock::{light_state, BodyLight, LightState, SimClock};
+pub use clouds::{cloud_cover_fraction, CloudField, CloudKind, CloudLayer, CloudOrigin};
 pub use ephemeris::{ephemeris, BodyPosition, Ephemeris, Observer};
 pub use events::{day_events, DayEvents};
 pub use illuminance::{natural_illuminance, Illuminance};

@@ -14,6 +14,15 @@
 //! fog = "exp"                          # off, linear, exp, exp2
 //! ground_fog = { top_m = 250, visibility_m = 400 }   # a fogged valley (top above MSL)
 //! sky = { model = "physical", exposure_compensation_ev = 0.5 }  # or fixed_exposure_ev = 12
+//!
+//! [[clouds]]                           # cloud layers (at most 4)
+//! base_m = 1200                        # above MSL
+//! thickness_m = 600
+//! coverage = 0.5                       # 0..1 of the sky
+//! kind = "cumulus"                     # cumulus, stratus, stratocumulus, cirrus, ... (CIGI's)
+//! wind_speed_mps = 8                   # the layer drifts with it
+//! wind_from_deg = 270
+//! seed = 1
 //! default_model = "truck"              # for entity types the table does not name
 //!
 //! [[models]]                           # the entity-type table
@@ -132,6 +141,9 @@ pub struct Scenario {
     /// The sky model and the exposure.
     #[serde(default)]
     pub sky: Option<SkySection>,
+    /// Cloud layers (the host's CIGI cloud layers replace them while it sets any).
+    #[serde(default)]
+    pub clouds: Vec<ScenarioCloud>,
 }
 
 /// `[sky]`: the sky model and the exposure.
@@ -148,6 +160,95 @@ pub struct SkySection {
     /// illuminance.
     #[serde(default)]
     pub fixed_exposure_ev: Option<f64>,
+}
+
+/// A cloud layer of the scenario.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioCloud {
+    /// Base, metres above MSL.
+    pub base_m: f64,
+    pub thickness_m: f64,
+    /// Covered fraction of the sky, 0..1.
+    pub coverage: f64,
+    /// Cloud type name (`cig_environment::clouds::CloudKind`), default cumulus.
+    #[serde(default = "cumulus")]
+    pub kind: String,
+    #[serde(default)]
+    pub wind_speed_mps: f64,
+    #[serde(default)]
+    pub wind_from_deg: f64,
+    #[serde(default = "one_u64")]
+    pub seed: u64,
+}
+
+fn cumulus() -> String {
+    "cumulus".to_string()
+}
+
+fn one_u64() -> u64 {
+    1
+}
+
+impl Scenario {
+    /// The scenario's cloud layers (checked when the scenario was parsed).
+    pub fn cloud_layers(&self) -> Vec<cig_environment::clouds::CloudLayer> {
+        self.clouds.iter().filter_map(|c| c.layer().ok()).collect()
+    }
+}
+
+impl ScenarioCloud {
+    fn layer(&self) -> Result<cig_environment::clouds::CloudLayer, String> {
+        let kind = cig_environment::clouds::CloudKind::from_name(&self.kind)
+            .ok_or_else(|| format!("\"{}\" is not a cloud type", self.kind))?;
+        Ok(cig_environment::clouds::CloudLayer {
+            base_m: self.base_m,
+            thickness_m: self.thickness_m,
+            coverage: self.coverage,
+            kind,
+            wind_speed_mps: self.wind_speed_mps,
+            wind_from_deg: self.wind_from_deg,
+            seed: self.seed,
+        })
+    }
+
+    fn check(&self, key: &str) -> Result<(), ScenarioError> {
+        use cig_environment::clouds::{BASE_RANGE_M, MAX_THICKNESS_M, MAX_WIND_SPEED_MPS};
+        check_finite(
+            &format!("{key}.base_m"),
+            self.base_m,
+            BASE_RANGE_M.0,
+            BASE_RANGE_M.1,
+        )?;
+        if !(self.thickness_m.is_finite() && self.thickness_m > 0.0) {
+            return Err(value_error(
+                format!("{key}.thickness_m"),
+                format!("{} is not above 0", self.thickness_m),
+            ));
+        }
+        check_finite(
+            &format!("{key}.thickness_m"),
+            self.thickness_m,
+            0.0,
+            MAX_THICKNESS_M,
+        )?;
+        check_finite(&format!("{key}.coverage"), self.coverage, 0.0, 1.0)?;
+        check_finite(
+            &format!("{key}.wind_speed_mps"),
+            self.wind_speed_mps,
+            0.0,
+            MAX_WIND_SPEED_MPS,
+        )?;
+        check_finite(
+            &format!("{key}.wind_from_deg"),
+            self.wind_from_deg,
+            -360.0,
+            360.0,
+        )?;
+        self.layer()
+            .map_err(|reason| value_error(format!("{key}.kind"), reason))?;
+        Ok(())
+    }
 }
 
 /// A smoke or fire source the scenario starts.
@@ -510,6 +611,19 @@ impl Scenario {
                 }
             }
         }
+        if self.clouds.len() > cig_environment::clouds::MAX_CLOUD_LAYERS {
+            return Err(value_error(
+                "clouds",
+                format!(
+                    "{} layers; at most {}",
+                    self.clouds.len(),
+                    cig_environment::clouds::MAX_CLOUD_LAYERS
+                ),
+            ));
+        }
+        for (i, c) in self.clouds.iter().enumerate() {
+            c.check(&format!("clouds[{i}]"))?;
+        }
         if let Some(f) = &self.fog {
             if FogMode::parse(f).is_none() {
                 return Err(value_error(
@@ -813,5 +927,90 @@ delivery = "multicast:239.1.2.3"
         assert_eq!(other.specificity(&t), None);
         assert!(DisTypePattern::parse("1:300").is_none());
         assert!(DisTypePattern::parse("1:1:70000").is_none());
+    }
+
+    const CLOUDS: &str = r#"
+[[clouds]]
+base_m = 1200
+thickness_m = 600
+coverage = 0.5
+kind = "stratocumulus"
+wind_speed_mps = 8
+wind_from_deg = 270
+seed = 3
+
+[[clouds]]
+base_m = 7000
+thickness_m = 300
+coverage = 0.2
+kind = "Cirrus"
+"#;
+
+    #[test]
+    fn cloud_layers_parse() {
+        use cig_environment::clouds::CloudKind;
+        let s = Scenario::from_toml(CLOUDS).expect("parses");
+        let layers = s.cloud_layers();
+        assert_eq!(layers.len(), 2);
+        assert_eq!(layers[0].kind, CloudKind::Stratocumulus);
+        assert_eq!((layers[0].base_m, layers[0].thickness_m), (1200.0, 600.0));
+        assert_eq!(
+            (layers[0].wind_speed_mps, layers[0].wind_from_deg),
+            (8.0, 270.0)
+        );
+        assert_eq!(layers[0].seed, 3);
+        assert_eq!(layers[1].kind, CloudKind::Cirrus);
+        assert_eq!((layers[1].wind_speed_mps, layers[1].seed), (0.0, 1));
+        assert!(layers.iter().all(|l| l.validate().is_ok()));
+    }
+
+    #[test]
+    fn bad_cloud_values_name_the_key() {
+        let cases = [
+            (
+                "coverage = 0.5",
+                "coverage = 1.5",
+                "clouds[0].coverage: 1.5 is outside 0..1",
+            ),
+            (
+                "thickness_m = 600",
+                "thickness_m = 0",
+                "clouds[0].thickness_m: 0 is not above 0",
+            ),
+            (
+                "base_m = 7000",
+                "base_m = 90000",
+                "clouds[1].base_m: 90000 is outside -500..25000",
+            ),
+            (
+                "kind = \"Cirrus\"",
+                "kind = \"fog\"",
+                "clouds[1].kind: \"fog\" is not a cloud type",
+            ),
+            (
+                "wind_speed_mps = 8",
+                "wind_speed_mps = -2",
+                "clouds[0].wind_speed_mps: -2 is outside 0..150",
+            ),
+            (
+                "wind_from_deg = 270",
+                "wind_from_deg = nan",
+                "clouds[0].wind_from_deg: NaN is outside -360..360",
+            ),
+        ];
+        for (from, to, expected) in cases {
+            let bad = CLOUDS.replace(from, to);
+            let e = Scenario::from_toml(&bad).expect_err("refused").to_string();
+            assert_eq!(e, expected);
+        }
+        let bad = CLOUDS.replace("seed = 3", "seed = 3\ncolour = 1");
+        let e = Scenario::from_toml(&bad).expect_err("refused").to_string();
+        assert!(
+            e.contains("unknown field `colour`") && !e.contains('\n'),
+            "{e}"
+        );
+        let five = CLOUDS.repeat(3);
+        let e = Scenario::from_toml(&five).expect_err("refused").to_string();
+        assert_eq!(e, "clouds: 6 layers; at most 4");
     }
 }

@@ -296,6 +296,19 @@ impl EnvironmentState {
         self.visibility_with(point, default_m, true)
     }
 
+    /// The host's enabled cloud layers (CIGI weather layers 1-3) over a point (regional ones
+    /// inside an active region, else global ones), by layer id.
+    pub fn cloud_layers_at(&self, point: Geodetic) -> Vec<WeatherControl> {
+        let mut layers: Vec<WeatherControl> = self
+            .layers_at(point)
+            .into_iter()
+            .filter(|l| (1..=3).contains(&l.layer_id))
+            .cloned()
+            .collect();
+        layers.sort_by_key(|l| l.layer_id);
+        layers
+    }
+
     /// The ground fog layer (CIGI weather layer 0) over a point: its top above MSL and the
     /// visibility inside it.
     pub fn ground_fog_at(&self, point: Geodetic) -> Option<(f64, f64)> {

@@ -36,6 +36,7 @@ use cig_effects::{
     EffectHandle, EffectId, EffectSystem, EffectsConfig, EffectsError, PlumeKind, PlumeSource,
     PlumeSpec,
 };
+use cig_environment::clouds::{CloudKind, CloudLayer, CloudOrigin};
 use cig_environment::{SimClock, UtcTime};
 use cig_geo::{EnuFrame, Geodetic};
 use cig_scene::lighting::{Fog, FogMode};
@@ -175,6 +176,13 @@ pub struct IgWorld {
     dust_trails: BTreeMap<u16, cig_effects::EffectHandle>,
     /// The effects could not advance to the world time (told once until they can again).
     effects_stalled: bool,
+    /// This frame's cloud layers (bases above MSL): the operator's, else the host's (CIGI
+    /// weather layers 1-3), else the scenario's.
+    clouds: Vec<CloudLayer>,
+    /// The operator's cloud layers, when set (they win over the host's and the scenario's).
+    operator_clouds: Option<Vec<CloudLayer>>,
+    /// The clouds' world-fixed noise origin: the first eye's whole degrees, kept for the run.
+    cloud_origin: Option<CloudOrigin>,
 }
 
 /// Models of ground vehicles that raise dust when they move on soil.
@@ -252,6 +260,7 @@ impl IgWorld {
             .collect();
         let mut effects = EffectSystem::new(config.effects)?;
         effects.advance_to(effect_time_s(start_unix_s))?;
+        let clouds = scenario.cloud_layers();
         Ok(IgWorld {
             session,
             scenario,
@@ -273,6 +282,9 @@ impl IgWorld {
             fixed_eye_geoid_m: 0.0,
             last_air_update_s: f64::NEG_INFINITY,
             operator_wind: None,
+            clouds,
+            operator_clouds: None,
+            cloud_origin: None,
             operator_plumes: Vec::new(),
             operator_plumes_started: 0,
             dust_trails: BTreeMap::new(),
@@ -508,6 +520,74 @@ impl IgWorld {
         self.eye_geoid_m = self
             .first_eye
             .map_or(0.0, |e| query.geoid_undulation_m(e.lat_deg, e.lon_deg));
+        self.update_clouds();
+    }
+
+    /// This frame's cloud layers: the operator's, else the host's CIGI cloud layers over the
+    /// first eye (values clamped into range, each correction told to the host; a Cloud Type of
+    /// 0 means no cloud), else the scenario's.
+    fn update_clouds(&mut self) {
+        if self.cloud_origin.is_none() {
+            self.cloud_origin = self.first_eye.map(|e| CloudOrigin {
+                lat_deg: e.lat_deg.round(),
+                lon_deg: e.lon_deg.round(),
+            });
+        }
+        if let Some(layers) = &self.operator_clouds {
+            self.clouds.clone_from(layers);
+            return;
+        }
+        let eye_msl = self.first_eye.map_or(Geodetic::new(0.0, 0.0, 0.0), |e| {
+            Geodetic::new(e.lat_deg, e.lon_deg, e.alt_m - self.eye_geoid_m)
+        });
+        let host = self.session.environment().cloud_layers_at(eye_msl);
+        if host.is_empty() {
+            self.clouds = self.scenario.cloud_layers();
+            return;
+        }
+        self.clouds.clear();
+        for w in host {
+            let Some(kind) = CloudKind::from_cigi(w.cloud_type) else {
+                continue;
+            };
+            let (layer, notes) = CloudLayer {
+                base_m: f64::from(w.base_elevation_m),
+                thickness_m: f64::from(w.thickness_m),
+                coverage: f64::from(w.coverage_pct) / 100.0,
+                kind,
+                wind_speed_mps: f64::from(w.horizontal_wind_speed_mps),
+                wind_from_deg: f64::from(w.wind_direction_deg),
+                seed: u64::from(w.layer_id),
+            }
+            .clamped();
+            for note in notes {
+                self.session
+                    .tell_host(format!("Weather Control layer {}: {note}", w.layer_id));
+            }
+            self.clouds.push(layer);
+        }
+    }
+
+    /// Sets the operator's cloud layers (bases above MSL), or gives the clouds back to the
+    /// host and the scenario (`None`).
+    ///
+    /// # Errors
+    /// The first invalid layer or too many layers; nothing changes then.
+    pub fn set_operator_clouds(
+        &mut self,
+        layers: Option<Vec<CloudLayer>>,
+    ) -> Result<(), cig_environment::EnvironmentError> {
+        if let Some(layers) = &layers {
+            cig_environment::CloudField::new(layers)?;
+        }
+        self.operator_clouds = layers;
+        self.update_clouds();
+        Ok(())
+    }
+
+    /// This frame's cloud layers (bases above MSL).
+    pub fn cloud_layers(&self) -> &[CloudLayer] {
+        &self.clouds
     }
 
     /// The air the effects drift in: the host's wind, temperature and cloud (CIGI Atmosphere and
@@ -530,16 +610,12 @@ impl IgWorld {
             from_deg: f64::from(a.wind_direction_deg).rem_euclid(360.0),
         });
         let at = self.first_eye.unwrap_or(Geodetic::new(0.0, 0.0, 0.0));
-        let (cover, ceiling_m) = environment
-            .weather
-            .values()
-            .filter(|w| w.weather_enable && (1..=3).contains(&w.layer_id))
-            .map(|w| {
-                (
-                    (f64::from(w.coverage_pct) / 100.0).clamp(0.0, 1.0),
-                    f64::from(w.base_elevation_m),
-                )
-            })
+        // Cloud cover and ceiling from this frame's cloud layers (the operator's, the host's
+        // CIGI cloud layers over the eye, or the scenario's; clamped, "no cloud" types left out).
+        let (cover, ceiling_m) = self
+            .clouds
+            .iter()
+            .map(|l| (l.coverage, l.base_m))
             .fold((0.0, 10_000.0), |(c, b), (c2, b2)| {
                 (f64::max(c, c2), f64::min(b, b2))
             });
@@ -957,6 +1033,24 @@ impl IgWorld {
             snapshot.star_intensity =
                 (f64::from(c.star_field_intensity_pct) / 100.0).clamp(0.0, 1.0);
         }
+        // Cloud bases above MSL become heights above the ellipsoid at the first eye.
+        snapshot.cloud_layers = self
+            .clouds
+            .iter()
+            .map(|l| CloudLayer {
+                base_m: l.base_m + self.eye_geoid_m,
+                ..*l
+            })
+            .collect();
+        snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&self.clouds);
+        snapshot.cloud_origin = self.cloud_origin.unwrap_or_else(|| {
+            views
+                .first()
+                .map_or(CloudOrigin::default(), |v| CloudOrigin {
+                    lat_deg: v.eye.lat_deg.round(),
+                    lon_deg: v.eye.lon_deg.round(),
+                })
+        });
         if let Some(first) = views.first() {
             let origin = first.eye.to_ecef();
             self.effects.snapshot(origin, &mut snapshot.puffs);

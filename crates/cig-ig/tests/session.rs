@@ -1237,3 +1237,118 @@ fn the_hosts_moon_and_star_switches_reach_the_frame_and_a_bad_intensity_is_clamp
         }
     }
 }
+
+#[test]
+fn the_hosts_cloud_layers_reach_the_snapshot_clamped_and_reported() {
+    use cig_environment::clouds::CloudKind;
+    let mut q = query();
+    let scenario = "[[clouds]]\nbase_m = 900\nthickness_m = 300\ncoverage = 0.3\n";
+    let mut w = world(scenario);
+    let (lat, lon) = (lat_of_row(30.0), lon_of_col(30.0));
+    let fallback = View {
+        eye: Geodetic::new(lat, lon, 1000.0),
+        orientation: Hpr::default(),
+        fov: FovDeg::symmetric(60.0, 45.0),
+        width_px: 64,
+        height_px: 48,
+    };
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        1,
+        vec![
+            entity_3(0, lat, lon, 120.0, 0.0),
+            Packet::ViewControl(ViewControl {
+                view_id: 0,
+                entity_id: 0,
+                ..ViewControl::default()
+            }),
+        ],
+    );
+    // Before the host sets any cloud, the scenario's layer is drawn.
+    frame(&mut w, &mut q);
+    let s = w.snapshot(64, 48, &fallback);
+    assert_eq!(s.cloud_layers.len(), 1);
+    assert!((s.cloud_layers[0].base_m - (900.0 + f64::from(GEOID_M))).abs() < 1e-6);
+    assert!((s.cloud_cover_fraction - 0.3).abs() < 1e-12);
+    let cloud = |layer_id: u8, cloud_type: u8, coverage_pct: f32| {
+        Packet::WeatherControl(cig_cigi::WeatherControl {
+            layer_id,
+            weather_enable: true,
+            scope: 0,
+            cloud_type,
+            coverage_pct,
+            base_elevation_m: 2000.0,
+            thickness_m: 800.0,
+            horizontal_wind_speed_mps: 12.0,
+            wind_direction_deg: 450.0,
+            ..cig_cigi::WeatherControl::default()
+        })
+    };
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        2,
+        vec![
+            // Stratus at 150 % cover (clamped), cumulus at 40 %, and a layer of no cloud.
+            cloud(1, 10, 150.0),
+            cloud(2, 7, 40.0),
+            cloud(3, 0, 90.0),
+        ],
+    );
+    let message = frame(&mut w, &mut q);
+    let s = w.snapshot(64, 48, &fallback);
+    assert_eq!(s.cloud_layers.len(), 2, "{:?}", s.cloud_layers);
+    let (a, b) = (s.cloud_layers[0], s.cloud_layers[1]);
+    assert_eq!((a.kind, b.kind), (CloudKind::Stratus, CloudKind::Cumulus));
+    assert_eq!((a.coverage, b.coverage), (1.0, 0.4));
+    assert!(
+        (a.base_m - (2000.0 + f64::from(GEOID_M))).abs() < 1e-3,
+        "{a:?}"
+    );
+    assert_eq!((a.thickness_m, a.wind_speed_mps), (800.0, 12.0));
+    assert_eq!(a.wind_from_deg, 90.0, "the direction wraps into 0..360");
+    assert_eq!(s.cloud_cover_fraction, 1.0);
+    assert!(s.cloud_layers.iter().all(|l| l.validate().is_ok()));
+    let told: Vec<String> = message
+        .packets
+        .iter()
+        .filter_map(|p| match p {
+            Packet::ImageGeneratorMessage(m) => Some(m.text.clone()),
+            _ => None,
+        })
+        .collect();
+    assert!(
+        told.iter()
+            .any(|t| t.contains("layer 1") && t.contains("coverage")),
+        "{told:?}"
+    );
+    // The origin of the clouds' pattern stays put while the eye moves.
+    let origin = s.cloud_origin;
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        3,
+        vec![entity_3(0, lat + 0.6, lon + 0.7, 120.0, 0.0)],
+    );
+    frame(&mut w, &mut q);
+    assert_eq!(w.snapshot(64, 48, &fallback).cloud_origin, origin);
+    // The operator's layer wins over the host's; an invalid one is refused.
+    let operator = cig_environment::CloudLayer::new(3000.0, 500.0, 0.7, CloudKind::Altocumulus);
+    assert!(w
+        .set_operator_clouds(Some(vec![cig_environment::CloudLayer {
+            coverage: 2.0,
+            ..operator
+        }]))
+        .is_err());
+    w.set_operator_clouds(Some(vec![operator])).expect("valid");
+    let s = w.snapshot(64, 48, &fallback);
+    assert_eq!(s.cloud_layers.len(), 1);
+    assert_eq!(s.cloud_layers[0].kind, CloudKind::Altocumulus);
+    w.set_operator_clouds(None).expect("back to the host");
+    frame(&mut w, &mut q);
+    assert_eq!(w.snapshot(64, 48, &fallback).cloud_layers.len(), 2);
+}

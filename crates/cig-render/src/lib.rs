@@ -1,7 +1,7 @@
 //! The wgpu renderer of cig: round-earth terrain with continuous level of detail, entity
-//! models, a physically based sky (Bruneton/Hillaire atmosphere, sun disc, aerial perspective)
-//! and fog, obscurant puffs (smoke, flame, dust), exposure from the natural light and a tone map,
-//! for off-screen frames and windows alike.
+//! models, a physically based sky (Bruneton/Hillaire atmosphere, sun disc, aerial perspective,
+//! moon and stars) and fog, cloud layers, obscurant puffs (smoke, flame, dust), exposure from the
+//! natural light and a tone map, for off-screen frames and windows alike.
 //!
 //! The renderer owns every GPU resource; the world reaches it as plain data (a
 //! [`cig_scene::FrameSnapshot`] and the terrain [`cig_terrain::TileCache`]). Any wgpu backend
@@ -9,6 +9,7 @@
 
 pub mod atmosphere;
 pub mod celestial;
+pub mod clouds;
 pub mod gltf_model;
 pub mod gpu;
 pub mod offscreen;

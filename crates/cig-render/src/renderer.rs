@@ -24,6 +24,7 @@
 
 use crate::atmosphere::{atmosphere_shader, AtmosphereGpu, ToneMap, HDR_FORMAT};
 use crate::celestial::CelestialPass;
+use crate::clouds::CloudPass;
 use crate::gpu::{Gpu, RenderError};
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainGpu};
@@ -69,6 +70,10 @@ pub mod serde_like {
         pub gpu_ms: f64,
         /// GPU time of the puff passes (timestamp queries; 0 without them or without puffs).
         pub puff_gpu_ms: f64,
+        /// Cloud layers drawn.
+        pub cloud_layers_drawn: u32,
+        /// GPU time of the cloud pass (timestamp queries; 0 without them or without clouds).
+        pub cloud_gpu_ms: f64,
         pub gpu_timed_by: &'static str,
         /// Natural illuminance of the frame (the exposure's input), lux.
         pub illuminance_lux: f64,
@@ -120,6 +125,17 @@ struct Globals {
     atmos: [f32; 4],
     night_sky: [f32; 4],
     tonemap: [f32; 4],
+}
+
+/// Timestamp queries of the frame: 0 start, 1 end, then pass starts and ends as needed.
+const QUERY_COUNT: u32 = 6;
+
+/// Which timestamp queries a frame wrote: how many, and the (begin, end) of the puff passes
+/// and of the cloud pass.
+struct PassQueries {
+    count: u32,
+    puff: Option<(u32, u32)>,
+    cloud: Option<(u32, u32)>,
 }
 
 #[repr(C)]
@@ -176,7 +192,9 @@ pub struct Renderer {
     puffs: PuffPass,
     /// The moon and stars of the sky pass (its `@group(2)`).
     celestial: CelestialPass,
-    /// Queries: 0 the frame's start, 1 its end, 2 and 3 the start and end of the puff passes.
+    clouds: CloudPass,
+    /// Queries: 0 the frame's start, 1 its end (the tone map's), then as needed the start and
+    /// end of the puff passes and of the cloud passes.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: u64,
 }
@@ -528,24 +546,25 @@ impl Renderer {
                 device.create_query_set(&wgpu::QuerySetDescriptor {
                     label: Some("frame time"),
                     ty: wgpu::QueryType::Timestamp,
-                    count: 4,
+                    count: QUERY_COUNT,
                 }),
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("timestamps"),
-                    size: 32,
+                    size: u64::from(QUERY_COUNT) * 8,
                     usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 }),
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("timestamps readback"),
-                    size: 32,
+                    size: u64::from(QUERY_COUNT) * 8,
                     usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
             )
         });
-        // The puffs composite onto the resolved scene before the tone map.
+        // The puffs and clouds composite onto the resolved scene before the tone map.
         let puffs = PuffPass::new(&gpu, HDR_FORMAT, &atmosphere.layout);
+        let clouds = CloudPass::new(&gpu, HDR_FORMAT);
         let mut renderer = Renderer {
             model_vertices: empty("model vertices", wgpu::BufferUsages::VERTEX),
             model_indices: empty("model indices", wgpu::BufferUsages::INDEX),
@@ -570,6 +589,7 @@ impl Renderer {
             targets: None,
             puffs,
             celestial,
+            clouds,
             timestamps,
             frame: 0,
         };
@@ -668,9 +688,15 @@ impl Renderer {
                 tone_map_bind: self.tone_map.bind(&self.gpu, &hdr),
                 hdr,
                 // The puff pass may read the depth samples.
-                depth: make("depth", DEPTH_FORMAT, self.puffs.depth_usage()),
+                depth: make(
+                    "depth",
+                    DEPTH_FORMAT,
+                    self.puffs.depth_usage() | self.clouds.depth_usage(),
+                ),
             };
             self.puffs
+                .resize(&self.gpu, size, &targets.depth, &self.globals);
+            self.clouds
                 .resize(&self.gpu, size, &targets.depth, &self.globals);
             self.targets = Some(targets);
         }
@@ -768,6 +794,17 @@ impl Renderer {
         }
 
         let puff_count = self.puffs.prepare(&self.gpu, &camera, snapshot);
+        let cloud_count = self.clouds.prepare(&self.gpu, &camera, snapshot);
+        // Below the clouds, the puffs are nearer: clouds first. Timestamp queries are numbered
+        // in the order passes need them, so the written ones are 0..queries.
+        let clouds_first = cloud_count > 0 && (puff_count == 0 || self.clouds.eye_below_clouds());
+        let mut queries = 2u32;
+        let mut next_query = || {
+            queries += 1;
+            queries - 1
+        };
+        let puff_queries = (puff_count > 0).then(|| (next_query(), next_query()));
+        let cloud_queries = (cloud_count > 0).then(|| (next_query(), next_query()));
         let size = (view.width_px, view.height_px);
         let mut encoder = self
             .gpu
@@ -835,8 +872,8 @@ impl Renderer {
                     view: &targets.depth,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(0.0),
-                        // Kept for the puff pass, which reads it.
-                        store: if puff_count > 0 {
+                        // Kept for the puff and cloud passes, which read it.
+                        store: if puff_count > 0 || cloud_count > 0 {
                             wgpu::StoreOp::Store
                         } else {
                             wgpu::StoreOp::Discard
@@ -890,6 +927,17 @@ impl Renderer {
                 stats.entities_drawn = draws.iter().filter(|d| d.1.col0[3] == 0.0).count() as u32;
             }
         }
+        let set = self.timestamps.as_ref().map(|(set, _, _)| set);
+        if clouds_first {
+            let Some(targets) = self.targets.as_ref() else {
+                return Err(RenderError::Gpu("render targets missing".into()));
+            };
+            stats.draw_calls += self.clouds.encode(
+                &mut encoder,
+                &targets.hdr,
+                set.zip(cloud_queries).map(|(s, (b, e))| (s, b, Some(e))),
+            );
+        }
         if puff_count > 0 {
             let Some(targets) = self.targets.as_ref() else {
                 return Err(RenderError::Gpu("render targets missing".into()));
@@ -900,10 +948,21 @@ impl Renderer {
                 &targets.depth,
                 puff_count,
                 &self.atmosphere.scene_bind,
-                self.timestamps.as_ref().map(|(set, _, _)| (set, 2, 3)),
+                set.zip(puff_queries).map(|(s, (b, e))| (s, b, e)),
             );
             stats.puffs_drawn = puff_count as u32;
         }
+        if cloud_count > 0 && !clouds_first {
+            let Some(targets) = self.targets.as_ref() else {
+                return Err(RenderError::Gpu("render targets missing".into()));
+            };
+            stats.draw_calls += self.clouds.encode(
+                &mut encoder,
+                &targets.hdr,
+                set.zip(cloud_queries).map(|(s, (b, e))| (s, b, Some(e))),
+            );
+        }
+        stats.cloud_layers_drawn = cloud_count as u32;
         {
             let Some(targets) = self.targets.as_ref() else {
                 return Err(RenderError::Gpu("render targets missing".into()));
@@ -923,7 +982,6 @@ impl Renderer {
             );
             stats.draw_calls += 1;
         }
-        let queries = if puff_count > 0 { 4 } else { 2 };
         if let Some((set, resolve, readback)) = &self.timestamps {
             encoder.resolve_query_set(set, 0..queries, resolve, 0);
             encoder.copy_buffer_to_buffer(resolve, 0, readback, 0, u64::from(queries) * 8);
@@ -937,38 +995,44 @@ impl Renderer {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| RenderError::Gpu(e.to_string()))?;
         let wall_gpu_ms = submit_started.elapsed().as_secs_f64() * 1e3;
-        (stats.gpu_ms, stats.puff_gpu_ms, stats.gpu_timed_by) =
-            match self.read_timestamps(puff_count > 0) {
-                Some((frame_ms, puff_ms)) => (frame_ms, puff_ms, "timestamp_query"),
-                None => (wall_gpu_ms, 0.0, "submit_to_completion"),
-            };
+        let spans = PassQueries {
+            count: queries,
+            puff: puff_queries,
+            cloud: cloud_queries,
+        };
+        (
+            stats.gpu_ms,
+            stats.puff_gpu_ms,
+            stats.cloud_gpu_ms,
+            stats.gpu_timed_by,
+        ) = match self.read_timestamps(&spans) {
+            Some((frame_ms, puff_ms, cloud_ms)) => (frame_ms, puff_ms, cloud_ms, "timestamp_query"),
+            None => (wall_gpu_ms, 0.0, 0.0, "submit_to_completion"),
+        };
         Ok(stats)
     }
 
-    /// (frame, puff passes) GPU milliseconds from the timestamp queries.
-    fn read_timestamps(&self, with_puffs: bool) -> Option<(f64, f64)> {
+    /// (frame, puff passes, cloud pass) GPU milliseconds from the timestamp queries.
+    fn read_timestamps(&self, spans: &PassQueries) -> Option<(f64, f64, f64)> {
         let (_, _, readback) = self.timestamps.as_ref()?;
         let slice = readback.slice(..);
         crate::gpu::map_for_reading(&self.gpu, &slice).ok()?;
-        let ticks: [u64; 4] = {
+        let ticks: Vec<u64> = {
             let data = slice.get_mapped_range().ok()?;
             let v: &[u64] = bytemuck::cast_slice(&data);
-            [
-                v.first().copied()?,
-                v.get(1).copied()?,
-                v.get(2).copied().unwrap_or(0),
-                v.get(3).copied().unwrap_or(0),
-            ]
+            v.iter().take(spans.count as usize).copied().collect()
         };
         readback.unmap();
         let period_ms = f64::from(self.gpu.queue.get_timestamp_period()) / 1e6;
-        let frame_ms = ticks[1].saturating_sub(ticks[0]) as f64 * period_ms;
-        let puff_ms = if with_puffs {
-            ticks[3].saturating_sub(ticks[2]) as f64 * period_ms
-        } else {
-            0.0
+        let span = |(begin, end): (u32, u32)| -> f64 {
+            let at = |i: u32| ticks.get(i as usize).copied().unwrap_or(0);
+            at(end).saturating_sub(at(begin)) as f64 * period_ms
         };
-        Some((frame_ms, puff_ms))
+        Some((
+            span((0, 1)),
+            spans.puff.map_or(0.0, span),
+            spans.cloud.map_or(0.0, span),
+        ))
     }
 
     fn write_globals(

@@ -125,6 +125,11 @@ pub struct FrameSnapshot {
     pub star_intensity: f64,
     /// Draw the moon.
     pub moon_visible: bool,
+    /// Cloud layers to draw (at most `cig_environment::clouds::MAX_CLOUD_LAYERS`; bases
+    /// above the WGS84 ellipsoid — the world adds the geoid to the layers' MSL heights).
+    pub cloud_layers: Vec<cig_environment::clouds::CloudLayer>,
+    /// The world-fixed origin of the clouds' noise plane (keep it fixed while the eye moves).
+    pub cloud_origin: cig_environment::clouds::CloudOrigin,
 }
 
 impl FrameSnapshot {
@@ -145,6 +150,8 @@ impl FrameSnapshot {
             stars_visible: true,
             star_intensity: 1.0,
             moon_visible: true,
+            cloud_layers: Vec::new(),
+            cloud_origin: cig_environment::clouds::CloudOrigin::default(),
         }
     }
 }

@@ -439,6 +439,16 @@ pub struct RenderArgs {
     /// light.
     #[arg(long, allow_hyphen_values = true)]
     pub fixed_exposure_ev: Option<f64>,
+    /// A cloud layer "BASE_M,THICKNESS_M,COVERAGE[,KIND[,WIND_MPS,FROM_DEG]]": base above the
+    /// WGS84 ellipsoid (as `--eye`), coverage 0..1, kind cumulus (default), stratus,
+    /// stratocumulus, nimbostratus, cumulonimbus, altocumulus, altostratus, cirrus,
+    /// cirrocumulus or cirrostratus; the layer drifts with its wind for --time. Repeatable (4).
+    #[arg(
+        long = "cloud",
+        value_name = "BASE_M,THICKNESS_M,COVERAGE[,KIND[,WIND_MPS,FROM_DEG]]",
+        allow_hyphen_values = true
+    )]
+    pub clouds: Vec<String>,
     /// Draw the terrain as a wireframe.
     #[arg(long)]
     pub wireframe: bool,

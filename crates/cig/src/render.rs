@@ -151,6 +151,52 @@ pub fn parse_smoke(text: &str) -> anyhow::Result<FireSpec> {
     })
 }
 
+/// Parses a `--cloud` layer "BASE_M,THICKNESS_M,COVERAGE[,KIND[,WIND_MPS,FROM_DEG]]" (the
+/// `seed` of the layer's pattern given).
+pub fn parse_cloud(text: &str, seed: u64) -> anyhow::Result<cig_environment::clouds::CloudLayer> {
+    use cig_environment::clouds::{CloudKind, CloudLayer};
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let form = "BASE_M,THICKNESS_M,COVERAGE[,KIND[,WIND_MPS,FROM_DEG]]";
+    if ![3, 4, 6].contains(&parts.len()) {
+        bail!("--cloud \"{text}\" is not {form}");
+    }
+    let number = |i: usize, name: &str| -> anyhow::Result<f64> {
+        let part = parts.get(i).copied().unwrap_or_default();
+        part.parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .with_context(|| format!("--cloud \"{text}\": {name} \"{part}\" is not a number"))
+    };
+    let kind = match parts.get(3) {
+        Some(name) => CloudKind::from_name(name).with_context(|| {
+            let names: Vec<&str> = CloudKind::ALL.iter().map(|k| k.name()).collect();
+            format!(
+                "--cloud \"{text}\": \"{name}\" is not a cloud type ({})",
+                names.join(", ")
+            )
+        })?,
+        None => CloudKind::Cumulus,
+    };
+    let (wind_speed_mps, wind_from_deg) = if parts.len() == 6 {
+        (number(4, "wind speed")?, number(5, "wind direction")?)
+    } else {
+        (0.0, 0.0)
+    };
+    let layer = CloudLayer {
+        base_m: number(0, "base")?,
+        thickness_m: number(1, "thickness")?,
+        coverage: number(2, "coverage")?,
+        kind,
+        wind_speed_mps,
+        wind_from_deg,
+        seed,
+    };
+    layer
+        .validate()
+        .with_context(|| format!("--cloud \"{text}\""))?;
+    Ok(layer)
+}
+
 /// Parses "SPEED,FROM_DEG".
 pub fn parse_wind(text: &str) -> anyhow::Result<cig_effects::Wind> {
     let v = parse_numbers(text, "--wind", &[2])
@@ -242,6 +288,8 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "puff_gpu_ms": stats.puff_gpu_ms,
         "illuminance_lux": stats.illuminance_lux,
         "exposure_ev": stats.exposure_ev,
+        "cloud_layers_drawn": stats.cloud_layers_drawn,
+        "cloud_gpu_ms": stats.cloud_gpu_ms,
         "adapter": gpu.describe(),
         "size": [view.width_px, view.height_px],
     })
@@ -342,6 +390,19 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .map(|text| Ok((text.clone(), parse_smoke(text)?)))
         .collect::<anyhow::Result<_>>()?;
     let wind = parse_wind(&args.wind)?;
+    if args.clouds.len() > cig_environment::clouds::MAX_CLOUD_LAYERS {
+        bail!(
+            "--cloud is given {} times; at most {} layers",
+            args.clouds.len(),
+            cig_environment::clouds::MAX_CLOUD_LAYERS
+        );
+    }
+    let clouds: Vec<cig_environment::clouds::CloudLayer> = args
+        .clouds
+        .iter()
+        .enumerate()
+        .map(|(i, text)| parse_cloud(text, i as u64 + 1))
+        .collect::<anyhow::Result<_>>()?;
     let (cache, mut renderer) = open(&args.db, config)?;
     let mut session = QuerySession::new(Arc::clone(&cache));
     let mut entities = Vec::new();
@@ -378,6 +439,13 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     snapshot.max_pixel_error = args.max_pixel_error;
     snapshot.wireframe = args.wireframe;
     snapshot.entities = entities;
+    snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&clouds);
+    snapshot.cloud_layers = clouds;
+    // The pattern's origin: the eye's whole degrees (the same clouds for nearby eyes).
+    snapshot.cloud_origin = cig_environment::CloudOrigin {
+        lat_deg: view.eye.lat_deg.round(),
+        lon_deg: view.eye.lon_deg.round(),
+    };
     snapshot.puff_origin_ecef_m = view.eye.to_ecef();
     snapshot.puffs = fire_puffs(
         &mut session,

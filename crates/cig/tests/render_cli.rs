@@ -175,6 +175,74 @@ fn render_draws_smoke_plumes_from_the_command_line() {
 }
 
 #[test]
+fn render_draws_cloud_layers_from_the_command_line() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let clear = dir.path().join("clear.png");
+    cig().args(render_args(&db, &clear)).assert().success();
+    let cloudy = dir.path().join("cloudy.png");
+    let stats = dir.path().join("stats.json");
+    cig()
+        .args(render_args(&db, &cloudy))
+        .args([
+            "--cloud",
+            "1200,400,1,stratus",
+            "--cloud",
+            "3000,800,0.4,cumulus,10,250",
+            "--stats",
+            &stats.display().to_string(),
+        ])
+        .assert()
+        .success();
+    let json: Value = serde_json::from_slice(&std::fs::read(&stats).expect("stats")).expect("json");
+    assert_eq!(json["cloud_layers_drawn"].as_u64(), Some(2), "{json}");
+    assert!(json["cloud_gpu_ms"].is_number(), "{json}");
+    let (a, b) = (read_rgba(&clear), read_rgba(&cloudy));
+    assert_eq!(a.len(), b.len());
+    let changed = a
+        .chunks_exact(4)
+        .zip(b.chunks_exact(4))
+        .filter(|(p, q)| (0..3).any(|c| p[c].abs_diff(q[c]) > 8))
+        .count();
+    // Under an overcast the sky greys and the sunlit ground is in shade: most pixels change.
+    assert!(changed > a.len() / 4 / 2, "only {changed} pixels changed");
+}
+
+#[test]
+fn bad_cloud_values_give_one_line_errors() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let out = dir.path().join("frame.png");
+    let cases: Vec<(&str, &str)> = vec![
+        ("1200,400", "--cloud"),
+        ("1200,400,0.5,cumulus,10", "--cloud"),
+        ("1200,400,1.5", "coverage"),
+        ("1200,0,0.5", "thickness"),
+        ("1e6,400,0.5", "base"),
+        ("1200,400,0.5,fog", "not a cloud type"),
+        ("1200,400,0.5,stratus,-3,90", "wind speed"),
+        ("1200,400,nan", "coverage"),
+        ("1200,400,0.5,stratus,5,x", "wind direction"),
+    ];
+    for (value, expect) in cases {
+        let mut args = render_args(&db, &out);
+        args.extend(["--cloud".to_string(), value.to_string()]);
+        let line = one_line_error(&cig().args(&args).assert().failure());
+        assert!(
+            line.contains(expect) && line.contains("--cloud"),
+            "{value}: {line}"
+        );
+    }
+    let mut args = render_args(&db, &out);
+    for _ in 0..5 {
+        args.extend(["--cloud".to_string(), "1200,400,0.5".to_string()]);
+    }
+    let line = one_line_error(&cig().args(&args).assert().failure());
+    assert!(line.contains("at most 4"), "{line}");
+    assert!(!out.exists(), "no frame written after an error");
+}
+
+#[test]
 fn bad_smoke_and_wind_values_give_one_line_errors() {
     let dir = tempfile::tempdir().expect("tmp");
     let db = small_db(dir.path());

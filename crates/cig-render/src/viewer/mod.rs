@@ -694,6 +694,19 @@ impl App {
                 snapshot
             }
         };
+        if self.driver.is_none() {
+            // The stand-alone viewer's clouds are anchored at its starting eye's whole degrees.
+            snapshot.cloud_origin = cig_environment::CloudOrigin {
+                lat_deg: self.options.eye.lat_deg.round(),
+                lon_deg: self.options.eye.lon_deg.round(),
+            };
+        }
+        // The operator's cloud layer wins over the driver's.
+        if let Some(layer) = self.panel.cloud_layer() {
+            snapshot.cloud_layers = vec![layer];
+            snapshot.cloud_cover_fraction =
+                cig_environment::cloud_cover_fraction(&snapshot.cloud_layers);
+        }
         snapshot.max_pixel_error = self.panel.max_pixel_error;
         snapshot.wireframe = self.panel.wireframe;
         snapshot.sky.exposure_compensation_ev += self.panel.exposure_compensation_ev;

@@ -12,6 +12,7 @@
 
 use crate::renderer::serde_like::FrameStats;
 use crate::viewer::camera::FlyCamera;
+use cig_environment::clouds::{CloudKind, CloudLayer};
 use cig_scene::lighting::{Fog, FogMode};
 
 /// Seconds in a day.
@@ -102,6 +103,15 @@ pub struct PanelState {
     pub wind_from_deg: f64,
     /// A line about the last obscurant order (e.g. why it could not be done).
     pub obscurant_note: String,
+    /// One cloud layer: on, base (metres above the ellipsoid), thickness, coverage, kind, and
+    /// the wind it drifts in. When on, it replaces the world's clouds.
+    pub clouds: bool,
+    pub cloud_base_m: f64,
+    pub cloud_thickness_m: f64,
+    pub cloud_coverage: f64,
+    pub cloud_kind: CloudKind,
+    pub cloud_wind_speed_mps: f64,
+    pub cloud_wind_from_deg: f64,
     /// Orders given this frame, taken by the viewer.
     commands: Vec<ObscurantCommand>,
     /// The date field being edited.
@@ -166,6 +176,13 @@ impl PanelState {
             wind_speed_mps: 3.0,
             wind_from_deg: 270.0,
             obscurant_note: String::new(),
+            clouds: false,
+            cloud_base_m: 1500.0,
+            cloud_thickness_m: 600.0,
+            cloud_coverage: 0.5,
+            cloud_kind: CloudKind::Cumulus,
+            cloud_wind_speed_mps: 8.0,
+            cloud_wind_from_deg: 270.0,
             commands: Vec::new(),
             date_text: String::new(),
             date_error: false,
@@ -213,6 +230,23 @@ impl PanelState {
         })
     }
 
+    /// The cloud layer these settings ask for (values brought into range), if on.
+    pub fn cloud_layer(&self) -> Option<CloudLayer> {
+        self.clouds.then(|| {
+            CloudLayer {
+                base_m: self.cloud_base_m,
+                thickness_m: self.cloud_thickness_m,
+                coverage: self.cloud_coverage,
+                kind: self.cloud_kind,
+                wind_speed_mps: self.cloud_wind_speed_mps,
+                wind_from_deg: self.cloud_wind_from_deg,
+                seed: 1,
+            }
+            .clamped()
+            .0
+        })
+    }
+
     /// Draws the panel (a floating window) and applies the operator's changes.
     pub fn ui(&mut self, ctx: &egui::Context, camera: &mut FlyCamera, info: &FrameInfo) {
         egui::Window::new("cig view")
@@ -229,6 +263,8 @@ impl PanelState {
                 self.detail_ui(ui, info);
                 ui.separator();
                 self.obscurants_ui(ui);
+                ui.separator();
+                self.clouds_ui(ui);
                 ui.separator();
                 camera_ui(ui, camera, info);
             });
@@ -399,6 +435,43 @@ impl PanelState {
         }
     }
 
+    fn clouds_ui(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Clouds");
+        ui.checkbox(&mut self.clouds, "cloud layer")
+            .on_hover_text("replaces the scenario's and the host's clouds while on");
+        ui.add_enabled_ui(self.clouds, |ui| {
+            ui.add(
+                egui::Slider::new(&mut self.cloud_base_m, 0.0..=12_000.0)
+                    .text("base")
+                    .suffix(" m"),
+            );
+            ui.add(
+                egui::Slider::new(&mut self.cloud_thickness_m, 50.0..=5_000.0)
+                    .logarithmic(true)
+                    .text("thickness")
+                    .suffix(" m"),
+            );
+            ui.add(egui::Slider::new(&mut self.cloud_coverage, 0.0..=1.0).text("coverage"));
+            egui::ComboBox::from_label("type")
+                .selected_text(self.cloud_kind.name())
+                .show_ui(ui, |ui| {
+                    for kind in CloudKind::ALL {
+                        ui.selectable_value(&mut self.cloud_kind, kind, kind.name());
+                    }
+                });
+            ui.add(
+                egui::Slider::new(&mut self.cloud_wind_speed_mps, 0.0..=60.0)
+                    .text("wind")
+                    .suffix(" m/s"),
+            );
+            ui.add(
+                egui::Slider::new(&mut self.cloud_wind_from_deg, 0.0..=359.0)
+                    .text("from")
+                    .suffix("°"),
+            );
+        });
+    }
+
     fn detail_ui(&mut self, ui: &mut egui::Ui, info: &FrameInfo) {
         ui.strong("Terrain");
         ui.add(
@@ -565,5 +638,19 @@ mod tests {
             prop_assert_eq!(days_from_civil(y, m, d), Some(days));
             prop_assert_eq!(parse_date(&format_date(days)), Some(days));
         }
+    }
+
+    #[test]
+    fn the_cloud_layer_is_off_until_asked_and_always_valid() {
+        let mut p = PanelState::new(0.0, 1000.0, FogMode::Linear, 1.0, false);
+        assert_eq!(p.cloud_layer(), None);
+        p.clouds = true;
+        let layer = p.cloud_layer().expect("on");
+        assert_eq!((layer.base_m, layer.coverage), (1500.0, 0.5));
+        p.cloud_coverage = 7.0;
+        p.cloud_thickness_m = f64::NAN;
+        let layer = p.cloud_layer().expect("on");
+        assert!(layer.validate().is_ok(), "{layer:?}");
+        assert_eq!(layer.coverage, 1.0);
     }
 }
