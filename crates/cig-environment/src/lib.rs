@@ -27,6 +27,8 @@
 //!   (directions, colours, illuminance) that the renderer reads every frame.
 //! - [`lightning`]: the NPS thesis's branching bolt (V.A.4, appendix F), made
 //!   iterative with a hard segment cap and seeded, and the flash envelope.
+//! - [`precipitation`]: rain and snow extinction from the Marshall-Palmer and Gunn-Marshall
+//!   size distributions (geometric optics), visibility by Koschmieder, fall speeds.
 //!
 //! Conventions: degrees at every interface, metres, UTC; azimuth from true
 //! north through east; directions in the observer's east-north-up frame.
@@ -39,6 +41,7 @@ pub mod events;
 pub mod illuminance;
 pub mod lightning;
 pub mod moon;
+pub mod precipitation;
 pub mod nutation;
 pub mod sun;
 pub mod time;
@@ -49,6 +52,7 @@ pub use ephemeris::{ephemeris, BodyPosition, Ephemeris, Observer};
 pub use events::{day_events, DayEvents};
 pub use illuminance::{natural_illuminance, Illuminance};
 pub use lightning::{generate_bolt, Bolt, BoltParams, BoltSegment, FlashEnvelope};
+pub use precipitation::{Precipitation, PrecipitationKind};
 pub use time::{CalendarTime, UtcTime};
 
 /// Errors from the environment model: every one names the bad value.

@@ -15,5 +15,7 @@ pub mod view;
 
 pub use lighting::{Fog, FogMode, Lighting};
 pub use lod::{LodSettings, NodeKey, NodeLayout, Selection, TerrainLod};
-pub use snapshot::{EntityInstance, EntitySpec, FogLayer, FrameSnapshot};
+pub use snapshot::{
+    BoltDraw, BoltLine, EntityInstance, EntitySpec, FogLayer, FrameSnapshot, PrecipitationDraw,
+};
 pub use view::{Camera, FovDeg, Hpr, View, ViewError};
