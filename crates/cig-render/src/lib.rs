@@ -5,9 +5,11 @@
 //! [`cig_scene::FrameSnapshot`] and the terrain [`cig_terrain::TileCache`]). Any wgpu backend
 //! works (Vulkan, Metal, DX12, GL); with no GPU, Mesa's lavapipe renders the same frames.
 
+pub mod bolts;
 pub mod gltf_model;
 pub mod gpu;
 pub mod offscreen;
+pub mod precipitation;
 pub mod puffs;
 pub mod renderer;
 pub mod terrain;

@@ -59,6 +59,10 @@ pub mod serde_like {
         /// GPU time of the puff passes (timestamp queries; 0 without them or without puffs).
         pub puff_gpu_ms: f64,
         pub gpu_timed_by: &'static str,
+        /// Lightning bolt lines drawn.
+        pub bolt_lines_drawn: u32,
+        /// Rain drops or snow flakes drawn.
+        pub precipitation_particles: u32,
     }
 }
 
@@ -145,6 +149,8 @@ pub struct Renderer {
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
     puffs: PuffPass,
+    bolts: crate::bolts::BoltPass,
+    precipitation: crate::precipitation::PrecipitationPass,
     /// Queries: 0 the frame's start, 1 its end, 2 the start of the puff passes.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: u64,
@@ -493,6 +499,9 @@ impl Renderer {
             )
         });
         let puffs = PuffPass::new(&gpu, colour_format);
+        let bolts = crate::bolts::BoltPass::new(&gpu, colour_format, &globals);
+        let precipitation =
+            crate::precipitation::PrecipitationPass::new(&gpu, colour_format, &globals);
         let mut renderer = Renderer {
             model_vertices: empty("model vertices", wgpu::BufferUsages::VERTEX),
             model_indices: empty("model indices", wgpu::BufferUsages::INDEX),
@@ -515,6 +524,8 @@ impl Renderer {
             node_first_seen: HashMap::new(),
             targets: None,
             puffs,
+            bolts,
+            precipitation,
             timestamps,
             frame: 0,
         };
@@ -679,7 +690,7 @@ impl Renderer {
             self.frame,
             options.mesh_budget,
         );
-        let lighting = Lighting::at(snapshot.unix_time_s, view.eye);
+        let lighting = Lighting::at(snapshot.unix_time_s, view.eye).with_flash(snapshot.flash_lux);
         let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
         self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
         if !records.is_empty() {
@@ -698,6 +709,12 @@ impl Renderer {
         }
 
         let puff_count = self.puffs.prepare(&self.gpu, &camera, snapshot);
+        let bolt_lines = self
+            .bolts
+            .prepare(&self.gpu, &self.globals, &camera, snapshot);
+        let particles = self
+            .precipitation
+            .prepare(&self.gpu, &camera, snapshot, &lighting);
         let size = (view.width_px, view.height_px);
         let mut encoder = self
             .gpu
@@ -802,6 +819,11 @@ impl Renderer {
                 stats.draw_calls += draws.len() as u32;
                 stats.entities_drawn = draws.len() as u32;
             }
+            // After the opaque geometry: lightning (additive) and rain or snow (over).
+            stats.draw_calls += self.bolts.draw(&mut pass, bolt_lines);
+            stats.draw_calls += self.precipitation.draw(&mut pass, particles);
+            stats.bolt_lines_drawn = bolt_lines as u32;
+            stats.precipitation_particles = particles;
         }
         if puff_count > 0 {
             let Some(targets) = self.targets.as_ref() else {
