@@ -8,8 +8,8 @@
 //! is taken in f64 on the CPU, so the places are a function of (seed, index, time) alone, do
 //! not depend on the frame rate, and stay put in the world when the eye moves (the eye moves
 //! through them). One instanced draw of six vertices per particle: rain as a streak, the
-//! drop's path over [`STREAK_EXPOSURE_S`] (a 1/60 s exposure) widened to a pixel-wide quad
-//! (`screen_lines.wgsl`); snow as a soft disc facing the eye, its size 8 mm or two pixels,
+//! drop's path over [`STREAK_EXPOSURE_S`] (1/30 s, about the eye's integration time) widened to a pixel-wide quad
+//! (`screen_lines.wgsl`); snow as a soft disc facing the eye, its size 12 mm (an aggregate) or three pixels,
 //! swaying ±0.3 m. Particles are lit by the frame's light (the ambient sky light and a share
 //! of the sun, after any lightning flash), semi-transparent (premultiplied alpha over the
 //! scene), depth-tested against terrain and models, faded out at the edge of the ball inscribed
@@ -32,17 +32,17 @@ use glam::DVec3;
 
 /// Side of the box of particles around the eye, m.
 pub const BOX_M: f64 = 24.0;
-/// Exposure over which a drop's streak is drawn, s.
-pub const STREAK_EXPOSURE_S: f64 = 1.0 / 60.0;
+/// Exposure over which a drop's streak is drawn, s (about the eye's integration time).
+pub const STREAK_EXPOSURE_S: f64 = 1.0 / 30.0;
 /// Most raindrops drawn.
-pub const MAX_RAIN_PARTICLES: u32 = 6000;
+pub const MAX_RAIN_PARTICLES: u32 = 10_000;
 /// Most snow flakes drawn.
-pub const MAX_SNOW_PARTICLES: u32 = 5000;
+pub const MAX_SNOW_PARTICLES: u32 = 12_000;
 /// Rates at which the drawn numbers reach 63 % of their maximum, mm/h of water.
 const RAIN_SCALE_MM_PER_H: f64 = 8.0;
 const SNOW_SCALE_MM_PER_H: f64 = 1.0;
 /// Flake diameter, m.
-const FLAKE_DIAMETER_M: f32 = 0.008;
+const FLAKE_DIAMETER_M: f32 = 0.012;
 /// Time the particles' motion counts from (2020-01-01 UTC), to keep the products small.
 const EPOCH_UNIX_S: f64 = 1_577_836_800.0;
 
@@ -176,10 +176,12 @@ impl PrecipitationPass {
         let snow = p.kind == PrecipitationKind::Snow;
         // Light on a particle: the sky's ambient light and a share of the sun (drops
         // refract most of what is behind them; flakes are white and scatter it all).
+        // Flakes are lit mostly by the sky, so against a bright sky they show grey, against
+        // terrain or at night white, as real snow does.
         let (albedo, sun_share, opacity) = if snow {
-            (0.9f32, 0.5f32, 0.85f32)
+            (0.9f32, 0.1f32, 0.9f32)
         } else {
-            (0.5, 0.15, 0.3)
+            (0.5, 0.15, 0.45)
         };
         let sun_up = (lighting.sun_elevation_deg.to_radians().sin() as f32).max(0.0);
         let lit: [f32; 3] = std::array::from_fn(|i| {
@@ -207,7 +209,7 @@ impl PrecipitationPass {
             viewport: [
                 camera.view.width_px as f32,
                 camera.view.height_px as f32,
-                if snow { 1.0 } else { 0.6 },
+                if snow { 1.5 } else { 0.6 },
                 ((draw.seed ^ (draw.seed >> 32)) & 0x7F_FFFF) as f32,
             ],
         };

@@ -82,7 +82,7 @@ fn vs_main(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance
         out.clip = vec4<f32>(0.0, 0.0, -1.0, 1.0);
     }
     out.uv = corner;
-    out.alpha = p.params.w * fade * max(share * share, 0.35);
+    out.alpha = p.params.w * fade * max(share, 0.7);
     return out;
 }
 
