@@ -259,7 +259,10 @@ mod tests {
         for i in 0..steps {
             let d = (i as f64 + 0.5) * dd;
             let geometric = k * d;
-            sum += 2.0 * std::f64::consts::FRAC_PI_4 * geometric * geometric
+            sum += 2.0
+                * std::f64::consts::FRAC_PI_4
+                * geometric
+                * geometric
                 * n0
                 * (-lambda * d).exp()
                 * dd;
@@ -311,12 +314,19 @@ mod tests {
             assert!((w - want).abs() < 0.005 * want, "{r}: {w} vs {want}");
             for kind in [PrecipitationKind::Rain, PrecipitationKind::Snow] {
                 let p = Precipitation::new(kind, r).unwrap();
-                let back = Precipitation::rate_for_water_content(kind, p.liquid_water_content_g_per_m3());
+                let back =
+                    Precipitation::rate_for_water_content(kind, p.liquid_water_content_g_per_m3());
                 assert!((back - r).abs() < 1e-6 * r, "{kind:?} {r}: {back}");
             }
         }
-        assert_eq!(Precipitation::rate_for_water_content(PrecipitationKind::Rain, f64::NAN), 0.0);
-        assert_eq!(Precipitation::rate_for_water_content(PrecipitationKind::Rain, 1e9), 10_000.0);
+        assert_eq!(
+            Precipitation::rate_for_water_content(PrecipitationKind::Rain, f64::NAN),
+            0.0
+        );
+        assert_eq!(
+            Precipitation::rate_for_water_content(PrecipitationKind::Rain, 1e9),
+            10_000.0
+        );
     }
 
     #[test]
@@ -331,7 +341,10 @@ mod tests {
         let want = KOSCHMIEDER / (KOSCHMIEDER / 5000.0 + KOSCHMIEDER / rain.visibility_m());
         assert!((v - want).abs() < 1e-9);
         assert!(v < 5000.0 && v < rain.visibility_m());
-        assert_eq!(rain.combined_visibility_m(f64::INFINITY), rain.visibility_m());
+        assert_eq!(
+            rain.combined_visibility_m(f64::INFINITY),
+            rain.visibility_m()
+        );
     }
 
     #[test]
@@ -348,7 +361,10 @@ mod tests {
             Precipitation::clamped(PrecipitationKind::Rain, f64::NAN).rate_mm_per_h,
             0.0
         );
-        assert_eq!(PrecipitationKind::parse(" Snow"), Some(PrecipitationKind::Snow));
+        assert_eq!(
+            PrecipitationKind::parse(" Snow"),
+            Some(PrecipitationKind::Snow)
+        );
         assert_eq!(PrecipitationKind::parse("hail"), None);
     }
 

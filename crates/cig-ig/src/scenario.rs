@@ -830,24 +830,47 @@ delivery = "multicast:239.1.2.3"
              [lightning]\nlat_deg = 51.0\nlon_deg = -1.5\nstrikes_per_minute = 12\nseed = 9\n"
         );
         let s = Scenario::from_toml(&text).expect("parses");
-        let p = s.precipitation.as_ref().and_then(|p| p.precipitation()).expect("snow");
+        let p = s
+            .precipitation
+            .as_ref()
+            .and_then(|p| p.precipitation())
+            .expect("snow");
         assert_eq!(p.kind, cig_environment::PrecipitationKind::Snow);
         assert_eq!(p.rate_mm_per_h, 2.5);
         let storm = s.lightning.as_ref().and_then(|l| l.storm()).expect("storm");
-        assert_eq!((storm.seed, storm.strikes_per_minute, storm.radius_m), (9, 12.0, 10_000.0));
+        assert_eq!(
+            (storm.seed, storm.strikes_per_minute, storm.radius_m),
+            (9, 12.0, 10_000.0)
+        );
         for (bad, key) in [
-            ("rate_mm_per_h = 2.5", "precipitation.rate_mm_per_h: 500 is outside 0..200"),
-            ("kind = \"snow\"", "precipitation.kind: \"hail\" is not rain, snow or sleet"),
-            ("strikes_per_minute = 12", "lightning.strikes_per_minute: -1 is outside 0..600"),
-            ("lat_deg = 51.0\nlon_deg = -1.5\nstrikes", "lightning.lat_deg: 91 is outside -90..90"),
+            (
+                "rate_mm_per_h = 2.5",
+                "precipitation.rate_mm_per_h: 500 is outside 0..200",
+            ),
+            (
+                "kind = \"snow\"",
+                "precipitation.kind: \"hail\" is not rain, snow or sleet",
+            ),
+            (
+                "strikes_per_minute = 12",
+                "lightning.strikes_per_minute: -1 is outside 0..600",
+            ),
+            (
+                "lat_deg = 51.0\nlon_deg = -1.5\nstrikes",
+                "lightning.lat_deg: 91 is outside -90..90",
+            ),
         ] {
             let replaced = match key.split(':').next() {
                 Some("precipitation.rate_mm_per_h") => text.replace(bad, "rate_mm_per_h = 500"),
                 Some("precipitation.kind") => text.replace(bad, "kind = \"hail\""),
-                Some("lightning.strikes_per_minute") => text.replace(bad, "strikes_per_minute = -1"),
+                Some("lightning.strikes_per_minute") => {
+                    text.replace(bad, "strikes_per_minute = -1")
+                }
                 _ => text.replace(bad, "lat_deg = 91.0\nlon_deg = -1.5\nstrikes"),
             };
-            let e = Scenario::from_toml(&replaced).expect_err("refused").to_string();
+            let e = Scenario::from_toml(&replaced)
+                .expect_err("refused")
+                .to_string();
             assert_eq!(e, key);
         }
         let e = Scenario::from_toml(&format!("{text}\ncolour = 1\n")).expect_err("refused");

@@ -349,7 +349,11 @@ impl EnvironmentState {
     fn precipitation_layer_at(
         &self,
         point: Geodetic,
-    ) -> Option<(&WeatherControl, cig_environment::Precipitation, Option<String>)> {
+    ) -> Option<(
+        &WeatherControl,
+        cig_environment::Precipitation,
+        Option<String>,
+    )> {
         use cig_environment::{Precipitation, PrecipitationKind};
         let layer = self.layers_at(point).into_iter().find(|l| {
             (4..=7).contains(&l.layer_id) && {
@@ -373,7 +377,11 @@ impl EnvironmentState {
         } else {
             let r = rain_by_severity.get(severity).copied().unwrap_or(10.0);
             (
-                if kind == PrecipitationKind::Snow { r / 10.0 } else { r },
+                if kind == PrecipitationKind::Snow {
+                    r / 10.0
+                } else {
+                    r
+                },
                 format!("severity {}", layer.severity),
             )
         };
@@ -411,10 +419,14 @@ impl EnvironmentState {
             .find_map(|w| {
                 let probe = Geodetic::new(0.0, 0.0, f64::NEG_INFINITY);
                 let single = EnvironmentState {
-                    weather: [((SCOPE_GLOBAL, 0, w.layer_id), w.clone())].into_iter().collect(),
+                    weather: [((SCOPE_GLOBAL, 0, w.layer_id), w.clone())]
+                        .into_iter()
+                        .collect(),
                     ..EnvironmentState::default()
                 };
-                single.precipitation_layer_at(probe).and_then(|(_, _, note)| note)
+                single
+                    .precipitation_layer_at(probe)
+                    .and_then(|(_, _, note)| note)
             })
     }
 

@@ -29,16 +29,18 @@
 //! (measured peak intensities of return strokes are far higher but last microseconds), no
 //! thunder.
 
-use cig_environment::lightning::{generate_bolt, BoltParams, FlashEnvelope};
+use cig_environment::lightning::FlashEnvelope;
 use cig_geo::{EnuFrame, Geodetic};
-use cig_scene::{BoltDraw, BoltLine};
+pub use cig_scene::bolt::{
+    flash_lux_from, make_bolt, MadeBolt, FLASH_LUMINOUS_INTENSITY_CD, MAX_BOLT_SEGMENTS,
+    MAX_FLASH_LUX,
+};
+use cig_scene::BoltDraw;
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Arc;
 
-/// Segment cap of every bolt.
-pub const MAX_BOLT_SEGMENTS: usize = 2000;
 /// Length of one schedule slot, s.
 const SLOT_S: f64 = 1.0;
 /// Most strikes one slot holds (a storm of 600 a minute would need more; rates are capped).
@@ -47,16 +49,8 @@ const MAX_STRIKES_PER_SLOT: u32 = 32;
 pub const MAX_STRIKES_PER_MINUTE: f64 = 600.0;
 /// Longest window one step looks back over, s (older strikes are over anyway).
 const MAX_WINDOW_S: f64 = 2.0;
-/// Mean luminous intensity of a bolt over a frame, candela.
-pub const FLASH_LUMINOUS_INTENSITY_CD: f64 = 1.0e8;
-/// Nearest distance the flash's intensity is taken at, m.
-const MIN_FLASH_DISTANCE_M: f64 = 300.0;
-/// The most a flash adds to the scene's illuminance, lux.
-pub const MAX_FLASH_LUX: f64 = 2000.0;
 /// Bolts lit at once at most (the oldest go first).
 const MAX_ACTIVE_BOLTS: usize = 16;
-/// Horizontal half-size of a bolt's bounding volume, m.
-const BOLT_HALF_WIDTH_M: f64 = 1500.0;
 
 /// A thunderstorm that strikes by itself.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,79 +133,6 @@ impl LightningStorm {
         out.sort_by(|a, b| a.time_unix_s.total_cmp(&b.time_unix_s));
         out
     }
-}
-
-/// A generated bolt ready to draw, and what generating it cost.
-#[derive(Clone, Debug)]
-pub struct MadeBolt {
-    pub origin_ecef_m: DVec3,
-    pub lines: Arc<[BoltLine]>,
-    /// The middle of the channel, ECEF, m (where the flash's light comes from).
-    pub centre_ecef_m: DVec3,
-    pub generation_us: f64,
-    pub segments: usize,
-}
-
-/// Generates the bolt of a strike at `ground` (its root `cloud_base_m` above) with `seed`.
-pub fn make_bolt(ground: Geodetic, cloud_base_m: f64, seed: u64) -> MadeBolt {
-    let started = std::time::Instant::now();
-    let base = if cloud_base_m.is_finite() {
-        cloud_base_m.clamp(100.0, 10_000.0)
-    } else {
-        1500.0
-    };
-    let params = BoltParams {
-        root_enu_m: [0.0, 0.0, base],
-        bounds_min_enu_m: [-BOLT_HALF_WIDTH_M, -BOLT_HALF_WIDTH_M, 0.0],
-        bounds_max_enu_m: [BOLT_HALF_WIDTH_M, BOLT_HALF_WIDTH_M, base],
-        max_segments: MAX_BOLT_SEGMENTS,
-        seed,
-        ..BoltParams::default()
-    };
-    let frame = EnuFrame::new(ground);
-    let lines: Vec<BoltLine> = match generate_bolt(&params) {
-        Ok(bolt) => bolt
-            .segments
-            .iter()
-            .map(|s| {
-                let f = |p: [f64; 3]| {
-                    let v = frame.enu_vector_to_ecef(DVec3::from_array(p));
-                    [v.x as f32, v.y as f32, v.z as f32]
-                };
-                BoltLine {
-                    start_m: f(s.start_enu_m),
-                    end_m: f(s.end_enu_m),
-                    brightness: if s.generation == 0 {
-                        1.0
-                    } else {
-                        0.4 / s.generation as f32
-                    },
-                }
-            })
-            .collect(),
-        // The parameters are this module's own and valid; a failure draws nothing.
-        Err(e) => {
-            tracing::warn!("a lightning bolt cannot be generated: {e}");
-            Vec::new()
-        }
-    };
-    let origin = ground.to_ecef();
-    MadeBolt {
-        origin_ecef_m: origin,
-        segments: lines.len(),
-        lines: lines.into(),
-        centre_ecef_m: origin + frame.enu_vector_to_ecef(DVec3::new(0.0, 0.0, base / 2.0)),
-        generation_us: started.elapsed().as_secs_f64() * 1e6,
-    }
-}
-
-/// Illuminance at `eye_ecef_m` from a bolt whose channel's middle is at `centre_ecef_m`, lit
-/// at `intensity` (0..1) of its peak, lux.
-pub fn flash_lux_from(eye_ecef_m: DVec3, centre_ecef_m: DVec3, intensity: f64) -> f64 {
-    let d = (centre_ecef_m - eye_ecef_m)
-        .length()
-        .max(MIN_FLASH_DISTANCE_M);
-    (FLASH_LUMINOUS_INTENSITY_CD * intensity.clamp(0.0, 1.0) / (d * d)).min(MAX_FLASH_LUX)
 }
 
 /// A bolt lit now.
@@ -366,7 +287,8 @@ impl Lightning {
             .lit
             .iter()
             .map(|b| {
-                let k = self.envelope.intensity(now_unix_s - b.start_unix_s) * f64::from(b.intensity);
+                let k =
+                    self.envelope.intensity(now_unix_s - b.start_unix_s) * f64::from(b.intensity);
                 flash_lux_from(eye_ecef_m, b.bolt.centre_ecef_m, k)
             })
             .sum();

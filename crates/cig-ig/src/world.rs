@@ -289,9 +289,7 @@ impl IgWorld {
             operator_plumes_started: 0,
             dust_trails: BTreeMap::new(),
             effects_stalled: false,
-            lightning: crate::weather::Lightning::new(
-                scenario_storm,
-            ),
+            lightning: crate::weather::Lightning::new(scenario_storm),
             received_strikes: Vec::new(),
             operator_precipitation: None,
             precipitation_told: false,
@@ -351,9 +349,9 @@ impl IgWorld {
         if let Some(p) = self.operator_precipitation {
             return p;
         }
-        let eye_msl = self.first_eye.map(|e| {
-            Geodetic::new(e.lat_deg, e.lon_deg, e.alt_m - self.eye_geoid_m)
-        });
+        let eye_msl = self
+            .first_eye
+            .map(|e| Geodetic::new(e.lat_deg, e.lon_deg, e.alt_m - self.eye_geoid_m));
         if let Some(p) = eye_msl.and_then(|e| self.session.environment().precipitation_at(e)) {
             return Some(p);
         }
@@ -579,9 +577,7 @@ impl IgWorld {
     fn step_lightning(&mut self, query: &mut QuerySession) {
         let now_unix_s = self.clock.now().unix_seconds();
         let scheduled = self.lightning.advance(now_unix_s, |lat, lon| {
-            query
-                .hot(lat, lon)
-                .map_or(0.0, |g| g.height_ellipsoid_m())
+            query.hot(lat, lon).map_or(0.0, |g| g.height_ellipsoid_m())
         });
         if let Some(x) = self.exercise.as_mut() {
             for s in &scheduled {
@@ -1055,17 +1051,17 @@ impl IgWorld {
             // Rain and snow add their extinction to the air's (Koschmieder), unless the host's
             // precipitation layer states its own visibility, which already applies.
             if let Some(p) = self.precipitation() {
-                if !self.session.environment().precipitation_sets_visibility(eye_msl) {
+                if !self
+                    .session
+                    .environment()
+                    .precipitation_sets_visibility(eye_msl)
+                {
                     visibility_m = p.combined_visibility_m(visibility_m);
                 }
                 snapshot.precipitation = Some(cig_scene::PrecipitationDraw {
                     precipitation: p,
                     wind_en_mps: self.wind_en_mps(),
-                    seed: self
-                        .scenario
-                        .precipitation
-                        .as_ref()
-                        .map_or(1, |s| s.seed),
+                    seed: self.scenario.precipitation.as_ref().map_or(1, |s| s.seed),
                 });
             }
             snapshot.fog = Fog::from_visibility(self.fog_mode, visibility_m);

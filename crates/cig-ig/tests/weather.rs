@@ -150,7 +150,10 @@ fn a_flash_rises_within_two_frames_and_decays() {
         flashes.push(snap(&w).flash_lux);
     }
     let peak = flashes.iter().copied().fold(0.0, f64::max);
-    assert!(peak > 10.0, "a strike 1 km away lights the scene: {flashes:?}");
+    assert!(
+        peak > 10.0,
+        "a strike 1 km away lights the scene: {flashes:?}"
+    );
     assert!(
         flashes[0].max(flashes[1]) >= 0.8 * peak,
         "full within two frames: {flashes:?}"
@@ -249,7 +252,8 @@ fn the_hosts_rain_layer_reaches_the_snapshot_clamped_and_reported() {
         })
         .collect();
     assert!(
-        told.iter().any(|t| t.contains("layer 4") && t.contains("clamped")),
+        told.iter()
+            .any(|t| t.contains("layer 4") && t.contains("clamped")),
         "{told:?}"
     );
     // Above the layer's top the rain stops.

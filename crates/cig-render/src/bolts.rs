@@ -239,12 +239,14 @@ impl BoltPass {
                     break 'bolts;
                 }
                 let at = |p: [f32; 3]| {
-                    let v = base + glam::DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+                    let v =
+                        base + glam::DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
                     [v.x as f32, v.y as f32, v.z as f32]
                 };
                 let [ax, ay, az] = at(line.start_m);
                 let [bx, by, bz] = at(line.end_m);
-                let radiance = (peak * f64::from(bolt.intensity * line.brightness.clamp(0.0, 1.0))) as f32;
+                let radiance =
+                    (peak * f64::from(bolt.intensity * line.brightness.clamp(0.0, 1.0))) as f32;
                 self.staging.push(GpuLine {
                     start: [ax, ay, az, radiance],
                     end: [bx, by, bz, 0.0],

@@ -165,10 +165,18 @@ impl PrecipitationPass {
         let frame = EnuFrame::new(anchor);
         let eye_enu = frame.geodetic_to_enu(eye);
         let [wind_e, wind_n] = draw.wind_en_mps;
-        let wind = |w: f64| if w.is_finite() { w.clamp(-100.0, 100.0) } else { 0.0 };
+        let wind = |w: f64| {
+            if w.is_finite() {
+                w.clamp(-100.0, 100.0)
+            } else {
+                0.0
+            }
+        };
         let velocity = DVec3::new(wind(wind_e), wind(wind_n), -p.fall_speed_mps());
         let t = snapshot.unix_time_s - EPOCH_UNIX_S;
-        let offset = (eye_enu - velocity * t).to_array().map(|c| c.rem_euclid(BOX_M) as f32);
+        let offset = (eye_enu - velocity * t)
+            .to_array()
+            .map(|c| c.rem_euclid(BOX_M) as f32);
         let axis = |v: DVec3| {
             let e = frame.enu_vector_to_ecef(v);
             [e.x as f32, e.y as f32, e.z as f32, 0.0]

@@ -23,10 +23,7 @@ fn eye() -> Geodetic {
 
 /// A frame over the sea looking north, level.
 fn frame(unix_time_s: f64) -> FrameSnapshot {
-    FrameSnapshot::new(
-        unix_time_s,
-        vec![view(eye(), (0.0, 0.0, 0.0), 60.0, SIZE)],
-    )
+    FrameSnapshot::new(unix_time_s, vec![view(eye(), (0.0, 0.0, 0.0), 60.0, SIZE)])
 }
 
 fn luminance_sum(image: &Image) -> f64 {
@@ -40,8 +37,15 @@ fn luminance_sum(image: &Image) -> f64 {
 /// Pixels whose colour changed by more than `threshold` (sum of channels), as (x, y).
 fn changed(a: &Image, b: &Image, threshold: i32) -> Vec<(u32, u32)> {
     let mut out = Vec::new();
-    for (i, (p, q)) in a.rgba.chunks_exact(4).zip(b.rgba.chunks_exact(4)).enumerate() {
-        let d: i32 = (0..3).map(|c| (i32::from(p[c]) - i32::from(q[c])).abs()).sum();
+    for (i, (p, q)) in a
+        .rgba
+        .chunks_exact(4)
+        .zip(b.rgba.chunks_exact(4))
+        .enumerate()
+    {
+        let d: i32 = (0..3)
+            .map(|c| (i32::from(p[c]) - i32::from(q[c])).abs())
+            .sum();
         if d > threshold {
             out.push((i as u32 % a.width, i as u32 / a.width));
         }
@@ -110,7 +114,11 @@ fn a_flash_brightens_the_frame_and_fades() {
     let (dark, _) = render(&mut renderer, &cache, &plain, false);
     let (bright, _) = render(&mut renderer, &cache, &flash, false);
     let (dimmer, _) = render(&mut renderer, &cache, &fading, false);
-    let (d, b, m) = (luminance_sum(&dark), luminance_sum(&bright), luminance_sum(&dimmer));
+    let (d, b, m) = (
+        luminance_sum(&dark),
+        luminance_sum(&bright),
+        luminance_sum(&dimmer),
+    );
     assert!(b > d * 1.2, "flash {b} vs night {d}");
     assert!(m > d && m <= b, "fading {m} between {d} and {b}");
 }
@@ -137,9 +145,24 @@ fn rain_adds_streaks_and_snow_adds_flakes_near_the_eye() {
     dry.precipitation = None;
     let (clear, none_stats) = render(&mut renderer, &cache, &dry, false);
     assert_eq!(none_stats.precipitation_particles, 0);
-    let (rain, rain_stats) = render(&mut renderer, &cache, &rainy(PrecipitationKind::Rain, 10.0, t), false);
-    let (light, _) = render(&mut renderer, &cache, &rainy(PrecipitationKind::Rain, 1.0, t), false);
-    let (snow, snow_stats) = render(&mut renderer, &cache, &rainy(PrecipitationKind::Snow, 2.0, t), false);
+    let (rain, rain_stats) = render(
+        &mut renderer,
+        &cache,
+        &rainy(PrecipitationKind::Rain, 10.0, t),
+        false,
+    );
+    let (light, _) = render(
+        &mut renderer,
+        &cache,
+        &rainy(PrecipitationKind::Rain, 1.0, t),
+        false,
+    );
+    let (snow, snow_stats) = render(
+        &mut renderer,
+        &cache,
+        &rainy(PrecipitationKind::Snow, 2.0, t),
+        false,
+    );
     write_png(&rain, &out_dir().join("rain.png"));
     write_png(&snow, &out_dir().join("snow.png"));
     assert!(rain_stats.precipitation_particles > 1000);
@@ -154,8 +177,18 @@ fn rain_adds_streaks_and_snow_adds_flakes_near_the_eye() {
     // Snow is white flakes: brighter than the sea behind it on the whole.
     assert!(luminance_sum(&snow) > luminance_sum(&clear));
     // The same time draws the same particles; a moment later they have fallen.
-    let (again, _) = render(&mut renderer, &cache, &rainy(PrecipitationKind::Rain, 10.0, t), false);
+    let (again, _) = render(
+        &mut renderer,
+        &cache,
+        &rainy(PrecipitationKind::Rain, 10.0, t),
+        false,
+    );
     assert_eq!(again.rgba, rain.rgba);
-    let (later, _) = render(&mut renderer, &cache, &rainy(PrecipitationKind::Rain, 10.0, t + 0.05), false);
+    let (later, _) = render(
+        &mut renderer,
+        &cache,
+        &rainy(PrecipitationKind::Rain, 10.0, t + 0.05),
+        false,
+    );
     assert!(!changed(&rain, &later, 6).is_empty());
 }

@@ -303,7 +303,10 @@ mod tests {
         let lit = base.with_flash(100.0);
         let units = (100.0 * LIGHTING_UNITS_PER_LUX) as f32;
         for i in 0..3 {
-            assert!((lit.ambient_colour[i] - base.ambient_colour[i] - FLASH_COLOUR[i] * units).abs() < 1e-7);
+            assert!(
+                (lit.ambient_colour[i] - base.ambient_colour[i] - FLASH_COLOUR[i] * units).abs()
+                    < 1e-7
+            );
             assert!(lit.sky_zenith[i] > base.sky_zenith[i]);
             assert!(lit.fog_colour[i] > base.fog_colour[i]);
         }

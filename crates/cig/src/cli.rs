@@ -435,7 +435,12 @@ pub struct RenderArgs {
     pub wind: String,
     /// Rain at MM_PER_H of water (0..200): lowers the visibility (Marshall-Palmer extinction
     /// added to the fog's) and draws streaks near the eye.
-    #[arg(long, value_name = "MM_PER_H", allow_hyphen_values = true, conflicts_with = "snow")]
+    #[arg(
+        long,
+        value_name = "MM_PER_H",
+        allow_hyphen_values = true,
+        conflicts_with = "snow"
+    )]
     pub rain: Option<String>,
     /// Snow at MM_PER_H of water (0..200): lowers the visibility and draws flakes near the eye.
     #[arg(long, value_name = "MM_PER_H", allow_hyphen_values = true)]
