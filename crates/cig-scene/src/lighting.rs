@@ -302,11 +302,8 @@ mod tests {
         let base = Lighting::at(unix(2026, 6, 21, 8.07), Geodetic::new(36.0, -121.0, 0.0));
         let lit = base.with_flash(100.0);
         let units = (100.0 * LIGHTING_UNITS_PER_LUX) as f32;
-        for i in 0..3 {
-            assert!(
-                (lit.ambient_colour[i] - base.ambient_colour[i] - FLASH_COLOUR[i] * units).abs()
-                    < 1e-7
-            );
+        for (i, flash) in FLASH_COLOUR.iter().enumerate() {
+            assert!((lit.ambient_colour[i] - base.ambient_colour[i] - flash * units).abs() < 1e-7);
             assert!(lit.sky_zenith[i] > base.sky_zenith[i]);
             assert!(lit.fog_colour[i] > base.fog_colour[i]);
         }
