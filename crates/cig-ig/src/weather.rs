@@ -13,9 +13,9 @@
 //! along the thesis's flash envelope ("set to the maximum ... then linearly decreased"; rise
 //! 20 ms, decay 250 ms: full brightness within 2 frames at 60 Hz, gone in about 16). Strikes
 //! other nodes announce over DIS (thesis §VI.E.5) are drawn from the frame they arrive in;
-//! strikes this IG schedules are announced when it is in an exercise; a strike with the seed
-//! of one already lit is the same strike (two IGs of one storm announce it both) and is drawn
-//! once.
+//! strikes this IG schedules are announced when it is in an exercise (with the ground point
+//! the bolt reaches); a strike with the seed of one struck in the last 10 s is the same strike
+//! (two IGs of one storm announce it both) and is drawn once.
 //!
 //! The flash's illuminance at the eye is `I / d²` per lit bolt (times its envelope), with the
 //! bolt's mean luminous intensity over a frame `I` = [`FLASH_LUMINOUS_INTENSITY_CD`] and `d`
@@ -163,7 +163,15 @@ pub struct Lightning {
     lit: Vec<LitBolt>,
     last_time_unix_s: Option<f64>,
     stats: LightningStats,
+    /// Seeds struck in the last [`RECENT_S`] seconds (an announcement of a strike already
+    /// drawn, arriving late, is not drawn again).
+    recent: Vec<(f64, u64)>,
 }
+
+/// How long a struck seed is remembered, s.
+const RECENT_S: f64 = 10.0;
+/// Most seeds remembered.
+const MAX_RECENT: usize = 256;
 
 impl Lightning {
     pub fn new(storm: Option<LightningStorm>) -> Lightning {
@@ -203,9 +211,14 @@ impl Lightning {
     ) -> bool {
         if !(time_unix_s.is_finite() && ground.lat_deg.is_finite() && ground.lon_deg.is_finite())
             || self.lit.iter().any(|b| b.seed == seed)
+            || self.recent.iter().any(|(_, s)| *s == seed)
         {
             return false;
         }
+        if self.recent.len() >= MAX_RECENT {
+            self.recent.remove(0);
+        }
+        self.recent.push((time_unix_s, seed));
         let bolt = make_bolt(ground, cloud_base_m, seed);
         self.stats.bolts_generated += 1;
         self.stats.last_generation_us = bolt.generation_us;
@@ -228,13 +241,13 @@ impl Lightning {
 
     /// Advances to world time `now_unix_s`: the storm's strikes since the last step are lit
     /// (their ground height from `ground_height_m`, metres above the ellipsoid) and returned
-    /// (to announce), and bolts whose flash is over go out. A time that goes back or jumps
-    /// ahead starts the schedule again from `now_unix_s`.
+    /// with their ground points (to announce), and bolts whose flash is over go out. A time
+    /// that goes back or jumps ahead starts the schedule again from `now_unix_s`.
     pub fn advance(
         &mut self,
         now_unix_s: f64,
         mut ground_height_m: impl FnMut(f64, f64) -> f64,
-    ) -> Vec<ScheduledStrike> {
+    ) -> Vec<(ScheduledStrike, Geodetic)> {
         if !now_unix_s.is_finite() {
             return Vec::new();
         }
@@ -243,27 +256,28 @@ impl Lightning {
             _ => now_unix_s,
         };
         self.last_time_unix_s = Some(now_unix_s);
-        let strikes = self
-            .storm
-            .map(|s| s.strikes_between(after, now_unix_s))
-            .unwrap_or_default();
+        let mut struck = Vec::new();
         if let Some(storm) = self.storm {
-            for s in &strikes {
+            for s in storm.strikes_between(after, now_unix_s) {
                 let h = ground_height_m(s.lat_deg, s.lon_deg);
-                let h = if h.is_finite() { h } else { 0.0 };
+                let ground =
+                    Geodetic::new(s.lat_deg, s.lon_deg, if h.is_finite() { h } else { 0.0 });
                 self.strike(
                     s.time_unix_s,
-                    Geodetic::new(s.lat_deg, s.lon_deg, h),
+                    ground,
                     storm.cloud_base_m,
                     s.bolt_seed,
                     s.intensity,
                 );
+                struck.push((s, ground));
             }
         }
         let over = self.envelope.duration_s();
         self.lit
             .retain(|b| now_unix_s - b.start_unix_s <= over && b.start_unix_s <= now_unix_s + 1.0);
-        strikes
+        self.recent
+            .retain(|(t, _)| (now_unix_s - t).abs() <= RECENT_S);
+        struck
     }
 
     /// The bolts lit at `now_unix_s`, for the snapshot.
@@ -359,6 +373,12 @@ mod tests {
         assert!((d[0].intensity - 1.0).abs() < 1e-6);
         l.advance(T0 + 1.0, |_, _| 0.0);
         assert_eq!(l.lit_count(), 0);
+        // A late announcement of the same strike is not drawn again; after 10 s a seed is new.
+        assert!(!l.strike(T0 + 1.0, Geodetic::new(36.0, -121.0, 10.0), 1500.0, 5, 1.0));
+        l.advance(T0 + 1.5, |_, _| 0.0);
+        l.advance(T0 + 3.0, |_, _| 0.0);
+        l.advance(T0 + 12.0, |_, _| 0.0);
+        assert!(l.strike(T0 + 12.0, Geodetic::new(36.0, -121.0, 10.0), 1500.0, 5, 1.0));
     }
 
     proptest! {

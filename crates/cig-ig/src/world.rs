@@ -580,8 +580,7 @@ impl IgWorld {
             query.hot(lat, lon).map_or(0.0, |g| g.height_ellipsoid_m())
         });
         if let Some(x) = self.exercise.as_mut() {
-            for s in &scheduled {
-                let ground = Geodetic::new(s.lat_deg, s.lon_deg, 0.0);
+            for (s, ground) in &scheduled {
                 x.announce_lightning(self.monotonic_s, ground.to_ecef(), s.bolt_seed, s.intensity);
             }
             let base = self.lightning.storm().map_or(1500.0, |s| s.cloud_base_m);
