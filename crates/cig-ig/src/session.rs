@@ -24,7 +24,10 @@
 //!   orientation, and take asymmetric frusta (left, right, bottom, top half-angles).
 //! - Celestial Sphere: date and time of day set the simulation clock. Atmosphere, Weather
 //!   (global, regional and entity layers), Environmental Region, Maritime and Terrestrial
-//!   Surface Conditions, Wave Control: kept; visibility and fog come from them.
+//!   Surface Conditions, Wave Control: kept; visibility and fog come from them, rain, snow,
+//!   sleet and hail layers (4-7) give the precipitation over the eye (rate from the layer's
+//!   aerosol concentration as liquid water content, else its severity; clamped to 200 mm/h
+//!   and reported), and a layer's random lightning enable a storm around the eye.
 //! - Sensor Control: sensor modes per view (on/off, polarity, gain, level, track mode).
 //! - HAT/HOT, LOS Segment and Vector, Position and Environmental Conditions requests and
 //!   Collision Detection Segment and Volume definitions: answered in the next frame's message
@@ -395,6 +398,24 @@ impl EnvironmentState {
             )
         });
         Some((layer, p, note))
+    }
+
+    /// The host's random lightning over a point (CIGI Weather Control's random lightning
+    /// enable on a layer that applies there): strikes per minute from the layer's severity
+    /// 0-5 (1, 2, 4, 8, 15, 30: this project's reading; the ICD leaves it to the IG) and the
+    /// layer's id.
+    pub fn random_lightning_at(&self, point: Geodetic) -> Option<(f64, u8)> {
+        const RATES: [f64; 6] = [1.0, 2.0, 4.0, 8.0, 15.0, 30.0];
+        self.layers_at(point)
+            .into_iter()
+            .find(|l| l.random_lightning_enable)
+            .map(|l| {
+                let rate = RATES
+                    .get(usize::from(l.severity.min(5)))
+                    .copied()
+                    .unwrap_or(4.0);
+                (rate, l.layer_id)
+            })
     }
 
     /// The host's rain, snow or sleet over a point (altitude above MSL), if any.

@@ -186,6 +186,8 @@ pub struct IgWorld {
     precipitation_told: bool,
     /// Strikes received over DIS and drawn.
     lightning_received: u64,
+    /// The operator's or the scenario's storm (wins over the host's random lightning).
+    own_storm: Option<crate::weather::LightningStorm>,
 }
 
 /// Models of ground vehicles that raise dust when they move on soil.
@@ -294,6 +296,7 @@ impl IgWorld {
             operator_precipitation: None,
             precipitation_told: false,
             lightning_received: 0,
+            own_storm: scenario_storm,
         })
     }
 
@@ -323,7 +326,12 @@ impl IgWorld {
     }
     /// Sets or ends the storm (the operator's).
     pub fn set_lightning_storm(&mut self, storm: Option<crate::weather::LightningStorm>) {
+        self.own_storm = storm;
         self.lightning.set_storm(storm);
+    }
+    /// Strikes received over DIS and drawn.
+    pub fn lightning_received(&self) -> u64 {
+        self.lightning_received
     }
     /// Strikes now at `ground` (the operator's "strike now"), announced to the exercise.
     pub fn strike_lightning_now(&mut self, ground: Geodetic, seed: u64) {
@@ -576,6 +584,25 @@ impl IgWorld {
     /// The storm's strikes since the last step lit (and announced), received ones lit.
     fn step_lightning(&mut self, query: &mut QuerySession) {
         let now_unix_s = self.clock.now().unix_seconds();
+        // The host's random lightning (CIGI Weather Control) where this IG has no storm of its
+        // own: a storm around the eye's 0.1° cell, so IGs near each other share it.
+        let host = self.first_eye.and_then(|eye| {
+            let eye_msl = Geodetic::new(eye.lat_deg, eye.lon_deg, eye.alt_m - self.eye_geoid_m);
+            self.session.environment().random_lightning_at(eye_msl).map(
+                |(strikes_per_minute, layer)| crate::weather::LightningStorm {
+                    centre_lat_deg: (eye.lat_deg * 10.0).round() / 10.0,
+                    centre_lon_deg: (eye.lon_deg * 10.0).round() / 10.0,
+                    radius_m: 15_000.0,
+                    cloud_base_m: 1500.0,
+                    strikes_per_minute,
+                    seed: 0x4349_4749_0000_0000 | u64::from(layer),
+                },
+            )
+        });
+        let storm = self.own_storm.or(host);
+        if self.lightning.storm() != storm.as_ref() {
+            self.lightning.set_storm(storm);
+        }
         let scheduled = self.lightning.advance(now_unix_s, |lat, lon| {
             query.hot(lat, lon).map_or(0.0, |g| g.height_ellipsoid_m())
         });

@@ -270,3 +270,55 @@ fn the_hosts_rain_layer_reaches_the_snapshot_clamped_and_reported() {
     w.step(1.0 / 60.0, &mut q);
     assert!(snap(&w).precipitation.is_none());
 }
+
+#[test]
+fn the_hosts_random_lightning_strikes_around_the_eye() {
+    let mut q = query();
+    let (lat, lon) = centre();
+    let mut w = world("");
+    let mut packets = vec![
+        Packet::EntityControl(EntityControl {
+            entity_id: 0,
+            entity_state: 1,
+            lat_deg_or_x_m: lat,
+            lon_deg_or_y_m: lon,
+            alt_m_or_z_m: 200.0,
+            ..EntityControl::default()
+        }),
+        Packet::ViewControl(ViewControl {
+            view_id: 0,
+            entity_id: 0,
+            ..ViewControl::default()
+        }),
+    ];
+    send(&mut w, 1, packets.clone());
+    let mut seen = 0;
+    for _ in 0..16 * 20 {
+        w.step(1.0 / 16.0, &mut q);
+        seen += snap(&w).bolts.len();
+    }
+    assert_eq!(seen, 0, "no lightning without the host's");
+    packets.push(Packet::WeatherControl(WeatherControl {
+        layer_id: 1,
+        weather_enable: true,
+        random_lightning_enable: true,
+        scope: 0,
+        severity: 5,
+        base_elevation_m: 1500.0,
+        thickness_m: 2000.0,
+        coverage_pct: 80.0,
+        ..WeatherControl::default()
+    }));
+    send(&mut w, 2, packets);
+    for _ in 0..16 * 20 {
+        w.step(1.0 / 16.0, &mut q);
+        seen += snap(&w).bolts.len();
+    }
+    // 30 strikes a minute for 20 s: about 10.
+    assert!(
+        w.lightning().stats().bolts_generated >= 3,
+        "{:?}",
+        w.lightning().stats()
+    );
+    assert!(seen > 0);
+}
