@@ -8,10 +8,16 @@
 //! 2. [`IgWorld::step`] advances the clock (the exercise's shared world time when the IG is in
 //!    one; a time the host set through Celestial Sphere Control wins and is announced), moves
 //!    scripted entities along their paths and host entities by their rates, resolves every
-//!    pose (clamping, attachments), advances the effects and publishes owned entities;
+//!    pose (clamping, attachments), advances the effects and publishes owned entities, and
+//!    lights the lightning storm's strikes due by the new time ([`crate::weather`]: the
+//!    scenario's or operator's storm, else the host's random lightning; strikes received over
+//!    DIS are lit too and this IG's own are announced);
 //! 3. [`IgWorld::host_message`] is the frame's message to the host: Start of Frame and the
 //!    answers to the requests received in step 1;
-//! 4. [`IgWorld::snapshot`] is what the renderer draws.
+//! 4. [`IgWorld::snapshot`] is what the renderer draws: with the bolts lit now, the flash's
+//!    illuminance at the first eye, and the rain or snow over it (the operator's, else the
+//!    host's precipitation layer, else the scenario's), whose extinction is added to the
+//!    visibility unless the host's layer states its own.
 //!
 //! Time: scripted entities move on their own forward-only time (elapsed seconds × the clock's
 //! rate), so a time of day set by the host or the exercise does not make them jump. Effects run
