@@ -38,6 +38,8 @@
 //!   ECEF, colour from B−V, the eye's threshold against a bright sky (Schaefer 1990).
 //! - [`moon_disc`]: the moon's angular radius, bright-limb position angle (Meeus
 //!   48.5), illuminated fraction and Lommel–Seeliger surface brightness.
+//! - [`precipitation`]: rain and snow extinction from the Marshall-Palmer and Gunn-Marshall
+//!   size distributions (geometric optics), visibility by Koschmieder, fall speeds.
 //!
 //! Conventions: degrees at every interface, metres, UTC; azimuth from true
 //! north through east; directions in the observer's east-north-up frame.
@@ -54,6 +56,7 @@ pub mod lightning;
 pub mod moon;
 pub mod moon_disc;
 pub mod nutation;
+pub mod precipitation;
 pub mod stars;
 pub mod sun;
 pub mod time;
@@ -66,6 +69,7 @@ pub use ephemeris::{ephemeris, BodyPosition, Ephemeris, Observer};
 pub use events::{day_events, DayEvents};
 pub use illuminance::{natural_illuminance, Illuminance};
 pub use lightning::{generate_bolt, Bolt, BoltParams, BoltSegment, FlashEnvelope};
+pub use precipitation::{Precipitation, PrecipitationKind};
 pub use time::{CalendarTime, UtcTime};
 
 /// Errors from the environment model: every one names the bad value.

@@ -13,6 +13,8 @@
 //!   detonation and appearance effects, shared world time.
 //! - [`world`]: the per-frame step that ties them to the clock and the effects and produces
 //!   the renderer's snapshot.
+//! - [`weather`]: lightning storms (a Poisson strike schedule that is a function of seed and
+//!   world time), the bolts lit now and their flash.
 //!
 //! Limits: see each module.
 
@@ -21,6 +23,7 @@ pub mod model_table;
 pub mod pose;
 pub mod scenario;
 pub mod session;
+pub mod weather;
 pub mod world;
 
 pub use cig_effects::EFFECT_EPOCH_UNIX_S;

@@ -67,6 +67,20 @@
 //! start_s = 0                          # after start_time
 //! duration_s = 900
 //!
+//! [precipitation]                    # rain or snow around the eye
+//! kind = "rain"                        # rain, snow or sleet
+//! rate_mm_per_h = 8.0                  # water equivalent, 0..200
+//! seed = 1                             # the particles' places
+//!
+//! [lightning]                          # a thunderstorm that strikes by itself
+//! lat_deg = 51.05                      # centre
+//! lon_deg = -1.45
+//! radius_m = 8000                      # strikes anywhere within this distance
+//! cloud_base_m = 1500                  # the bolts' roots, above the ground
+//! strikes_per_minute = 6
+//! seed = 42                            # every IG with this seed draws the same bolts
+//! enabled = true
+//!
 //! [dis]
 //! exercise = 1
 //! site = 3001
@@ -144,6 +158,12 @@ pub struct Scenario {
     /// Cloud layers (the host's CIGI cloud layers replace them while it sets any).
     #[serde(default)]
     pub clouds: Vec<ScenarioCloud>,
+    /// Rain or snow.
+    #[serde(default)]
+    pub precipitation: Option<ScenarioPrecipitation>,
+    /// A thunderstorm.
+    #[serde(default)]
+    pub lightning: Option<ScenarioLightning>,
 }
 
 /// `[sky]`: the sky model and the exposure.
@@ -178,6 +198,19 @@ pub struct ScenarioCloud {
     pub wind_speed_mps: f64,
     #[serde(default)]
     pub wind_from_deg: f64,
+    #[serde(default = "one_u64")]
+    pub seed: u64,
+}
+
+/// The scenario's rain or snow.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioPrecipitation {
+    /// "rain", "snow" or "sleet".
+    #[serde(default = "rain_kind")]
+    pub kind: String,
+    /// Water-equivalent rate, mm/h.
+    pub rate_mm_per_h: f64,
     #[serde(default = "one_u64")]
     pub seed: u64,
 }
@@ -249,6 +282,62 @@ impl ScenarioCloud {
             .map_err(|reason| value_error(format!("{key}.kind"), reason))?;
         Ok(())
     }
+}
+
+/// The scenario's thunderstorm.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioLightning {
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    #[serde(default = "storm_radius")]
+    pub radius_m: f64,
+    #[serde(default = "cloud_base")]
+    pub cloud_base_m: f64,
+    #[serde(default = "strike_rate")]
+    pub strikes_per_minute: f64,
+    #[serde(default = "one_u64")]
+    pub seed: u64,
+    #[serde(default = "yes")]
+    pub enabled: bool,
+}
+
+impl ScenarioPrecipitation {
+    /// The checked precipitation.
+    pub fn precipitation(&self) -> Option<cig_environment::Precipitation> {
+        let kind = cig_environment::PrecipitationKind::parse(&self.kind)?;
+        cig_environment::Precipitation::new(kind, self.rate_mm_per_h).ok()
+    }
+}
+
+impl ScenarioLightning {
+    /// The storm, when enabled.
+    pub fn storm(&self) -> Option<crate::weather::LightningStorm> {
+        self.enabled.then_some(crate::weather::LightningStorm {
+            centre_lat_deg: self.lat_deg,
+            centre_lon_deg: self.lon_deg,
+            radius_m: self.radius_m,
+            cloud_base_m: self.cloud_base_m,
+            strikes_per_minute: self.strikes_per_minute,
+            seed: self.seed,
+        })
+    }
+}
+
+fn rain_kind() -> String {
+    "rain".to_string()
+}
+fn storm_radius() -> f64 {
+    10_000.0
+}
+fn cloud_base() -> f64 {
+    1500.0
+}
+fn strike_rate() -> f64 {
+    6.0
+}
+fn yes() -> bool {
+    true
 }
 
 /// A smoke or fire source the scenario starts.
@@ -747,6 +836,31 @@ impl Scenario {
             check_finite(&format!("{key}.start_s"), m.start_s, 0.0, 1.0e7)?;
             check_finite(&format!("{key}.duration_s"), m.duration_s, 0.1, 1.0e7)?;
         }
+        if let Some(p) = &self.precipitation {
+            if cig_environment::PrecipitationKind::parse(&p.kind).is_none() {
+                return Err(value_error(
+                    "precipitation.kind",
+                    format!("\"{}\" is not rain, snow or sleet", p.kind),
+                ));
+            }
+            check_finite(
+                "precipitation.rate_mm_per_h",
+                p.rate_mm_per_h,
+                0.0,
+                cig_environment::precipitation::MAX_RATE_MM_PER_H,
+            )?;
+        }
+        if let Some(l) = &self.lightning {
+            check_lat_lon("lightning", l.lat_deg, l.lon_deg)?;
+            check_finite("lightning.radius_m", l.radius_m, 0.0, 200_000.0)?;
+            check_finite("lightning.cloud_base_m", l.cloud_base_m, 100.0, 10_000.0)?;
+            check_finite(
+                "lightning.strikes_per_minute",
+                l.strikes_per_minute,
+                0.0,
+                crate::weather::MAX_STRIKES_PER_MINUTE,
+            )?;
+        }
         if let Some(v) = &self.view {
             match (v.entity, v.eye) {
                 (Some(id), None) => {
@@ -906,6 +1020,63 @@ delivery = "multicast:239.1.2.3"
         let bad = FULL.replace("entity = 1\n", "entity = 9\n");
         let e = Scenario::from_toml(&bad).expect_err("refused").to_string();
         assert!(e.starts_with("view.entity"), "{e}");
+    }
+
+    #[test]
+    fn weather_tables_parse_and_bad_values_name_their_key() {
+        let text = format!(
+            "{FULL}\n[precipitation]\nkind = \"snow\"\nrate_mm_per_h = 2.5\n\
+             [lightning]\nlat_deg = 51.0\nlon_deg = -1.5\nstrikes_per_minute = 12\nseed = 9\n"
+        );
+        let s = Scenario::from_toml(&text).expect("parses");
+        let p = s
+            .precipitation
+            .as_ref()
+            .and_then(|p| p.precipitation())
+            .expect("snow");
+        assert_eq!(p.kind, cig_environment::PrecipitationKind::Snow);
+        assert_eq!(p.rate_mm_per_h, 2.5);
+        let storm = s.lightning.as_ref().and_then(|l| l.storm()).expect("storm");
+        assert_eq!(
+            (storm.seed, storm.strikes_per_minute, storm.radius_m),
+            (9, 12.0, 10_000.0)
+        );
+        for (bad, key) in [
+            (
+                "rate_mm_per_h = 2.5",
+                "precipitation.rate_mm_per_h: 500 is outside 0..200",
+            ),
+            (
+                "kind = \"snow\"",
+                "precipitation.kind: \"hail\" is not rain, snow or sleet",
+            ),
+            (
+                "strikes_per_minute = 12",
+                "lightning.strikes_per_minute: -1 is outside 0..600",
+            ),
+            (
+                "lat_deg = 51.0\nlon_deg = -1.5\nstrikes",
+                "lightning.lat_deg: 91 is outside -90..90",
+            ),
+        ] {
+            let replaced = match key.split(':').next() {
+                Some("precipitation.rate_mm_per_h") => text.replace(bad, "rate_mm_per_h = 500"),
+                Some("precipitation.kind") => text.replace(bad, "kind = \"hail\""),
+                Some("lightning.strikes_per_minute") => {
+                    text.replace(bad, "strikes_per_minute = -1")
+                }
+                _ => text.replace(bad, "lat_deg = 91.0\nlon_deg = -1.5\nstrikes"),
+            };
+            let e = Scenario::from_toml(&replaced)
+                .expect_err("refused")
+                .to_string();
+            assert_eq!(e, key);
+        }
+        let e = Scenario::from_toml(&format!("{text}\ncolour = 1\n")).expect_err("refused");
+        assert!(e.to_string().contains("unknown field `colour`"), "{e}");
+        let disabled = text.replace("seed = 9", "seed = 9\nenabled = false");
+        let s = Scenario::from_toml(&disabled).expect("parses");
+        assert!(s.lightning.and_then(|l| l.storm()).is_none());
     }
 
     #[test]

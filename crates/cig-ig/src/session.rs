@@ -26,7 +26,10 @@
 //!   switches and the star field intensity (clamped to 0..100 %, reported) reach the renderer.
 //!   Atmosphere, Weather
 //!   (global, regional and entity layers), Environmental Region, Maritime and Terrestrial
-//!   Surface Conditions, Wave Control: kept; visibility and fog come from them.
+//!   Surface Conditions, Wave Control: kept; visibility and fog come from them, rain, snow,
+//!   sleet and hail layers (4-7) give the precipitation over the eye (rate from the layer's
+//!   aerosol concentration as liquid water content, else its severity; clamped to 200 mm/h
+//!   and reported), and a layer's random lightning enable a storm around the eye.
 //! - Sensor Control: sensor modes per view (on/off, polarity, gain, level, track mode).
 //! - HAT/HOT, LOS Segment and Vector, Position and Environmental Conditions requests and
 //!   Collision Detection Segment and Volume definitions: answered in the next frame's message
@@ -353,6 +356,114 @@ impl EnvironmentState {
             }
         }
         visibility
+    }
+
+    /// The host's precipitation layer (rain 4, snow 5, sleet 6, hail 7) over a point (altitude
+    /// above MSL, below the layer's top), with its rate in mm/h and a note when the rate had to
+    /// be clamped. CIGI gives no rate: it is the one whose liquid water content is the layer's
+    /// aerosol concentration (g/m³, Marshall-Palmer / Gunn-Marshall), else this project's
+    /// reading of the severity 0-5 (rain 1, 2.5, 5, 10, 25, 50 mm/h; snow a tenth of that in
+    /// water). Hail is drawn as sleet.
+    fn precipitation_layer_at(
+        &self,
+        point: Geodetic,
+    ) -> Option<(
+        &WeatherControl,
+        cig_environment::Precipitation,
+        Option<String>,
+    )> {
+        use cig_environment::{Precipitation, PrecipitationKind};
+        let layer = self.layers_at(point).into_iter().find(|l| {
+            (4..=7).contains(&l.layer_id) && {
+                let top = f64::from(l.base_elevation_m) + f64::from(l.thickness_m);
+                !top.is_finite() || point.alt_m <= top
+            }
+        })?;
+        let kind = match layer.layer_id {
+            4 => PrecipitationKind::Rain,
+            5 => PrecipitationKind::Snow,
+            _ => PrecipitationKind::Sleet,
+        };
+        let concentration = f64::from(layer.aerosol_concentration_gpm3);
+        let severity = usize::from(layer.severity.min(5));
+        let rain_by_severity = [1.0, 2.5, 5.0, 10.0, 25.0, 50.0];
+        let (rate, source) = if concentration.is_finite() && concentration > 0.0 {
+            (
+                Precipitation::rate_for_water_content(kind, concentration),
+                format!("aerosol concentration {concentration} g/m³"),
+            )
+        } else {
+            let r = rain_by_severity.get(severity).copied().unwrap_or(10.0);
+            (
+                if kind == PrecipitationKind::Snow {
+                    r / 10.0
+                } else {
+                    r
+                },
+                format!("severity {}", layer.severity),
+            )
+        };
+        let p = Precipitation::clamped(kind, rate);
+        let note = (p.rate_mm_per_h != rate || layer.severity > 5).then(|| {
+            format!(
+                "Weather Control layer {}: {} rate {rate:.0} mm/h from {source} clamped to {} mm/h",
+                layer.layer_id,
+                kind.name(),
+                p.rate_mm_per_h
+            )
+        });
+        Some((layer, p, note))
+    }
+
+    /// The host's random lightning over a point (CIGI Weather Control's random lightning
+    /// enable on a layer that applies there): strikes per minute from the layer's severity
+    /// 0-5 (1, 2, 4, 8, 15, 30: this project's reading; the ICD leaves it to the IG) and the
+    /// layer's id.
+    pub fn random_lightning_at(&self, point: Geodetic) -> Option<(f64, u8)> {
+        const RATES: [f64; 6] = [1.0, 2.0, 4.0, 8.0, 15.0, 30.0];
+        self.layers_at(point)
+            .into_iter()
+            .find(|l| l.random_lightning_enable)
+            .map(|l| {
+                let rate = RATES
+                    .get(usize::from(l.severity.min(5)))
+                    .copied()
+                    .unwrap_or(4.0);
+                (rate, l.layer_id)
+            })
+    }
+
+    /// The host's rain, snow or sleet over a point (altitude above MSL), if any.
+    pub fn precipitation_at(&self, point: Geodetic) -> Option<cig_environment::Precipitation> {
+        self.precipitation_layer_at(point).map(|(_, p, _)| p)
+    }
+
+    /// Whether the host's precipitation layer over a point states its own visibility (which
+    /// then applies instead of the one its rate gives).
+    pub fn precipitation_sets_visibility(&self, point: Geodetic) -> bool {
+        self.precipitation_layer_at(point).is_some_and(|(l, _, _)| {
+            let v = f64::from(l.visibility_range_m);
+            v.is_finite() && v > 0.0
+        })
+    }
+
+    /// Why a host precipitation layer's rate was clamped, for any enabled layer.
+    pub fn precipitation_clamped(&self) -> Option<String> {
+        self.weather
+            .values()
+            .filter(|w| w.weather_enable && (4..=7).contains(&w.layer_id))
+            .find_map(|w| {
+                let probe = Geodetic::new(0.0, 0.0, f64::NEG_INFINITY);
+                let single = EnvironmentState {
+                    weather: [((SCOPE_GLOBAL, 0, w.layer_id), w.clone())]
+                        .into_iter()
+                        .collect(),
+                    ..EnvironmentState::default()
+                };
+                single
+                    .precipitation_layer_at(probe)
+                    .and_then(|(_, _, note)| note)
+            })
     }
 
     fn weather_response(

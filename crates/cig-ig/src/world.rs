@@ -8,10 +8,16 @@
 //! 2. [`IgWorld::step`] advances the clock (the exercise's shared world time when the IG is in
 //!    one; a time the host set through Celestial Sphere Control wins and is announced), moves
 //!    scripted entities along their paths and host entities by their rates, resolves every
-//!    pose (clamping, attachments), advances the effects and publishes owned entities;
+//!    pose (clamping, attachments), advances the effects and publishes owned entities, and
+//!    lights the lightning storm's strikes due by the new time ([`crate::weather`]: the
+//!    scenario's or operator's storm, else the host's random lightning; strikes received over
+//!    DIS are lit too and this IG's own are announced);
 //! 3. [`IgWorld::host_message`] is the frame's message to the host: Start of Frame and the
 //!    answers to the requests received in step 1;
-//! 4. [`IgWorld::snapshot`] is what the renderer draws.
+//! 4. [`IgWorld::snapshot`] is what the renderer draws: with the bolts lit now, the flash's
+//!    illuminance at the first eye, and the rain or snow over it (the operator's, else the
+//!    host's precipitation layer, else the scenario's), whose extinction is added to the
+//!    visibility unless the host's layer states its own.
 //!
 //! Time: scripted entities move on their own forward-only time (elapsed seconds × the clock's
 //! rate), so a time of day set by the host or the exercise does not make them jump. Effects run
@@ -183,6 +189,19 @@ pub struct IgWorld {
     operator_clouds: Option<Vec<CloudLayer>>,
     /// The clouds' world-fixed noise origin: the first eye's whole degrees, kept for the run.
     cloud_origin: Option<CloudOrigin>,
+    /// Lightning: the scenario's storm and the bolts lit now.
+    lightning: crate::weather::Lightning,
+    /// Strikes received over DIS since `take_lightning` was last called (kept for callers).
+    received_strikes: Vec<cig_dis::LightningStrike>,
+    /// The operator's precipitation (wins over the scenario's and the host's), or `Some(None)`
+    /// when the operator stopped it.
+    operator_precipitation: Option<Option<cig_environment::Precipitation>>,
+    /// The host's precipitation told (clamped values reported once).
+    precipitation_told: bool,
+    /// Strikes received over DIS and drawn.
+    lightning_received: u64,
+    /// The operator's or the scenario's storm (wins over the host's random lightning).
+    own_storm: Option<crate::weather::LightningStorm>,
 }
 
 /// Models of ground vehicles that raise dust when they move on soil.
@@ -261,6 +280,7 @@ impl IgWorld {
         let mut effects = EffectSystem::new(config.effects)?;
         effects.advance_to(effect_time_s(start_unix_s))?;
         let clouds = scenario.cloud_layers();
+        let scenario_storm = scenario.lightning.as_ref().and_then(|l| l.storm());
         Ok(IgWorld {
             session,
             scenario,
@@ -289,6 +309,12 @@ impl IgWorld {
             operator_plumes_started: 0,
             dust_trails: BTreeMap::new(),
             effects_stalled: false,
+            lightning: crate::weather::Lightning::new(scenario_storm),
+            received_strikes: Vec::new(),
+            operator_precipitation: None,
+            precipitation_told: false,
+            lightning_received: 0,
+            own_storm: scenario_storm,
         })
     }
 
@@ -304,12 +330,61 @@ impl IgWorld {
     pub fn exercise_mut(&mut self) -> Option<&mut Exercise> {
         self.exercise.as_mut()
     }
-    /// Lightning strikes other nodes announced since the last call.
+    /// Lightning strikes other nodes announced since the last call (they are drawn too).
     pub fn take_lightning(&mut self) -> Vec<cig_dis::LightningStrike> {
-        self.exercise
-            .as_mut()
-            .map(Exercise::take_lightning)
-            .unwrap_or_default()
+        let mut strikes = std::mem::take(&mut self.received_strikes);
+        if let Some(x) = self.exercise.as_mut() {
+            strikes.extend(x.take_lightning());
+        }
+        strikes
+    }
+    /// The world's lightning (storm, statistics).
+    pub fn lightning(&self) -> &crate::weather::Lightning {
+        &self.lightning
+    }
+    /// Sets or ends the storm (the operator's).
+    pub fn set_lightning_storm(&mut self, storm: Option<crate::weather::LightningStorm>) {
+        self.own_storm = storm;
+        self.lightning.set_storm(storm);
+    }
+    /// Strikes received over DIS and drawn.
+    pub fn lightning_received(&self) -> u64 {
+        self.lightning_received
+    }
+    /// Strikes now at `ground` (the operator's "strike now"), announced to the exercise.
+    pub fn strike_lightning_now(&mut self, ground: Geodetic, seed: u64) {
+        let now = self.unix_time_s();
+        let base = self.lightning.storm().map_or(1500.0, |s| s.cloud_base_m);
+        if self.lightning.strike(now, ground, base, seed, 1.0) {
+            if let Some(x) = self.exercise.as_mut() {
+                x.announce_lightning(self.monotonic_s, ground.to_ecef(), seed, 1.0);
+            }
+        }
+    }
+    /// Sets the operator's precipitation (`None` stops it); it wins over the scenario's and
+    /// the host's.
+    pub fn set_operator_precipitation(
+        &mut self,
+        precipitation: Option<cig_environment::Precipitation>,
+    ) {
+        self.operator_precipitation = Some(precipitation);
+    }
+    /// The precipitation falling at the first eye now (the operator's, else the host's rain,
+    /// snow or sleet layer over the eye, else the scenario's).
+    pub fn precipitation(&self) -> Option<cig_environment::Precipitation> {
+        if let Some(p) = self.operator_precipitation {
+            return p;
+        }
+        let eye_msl = self
+            .first_eye
+            .map(|e| Geodetic::new(e.lat_deg, e.lon_deg, e.alt_m - self.eye_geoid_m));
+        if let Some(p) = eye_msl.and_then(|e| self.session.environment().precipitation_at(e)) {
+            return Some(p);
+        }
+        self.scenario
+            .precipitation
+            .as_ref()
+            .and_then(|p| p.precipitation())
     }
     pub fn effects(&self) -> &EffectSystem {
         &self.effects
@@ -521,6 +596,8 @@ impl IgWorld {
             .first_eye
             .map_or(0.0, |e| query.geoid_undulation_m(e.lat_deg, e.lon_deg));
         self.update_clouds();
+        self.step_lightning(query);
+        self.report_host_precipitation();
     }
 
     /// This frame's cloud layers: the operator's, else the host's CIGI cloud layers over the
@@ -588,6 +665,62 @@ impl IgWorld {
     /// This frame's cloud layers (bases above MSL).
     pub fn cloud_layers(&self) -> &[CloudLayer] {
         &self.clouds
+    }
+
+    /// The storm's strikes since the last step lit (and announced), received ones lit.
+    fn step_lightning(&mut self, query: &mut QuerySession) {
+        let now_unix_s = self.clock.now().unix_seconds();
+        // The host's random lightning (CIGI Weather Control) where this IG has no storm of its
+        // own: a storm around the eye's 0.1° cell, so IGs near each other share it.
+        let host = self.first_eye.and_then(|eye| {
+            let eye_msl = Geodetic::new(eye.lat_deg, eye.lon_deg, eye.alt_m - self.eye_geoid_m);
+            self.session.environment().random_lightning_at(eye_msl).map(
+                |(strikes_per_minute, layer)| crate::weather::LightningStorm {
+                    centre_lat_deg: (eye.lat_deg * 10.0).round() / 10.0,
+                    centre_lon_deg: (eye.lon_deg * 10.0).round() / 10.0,
+                    radius_m: 15_000.0,
+                    cloud_base_m: 1500.0,
+                    strikes_per_minute,
+                    seed: 0x4349_4749_0000_0000 | u64::from(layer),
+                },
+            )
+        });
+        let storm = self.own_storm.or(host);
+        if self.lightning.storm() != storm.as_ref() {
+            self.lightning.set_storm(storm);
+        }
+        let scheduled = self.lightning.advance(now_unix_s, |lat, lon| {
+            query.hot(lat, lon).map_or(0.0, |g| g.height_ellipsoid_m())
+        });
+        if let Some(x) = self.exercise.as_mut() {
+            for (s, ground) in &scheduled {
+                x.announce_lightning(self.monotonic_s, ground.to_ecef(), s.bolt_seed, s.intensity);
+            }
+            let base = self.lightning.storm().map_or(1500.0, |s| s.cloud_base_m);
+            for strike in x.take_lightning() {
+                let ground = Geodetic::from_ecef(strike.position_ecef_m);
+                if self
+                    .lightning
+                    .strike(now_unix_s, ground, base, strike.seed, strike.intensity)
+                {
+                    self.lightning_received += 1;
+                }
+                if self.received_strikes.len() < 64 {
+                    self.received_strikes.push(strike);
+                }
+            }
+        }
+    }
+
+    /// Tells the host once when its rain or snow layer's values were clamped.
+    fn report_host_precipitation(&mut self) {
+        if self.precipitation_told {
+            return;
+        }
+        if let Some(reason) = self.session.environment().precipitation_clamped() {
+            self.precipitation_told = true;
+            self.session.tell_host(reason);
+        }
     }
 
     /// The air the effects drift in: the host's wind, temperature and cloud (CIGI Atmosphere and
@@ -1024,6 +1157,22 @@ impl IgWorld {
                     visibility_m = visibility_m.min(v);
                 }
             }
+            // Rain and snow add their extinction to the air's (Koschmieder), unless the host's
+            // precipitation layer states its own visibility, which already applies.
+            if let Some(p) = self.precipitation() {
+                if !self
+                    .session
+                    .environment()
+                    .precipitation_sets_visibility(eye_msl)
+                {
+                    visibility_m = p.combined_visibility_m(visibility_m);
+                }
+                snapshot.precipitation = Some(cig_scene::PrecipitationDraw {
+                    precipitation: p,
+                    wind_en_mps: self.wind_en_mps(),
+                    seed: self.scenario.precipitation.as_ref().map_or(1, |s| s.seed),
+                });
+            }
             snapshot.fog = Fog::from_visibility(self.fog_mode, visibility_m);
         }
         // The host's moon and star field switches and the star field's intensity.
@@ -1051,6 +1200,11 @@ impl IgWorld {
                     lon_deg: v.eye.lon_deg.round(),
                 })
         });
+        let now_unix_s = self.unix_time_s();
+        snapshot.bolts = self.lightning.draws(now_unix_s);
+        if let Some(first) = views.first() {
+            snapshot.flash_lux = self.lightning.flash_lux(now_unix_s, first.eye.to_ecef());
+        }
         if let Some(first) = views.first() {
             let origin = first.eye.to_ecef();
             self.effects.snapshot(origin, &mut snapshot.puffs);
@@ -1093,6 +1247,14 @@ impl IgWorld {
             }
         }
         snapshot
+    }
+
+    /// The wind the effects drift in, as (east, north) m/s.
+    fn wind_en_mps(&self) -> [f64; 2] {
+        let w = self.effects.atmosphere().wind;
+        // "From" a direction: the air moves the opposite way.
+        let to = (w.from_deg + 180.0).to_radians();
+        [w.speed_mps * to.sin(), w.speed_mps * to.cos()]
     }
 
     /// Azimuth and elevation of the sun at a point now, degrees (for the operator's display).

@@ -8,11 +8,13 @@
 //! works (Vulkan, Metal, DX12, GL); with no GPU, Mesa's lavapipe renders the same frames.
 
 pub mod atmosphere;
+pub mod bolts;
 pub mod celestial;
 pub mod clouds;
 pub mod gltf_model;
 pub mod gpu;
 pub mod offscreen;
+pub mod precipitation;
 pub mod puffs;
 pub mod renderer;
 pub mod terrain;

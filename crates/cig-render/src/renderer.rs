@@ -80,6 +80,10 @@ pub mod serde_like {
         /// The exposure the frame was drawn at, as an incident-light EV (`log2(lux / 2.5)`,
         /// compensation included).
         pub exposure_ev: f64,
+        /// Lightning bolt lines drawn.
+        pub bolt_lines_drawn: u32,
+        /// Rain drops or snow flakes drawn.
+        pub precipitation_particles: u32,
     }
 }
 
@@ -193,6 +197,8 @@ pub struct Renderer {
     /// The moon and stars of the sky pass (its `@group(2)`).
     celestial: CelestialPass,
     clouds: CloudPass,
+    bolts: crate::bolts::BoltPass,
+    precipitation: crate::precipitation::PrecipitationPass,
     /// Queries: 0 the frame's start, 1 its end (the tone map's), then as needed the start and
     /// end of the puff passes and of the cloud passes.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
@@ -565,6 +571,9 @@ impl Renderer {
         // The puffs and clouds composite onto the resolved scene before the tone map.
         let puffs = PuffPass::new(&gpu, HDR_FORMAT, &atmosphere.layout);
         let clouds = CloudPass::new(&gpu, HDR_FORMAT);
+        let bolts = crate::bolts::BoltPass::new(&gpu, HDR_FORMAT, &globals);
+        let precipitation =
+            crate::precipitation::PrecipitationPass::new(&gpu, HDR_FORMAT, &globals);
         let mut renderer = Renderer {
             model_vertices: empty("model vertices", wgpu::BufferUsages::VERTEX),
             model_indices: empty("model indices", wgpu::BufferUsages::INDEX),
@@ -590,6 +599,8 @@ impl Renderer {
             puffs,
             celestial,
             clouds,
+            bolts,
+            precipitation,
             timestamps,
             frame: 0,
         };
@@ -773,7 +784,8 @@ impl Renderer {
             view.eye,
             snapshot.cloud_cover_fraction,
             &snapshot.sky,
-        );
+        )
+        .with_flash(snapshot.flash_lux);
         let physical_sky = snapshot.sky.model == SkyModel::Physical;
         let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
         self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
@@ -805,6 +817,12 @@ impl Renderer {
         };
         let puff_queries = (puff_count > 0).then(|| (next_query(), next_query()));
         let cloud_queries = (cloud_count > 0).then(|| (next_query(), next_query()));
+        let bolt_lines = self
+            .bolts
+            .prepare(&self.gpu, &self.globals, &camera, snapshot);
+        let particles = self
+            .precipitation
+            .prepare(&self.gpu, &camera, snapshot, &lighting);
         let size = (view.width_px, view.height_px);
         let mut encoder = self
             .gpu
@@ -926,6 +944,11 @@ impl Renderer {
                 // A model blending two levels is drawn twice; count it once.
                 stats.entities_drawn = draws.iter().filter(|d| d.1.col0[3] == 0.0).count() as u32;
             }
+            // After the opaque geometry: lightning (additive) and rain or snow (over).
+            stats.draw_calls += self.bolts.draw(&mut pass, bolt_lines);
+            stats.draw_calls += self.precipitation.draw(&mut pass, particles);
+            stats.bolt_lines_drawn = bolt_lines as u32;
+            stats.precipitation_particles = particles;
         }
         let set = self.timestamps.as_ref().map(|(set, _, _)| set);
         if clouds_first {

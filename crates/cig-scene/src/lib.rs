@@ -1,11 +1,12 @@
 //! The renderer's plain data, computed on the CPU without touching the GPU: views and camera
 //! maths ([`view`]), terrain level-of-detail selection ([`lod`]) and node meshes
 //! ([`terrain_mesh`]), light, sky and fog ([`lighting`]), entity models ([`models`]) and the
-//! per-frame snapshot ([`snapshot`]).
+//! per-frame snapshot ([`snapshot`]), lightning bolts ready to draw and their flash ([`bolt`]).
 //!
 //! This crate is pure: it never opens files, sockets, the GPU or the terminal; `cig-render`
 //! turns what it computes into frames.
 
+pub mod bolt;
 pub mod lighting;
 pub mod lod;
 pub mod models;
@@ -15,5 +16,7 @@ pub mod view;
 
 pub use lighting::{Fog, FogMode, Lighting};
 pub use lod::{LodSettings, NodeKey, NodeLayout, Selection, TerrainLod};
-pub use snapshot::{EntityInstance, EntitySpec, FogLayer, FrameSnapshot};
+pub use snapshot::{
+    BoltDraw, BoltLine, EntityInstance, EntitySpec, FogLayer, FrameSnapshot, PrecipitationDraw,
+};
 pub use view::{Camera, FovDeg, Hpr, View, ViewError};

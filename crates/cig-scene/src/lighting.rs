@@ -422,6 +422,38 @@ fn ephemeris_at(unix_time_s: f64, eye: Geodetic) -> Option<cig_environment::Ephe
     Some(cig_environment::ephemeris(&observer, time))
 }
 
+/// Colour of a lightning flash's light (bluish white, unit luminance-weighted).
+pub const FLASH_COLOUR: [f32; 3] = [0.86, 0.92, 1.0];
+/// Fraction of the flash's illuminance the sky and the fog show as their colour (the cloud base
+/// and the rain lit from within).
+const FLASH_SKY_FRACTION: f32 = 0.5;
+
+impl Lighting {
+    /// The light of the frame with a lightning flash of `flash_lux` (at the eye) added: its
+    /// bluish-white light joins the ambient light and lights the sky and the fog (half of it),
+    /// so terrain, models and sky brighten together. Non-finite or negative values add nothing.
+    pub fn with_flash(self, flash_lux: f64) -> Lighting {
+        if !(flash_lux.is_finite() && flash_lux > 0.0) {
+            return self;
+        }
+        let e = (flash_lux * LIGHTING_UNITS_PER_LUX) as f32;
+        let add = |c: [f32; 3], k: f32| {
+            [
+                c[0] + FLASH_COLOUR[0] * e * k,
+                c[1] + FLASH_COLOUR[1] * e * k,
+                c[2] + FLASH_COLOUR[2] * e * k,
+            ]
+        };
+        Lighting {
+            ambient_colour: add(self.ambient_colour, 1.0),
+            sky_zenith: add(self.sky_zenith, FLASH_SKY_FRACTION),
+            sky_horizon: add(self.sky_horizon, FLASH_SKY_FRACTION),
+            fog_colour: add(self.fog_colour, FLASH_SKY_FRACTION),
+            ..self
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -557,5 +589,21 @@ mod tests {
             assert!(fog.factor(2000.0) > fog.factor(3000.0));
         }
         assert_eq!(Fog::from_visibility(FogMode::Off, 10.0).factor(1e6), 1.0);
+    }
+
+    #[test]
+    fn a_flash_brightens_ambient_and_sky_and_nothing_else() {
+        let base = Lighting::at(unix(2026, 6, 21, 8.07), Geodetic::new(36.0, -121.0, 0.0));
+        let lit = base.with_flash(100.0);
+        let units = (100.0 * LIGHTING_UNITS_PER_LUX) as f32;
+        for (i, flash) in FLASH_COLOUR.iter().enumerate() {
+            assert!((lit.ambient_colour[i] - base.ambient_colour[i] - flash * units).abs() < 1e-7);
+            assert!(lit.sky_zenith[i] > base.sky_zenith[i]);
+            assert!(lit.fog_colour[i] > base.fog_colour[i]);
+        }
+        assert_eq!(lit.sun_colour, base.sun_colour);
+        assert_eq!(base.with_flash(0.0), base);
+        assert_eq!(base.with_flash(f64::NAN), base);
+        assert_eq!(base.with_flash(-5.0), base);
     }
 }

@@ -130,6 +130,43 @@ pub struct FrameSnapshot {
     pub cloud_layers: Vec<cig_environment::clouds::CloudLayer>,
     /// The world-fixed origin of the clouds' noise plane (keep it fixed while the eye moves).
     pub cloud_origin: cig_environment::clouds::CloudOrigin,
+    /// Lightning bolts lit now (drawn as emissive lines).
+    pub bolts: Vec<BoltDraw>,
+    /// Extra illuminance at the eye from lightning flashes now, lux (0 without).
+    pub flash_lux: f64,
+    /// Rain or snow falling around the eye, if any.
+    pub precipitation: Option<PrecipitationDraw>,
+}
+
+/// One straight piece of a lightning bolt, relative to its bolt's origin (ECEF axes, metres).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoltLine {
+    pub start_m: [f32; 3],
+    pub end_m: [f32; 3],
+    /// Relative brightness: 1 on the main channel, less on side branches.
+    pub brightness: f32,
+}
+
+/// A lightning bolt to draw.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoltDraw {
+    /// ECEF point the lines are relative to (the strike point), m.
+    pub origin_ecef_m: glam::DVec3,
+    /// The bolt's lines (shared between frames: a bolt is generated once).
+    pub lines: std::sync::Arc<[BoltLine]>,
+    /// Brightness now relative to the bolt's peak, 0..1 (the flash envelope times the strike's
+    /// intensity).
+    pub intensity: f32,
+}
+
+/// Rain or snow around the eye, as the renderer draws it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrecipitationDraw {
+    pub precipitation: cig_environment::Precipitation,
+    /// Horizontal wind the particles drift with, east and north, m/s.
+    pub wind_en_mps: [f64; 2],
+    /// Seed of the particles' places.
+    pub seed: u64,
 }
 
 impl FrameSnapshot {
@@ -152,6 +189,9 @@ impl FrameSnapshot {
             moon_visible: true,
             cloud_layers: Vec::new(),
             cloud_origin: cig_environment::clouds::CloudOrigin::default(),
+            bolts: Vec::new(),
+            flash_lux: 0.0,
+            precipitation: None,
         }
     }
 }

@@ -475,6 +475,22 @@ pub struct RenderArgs {
         allow_hyphen_values = true
     )]
     pub wind: String,
+    /// Rain at MM_PER_H of water (0..200): lowers the visibility (Marshall-Palmer extinction
+    /// added to the fog's) and draws streaks near the eye.
+    #[arg(
+        long,
+        value_name = "MM_PER_H",
+        allow_hyphen_values = true,
+        conflicts_with = "snow"
+    )]
+    pub rain: Option<String>,
+    /// Snow at MM_PER_H of water (0..200): lowers the visibility and draws flakes near the eye.
+    #[arg(long, value_name = "MM_PER_H", allow_hyphen_values = true)]
+    pub snow: Option<String>,
+    /// A lightning bolt "SEED[,DIST_M]" at its brightest, DIST_M (default 3000, 100..50000)
+    /// ahead of the eye, and its flash.
+    #[arg(long, value_name = "SEED[,DIST_M]", allow_hyphen_values = true)]
+    pub lightning: Option<String>,
     /// Write frame statistics (triangles, tiles, draw calls, CPU and GPU time) as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,

@@ -267,6 +267,68 @@ pub fn fire_puffs(
     Ok(puffs)
 }
 
+/// Parses a `--rain` or `--snow` rate.
+pub fn parse_precipitation(
+    text: &str,
+    kind: cig_environment::PrecipitationKind,
+) -> anyhow::Result<cig_environment::Precipitation> {
+    let flag = format!("--{}", kind.name());
+    let v = parse_numbers(text, &flag, &[1])?;
+    cig_environment::Precipitation::new(kind, v[0])
+        .map_err(|e| anyhow::anyhow!("{flag} \"{text}\": {e}"))
+}
+
+/// Parses `--lightning SEED[,DIST_M]`.
+pub fn parse_lightning(text: &str) -> anyhow::Result<(u64, f64)> {
+    let (seed_text, distance) = match text.split_once(',') {
+        Some((s, d)) => (s.trim(), Some(d.trim())),
+        None => (text.trim(), None),
+    };
+    let seed = seed_text.parse::<u64>().map_err(|_| {
+        anyhow::anyhow!("--lightning \"{text}\": the seed \"{seed_text}\" is not a whole number 0..2^64 (SEED[,DIST_M])")
+    })?;
+    let distance_m = match distance {
+        None => 3000.0,
+        Some(d) => parse_numbers(d, "--lightning distance", &[1])?[0],
+    };
+    if !(100.0..=50_000.0).contains(&distance_m) {
+        bail!("--lightning \"{text}\": the distance {distance_m} m must lie in 100..50000");
+    }
+    Ok((seed, distance_m))
+}
+
+/// The bolt of `--lightning`: `distance_m` ahead of the eye on the terrain (or the ellipsoid
+/// off the database), at its brightest, and its flash at the eye.
+pub fn lightning_bolt(
+    session: &mut QuerySession,
+    view: &View,
+    seed: u64,
+    distance_m: f64,
+) -> (cig_scene::BoltDraw, f64, cig_ig::weather::MadeBolt) {
+    let frame = cig_geo::EnuFrame::new(view.eye);
+    let h = view.orientation.heading_deg.to_radians();
+    let ahead = frame.enu_to_geodetic(glam::DVec3::new(
+        distance_m * h.sin(),
+        distance_m * h.cos(),
+        0.0,
+    ));
+    let ground_m = session
+        .hot(ahead.lat_deg, ahead.lon_deg)
+        .map_or(0.0, |g| g.height_ellipsoid_m());
+    let ground = Geodetic::new(ahead.lat_deg, ahead.lon_deg, ground_m);
+    let bolt = cig_ig::weather::make_bolt(ground, 1500.0, seed);
+    let flash_lux = cig_ig::weather::flash_lux_from(view.eye.to_ecef(), bolt.centre_ecef_m, 1.0);
+    (
+        cig_scene::BoltDraw {
+            origin_ecef_m: bolt.origin_ecef_m,
+            lines: Arc::clone(&bolt.lines),
+            intensity: 1.0,
+        },
+        flash_lux,
+        bolt,
+    )
+}
+
 /// The frame statistics as JSON.
 pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Value {
     serde_json::json!({
@@ -290,6 +352,8 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "exposure_ev": stats.exposure_ev,
         "cloud_layers_drawn": stats.cloud_layers_drawn,
         "cloud_gpu_ms": stats.cloud_gpu_ms,
+        "bolt_lines_drawn": stats.bolt_lines_drawn,
+        "precipitation_particles": stats.precipitation_particles,
         "adapter": gpu.describe(),
         "size": [view.width_px, view.height_px],
     })
@@ -403,6 +467,18 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .enumerate()
         .map(|(i, text)| parse_cloud(text, i as u64 + 1))
         .collect::<anyhow::Result<_>>()?;
+    let precipitation = match (&args.rain, &args.snow) {
+        (Some(text), _) => Some(parse_precipitation(
+            text,
+            cig_environment::PrecipitationKind::Rain,
+        )?),
+        (None, Some(text)) => Some(parse_precipitation(
+            text,
+            cig_environment::PrecipitationKind::Snow,
+        )?),
+        (None, None) => None,
+    };
+    let lightning = args.lightning.as_deref().map(parse_lightning).transpose()?;
     let (cache, mut renderer) = open(&args.db, config)?;
     let mut session = QuerySession::new(Arc::clone(&cache));
     let mut entities = Vec::new();
@@ -430,6 +506,26 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     }
     let mut snapshot = FrameSnapshot::new(unix_time_s, vec![view]);
     snapshot.fog = Fog::from_visibility(fog_mode, args.visibility);
+    if let Some(p) = precipitation {
+        // The rain's or snow's extinction adds to the air's.
+        snapshot.fog = Fog::from_visibility(fog_mode, p.combined_visibility_m(args.visibility));
+        let to = (wind.from_deg + 180.0).to_radians();
+        snapshot.precipitation = Some(cig_scene::PrecipitationDraw {
+            precipitation: p,
+            wind_en_mps: [wind.speed_mps * to.sin(), wind.speed_mps * to.cos()],
+            seed: 1,
+        });
+    }
+    let mut bolt_note = String::new();
+    if let Some((seed, distance_m)) = lightning {
+        let (bolt, flash_lux, made) = lightning_bolt(&mut session, &view, seed, distance_m);
+        bolt_note = format!(
+            ", a bolt of {} segments generated in {:.0} us, flash {flash_lux:.2} lux",
+            made.segments, made.generation_us
+        );
+        snapshot.bolts = vec![bolt];
+        snapshot.flash_lux = flash_lux;
+    }
     snapshot.ground_fog = ground_fog;
     snapshot.sky = cig_scene::lighting::SkySettings {
         model: sky_model,
@@ -466,7 +562,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     eprintln!(
-        "rendered {}x{} to {}: {} triangles, {} nodes, {} puffs, {} draw calls, cpu {:.1} ms, gpu {:.1} ms ({})",
+        "rendered {}x{} to {}: {} triangles, {} nodes, {} puffs, {} draw calls, cpu {:.1} ms, gpu {:.1} ms ({}){bolt_note}",
         view.width_px,
         view.height_px,
         args.out.display(),

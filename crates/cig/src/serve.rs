@@ -443,6 +443,7 @@ fn run_windowed(
     let mut loop_state: Option<LoopState> = None;
     let rate_hz = args.rate_hz;
     let dis_out = dis.as_ref().map(UdpEndpoint::local_addr);
+    let mut operator_strikes: u64 = 0;
     let driver: cig_render::FrameDriver = Box::new(move |tick: &cig_render::ViewerTick| {
         let (width_px, height_px) = (tick.width_px, tick.height_px);
         for order in &tick.orders {
@@ -461,6 +462,27 @@ fn run_windowed(
                     speed_mps,
                     from_deg,
                 } => world.set_operator_wind(speed_mps, from_deg),
+                cig_render::ObscurantOrder::SetPrecipitation(p) => {
+                    world.set_operator_precipitation(p);
+                }
+                cig_render::ObscurantOrder::StrikeLightning { at } => {
+                    operator_strikes += 1;
+                    world.strike_lightning_now(at, 0x4f50_4c47_0000_0000 | operator_strikes);
+                }
+                cig_render::ObscurantOrder::SetStorm {
+                    centre,
+                    strikes_per_minute,
+                } => world.set_lightning_storm((strikes_per_minute > 0.0).then_some(
+                    cig_ig::weather::LightningStorm {
+                        centre_lat_deg: centre.lat_deg,
+                        centre_lon_deg: centre.lon_deg,
+                        radius_m: 10_000.0,
+                        cloud_base_m: 1500.0,
+                        strikes_per_minute:
+                            strikes_per_minute.min(cig_ig::weather::MAX_STRIKES_PER_MINUTE),
+                        seed: operator_strikes ^ 0x5354_4f52_4d00_0000,
+                    },
+                )),
             }
         }
         let mut t = totals

@@ -480,3 +480,75 @@ fn demo_flies_to_png_frames_without_a_display_and_in_a_window_with_one() {
         "{stdout}"
     );
 }
+
+/// Renders with `extra` arguments at `time`; returns the PNG's bytes and the statistics.
+fn render_with(db: &Path, dir: &Path, name: &str, time: &str, extra: &[&str]) -> (Vec<u8>, Value) {
+    let out = dir.join(format!("{name}.png"));
+    let stats = dir.join(format!("{name}.json"));
+    let mut args = render_args(db, &out);
+    if let Some(i) = args.iter().position(|a| a == "--time") {
+        args[i + 1] = time.to_string();
+    }
+    let assert = cig()
+        .args(&args)
+        .args(["--stats", &stats.display().to_string()])
+        .args(extra)
+        .assert()
+        .success();
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
+    if extra.contains(&"--lightning") {
+        assert!(stderr.contains("segments generated in"), "{stderr}");
+    }
+    let json: Value = serde_json::from_slice(&std::fs::read(&stats).expect("stats")).expect("json");
+    (std::fs::read(&out).expect("png"), json)
+}
+
+#[test]
+fn render_draws_rain_snow_and_lightning() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let day = "2026-06-21T19:00:00Z";
+    let (clear, clear_stats) = render_with(&db, dir.path(), "clear", day, &[]);
+    assert_eq!(clear_stats["precipitation_particles"], 0);
+    assert_eq!(clear_stats["bolt_lines_drawn"], 0);
+    let (rain, rain_stats) = render_with(&db, dir.path(), "rain", day, &["--rain", "20"]);
+    assert!(rain_stats["precipitation_particles"].as_u64().unwrap_or(0) > 1000);
+    assert_ne!(rain, clear);
+    let (snow, snow_stats) = render_with(&db, dir.path(), "snow", day, &["--snow", "2"]);
+    assert!(snow_stats["precipitation_particles"].as_u64().unwrap_or(0) > 1000);
+    assert_ne!(snow, rain);
+    let night = "2026-06-22T07:00:00Z";
+    let (dark, _) = render_with(&db, dir.path(), "night", night, &[]);
+    let (bolt, bolt_stats) =
+        render_with(&db, dir.path(), "bolt", night, &["--lightning", "7,2000"]);
+    assert!(bolt_stats["bolt_lines_drawn"].as_u64().unwrap_or(0) > 10);
+    assert_ne!(bolt, dark);
+    // The same seed draws the same bolt.
+    let (again, _) = render_with(&db, dir.path(), "again", night, &["--lightning", "7,2000"]);
+    assert_eq!(again, bolt);
+}
+
+#[test]
+fn bad_weather_values_give_one_line_errors() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let out = dir.path().join("frame.png");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--rain", "heavy"], "--rain"),
+        (vec!["--rain", "-1"], "rain rate -1 mm/h is outside 0..200"),
+        (vec!["--snow", "500"], "snow rate 500 mm/h"),
+        (vec!["--snow", "nan"], "--snow"),
+        (vec!["--rain", "5", "--snow", "1"], "cannot be used with"),
+        (vec!["--lightning", "bright"], "--lightning"),
+        (vec!["--lightning", "-3"], "seed"),
+        (vec!["--lightning", "3,10"], "distance 10 m"),
+        (vec!["--lightning", "3,inf"], "--lightning"),
+    ];
+    for (extra, expect) in cases {
+        let mut args = render_args(&db, &out);
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let line = one_line_error(&cig().args(&args).assert().failure());
+        assert!(line.contains(expect), "{extra:?}: {line}");
+    }
+    assert!(!out.exists(), "no frame written after an error");
+}

@@ -105,6 +105,79 @@ pub enum ObscurantOrder {
     StopPlumes,
     /// Set the wind the obscurants drift in (direction it blows from, degrees).
     SetWind { speed_mps: f64, from_deg: f64 },
+    /// Rain or snow around the eye (`None`: stop it).
+    SetPrecipitation(Option<cig_environment::Precipitation>),
+    /// A lightning strike on the ground at `at`.
+    StrikeLightning { at: Geodetic },
+    /// A storm around `centre` striking this often, per minute (0: none).
+    SetStorm {
+        centre: Geodetic,
+        strikes_per_minute: f64,
+    },
+}
+
+/// Without a driver, the panel's weather: rain or snow around the eye, and the last
+/// lightning strike's bolt and flash (a storm needs the IG's world, `cig serve`).
+fn own_weather(
+    panel: &mut PanelState,
+    eye: Geodetic,
+    own_bolt: &mut Option<(f64, cig_scene::bolt::MadeBolt)>,
+    own_strikes: &mut u64,
+    orders: &[ObscurantOrder],
+    snapshot: &mut FrameSnapshot,
+) {
+    let now = panel.unix_time_s;
+    for order in orders {
+        match *order {
+            ObscurantOrder::StrikeLightning { at } => {
+                *own_strikes += 1;
+                *own_bolt = Some((now, cig_scene::bolt::make_bolt(at, 1500.0, *own_strikes)));
+            }
+            ObscurantOrder::SetStorm {
+                strikes_per_minute, ..
+            } if strikes_per_minute > 0.0 => {
+                panel.obscurant_note =
+                    "a storm needs the IG (cig serve); strike now works here".into();
+            }
+            _ => {}
+        }
+    }
+    let wind = panel.wind_from_deg.to_radians() + std::f64::consts::PI;
+    snapshot.precipitation =
+        panel
+            .precipitation()
+            .map(|precipitation| cig_scene::PrecipitationDraw {
+                precipitation,
+                wind_en_mps: [
+                    panel.wind_speed_mps * wind.sin(),
+                    panel.wind_speed_mps * wind.cos(),
+                ],
+                seed: 1,
+            });
+    if let Some(p) = panel.precipitation() {
+        let v = p.combined_visibility_m(panel.visibility_m);
+        snapshot.fog = cig_scene::Fog::from_visibility(panel.fog_mode, v);
+    }
+    let envelope = cig_environment::lightning::FlashEnvelope::default();
+    let mut over = false;
+    if let Some((start, bolt)) = &*own_bolt {
+        // The panel's clock may run at any rate: the flash runs on its time.
+        let k = envelope.intensity(now - start);
+        if k > 0.0 {
+            snapshot.bolts.push(cig_scene::BoltDraw {
+                origin_ecef_m: bolt.origin_ecef_m,
+                lines: Arc::clone(&bolt.lines),
+                intensity: k as f32,
+            });
+            snapshot.flash_lux =
+                cig_scene::bolt::flash_lux_from(eye.to_ecef(), bolt.centre_ecef_m, k);
+        } else if now - start > envelope.duration_s() || now < *start {
+            over = true;
+        }
+    }
+    if over {
+        *own_bolt = None;
+    }
 }
 
 /// Where the camera's view axis meets the terrain, within 30 km.
@@ -273,6 +346,8 @@ pub fn run_viewer_driven(
         driver,
         effects: None,
         operator_plumes: Vec::new(),
+        own_bolt: None,
+        own_strikes: 0,
         puff_scratch: Vec::new(),
     };
     let run = event_loop.run_app(&mut app);
@@ -301,6 +376,9 @@ struct App {
     /// The stand-alone viewer's own obscurants (a driven viewer's belong to its driver).
     effects: Option<cig_effects::EffectSystem>,
     operator_plumes: Vec<cig_effects::EffectHandle>,
+    /// Without a driver: the operator's last lightning strike (its time and bolt).
+    own_bolt: Option<(f64, cig_scene::bolt::MadeBolt)>,
+    own_strikes: u64,
     puff_scratch: Vec<cig_effects::PuffInstance>,
 }
 
@@ -642,6 +720,22 @@ impl App {
                     }
                 },
                 ObscurantCommand::StopPlumes => orders.push(ObscurantOrder::StopPlumes),
+                ObscurantCommand::SetPrecipitation(p) => {
+                    orders.push(ObscurantOrder::SetPrecipitation(p));
+                }
+                ObscurantCommand::StrikeLightning => match ground_ahead(&r.cache, &self.camera) {
+                    Some(at) => orders.push(ObscurantOrder::StrikeLightning { at }),
+                    None => {
+                        self.panel.obscurant_note =
+                            "no ground within 30 km at the centre of the view".into();
+                    }
+                },
+                ObscurantCommand::SetStorm { strikes_per_minute } => {
+                    orders.push(ObscurantOrder::SetStorm {
+                        centre: self.camera.eye,
+                        strikes_per_minute,
+                    });
+                }
                 ObscurantCommand::SetWind {
                     speed_mps,
                     from_deg,
@@ -675,6 +769,14 @@ impl App {
                 );
                 snapshot.fog = self.panel.fog();
                 snapshot.ground_fog = self.panel.ground_fog();
+                own_weather(
+                    &mut self.panel,
+                    self.camera.eye,
+                    &mut self.own_bolt,
+                    &mut self.own_strikes,
+                    &orders,
+                    &mut snapshot,
+                );
                 let note = run_own_obscurants(
                     &mut self.effects,
                     &mut self.operator_plumes,
@@ -1130,6 +1232,10 @@ fn run_own_obscurants(
                     note = Some(format!("wind refused: {e}"));
                 }
             }
+            // Weather orders are not the obscurants' ([`own_weather`]).
+            ObscurantOrder::SetPrecipitation(_)
+            | ObscurantOrder::StrikeLightning { .. }
+            | ObscurantOrder::SetStorm { .. } => {}
         }
     }
     note

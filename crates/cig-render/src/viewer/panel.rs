@@ -112,6 +112,11 @@ pub struct PanelState {
     pub cloud_kind: CloudKind,
     pub cloud_wind_speed_mps: f64,
     pub cloud_wind_from_deg: f64,
+    /// Rain or snow (`None`: dry) and its rate, mm/h of water.
+    pub precipitation_kind: Option<cig_environment::PrecipitationKind>,
+    pub precipitation_rate_mm_per_h: f64,
+    /// Strikes per minute of the operator's storm around the eye (0: none).
+    pub storm_strikes_per_minute: f64,
     /// Orders given this frame, taken by the viewer.
     commands: Vec<ObscurantCommand>,
     /// The date field being edited.
@@ -128,7 +133,16 @@ pub enum ObscurantCommand {
     StopPlumes,
     /// Set the wind the obscurants drift in.
     SetWind { speed_mps: f64, from_deg: f64 },
+    /// Rain or snow at a rate (`None`: stop it).
+    SetPrecipitation(Option<cig_environment::Precipitation>),
+    /// A lightning strike where the camera looks.
+    StrikeLightning,
+    /// A storm around the eye striking this often (0: none), per minute.
+    SetStorm { strikes_per_minute: f64 },
 }
+
+/// Precipitation rates the panel offers, mm/h of water.
+const PRECIPITATION_RANGE_MM_PER_H: (f64, f64) = (0.1, 100.0);
 
 /// Heat release range of operator plumes, MW.
 const PLUME_HEAT_RANGE_MW: (f64, f64) = (0.1, 200.0);
@@ -183,6 +197,9 @@ impl PanelState {
             cloud_kind: CloudKind::Cumulus,
             cloud_wind_speed_mps: 8.0,
             cloud_wind_from_deg: 270.0,
+            precipitation_kind: None,
+            precipitation_rate_mm_per_h: 5.0,
+            storm_strikes_per_minute: 0.0,
             commands: Vec::new(),
             date_text: String::new(),
             date_error: false,
@@ -265,6 +282,7 @@ impl PanelState {
                 self.obscurants_ui(ui);
                 ui.separator();
                 self.clouds_ui(ui);
+                self.weather_ui(ui);
                 ui.separator();
                 camera_ui(ui, camera, info);
             });
@@ -472,6 +490,73 @@ impl PanelState {
         });
     }
 
+    /// The precipitation these settings ask for.
+    pub fn precipitation(&self) -> Option<cig_environment::Precipitation> {
+        self.precipitation_kind.map(|kind| {
+            cig_environment::Precipitation::clamped(
+                kind,
+                clamp_or(
+                    self.precipitation_rate_mm_per_h,
+                    PRECIPITATION_RANGE_MM_PER_H,
+                    5.0,
+                ),
+            )
+        })
+    }
+
+    fn weather_ui(&mut self, ui: &mut egui::Ui) {
+        use cig_environment::PrecipitationKind;
+        ui.strong("Weather");
+        let mut changed = false;
+        ui.horizontal(|ui| {
+            for (kind, name) in [
+                (None, "dry"),
+                (Some(PrecipitationKind::Rain), "rain"),
+                (Some(PrecipitationKind::Snow), "snow"),
+            ] {
+                changed |= ui
+                    .selectable_value(&mut self.precipitation_kind, kind, name)
+                    .changed();
+            }
+        });
+        changed |= ui
+            .add_enabled(
+                self.precipitation_kind.is_some(),
+                egui::Slider::new(
+                    &mut self.precipitation_rate_mm_per_h,
+                    PRECIPITATION_RANGE_MM_PER_H.0..=PRECIPITATION_RANGE_MM_PER_H.1,
+                )
+                .logarithmic(true)
+                .text("rate")
+                .suffix(" mm/h"),
+            )
+            .changed();
+        if changed {
+            self.commands
+                .push(ObscurantCommand::SetPrecipitation(self.precipitation()));
+        }
+        if let Some(p) = self.precipitation() {
+            ui.label(format!("visibility in it {:.0} m", p.visibility_m()));
+        }
+        let storm = ui.add(
+            egui::Slider::new(&mut self.storm_strikes_per_minute, 0.0..=60.0)
+                .text("lightning")
+                .suffix(" /min"),
+        );
+        if storm.changed() {
+            self.commands.push(ObscurantCommand::SetStorm {
+                strikes_per_minute: self.storm_strikes_per_minute,
+            });
+        }
+        if ui
+            .button("strike now")
+            .on_hover_text("a bolt on the ground at the centre of the view")
+            .clicked()
+        {
+            self.commands.push(ObscurantCommand::StrikeLightning);
+        }
+    }
+
     fn detail_ui(&mut self, ui: &mut egui::Ui, info: &FrameInfo) {
         ui.strong("Terrain");
         ui.add(
@@ -622,6 +707,18 @@ mod tests {
         assert_eq!(p.unix_time_s, 0.0);
         assert_eq!(p.visibility_m, VISIBILITY_RANGE_M.1);
         assert_eq!(p.max_pixel_error, 0.0);
+    }
+
+    #[test]
+    fn the_weather_settings_give_checked_precipitation() {
+        let mut p = PanelState::new(0.0, 10_000.0, FogMode::Exponential, 1.0, false);
+        assert_eq!(p.precipitation(), None);
+        p.precipitation_kind = Some(cig_environment::PrecipitationKind::Snow);
+        p.precipitation_rate_mm_per_h = 1e9;
+        let snow = p.precipitation().expect("snow");
+        assert_eq!(snow.rate_mm_per_h, PRECIPITATION_RANGE_MM_PER_H.1);
+        p.precipitation_rate_mm_per_h = f64::NAN;
+        assert_eq!(p.precipitation().map(|s| s.rate_mm_per_h), Some(5.0));
     }
 
     proptest! {

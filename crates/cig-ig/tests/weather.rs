@@ -1,0 +1,324 @@
+//! Lightning and precipitation in the world: the same seed and time give the same bolts and
+//! flash on two IGs whatever their frame rates, the flash rises within two frames and decays,
+//! and the host's rain layer (CIGI Weather Control) reaches the snapshot, clamped and reported.
+
+use cig_cigi::{
+    decode_message, encode_message, ByteOrder, EntityControl, IgControl, Message, Packet, Version,
+    ViewControl, WeatherControl,
+};
+use cig_effects::EffectsConfig;
+use cig_environment::{PrecipitationKind, UtcTime};
+use cig_geo::Geodetic;
+use cig_ig::{IgWorld, Scenario, SessionConfig, WorldConfig};
+use cig_scene::lighting::FogMode;
+use cig_scene::{FovDeg, FrameSnapshot, Hpr, View};
+use cig_terrain::build::build_pyramid;
+use cig_terrain::database::{GeoidGrid, Manifest, MemoryTileStore, TerrainDatabase};
+use cig_terrain::material::Material;
+use cig_terrain::raster::{GeoGrid, Raster};
+use cig_terrain::{PagingConfig, QuerySession, TileCache};
+use std::sync::Arc;
+
+const SOUTH: f64 = 36.0;
+const WEST: f64 = -121.0;
+
+/// 65 x 65 posts, 60 m apart, a plane at 100 m.
+fn query() -> QuerySession {
+    let (n, e) = cig_geo::metres_per_degree(SOUTH);
+    let grid = GeoGrid {
+        south_lat_deg: SOUTH,
+        west_lon_deg: WEST,
+        dlat_deg: 60.0 / n,
+        dlon_deg: 60.0 / e,
+        rows: 65,
+        cols: 65,
+    };
+    let raster = Raster {
+        grid,
+        elevation_m: vec![100.0; grid.len()],
+        material: Some(vec![Material::Grass; grid.len()]),
+    };
+    let store = Arc::new(MemoryTileStore::new());
+    let summary = build_pyramid::<cig_terrain::build::BuildError>(&raster, 64, &mut |t| {
+        store.insert(t.key, t.encode());
+        Ok(())
+    })
+    .expect("build");
+    let manifest = Manifest::from_build(&summary, GeoidGrid::zero(), 0, vec!["test".into()]);
+    let db = TerrainDatabase::new(manifest, store as Arc<dyn cig_terrain::TileStore>).expect("db");
+    let cache = TileCache::new(Arc::new(db), PagingConfig::default()).expect("cache");
+    QuerySession::new(Arc::new(cache))
+}
+
+/// The middle of the test terrain.
+fn centre() -> (f64, f64) {
+    let (n, e) = cig_geo::metres_per_degree(SOUTH);
+    (SOUTH + 1920.0 / n, WEST + 1920.0 / e)
+}
+
+fn world(scenario: &str) -> IgWorld {
+    IgWorld::new(
+        Scenario::from_toml(scenario).expect("scenario"),
+        WorldConfig {
+            session: SessionConfig::default(),
+            start: UtcTime::from_calendar(2026, 6, 21, 4, 0, 0.0).expect("time"),
+            fog_mode: FogMode::Exponential,
+            effects: EffectsConfig::default(),
+            join_exercise: false,
+        },
+    )
+    .expect("world")
+}
+
+fn storm(seed: u64) -> String {
+    let (lat, lon) = centre();
+    format!(
+        "[view]\neye = [{lat}, {lon}, 300.0]\n\
+         [lightning]\nlat_deg = {lat}\nlon_deg = {lon}\nradius_m = 3000\n\
+         strikes_per_minute = 120\nseed = {seed}\n"
+    )
+}
+
+fn fallback() -> View {
+    let (lat, lon) = centre();
+    View {
+        eye: Geodetic::new(lat, lon, 500.0),
+        orientation: Hpr::default(),
+        fov: FovDeg::symmetric(60.0, 45.0),
+        width_px: 64,
+        height_px: 48,
+    }
+}
+
+fn snap(w: &IgWorld) -> FrameSnapshot {
+    w.snapshot(64, 48, &fallback())
+}
+
+/// What a frame shows of the lightning: each bolt's origin, lines and intensity, and the flash.
+fn lightning_of(s: &FrameSnapshot) -> (Vec<String>, u64) {
+    let bolts = s
+        .bolts
+        .iter()
+        .map(|b| format!("{:?} {:?} {}", b.origin_ecef_m, b.lines, b.intensity))
+        .collect();
+    (bolts, s.flash_lux.to_bits())
+}
+
+#[test]
+fn the_same_seed_and_time_give_the_same_bolts_at_any_frame_rate() {
+    let (mut qa, mut qb) = (query(), query());
+    let mut a = world(&storm(5));
+    let mut b = world(&storm(5));
+    let mut other = world(&storm(6));
+    let mut qo = query();
+    let mut lit_frames = 0;
+    let mut differs = false;
+    // A steps at 64 Hz, B at 16 Hz; they meet every 1/16 s for 20 s.
+    for _ in 0..320 {
+        for _ in 0..4 {
+            a.step(1.0 / 64.0, &mut qa);
+        }
+        b.step(1.0 / 16.0, &mut qb);
+        other.step(1.0 / 16.0, &mut qo);
+        assert_eq!(a.unix_time_s(), b.unix_time_s());
+        let (sa, sb, so) = (snap(&a), snap(&b), snap(&other));
+        assert_eq!(lightning_of(&sa), lightning_of(&sb));
+        if !sa.bolts.is_empty() {
+            lit_frames += 1;
+            assert!(sa.flash_lux > 0.0);
+        }
+        differs |= lightning_of(&sa) != lightning_of(&so);
+    }
+    // 40 strikes expected in 20 s, each lit for about 4 of these frames.
+    assert!(lit_frames > 20, "{lit_frames} frames with a bolt");
+    assert!(differs, "another seed strikes elsewhere and at other times");
+    let stats = a.lightning().stats();
+    assert!(stats.bolts_generated > 10, "{stats:?}");
+}
+
+#[test]
+fn a_flash_rises_within_two_frames_and_decays() {
+    let mut q = query();
+    let (lat, lon) = centre();
+    let mut w = world(&format!("[view]\neye = [{lat}, {lon}, 300.0]\n"));
+    w.step(1.0 / 60.0, &mut q);
+    assert_eq!(snap(&w).flash_lux, 0.0);
+    w.strike_lightning_now(Geodetic::new(lat + 0.01, lon, 100.0), 77);
+    let mut flashes = Vec::new();
+    for _ in 0..30 {
+        w.step(1.0 / 60.0, &mut q);
+        flashes.push(snap(&w).flash_lux);
+    }
+    let peak = flashes.iter().copied().fold(0.0, f64::max);
+    assert!(
+        peak > 10.0,
+        "a strike 1 km away lights the scene: {flashes:?}"
+    );
+    assert!(
+        flashes[0].max(flashes[1]) >= 0.8 * peak,
+        "full within two frames: {flashes:?}"
+    );
+    let top = flashes.iter().position(|f| *f == peak).unwrap_or(0);
+    assert!(top <= 1);
+    for w2 in flashes[top..].windows(2) {
+        assert!(w2[1] <= w2[0], "decays: {flashes:?}");
+    }
+    assert_eq!(flashes[20], 0.0, "gone within 20 frames: {flashes:?}");
+    assert!(snap(&w).bolts.is_empty());
+}
+
+fn send(world: &mut IgWorld, frame: u32, packets: Vec<Packet>) {
+    let mut all = vec![Packet::IgControl(IgControl {
+        ig_mode: 1,
+        host_frame_number: frame,
+        ..IgControl::default()
+    })];
+    all.extend(packets);
+    let mut bytes = Vec::new();
+    encode_message(
+        &Message::new(Version::V3_3, ByteOrder::BigEndian, all),
+        &mut bytes,
+    )
+    .expect("encode");
+    world.receive_cigi(&bytes).expect("accepted");
+}
+
+fn rain_layer(severity: u8, concentration: f32, visibility_m: f32) -> Packet {
+    Packet::WeatherControl(WeatherControl {
+        layer_id: 4,
+        weather_enable: true,
+        scope: 0,
+        severity,
+        base_elevation_m: 0.0,
+        thickness_m: 3000.0,
+        visibility_range_m: visibility_m,
+        aerosol_concentration_gpm3: concentration,
+        ..WeatherControl::default()
+    })
+}
+
+#[test]
+fn the_hosts_rain_layer_reaches_the_snapshot_clamped_and_reported() {
+    let mut q = query();
+    let (lat, lon) = centre();
+    let mut w = world("");
+    let eye = vec![
+        Packet::EntityControl(EntityControl {
+            entity_id: 0,
+            entity_state: 1,
+            lat_deg_or_x_m: lat,
+            lon_deg_or_y_m: lon,
+            alt_m_or_z_m: 200.0,
+            ..EntityControl::default()
+        }),
+        Packet::ViewControl(ViewControl {
+            view_id: 0,
+            entity_id: 0,
+            ..ViewControl::default()
+        }),
+    ];
+    send(&mut w, 1, eye.clone());
+    w.step(1.0 / 60.0, &mut q);
+    let dry = snap(&w);
+    assert!(dry.precipitation.is_none());
+    // Severity 3, no concentration, no visibility stated: 10 mm/h, and the rain lowers the
+    // visibility by its own extinction.
+    let mut packets = eye.clone();
+    packets.push(rain_layer(3, 0.0, 0.0));
+    send(&mut w, 2, packets);
+    w.step(1.0 / 60.0, &mut q);
+    let wet = snap(&w);
+    let p = wet.precipitation.expect("rain").precipitation;
+    assert_eq!(p.kind, PrecipitationKind::Rain);
+    assert_eq!(p.rate_mm_per_h, 10.0);
+    assert!(wet.fog.density_per_m > dry.fog.density_per_m + 3.912 / 4000.0);
+    // A water content far beyond any rain: clamped to 200 mm/h and told to the host once.
+    let mut packets = eye.clone();
+    packets.push(rain_layer(3, 500.0, 0.0));
+    send(&mut w, 3, packets);
+    w.step(1.0 / 60.0, &mut q);
+    let p = snap(&w).precipitation.expect("rain").precipitation;
+    assert_eq!(p.rate_mm_per_h, 200.0);
+    let message = w.host_message(&mut q, 0);
+    let mut bytes = Vec::new();
+    encode_message(&message, &mut bytes).expect("encode");
+    let told: Vec<String> = decode_message(&bytes)
+        .expect("decode")
+        .packets
+        .into_iter()
+        .filter_map(|p| match p {
+            Packet::ImageGeneratorMessage(m) => Some(m.text),
+            _ => None,
+        })
+        .collect();
+    assert!(
+        told.iter()
+            .any(|t| t.contains("layer 4") && t.contains("clamped")),
+        "{told:?}"
+    );
+    // Above the layer's top the rain stops.
+    let mut packets = vec![Packet::EntityControl(EntityControl {
+        entity_id: 0,
+        entity_state: 1,
+        lat_deg_or_x_m: lat,
+        lon_deg_or_y_m: lon,
+        alt_m_or_z_m: 4000.0,
+        ..EntityControl::default()
+    })];
+    packets.extend(eye[1..].iter().cloned());
+    send(&mut w, 4, packets);
+    w.step(1.0 / 60.0, &mut q);
+    assert!(snap(&w).precipitation.is_none());
+}
+
+#[test]
+fn the_hosts_random_lightning_strikes_around_the_eye() {
+    let mut q = query();
+    let (lat, lon) = centre();
+    let mut w = world("");
+    let mut packets = vec![
+        Packet::EntityControl(EntityControl {
+            entity_id: 0,
+            entity_state: 1,
+            lat_deg_or_x_m: lat,
+            lon_deg_or_y_m: lon,
+            alt_m_or_z_m: 200.0,
+            ..EntityControl::default()
+        }),
+        Packet::ViewControl(ViewControl {
+            view_id: 0,
+            entity_id: 0,
+            ..ViewControl::default()
+        }),
+    ];
+    send(&mut w, 1, packets.clone());
+    let mut seen = 0;
+    for _ in 0..16 * 20 {
+        w.step(1.0 / 16.0, &mut q);
+        seen += snap(&w).bolts.len();
+    }
+    assert_eq!(seen, 0, "no lightning without the host's");
+    packets.push(Packet::WeatherControl(WeatherControl {
+        layer_id: 1,
+        weather_enable: true,
+        random_lightning_enable: true,
+        scope: 0,
+        severity: 5,
+        base_elevation_m: 1500.0,
+        thickness_m: 2000.0,
+        coverage_pct: 80.0,
+        ..WeatherControl::default()
+    }));
+    send(&mut w, 2, packets);
+    for _ in 0..16 * 20 {
+        w.step(1.0 / 16.0, &mut q);
+        seen += snap(&w).bolts.len();
+    }
+    // 30 strikes a minute for 20 s: about 10.
+    assert!(
+        w.lightning().stats().bolts_generated >= 3,
+        "{:?}",
+        w.lightning().stats()
+    );
+    assert!(seen > 0);
+}

@@ -1,0 +1,291 @@
+//! Lightning bolts drawn as emissive lines in the scene pass.
+//!
+//! Algorithm: every line of every lit bolt (`FrameSnapshot::bolts`, generated once per strike
+//! by the world) is re-based on the view's eye in f64 and sent as an eye-relative f32 segment
+//! with its radiance; one instanced draw widens each segment into a screen-aligned quad
+//! [`LINE_HALF_WIDTH_PX`] pixels each side of the line (`shaders/screen_lines.wgsl`), so a bolt
+//! 20 km away is as visible as one nearby and never breaks up between pixels, with a Gaussian
+//! glow across it; the quads are depth-tested against the scene (terrain and models in front
+//! hide the bolt, no depth write) and added to the multisampled colour (additive blending: an
+//! emitter over whatever is behind it). The radiance follows the contract of the frame's light
+//! (`pi * L * LIGHTING_UNITS_PER_LUX` for a luminance `L`, [`radiance_units`]) times the
+//! bolt's envelope and the branch's brightness, and is dimmed by the fog along the line of sight
+//! (transmittance only: emission is not replaced by the fog's colour).
+//!
+//! Limits: the channel (centimetres thick) is drawn as a line of fixed pixel width whose
+//! luminance [`CHANNEL_LUMINANCE_CD_M2`] is a visual value, not the physical peak (1e8 cd/m²
+//! and more for microseconds): it saturates the frame at any exposure, which is what the eye
+//! sees. No bloom (the glow is the quad's own), no scattering by the cloud.
+
+use crate::gpu::Gpu;
+use crate::renderer::{shader, uniform_entry, DEPTH_FORMAT, MSAA_SAMPLES};
+use cig_scene::lighting::{FLASH_COLOUR, LIGHTING_UNITS_PER_LUX};
+use cig_scene::{Camera, FrameSnapshot};
+
+/// Half the width of a drawn bolt line, pixels.
+pub const LINE_HALF_WIDTH_PX: f32 = 1.5;
+/// Luminance a bolt's main channel is drawn with at its peak, cd/m².
+pub const CHANNEL_LUMINANCE_CD_M2: f64 = 1.0e6;
+/// Lines one view draws at most (16 bolts at the 2000-segment cap).
+const MAX_LINES: usize = 32_768;
+
+/// A luminance in cd/m² as the frame's light units (the value a white Lambert surface under
+/// illuminance `pi * L` shows).
+pub fn radiance_units(luminance_cd_m2: f64) -> f64 {
+    std::f64::consts::PI * luminance_cd_m2 * LIGHTING_UNITS_PER_LUX
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuLine {
+    start: [f32; 4],
+    end: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct BoltFrame {
+    viewport: [f32; 4],
+    colour: [f32; 4],
+}
+
+/// A pipeline drawing six vertices per instance into the scene pass's multisampled target,
+/// depth-tested (reversed depth) without writing depth, with `blend`.
+pub(crate) fn overlay_pipeline(
+    gpu: &Gpu,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::BindGroupLayout,
+    colour_format: wgpu::TextureFormat,
+    blend: wgpu::BlendState,
+) -> wgpu::RenderPipeline {
+    let pipeline_layout = gpu
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(layout)],
+            immediate_size: 0,
+        });
+    gpu.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Greater),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState {
+                count: MSAA_SAMPLES,
+                mask: !0,
+                alpha_to_coverage_enabled: false,
+            },
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: colour_format,
+                    blend: Some(blend),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+}
+
+pub(crate) fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// The bolt pass: pipeline, line buffer and per-frame uniform.
+pub(crate) struct BoltPass {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::RenderPipeline,
+    lines: wgpu::Buffer,
+    capacity: usize,
+    frame: wgpu::Buffer,
+    bind: wgpu::BindGroup,
+    staging: Vec<GpuLine>,
+}
+
+fn line_buffer(gpu: &Gpu, capacity: usize) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("bolt lines"),
+        size: (capacity * std::mem::size_of::<GpuLine>()) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+impl BoltPass {
+    pub(crate) fn new(
+        gpu: &Gpu,
+        colour_format: wgpu::TextureFormat,
+        globals: &wgpu::Buffer,
+    ) -> BoltPass {
+        let device = &gpu.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("bolts"),
+            entries: &[uniform_entry(0), storage_entry(1), uniform_entry(2)],
+        });
+        let source = format!(
+            "{}\n{}",
+            include_str!("shaders/screen_lines.wgsl"),
+            include_str!("shaders/bolts.wgsl")
+        );
+        let module = shader(gpu, "bolts", &source);
+        let additive = wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+        };
+        let pipeline = overlay_pipeline(gpu, "bolts", &module, &layout, colour_format, additive);
+        let frame = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("bolt frame"),
+            size: std::mem::size_of::<BoltFrame>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let capacity = 256;
+        let lines = line_buffer(gpu, capacity);
+        let bind = Self::bind(gpu, &layout, globals, &lines, &frame);
+        BoltPass {
+            layout,
+            pipeline,
+            lines,
+            capacity,
+            frame,
+            bind,
+            staging: Vec::new(),
+        }
+    }
+
+    fn bind(
+        gpu: &Gpu,
+        layout: &wgpu::BindGroupLayout,
+        globals: &wgpu::Buffer,
+        lines: &wgpu::Buffer,
+        frame: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("bolts"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: globals.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: lines.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: frame.as_entire_binding(),
+                },
+            ],
+        })
+    }
+
+    /// Uploads the snapshot's bolt lines relative to the camera's eye; returns how many to
+    /// draw.
+    pub(crate) fn prepare(
+        &mut self,
+        gpu: &Gpu,
+        globals: &wgpu::Buffer,
+        camera: &Camera,
+        snapshot: &FrameSnapshot,
+    ) -> usize {
+        self.staging.clear();
+        let peak = radiance_units(CHANNEL_LUMINANCE_CD_M2);
+        'bolts: for bolt in &snapshot.bolts {
+            if !(bolt.intensity.is_finite() && bolt.intensity > 0.0) {
+                continue;
+            }
+            let base = bolt.origin_ecef_m - camera.eye_ecef;
+            for line in bolt.lines.iter() {
+                if self.staging.len() >= MAX_LINES {
+                    break 'bolts;
+                }
+                let at = |p: [f32; 3]| {
+                    let v =
+                        base + glam::DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+                    [v.x as f32, v.y as f32, v.z as f32]
+                };
+                let [ax, ay, az] = at(line.start_m);
+                let [bx, by, bz] = at(line.end_m);
+                let radiance =
+                    (peak * f64::from(bolt.intensity * line.brightness.clamp(0.0, 1.0))) as f32;
+                self.staging.push(GpuLine {
+                    start: [ax, ay, az, radiance],
+                    end: [bx, by, bz, 0.0],
+                });
+            }
+        }
+        let count = self.staging.len();
+        if count == 0 {
+            return 0;
+        }
+        if count > self.capacity {
+            self.capacity = count.next_power_of_two().min(MAX_LINES);
+            self.lines = line_buffer(gpu, self.capacity);
+            self.bind = Self::bind(gpu, &self.layout, globals, &self.lines, &self.frame);
+        }
+        gpu.queue
+            .write_buffer(&self.lines, 0, bytemuck::cast_slice(&self.staging));
+        let frame = BoltFrame {
+            viewport: [
+                camera.view.width_px as f32,
+                camera.view.height_px as f32,
+                LINE_HALF_WIDTH_PX,
+                0.0,
+            ],
+            colour: [FLASH_COLOUR[0], FLASH_COLOUR[1], FLASH_COLOUR[2], 0.0],
+        };
+        gpu.queue
+            .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+        count
+    }
+
+    /// Draws `count` prepared lines in the scene pass; returns the draw calls.
+    pub(crate) fn draw(&self, pass: &mut wgpu::RenderPass<'_>, count: usize) -> u32 {
+        if count == 0 {
+            return 0;
+        }
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind, &[]);
+        pass.draw(0..6, 0..count as u32);
+        1
+    }
+}
