@@ -1,5 +1,5 @@
 //! The moon and the stars of the sky pass: their GPU data (`@group(2)` of the sky pipeline) and
-//! the per-frame values that `shaders/celestial.wgsl`'s `celestial_radiance(dir)` reads.
+//! the per-frame values that `shaders/celestial.wgsl`'s `celestial_radiance(dir, sky_behind)` reads.
 //!
 //! Algorithm: per frame, the ephemeris (`cig_environment::ephemeris`, topocentric at the view's
 //! eye) gives the moon's and the sun's directions (turned from east-north-up to ECEF), the moon's
@@ -19,9 +19,13 @@
 //! cell within 0.6° of it, so each pixel tests only the stars of its cell (0.6 on average); by
 //! day, when the eye's threshold is above every star, the lookup is skipped. A star
 //! is a gaussian of unit integral and σ = 0.6 pixel (so its total is the same at any field of
-//! view and it does not flicker as it drifts across pixels) times its illuminance; it fades out
-//! below the eye's point-source threshold against the sky's luminance (Schaefer 1990; today the
-//! zenith colour of `Globals`), so stars come out at dusk and vanish by day without any gate on
+//! view and it does not flicker as it drifts across pixels) times its illuminance; it fades with the eye's point-source threshold against the luminance
+//! of the sky behind it (Schaefer 1990; the pixel's own physical sky radiance from the sky-view
+//! table, moonlit and twilit parts included), compared with the star's illuminance at the eye
+//! after extinction: not drawn under the threshold, drawn whole one magnitude over it (a
+//! threshold is the faintest star seen at all, so a star there must not stand out on a display
+//! whose pixel spread, in a narrow view, concentrates it far above what the eye's own spread
+//! would), so stars come out at dusk and vanish by day without any gate on
 //! the sun's altitude. Moon and stars are dimmed by the atmosphere's extinction along the air
 //! mass of Kasten and Young (1989), 0.13/0.20/0.34 magnitudes per air mass in R/G/B for a clear
 //! sky at sea level (Rayleigh, λ⁻⁴, scale height 8 km, plus grey aerosol, 1.2 km; less above a
@@ -33,7 +37,15 @@
 //! tilt from the ecliptic pole and surface roughness are left out (a Lommel–Seeliger sphere); the
 //! moon and stars are not refracted (geometric directions, like the sun disc), and the
 //! extinction is a fixed clear-sky one, not the atmosphere model's; a star's point spread is the
-//! pixel's, not the eye's; no planets, Milky Way or zodiacal light.
+//! pixel's, not the eye's (radiometrically right: a star's flux is kept, and a pixel of a
+//! 60°/640 view, 5.6′, is within the eye's spatial summation area, so the star is as detectable
+//! on a display reproducing the scene's contrast; but in bright twilight its contrast in one
+//! pixel, E / (Ω_pixel B), is only a few percent, fainter than the naked eye's impression); no
+//! planets, Milky Way or zodiacal light. Under the frame's automatic night exposure the moon,
+//! 10⁴–10⁵ times the moonlit ground's luminance, and even its earthshine (about 100 times it)
+//! are over the tone map's clip, so the whole disc shows white and the phase is seen only at a
+//! photographer's exposure for the moon (`SkySettings::fixed_exposure_ev`) — what a camera
+//! exposed for the landscape records, not the eye's local adaptation to the disc.
 
 use crate::gpu::Gpu;
 use cig_environment::moon_disc;

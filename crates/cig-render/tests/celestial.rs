@@ -128,6 +128,49 @@ fn median(values: &[u32]) -> u32 {
     v[v.len() / 2]
 }
 
+/// Scene-linear, pre-exposed luminance of each pixel: the sRGB encoding and the tone map's ACES
+/// curve (K. Narkowicz's fit, as tonemap.wgsl) undone per channel. Exact up to the 8-bit
+/// quantisation for pixels under the curve's clip (display value 1 at 7.2).
+fn linear_luminance(image: &Image) -> Vec<f64> {
+    let decode = |v: u8| {
+        let c = f64::from(v) / 255.0;
+        let display = if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        };
+        // y = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), solved for x >= 0.
+        let y = display.min(0.999);
+        let (a, b, c) = (2.43 * y - 2.51, 0.59 * y - 0.03, 0.14 * y);
+        (-b - (b * b - 4.0 * a * c).max(0.0).sqrt()) / (2.0 * a)
+    };
+    image
+        .rgba
+        .chunks_exact(4)
+        .map(|p| 0.2126 * decode(p[0]) + 0.7152 * decode(p[1]) + 0.0722 * decode(p[2]))
+        .collect()
+}
+
+/// The incident-light exposure (EV, `cig_scene::lighting::exposure_value`) at which a luminance
+/// of `luminance_cd_per_m2` shows as pre-exposed radiance `shown` (a photographer's fixed
+/// exposure, so the object is not clipped by the tone map).
+fn exposure_ev_showing(luminance_cd_per_m2: f64, shown: f64) -> f64 {
+    use cig_scene::lighting::{exposure_for_illuminance, illuminance_for_exposure_value};
+    let radiance = luminance_cd_per_m2 * cig_render::celestial::radiance_per_cd_per_m2();
+    // The shown value falls monotonically with the EV: bisect.
+    let (mut lo, mut hi) = (-10.0, 20.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        let value = radiance * exposure_for_illuminance(illuminance_for_exposure_value(mid), 0.0);
+        if value > shown {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 fn write(image: &Image, name: &str) {
     common::write_png(image, &common::out_dir().join(format!("{name}.png")));
 }
@@ -135,12 +178,28 @@ fn write(image: &Image, name: &str) {
 const MOON_FOV_DEG: f64 = 2.0;
 const MOON_SIZE_PX: u32 = 128;
 
-/// Renders the moon at `time` in a narrow view aimed at it; returns the image, the view, the
-/// predicted centre (pixels) and radius (pixels).
+/// The exposure a photographer gives the moon: its brightest surface element (the Lommel–Seeliger
+/// limb, up to twice the head-on luminance, times the maria map's 1.15) shown at 0.7, under the
+/// tone map's clip, whatever the night's natural light (which would clip the whole disc, the
+/// earthshine too: a surface thousands of times brighter than the moonlit ground).
+fn moon_exposure_ev(time: UtcTime) -> f64 {
+    let e = ephemeris(&observer(), time);
+    let limb = if e.moon_phase_angle_deg < 1.0 {
+        1.0
+    } else {
+        2.0
+    };
+    let peak = moon_disc::moon_surface_luminance_cd_per_m2(e.moon_phase_angle_deg) * limb * 1.15;
+    exposure_ev_showing(peak, 0.7)
+}
+
+/// Renders the moon at `time` in a narrow view aimed at it at the moon's own fixed exposure;
+/// returns the image, the view, the predicted centre (pixels) and radius (pixels).
 fn moon_frame(scene: &mut Scene, time: UtcTime) -> (Image, View, (f64, f64), f64) {
     let moon = cig_render::celestial::moon_view(time.unix_seconds(), site()).expect("moon");
     let view = aimed(moon.direction_ecef, MOON_FOV_DEG, MOON_SIZE_PX);
-    let image = render(scene, time, view, true);
+    let ev = moon_exposure_ev(time);
+    let image = render_with(scene, time, view, |s| s.sky.fixed_exposure_ev = Some(ev));
     let centre = project(&view, moon.direction_ecef);
     let radius_px = moon.angular_radius_deg.to_radians().tan() * view.camera().pixels_per_tangent;
     (image, view, centre, radius_px)
@@ -158,7 +217,11 @@ fn the_full_moon_is_a_whole_disc_of_its_predicted_size_at_its_predicted_place() 
     let (image, view, (cx, cy), radius_px) = moon_frame(&mut scene, time);
     write(&image, "moon-full");
     // The host can switch it off.
-    let off = render_with(&mut scene, time, view, |s| s.moon_visible = false);
+    let ev = moon_exposure_ev(time);
+    let off = render_with(&mut scene, time, view, |s| {
+        s.moon_visible = false;
+        s.sky.fixed_exposure_ev = Some(ev);
+    });
     let b_off = brightness(&off);
     assert!(
         b_off.iter().max() <= Some(&(median(&b_off) + 3)),
@@ -206,6 +269,8 @@ fn a_quarter_moon_is_half_lit_with_its_bright_limb_toward_the_sun() {
         let peak = *b.iter().max().expect("in range");
         let background = median(&b);
         assert!(peak > background + 60, "{name}: {peak} vs {background}");
+        // At the moon's exposure nothing on the disc is clipped.
+        assert!(peak < 3 * 250, "{name}: the disc is clipped ({peak})");
         let (n, x, y) = bright_region(&image, background + (peak - background) / 5);
         let disc_area = std::f64::consts::PI * radius_px * radius_px;
         let fraction = n as f64 / disc_area;
@@ -278,9 +343,21 @@ fn peak_and_centroid(image: &Image) -> (u32, u32, f64, f64) {
     (peak, background, sx / w.max(1e-9), sy / w.max(1e-9))
 }
 
+/// A fixed exposure at which Sirius, the brightest star, peaks at 0.8 (pre-exposed) in the
+/// narrow star views, with its sigma of 0.6 pixel: no star is clipped, so the intensities can
+/// be compared on linear values.
+fn star_exposure_ev() -> f64 {
+    let pixel_rad = 2.0 * (STAR_FOV_DEG / 2.0).to_radians().tan() / f64::from(STAR_SIZE_PX);
+    let sigma = 0.6 * pixel_rad;
+    let peak_cd =
+        stars::illuminance_lux_from_magnitude(-1.46) / (2.0 * std::f64::consts::PI * sigma * sigma);
+    exposure_ev_showing(peak_cd, 0.8)
+}
+
 #[test]
 fn bright_stars_show_at_their_predicted_pixel_at_night_and_vanish_by_day() {
     let mut scene = scene();
+    let ev = star_exposure_ev();
     // Sirius, Capella, Rigel, Procyon, Arcturus: winter nights and summer days.
     for hr in [2491u16, 1708, 1713, 2943, 5340] {
         let night = find_time(
@@ -291,7 +368,8 @@ fn bright_stars_show_at_their_predicted_pixel_at_night_and_vanish_by_day() {
         );
         let dir = star_dir(hr, night);
         let view = aimed(dir, STAR_FOV_DEG, STAR_SIZE_PX);
-        let image = render(&mut scene, night, view, true);
+        let exposed = |s: &mut FrameSnapshot| s.sky.fixed_exposure_ev = Some(ev);
+        let image = render_with(&mut scene, night, view, exposed);
         write(&image, &format!("star-{hr}-night"));
         let (peak, background, x, y) = peak_and_centroid(&image);
         let (ex, ey) = project(&view, dir);
@@ -299,6 +377,7 @@ fn bright_stars_show_at_their_predicted_pixel_at_night_and_vanish_by_day() {
             peak > background + 24,
             "HR {hr}: {peak} vs sky {background}"
         );
+        assert!(peak < 3 * 250, "HR {hr}: clipped at the star exposure");
         assert!(
             (x - ex).hypot(y - ey) < 1.0,
             "HR {hr}: at ({x:.2}, {y:.2}), predicted ({ex:.2}, {ey:.2})"
@@ -317,19 +396,33 @@ fn bright_stars_show_at_their_predicted_pixel_at_night_and_vanish_by_day() {
             })
             .count();
         assert_eq!(far_bright, 0, "HR {hr}: a lone point");
-        // A dimmer star field (the host's intensity) shows it dimmer, or not at all once it
-        // falls under the eye's threshold.
-        let dim = render_with(&mut scene, night, view, |s| s.star_intensity = 0.3);
-        let (peak_dim, background_dim, _, _) = peak_and_centroid(&dim);
+        // A dimmer star field (the host's intensity): these stars stay far over the dark
+        // sky's threshold, so 30 % of the light shows 30 % of the linear radiance.
+        let linear_peak = |image: &Image| {
+            let l = linear_luminance(image);
+            let mut sorted = l.clone();
+            sorted.sort_by(f64::total_cmp);
+            let sky = sorted[sorted.len() / 2];
+            l.iter().fold(0.0f64, |m, v| m.max(*v)) - sky
+        };
+        let dim = render_with(&mut scene, night, view, |s| {
+            exposed(s);
+            s.star_intensity = 0.3;
+        });
+        let ratio = linear_peak(&dim) / linear_peak(&image);
         assert!(
-            peak_dim.saturating_sub(background_dim) + 8 < peak - background,
-            "HR {hr} at 30 %: {peak_dim} vs {peak}"
+            (ratio - 0.3).abs() < 0.04,
+            "HR {hr} at 30 %: {ratio:.3} of the full peak"
         );
         // Switched off, it is gone.
-        let off = render(&mut scene, night, view, false);
+        let off = render_with(&mut scene, night, view, |s| {
+            exposed(s);
+            s.stars_visible = false;
+        });
         let (peak_off, background_off, _, _) = peak_and_centroid(&off);
         assert!(peak_off <= background_off + 3, "HR {hr} off: {peak_off}");
-        // By day the sky's brightness hides it (no gate on the sun: the eye's threshold).
+        // By day the sky's brightness hides it (no gate on the sun: the eye's threshold), at
+        // the day's own exposure, under which the star, drawn, would stand out of the sky.
         let noon = find_time(
             UtcTime::from_calendar(2026, 6, 1, 0, 0, 0.0).expect("in range"),
             600.0,
@@ -379,9 +472,157 @@ fn sirius_comes_out_after_sunset_with_no_gate_on_the_sun() {
         "Sirius after dark: {} above the sky",
         peaks[1]
     );
-    // The catalogue's physics agrees: only in the dark is its magnitude under the limit.
-    let z = cig_scene::lighting::Lighting::at(dark.unix_seconds(), site()).sky_zenith;
-    let sky_cd = f64::from(0.2126 * z[0] + 0.7152 * z[1] + 0.0722 * z[2])
+    // The physics agrees, independently of the shader: Sirius's illuminance at the eye (after
+    // the extinction along its air mass) is under Schaefer's threshold against the sky's
+    // luminance at its place at dusk, over it after dark.
+    let sirius_at_eye_mag = |time: UtcTime| {
+        let h = altitude_deg(star_dir(sirius, time));
+        let air_mass = 1.0 / (h.to_radians().sin() + 0.50572 * (h + 6.07995).powf(-1.6364));
+        -1.46 + cig_render::celestial::extinction_mag_per_air_mass(site().alt_m)[1] * air_mass
+    };
+    let sky_cd_behind = |time: UtcTime| {
+        let e = ephemeris(&observer(), time);
+        let view = to_enu(star_dir(sirius, time)).to_array();
+        let l = cig_environment::Atmosphere::earth().sky_radiance(
+            site().alt_m,
+            view,
+            e.sun.direction_enu,
+        );
+        (0.2126 * l[0] + 0.7152 * l[1] + 0.0722 * l[2]) * cig_environment::SUN_ILLUMINANCE_TOA_LUX
+    };
+    let (dusk_mag, dusk_limit) = (
+        sirius_at_eye_mag(dusk),
+        stars::limiting_magnitude(sky_cd_behind(dusk)),
+    );
+    assert!(
+        dusk_limit < dusk_mag,
+        "dusk: limit {dusk_limit:.2} vs Sirius at {dusk_mag:.2}"
+    );
+    let (dark_mag, dark_limit) = (
+        sirius_at_eye_mag(dark),
+        stars::limiting_magnitude(sky_cd_behind(dark)),
+    );
+    assert!(
+        dark_limit > dark_mag + 4.0,
+        "dark: limit {dark_limit:.2} vs Sirius at {dark_mag:.2}"
+    );
+}
+
+/// Isolated points: pixels that are the brightest of their 5 x 5 neighbourhood and brighter by
+/// over `margin` (sum of the 8-bit channels) than the brightest pixel of its outer ring (the
+/// sky around a point; a star's spread of 0.6 pixel has fallen to 0.4 % there).
+fn isolated_points(image: &Image, margin: u32) -> usize {
+    let b = brightness(image);
+    let (w, h) = (i64::from(image.width), i64::from(image.height));
+    let at = |x: i64, y: i64| b[(y * w + x) as usize];
+    let mut count = 0;
+    for y in 2..h - 2 {
+        for x in 2..w - 2 {
+            let v = at(x, y);
+            let mut ring = 0;
+            let mut peak = true;
+            for dy in -2i64..=2 {
+                for dx in -2i64..=2 {
+                    let n = at(x + dx, y + dy);
+                    if dx.abs() == 2 || dy.abs() == 2 {
+                        ring = ring.max(n);
+                    }
+                    // Ties go to the first pixel in raster order.
+                    let before = dy < 0 || (dy == 0 && dx < 0);
+                    if (dx, dy) != (0, 0) && (n > v || (n == v && before)) {
+                        peak = false;
+                    }
+                }
+            }
+            if peak && v > ring + margin {
+                count += 1;
+            }
+        }
+    }
+    count
+}
+
+#[test]
+fn a_wide_view_of_the_moonless_night_sky_is_full_of_stars_and_the_noon_sky_has_none() {
+    // 60° across at 640 x 480, looking 60° up to the south, at the frame's own (automatic)
+    // exposure: what the dark-adapted eye sees. A moonless winter night with the sun far down.
+    let start = UtcTime::from_calendar(2026, 1, 10, 0, 0, 0.0).expect("in range");
+    let night = find_time(start, 1800.0, 48 * 40, |e| {
+        e.sun.altitude_deg < -24.0 && e.moon.altitude_deg < -10.0
+    });
+    let view = common::view(site(), (180.0, 60.0, 0.0), 60.0, (640, 480));
+    let mut scene = scene();
+    let image = render(&mut scene, night, view, true);
+    write(&image, "wide-night");
+    // The view holds about 6 % of the sphere, so about 55 of the 904 catalogue stars (to
+    // magnitude 4.5); each must show as a point over the sky at the night's exposure.
+    let stars = isolated_points(&image, 24);
+    assert!(stars > 35, "{stars} stars in a moonless 60° view");
+    let off = render(&mut scene, night, view, false);
+    assert_eq!(isolated_points(&off, 24), 0, "stars switched off");
+    // The same view at noon: the sky's brightness hides every star.
+    let noon = find_time(start, 1800.0, 48 * 40, |e| e.sun.altitude_deg > 25.0);
+    let image = render(&mut scene, noon, view, true);
+    write(&image, "wide-noon");
+    assert_eq!(isolated_points(&image, 3), 0, "stars at noon");
+}
+
+#[test]
+fn a_star_fades_out_at_the_eyes_threshold_against_the_sky_behind_it() {
+    // Sirius on a moonless night, dimmed by the host's star field intensity to a chosen
+    // multiple of Schaefer's threshold against the dark sky (the night-sky background, the sun
+    // far down): under the threshold it is not drawn, one magnitude over it, drawn whole.
+    let sirius = 2491;
+    let start = UtcTime::from_calendar(2026, 1, 10, 0, 0, 0.0).expect("in range");
+    let night = find_time(start, 600.0, 6 * 24 * 40, |e| {
+        e.sun.altitude_deg < -24.0
+            && e.moon.altitude_deg < -10.0
+            && altitude_deg(star_dir(sirius, e.time)) > 25.0
+    });
+    let dir = star_dir(sirius, night);
+    let lighting = cig_scene::lighting::Lighting::at(night.unix_seconds(), site());
+    let n = lighting.night_sky_colour;
+    let sky_cd = f64::from(0.2126 * n[0] + 0.7152 * n[1] + 0.0722 * n[2])
         / cig_render::celestial::radiance_per_cd_per_m2();
-    assert!(stars::limiting_magnitude(sky_cd) > -1.46);
+    let h = altitude_deg(dir);
+    let air_mass = 1.0 / (h.to_radians().sin() + 0.50572 * (h + 6.07995).powf(-1.6364));
+    let transmittance = 10f64.powf(
+        -0.4 * cig_render::celestial::extinction_mag_per_air_mass(site().alt_m)[1] * air_mass,
+    );
+    let at_eye_lux = stars::illuminance_lux_from_magnitude(-1.46) * transmittance;
+    // The intensity that puts Sirius at the threshold.
+    let at_threshold = stars::threshold_illuminance_lux(sky_cd) / at_eye_lux;
+    assert!(at_threshold < 0.01, "{at_threshold}");
+    // An exposure at which the brightest case's peak would show at 0.8, unclipped.
+    let view = aimed(dir, STAR_FOV_DEG, STAR_SIZE_PX);
+    let pixel_rad = 2.0 * (STAR_FOV_DEG / 2.0).to_radians().tan() / f64::from(STAR_SIZE_PX);
+    let spread_sr = 2.0 * std::f64::consts::PI * (0.6 * pixel_rad).powi(2);
+    let (under, half, whole) = (0.6, 1.6, 3.5);
+    let ev = exposure_ev_showing(whole * at_threshold * at_eye_lux / spread_sr, 0.8);
+    let mut scene = scene();
+    let mut peak_at = |multiple: f64| {
+        let image = render_with(&mut scene, night, view, |s| {
+            s.sky.fixed_exposure_ev = Some(ev);
+            s.star_intensity = multiple * at_threshold;
+        });
+        let l = linear_luminance(&image);
+        let mut sorted = l.clone();
+        sorted.sort_by(f64::total_cmp);
+        let sky = sorted[sorted.len() / 2];
+        (l.iter().fold(0.0f64, |m, v| m.max(*v)) - sky, image)
+    };
+    let (peak_whole, image) = peak_at(whole);
+    write(&image, "sirius-threshold-whole");
+    // (The view's centre, where the star is, is a pixel corner: the pixels show half the peak.)
+    assert!(peak_whole > 0.25, "one magnitude over: {peak_whole:.3}");
+    // Drawn in proportion, it would show at 0.6 / 3.5 of that: far over the 8-bit step.
+    let (peak_under, _) = peak_at(under);
+    assert!(
+        peak_under < 0.01 * peak_whole,
+        "under the threshold: {peak_under:.4} vs {peak_whole:.3}"
+    );
+    // Between, partly faded: the ramp gives log2(1.6) * 0.75 = 0.51 of the proportional value.
+    let (peak_half, _) = peak_at(half);
+    let faded = peak_half / (peak_whole * half / whole);
+    assert!((0.25..0.8).contains(&faded), "half-way: {faded:.3}");
 }

@@ -131,8 +131,10 @@ fn celestial_transmittance(dir: vec3<f32>) -> vec3<f32> {
     return pow(vec3<f32>(10.0), -0.4 * cel.extinction.rgb * air_mass);
 }
 
-// Linear radiance (light units, before exposure) of the moon and stars toward `dir` (ECEF).
-fn celestial_radiance(dir: vec3<f32>) -> vec3<f32> {
+// Linear radiance (light units, before exposure) of the moon and stars toward `dir` (ECEF), in
+// front of a sky of radiance `sky_behind` (π L, light units, un-exposed): the background the
+// eye's threshold for the stars is set by.
+fn celestial_radiance(dir: vec3<f32>, sky_behind: vec3<f32>) -> vec3<f32> {
     let transmittance = celestial_transmittance(dir);
     if (max(transmittance.r, max(transmittance.g, transmittance.b)) <= 0.0) {
         return vec3<f32>(0.0);
@@ -166,11 +168,16 @@ fn celestial_radiance(dir: vec3<f32>) -> vec3<f32> {
     }
 
     // The stars of this direction's cell, each a small gaussian of unit integral times its
-    // illuminance, faded by the eye's threshold against the sky behind.
-    let sky_cd = dot(g.sky_zenith.rgb, vec3<f32>(0.2126, 0.7152, 0.0722)) / max(cel.stars.x, 1e-30);
+    // illuminance, faded by the eye's threshold against the sky behind it: a star whose
+    // illuminance at the eye (after extinction) is under the threshold is not drawn, one a
+    // magnitude over it is drawn whole.
+    let luma = vec3<f32>(0.2126, 0.7152, 0.0722);
+    let sky_cd = dot(sky_behind, luma) / max(cel.stars.x, 1e-30);
     let threshold = star_threshold_lux(sky_cd);
-    // Sirius, the brightest, gives 9.8e-6 lux: over 1.6x that threshold, no star is seen.
-    if (cel.stars.y > 0.5 && threshold < 1.6e-5) {
+    let star_t = dot(transmittance, luma);
+    // Sirius, the brightest, gives 9.8e-6 lux above the atmosphere: over that threshold, no
+    // star is seen.
+    if (cel.stars.y > 0.5 && threshold < 9.8e-6 * star_t) {
         let c = vec3<f32>(dot(cel.ecef_to_celestial0.xyz, dir),
                           dot(cel.ecef_to_celestial1.xyz, dir),
                           dot(cel.ecef_to_celestial2.xyz, dir));
@@ -187,8 +194,8 @@ fn celestial_radiance(dir: vec3<f32>) -> vec3<f32> {
             let d2 = dot(off, off);
             if (cos_s > 0.0 && d2 < 16.0 * sigma * sigma) {
                 let lux = star.dir_lux.w * cel.stars.w;
-                // Seen when brighter than the threshold: a ramp over about one magnitude.
-                let seen = clamp(log2(lux / threshold) * 0.75 + 0.5, 0.0, 1.0);
+                // 0 at the threshold, 1 one magnitude (a factor 2.512) over it.
+                let seen = clamp(log2(lux * star_t / threshold) * 0.75257, 0.0, 1.0);
                 stars += star.colour.rgb * (lux * seen * norm * exp(-d2 * inv_two_sigma2));
             }
         }

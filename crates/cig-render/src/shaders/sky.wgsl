@@ -32,6 +32,8 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
     var colour = exposed(g.fog_colour.rgb);
     if (g.atmos.y < 0.5) {
         colour = sky_radiance(dir);
+        // The sky behind, un-exposed: the background of the eye's threshold for the stars.
+        let sky_behind = colour / max(g.flags.y, 1e-30);
         let r = eye_radius();
         let mu = dot(dir, g.eye_up.xyz);
         // What the air lets through toward space along this ray (0 into the ground).
@@ -49,7 +51,7 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
         }
         // Moon and stars (celestial.wgsl, the pipeline's @group(2)), dimmed by their own
         // extinction model and hidden below the apparent horizon, under the fog below.
-        colour += exposed(celestial_radiance(dir));
+        colour += exposed(celestial_radiance(dir, sky_behind));
     }
     // Inside the ground fog layer, the sky is seen through the rest of it: up to its top for
     // rays that climb out, through all of it for the others.
