@@ -6,7 +6,8 @@
 //! [`LINE_HALF_WIDTH_PX`] pixels each side of the line (`shaders/screen_lines.wgsl`), so a bolt
 //! 20 km away is as visible as one nearby and never breaks up between pixels, with a Gaussian
 //! glow across it; the quads are depth-tested against the scene (terrain and models in front
-//! hide the bolt, no depth write) and added to the multisampled colour (additive blending: an
+//! hide the bolt; it writes its depth, so the cloud and puff passes after the scene see it at
+//! its distance) and added to the multisampled colour (additive blending: an
 //! emitter over whatever is behind it). The radiance follows the contract of the frame's light
 //! (`pi * L * LIGHTING_UNITS_PER_LUX` for a luminance `L`, [`radiance_units`]) times the
 //! bolt's envelope and the branch's brightness, and is dimmed by the fog along the line of sight
@@ -50,7 +51,7 @@ struct BoltFrame {
 }
 
 /// A pipeline drawing six vertices per instance into the scene pass's multisampled target,
-/// depth-tested (reversed depth) without writing depth, with `blend`.
+/// depth-tested (reversed depth), writing depth when `depth_write`, with `blend`.
 pub(crate) fn overlay_pipeline(
     gpu: &Gpu,
     label: &str,
@@ -58,6 +59,7 @@ pub(crate) fn overlay_pipeline(
     layout: &wgpu::BindGroupLayout,
     colour_format: wgpu::TextureFormat,
     blend: wgpu::BlendState,
+    depth_write: bool,
 ) -> wgpu::RenderPipeline {
     let pipeline_layout = gpu
         .device
@@ -83,7 +85,7 @@ pub(crate) fn overlay_pipeline(
             },
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
+                depth_write_enabled: Some(depth_write),
                 depth_compare: Some(wgpu::CompareFunction::Greater),
                 stencil: Default::default(),
                 bias: Default::default(),
@@ -170,7 +172,17 @@ impl BoltPass {
                 operation: wgpu::BlendOperation::Add,
             },
         };
-        let pipeline = overlay_pipeline(gpu, "bolts", &module, &layout, colour_format, additive);
+        // The bolt writes its depth, so the cloud and puff passes after the scene see it where
+        // it is (in front of an overcast, behind smoke).
+        let pipeline = overlay_pipeline(
+            gpu,
+            "bolts",
+            &module,
+            &layout,
+            colour_format,
+            additive,
+            true,
+        );
         let frame = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("bolt frame"),
             size: std::mem::size_of::<BoltFrame>() as u64,

@@ -112,6 +112,8 @@ impl PrecipitationPass {
                 color: over,
                 alpha: over,
             },
+            // Translucent streaks: no depth (a cloud or puff behind a drop still shows).
+            false,
         );
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("precipitation"),

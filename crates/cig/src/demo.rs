@@ -1,6 +1,7 @@
 //! `cig demo`: builds the demo database when missing, shows the terrain answers and paging a
 //! trainer relies on, then flies a scripted flight over it — a low pass along a valley, a climb,
-//! a view at dusk — rendered off-screen to PNG frames and a contact sheet.
+//! a view at dusk, then the environment: the full moon at night, cumulus from below and above, a
+//! thunderstorm with rain — rendered off-screen to PNG frames and a contact sheet.
 
 use crate::cli::DemoArgs;
 use crate::config::Config;
@@ -298,9 +299,10 @@ fn fly(
     let mut last = *climb_views.last().unwrap_or(&shots[0].1);
     for k in 0..6 {
         last.orientation.heading_deg = heading + 180.0 + f64::from(k) * 30.0;
-        last.orientation.pitch_deg = -4.0;
+        last.orientation.pitch_deg = -10.0;
         shots.push((dusk + f64::from(k) * 240.0, last));
     }
+    let weather = environment_shots(q, &shots, size)?;
     let has_display =
         std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
     if has_display && !args.no_window {
@@ -351,8 +353,8 @@ fn fly(
     let cache = Arc::new(TileCache::new(Arc::clone(db), config.paging.clone())?);
     let gpu = cig_render::Gpu::headless()?;
     println!(
-        "flying: a low pass along the valley heading {heading:.0} deg, a climb to 1800 m, dusk ({} frames of {}x{} on {})",
-        shots.len(),
+        "flying: a low pass along the valley heading {heading:.0} deg, a climb to 1800 m, dusk; then the full moon, cumulus from below and above, a thunderstorm ({} frames of {}x{} on {})",
+        shots.len() + weather.len(),
         size.0,
         size.1,
         gpu.describe()
@@ -360,9 +362,23 @@ fn fly(
     let mut renderer = cig_render::Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
     let started = Instant::now();
     let mut frames = Vec::new();
-    for (i, (time, view)) in shots.iter().enumerate() {
-        let mut snapshot = cig_scene::FrameSnapshot::new(*time, vec![*view]);
-        snapshot.fog = cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, 30_000.0);
+    let clear = shots
+        .iter()
+        .enumerate()
+        .map(|(i, (time, view))| {
+            let mut snapshot = cig_scene::FrameSnapshot::new(*time, vec![*view]);
+            // The haze of the low pass; clearer air for the long views of the climb and dusk
+            // (the classic fog is as thick aloft as at the ground).
+            let visibility_m = if i < 10 { 30_000.0 } else { 80_000.0 };
+            snapshot.fog =
+                cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, visibility_m);
+            snapshot
+        })
+        .collect::<Vec<_>>();
+    for (i, snapshot) in clear.into_iter().chain(weather).enumerate() {
+        let Some(view) = snapshot.views.first() else {
+            continue;
+        };
         cache.update(&[view.eye]);
         cache.wait_idle();
         cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;
@@ -388,6 +404,101 @@ fn fly(
         sheet_path.display()
     );
     Ok(())
+}
+
+/// The environment's shots after the flight (off-screen only): the full moon over the valley
+/// at night, cumulus seen from under its base and from above it, and a thunderstorm with rain.
+fn environment_shots(
+    q: &mut QuerySession,
+    shots: &[(f64, cig_scene::View)],
+    size: (u32, u32),
+) -> anyhow::Result<Vec<cig_scene::FrameSnapshot>> {
+    use cig_environment::clouds::{CloudKind, CloudLayer};
+    let (Some(low), Some(high)) = (shots.first().map(|s| s.1), shots.get(17).map(|s| s.1)) else {
+        return Ok(Vec::new());
+    };
+    let ground_m = q
+        .hot(low.eye.lat_deg, low.eye.lon_deg)
+        .map_or(0.0, |g| g.height_ellipsoid_m());
+    let origin = cig_environment::CloudOrigin {
+        lat_deg: low.eye.lat_deg.round(),
+        lon_deg: low.eye.lon_deg.round(),
+    };
+    let fog = |visibility_m: f64| {
+        cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, visibility_m)
+    };
+    let with_clouds = |snapshot: &mut cig_scene::FrameSnapshot, layers: Vec<CloudLayer>| {
+        snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&layers);
+        snapshot.cloud_layers = layers;
+        snapshot.cloud_origin = origin;
+    };
+    let mut out = Vec::new();
+    // Night: the full moon of 29 June 2026, high over the valley in the small hours.
+    let night = crate::render::parse_time("2026-06-30T08:30:00Z")?;
+    let moon = cig_environment::ephemeris(
+        &cig_environment::Observer::new(low.eye.lat_deg, low.eye.lon_deg, low.eye.alt_m)?,
+        cig_environment::UtcTime::from_unix_seconds(night)?,
+    )
+    .moon;
+    let mut view = high;
+    view.orientation.heading_deg = moon.azimuth_deg;
+    view.orientation.pitch_deg = (moon.apparent_altitude_deg - 12.0).clamp(-10.0, 60.0);
+    let mut snapshot = cig_scene::FrameSnapshot::new(night, vec![view]);
+    snapshot.fog = fog(30_000.0);
+    out.push(snapshot);
+    // Cumulus 1200 m above the valley floor drifting in a 10 m/s westerly: from under it,
+    // and from above it at the climb's end.
+    let cumulus = CloudLayer {
+        wind_speed_mps: 10.0,
+        wind_from_deg: 270.0,
+        ..CloudLayer::new(ground_m + 1200.0, 700.0, 0.45, CloudKind::Cumulus)
+    };
+    let day = shots[0].0;
+    let mut view = low;
+    view.orientation.pitch_deg = 12.0;
+    let mut snapshot = cig_scene::FrameSnapshot::new(day, vec![view]);
+    snapshot.fog = fog(30_000.0);
+    with_clouds(&mut snapshot, vec![cumulus]);
+    out.push(snapshot);
+    let mut view = high;
+    view.eye.alt_m = view.eye.alt_m.max(ground_m + 2600.0);
+    view.orientation.pitch_deg = -20.0;
+    let mut snapshot = cig_scene::FrameSnapshot::new(day + 60.0, vec![view]);
+    snapshot.fog = fog(30_000.0);
+    with_clouds(&mut snapshot, vec![cumulus]);
+    out.push(snapshot);
+    // A thunderstorm late in the afternoon: overcast stratus, 8 mm/h of rain, a bolt 1.2 km ahead.
+    let storm_time = crate::render::parse_time("2026-06-22T01:30:00Z")?;
+    let rain = cig_environment::Precipitation::new(cig_environment::PrecipitationKind::Rain, 8.0)?;
+    let mut storm_view = low;
+    storm_view.orientation.pitch_deg = 6.0;
+    let mut snapshot = cig_scene::FrameSnapshot::new(storm_time, vec![storm_view]);
+    snapshot.fog = fog(rain.combined_visibility_m(20_000.0));
+    snapshot.precipitation = Some(cig_scene::PrecipitationDraw {
+        precipitation: rain,
+        wind_en_mps: [4.0, 0.0],
+        seed: 1,
+    });
+    with_clouds(
+        &mut snapshot,
+        vec![CloudLayer::new(
+            ground_m + 900.0,
+            1200.0,
+            1.0,
+            CloudKind::Stratus,
+        )],
+    );
+    let (bolt, flash_lux, _) = crate::render::lightning_bolt(q, &storm_view, 7, 1200.0);
+    snapshot.bolts = vec![bolt];
+    snapshot.flash_lux = flash_lux;
+    out.push(snapshot);
+    for snapshot in &mut out {
+        for view in &mut snapshot.views {
+            view.width_px = size.0;
+            view.height_px = size.1;
+        }
+    }
+    Ok(out)
 }
 
 /// Frames side by side, `columns` to a row, each halved.
