@@ -33,6 +33,26 @@
 //! like the sky itself (sky.wgsl adds them before its fog). Radiance is physical: a luminance of
 //! L cd/m² shows `π L LIGHTING_UNITS_PER_LUX` ([`radiance_per_cd_per_m2`]).
 //!
+//! The moon's disc alone is adapted locally (the one exception to the frame's single tone map):
+//! the eye looking at the moon adapts to the disc, not to the landscape, so it sees the phase,
+//! the maria and the earthshine of a disc that, under the frame's automatic night exposure, is
+//! 10⁴–10⁵ times the moonlit ground's luminance and far over the tone map's clip. As in the
+//! local ("dodging") operators of Reinhard et al. (2002, "Photographic tone reproduction for
+//! digital images", §3.2) and the eye's local adaptation of Durand and Dorsey (2000,
+//! "Interactive tone mapping"), the disc is compressed about its own adaptation level `A`, the
+//! exposed luminance of an element lit and seen head-on at the current phase (the surface
+//! luminance of `moon_disc`, known on the CPU, after extinction): while `A` is under the
+//! display level `D` = 1 (pre-tone-map; ACES shows 0.8 of its white there) the disc is left
+//! physical, so the pale daytime moon against the blue sky and the moon at dusk are unchanged;
+//! above it each exposed luminance `v` of the disc becomes `D (v / A)^γ`, with γ going from 1 at
+//! `A = D` (continuous with the physical disc) to 0.5 at `A ≥ 100 D` (log-linear in `A / D`).
+//! The brightest limb (2.3 A: the Lommel–Seeliger limb times the maria map's highlands) then
+//! shows at 1.5, under the clip, and the earthshine keeps its order below the lit side, its
+//! ratio to it square-rooted (10⁻³ at a quarter becomes 3 · 10⁻², just visible, as to the naked
+//! eye). The compression is on luminance (the extinction's reddening and the moon's colour are
+//! kept) and is applied before the edge's pixel coverage, so the antialiased edge is a linear
+//! blend with the sky; the stars are not compressed.
+//!
 //! Limits: the maria are a schematic of discs, not a map; libration (up to 8°), the axis's 1.5°
 //! tilt from the ecliptic pole and surface roughness are left out (a Lommel–Seeliger sphere); the
 //! moon and stars are not refracted (geometric directions, like the sun disc), and the
@@ -41,11 +61,12 @@
 //! 60°/640 view, 5.6′, is within the eye's spatial summation area, so the star is as detectable
 //! on a display reproducing the scene's contrast; but in bright twilight its contrast in one
 //! pixel, E / (Ω_pixel B), is only a few percent, fainter than the naked eye's impression); no
-//! planets, Milky Way or zodiacal light. Under the frame's automatic night exposure the moon,
-//! 10⁴–10⁵ times the moonlit ground's luminance, and even its earthshine (about 100 times it)
-//! are over the tone map's clip, so the whole disc shows white and the phase is seen only at a
-//! photographer's exposure for the moon (`SkySettings::fixed_exposure_ev`) — what a camera
-//! exposed for the landscape records, not the eye's local adaptation to the disc.
+//! planets, Milky Way or zodiacal light. The disc's local adaptation is a fixed curve, not a
+//! model of the eye's time course (no adaptation delay when looking from the ground to the moon)
+//! nor of glare: the disc's contrast to the sky beside it is the display's, not the scene's
+//! 10⁴, and the halo a bright moon casts in the eye is not drawn; under a photographer's fixed
+//! exposure (`SkySettings::fixed_exposure_ev`) that keeps the disc under the display level the
+//! disc is physical.
 
 use crate::gpu::Gpu;
 use cig_environment::moon_disc;

@@ -302,6 +302,139 @@ fn a_quarter_moon_is_half_lit_with_its_bright_limb_toward_the_sun() {
     }
 }
 
+/// At the renderer's own automatic night exposure (no fixed exposure: the landscape's, thousands
+/// of times under the moon's luminance) the disc would clip white without the eye's local
+/// adaptation to it (celestial.wgsl's `moon_adapted`): a first-quarter moon must show its lit
+/// half brighter than the earthshine, the lit fraction and bright limb of the ephemeris, and
+/// shading across the lit half (limb darkening, maria), not a flat clipped white.
+#[test]
+fn at_the_automatic_night_exposure_the_quarter_moon_shows_its_phase() {
+    let start = UtcTime::from_calendar(2026, 3, 1, 0, 0, 0.0).expect("in range");
+    let time = find_time(start, 1800.0, 48 * 120, |e| {
+        (0.45..0.55).contains(&e.moon_illuminated_fraction)
+            && e.moon_waxing
+            && e.moon.altitude_deg > 20.0
+            && e.sun.altitude_deg < -18.0
+    });
+    let mut scene = scene();
+    let moon = cig_render::celestial::moon_view(time.unix_seconds(), site()).expect("moon");
+    let view = aimed(moon.direction_ecef, MOON_FOV_DEG, MOON_SIZE_PX);
+    let image = render_with(&mut scene, time, view, |_| {});
+    write(&image, "moon-first-quarter-auto-exposure");
+    let (cx, cy) = project(&view, moon.direction_ecef);
+    let radius_px = moon.angular_radius_deg.to_radians().tan() * view.camera().pixels_per_tangent;
+    let b = brightness(&image);
+    let peak = *b.iter().max().expect("in range");
+    let background = median(&b);
+    let (n, x, y) = bright_region(&image, background + (peak - background) / 5);
+    let fraction = n as f64 / (std::f64::consts::PI * radius_px * radius_px);
+    let k = moon.illuminated_fraction;
+    assert!(
+        (fraction - k).abs() < 0.15,
+        "{fraction:.3} of the disc lit, illuminated fraction {k:.3}"
+    );
+    let moon_dir = unproject(&view, cx, cy);
+    let measured = moon_disc::position_angle_deg(moon_dir, unproject(&view, x, y));
+    let (sun, m) = cig_environment::ephemeris::geocentric_apparent(time);
+    let chi = moon_disc::bright_limb_position_angle_deg(
+        sun.right_ascension_deg,
+        sun.declination_deg,
+        m.right_ascension_deg,
+        m.declination_deg,
+    );
+    let diff = (measured - chi + 540.0).rem_euclid(360.0) - 180.0;
+    assert!(
+        diff.abs() < 20.0,
+        "bright limb at {measured:.1}°, Meeus χ {chi:.1}°"
+    );
+    // The disc's pixels (well inside its edge) on the lit side and on the dark side, along the
+    // axis from the centre to the lit part's centroid.
+    let (ax, ay) = (
+        (x - cx) / (x - cx).hypot(y - cy),
+        (y - cy) / (x - cx).hypot(y - cy),
+    );
+    let (mut lit, mut dark) = (Vec::new(), Vec::new());
+    for (i, v) in b.iter().enumerate() {
+        let px = (i as u32 % image.width) as f64 + 0.5 - cx;
+        let py = (i as u32 / image.width) as f64 + 0.5 - cy;
+        if px.hypot(py) > 0.85 * radius_px {
+            continue;
+        }
+        let along = px * ax + py * ay;
+        if along > 0.3 * radius_px {
+            lit.push(*v);
+        } else if along < -0.3 * radius_px {
+            dark.push(*v);
+        }
+    }
+    let (lit_median, dark_median) = (median(&lit), median(&dark));
+    assert!(
+        lit_median > dark_median + 150,
+        "lit half {lit_median} vs dark half {dark_median}"
+    );
+    // The earthshine is there, just: over the sky beside the disc.
+    assert!(
+        dark_median > background,
+        "dark half {dark_median} vs sky {background}"
+    );
+    // Not a flat clipped white: under a quarter of the lit half at the 8-bit clip, and shading
+    // across it.
+    let clipped = lit.iter().filter(|v| **v >= 3 * 254).count();
+    assert!(
+        clipped * 4 < lit.len(),
+        "{clipped} of {} lit pixels clipped",
+        lit.len()
+    );
+    let mut sorted = lit.clone();
+    sorted.sort_unstable();
+    let (p10, p90) = (sorted[sorted.len() / 10], sorted[sorted.len() * 9 / 10]);
+    eprintln!(
+        "auto exposure: lit fraction {fraction:.3} (k {k:.3}), limb {measured:.1}° (χ {chi:.1}°), \
+         lit median {lit_median}, dark median {dark_median}, sky {background}, peak {peak}, \
+         lit p10 {p10} p90 {p90}, clipped {clipped}/{}",
+        lit.len()
+    );
+    assert!(p90 > p10 + 20, "lit half from {p10} to {p90}: no shading");
+}
+
+/// By day the moon stays physical (no local adaptation while the disc is within the display's
+/// range): at a noon exposure its disc stands over the blue sky by its own exposed luminance,
+/// not by the adapted level (1.0, ten times more) a compressed disc would show.
+#[test]
+fn the_daytime_moon_is_a_pale_physical_disc() {
+    let start = UtcTime::from_calendar(2026, 3, 1, 0, 0, 0.0).expect("in range");
+    let time = find_time(start, 1800.0, 48 * 120, |e| {
+        (0.4..0.9).contains(&e.moon_illuminated_fraction)
+            && e.moon.altitude_deg > 30.0
+            && e.sun.altitude_deg > 30.0
+    });
+    let mut scene = scene();
+    let moon = cig_render::celestial::moon_view(time.unix_seconds(), site()).expect("moon");
+    let view = aimed(moon.direction_ecef, MOON_FOV_DEG, MOON_SIZE_PX);
+    let noon_ev = cig_scene::lighting::exposure_value(1.0e5);
+    let image = render_with(&mut scene, time, view, |s| {
+        s.sky.fixed_exposure_ev = Some(noon_ev)
+    });
+    write(&image, "moon-daytime");
+    let lum = linear_luminance(&image);
+    let mut sorted = lum.clone();
+    sorted.sort_by(f64::total_cmp);
+    let sky = sorted[sorted.len() / 2];
+    let excess = sorted[sorted.len() - 1] - sky;
+    use cig_scene::lighting::{exposure_for_illuminance, illuminance_for_exposure_value};
+    let exposure = exposure_for_illuminance(illuminance_for_exposure_value(noon_ev), 0.0);
+    // An element lit and seen head-on, exposed (the brightest is up to 2.3 times it, less the
+    // extinction's 20 %).
+    let level = moon_disc::moon_surface_luminance_cd_per_m2(moon.phase_angle_deg)
+        * cig_render::celestial::radiance_per_cd_per_m2()
+        * exposure;
+    assert!(level < 0.5, "the daytime disc is within range: {level:.3}");
+    assert!(
+        excess > 0.5 * level && excess < 2.5 * level,
+        "disc over the sky {excess:.3}, physical level {level:.3}, sky {sky:.3}"
+    );
+}
+
 /// The night and noon frames of a narrow view aimed at catalogue star `hr`.
 const STAR_FOV_DEG: f64 = 0.15;
 const STAR_SIZE_PX: u32 = 64;

@@ -80,6 +80,28 @@ fn moon_albedo(n: vec3<f32>, m: vec3<f32>) -> f32 {
     return 1.15 - 0.5 * mare;
 }
 const PI_CEL: f32 = 3.14159265;
+const luma_cel = vec3<f32>(0.2126, 0.7152, 0.0722);
+
+// Display value (pre-tone-map, exposed) to which the disc's adaptation level is brought when it
+// would be brighter: ACES gives 0.8 of its white there.
+const MOON_ADAPTED_LEVEL: f32 = 1.0;
+// Strongest compression of the disc's contrast (the exponent), reached when the adaptation
+// level is 100 times the display's (two decades).
+const MOON_MIN_GAMMA: f32 = 0.5;
+
+// The moon's exposed luminance `v` seen by an eye locally adapted to the disc, whose adaptation
+// level (the exposed luminance of an element lit and seen head-on at this phase) is `level`:
+// unchanged while the level is under MOON_ADAPTED_LEVEL; above it the disc is scaled about its
+// level (v / level brought to MOON_ADAPTED_LEVEL) with its contrast compressed by a power
+// (v / level)^gamma, gamma going from 1 to MOON_MIN_GAMMA over two decades of excess.
+fn moon_adapted(v: f32, level: f32) -> f32 {
+    if (level <= MOON_ADAPTED_LEVEL || v <= 0.0) {
+        return v;
+    }
+    let excess = level / MOON_ADAPTED_LEVEL;
+    let gamma = mix(1.0, MOON_MIN_GAMMA, clamp(log2(excess) / log2(100.0), 0.0, 1.0));
+    return MOON_ADAPTED_LEVEL * pow(v / level, gamma);
+}
 
 // The cube-map cell of a direction (same layout as celestial.rs's `cell_of`).
 fn star_cell(d: vec3<f32>) -> u32 {
@@ -163,7 +185,12 @@ fn celestial_radiance(dir: vec3<f32>, sky_behind: vec3<f32>) -> vec3<f32> {
                 lit += cel.moon_sun.w * 2.0 * cos_i / (cos_i + cos_e);
             }
             lit *= moon_albedo(n, m);
-            out += cel.moon_colour.rgb * lit * moon_cover;
+            // The eye's local adaptation to the disc (see celestial.rs): compressed about the
+            // disc's own level when it would pass the display's range, before the coverage so the
+            // antialiased edge stays a linear blend. Only the moon: the stars are left physical.
+            let seen = max(dot(cel.moon_colour.rgb * transmittance, luma_cel), 1e-30);
+            let adapted = moon_adapted(lit * seen * g.flags.y, cel.moon_sun.w * seen * g.flags.y);
+            out += cel.moon_colour.rgb * (adapted / (seen * max(g.flags.y, 1e-30))) * moon_cover;
         }
     }
 
