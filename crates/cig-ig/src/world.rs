@@ -675,13 +675,21 @@ impl IgWorld {
         let host = self.first_eye.and_then(|eye| {
             let eye_msl = Geodetic::new(eye.lat_deg, eye.lon_deg, eye.alt_m - self.eye_geoid_m);
             self.session.environment().random_lightning_at(eye_msl).map(
-                |(strikes_per_minute, layer)| crate::weather::LightningStorm {
-                    centre_lat_deg: (eye.lat_deg * 10.0).round() / 10.0,
-                    centre_lon_deg: (eye.lon_deg * 10.0).round() / 10.0,
-                    radius_m: 15_000.0,
-                    cloud_base_m: 1500.0,
-                    strikes_per_minute,
-                    seed: 0x4349_4749_0000_0000 | u64::from(layer),
+                |(strikes_per_minute, layer)| {
+                    let (cell_lat, cell_lon) =
+                        ((eye.lat_deg * 10.0).round(), (eye.lon_deg * 10.0).round());
+                    // The cell is in the seed: IGs in different cells must not strike the same
+                    // bolt seed at the same moment (each would drop the other's as a repeat).
+                    let cell = ((cell_lat as i64 as u64 & 0xffff) << 16)
+                        | (cell_lon as i64 as u64 & 0xffff);
+                    crate::weather::LightningStorm {
+                        centre_lat_deg: cell_lat / 10.0,
+                        centre_lon_deg: cell_lon / 10.0,
+                        radius_m: 15_000.0,
+                        cloud_base_m: 1500.0,
+                        strikes_per_minute,
+                        seed: 0x4349_4749_0000_0000 ^ (cell << 8) ^ u64::from(layer),
+                    }
                 },
             )
         });
@@ -745,10 +753,19 @@ impl IgWorld {
         let at = self.first_eye.unwrap_or(Geodetic::new(0.0, 0.0, 0.0));
         // Cloud cover and ceiling from this frame's cloud layers (the operator's, the host's
         // CIGI cloud layers over the eye, or the scenario's; clamped, "no cloud" types left out).
+        // The ceiling is the lowest broken or overcast layer (5/8 or more; Turner's key), its
+        // base above MSL (the terrain under the eye is not subtracted).
         let (cover, ceiling_m) = self
             .clouds
             .iter()
-            .map(|l| (l.coverage, l.base_m))
+            .map(|l| {
+                let ceiling = if l.coverage >= 0.625 {
+                    l.base_m
+                } else {
+                    10_000.0
+                };
+                (l.coverage, ceiling)
+            })
             .fold((0.0, 10_000.0), |(c, b), (c2, b2)| {
                 (f64::max(c, c2), f64::min(b, b2))
             });
@@ -1191,7 +1208,18 @@ impl IgWorld {
                 ..*l
             })
             .collect();
-        snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&self.clouds);
+        // The sky condition counts the layers over the eye (an aircraft above an overcast
+        // keeps its sun).
+        let eye_msl_m = views
+            .first()
+            .map_or(f64::NEG_INFINITY, |v| v.eye.alt_m - self.eye_geoid_m);
+        let overhead: Vec<CloudLayer> = self
+            .clouds
+            .iter()
+            .filter(|l| l.base_m + l.thickness_m > eye_msl_m)
+            .copied()
+            .collect();
+        snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&overhead);
         snapshot.cloud_origin = self.cloud_origin.unwrap_or_else(|| {
             views
                 .first()

@@ -30,6 +30,10 @@ use cig_scene::lighting::Lighting;
 use cig_scene::{Camera, FrameSnapshot};
 use glam::DVec3;
 
+/// Common period of the snow's two sway frequencies (2.1 and 1.7 rad/s: 21 and 17 turns in
+/// 20π s), so wrapping the time sent to the shader never makes a flake jump.
+const SWAY_PERIOD_S: f64 = 20.0 * std::f64::consts::PI;
+
 /// Side of the box of particles around the eye, m.
 pub const BOX_M: f64 = 24.0;
 /// Exposure over which a drop's streak is drawn, s (about the eye's integration time).
@@ -215,7 +219,7 @@ impl PrecipitationPass {
                 FLAKE_DIAMETER_M,
                 opacity,
             ],
-            colour: [lit[0], lit[1], lit[2], t.rem_euclid(1000.0) as f32],
+            colour: [lit[0], lit[1], lit[2], t.rem_euclid(SWAY_PERIOD_S) as f32],
             viewport: [
                 camera.view.width_px as f32,
                 camera.view.height_px as f32,

@@ -44,5 +44,6 @@ fn fs_main(in: BoltOut) -> @location(0) vec4<f32> {
     // Emission through the air: dimmed by the fog, never replaced by its colour.
     let f = fog_factor(length(in.rel)) * fog_layer_transmittance(in.rel);
     let radiance = frame.colour.rgb * in.radiance * glow * f;
-    return vec4<f32>(exposed(radiance), 0.0);
+    // Clamped below the half float's largest value: a bolt at night must not write infinity.
+    return vec4<f32>(min(exposed(radiance), vec3<f32>(60000.0)), 0.0);
 }

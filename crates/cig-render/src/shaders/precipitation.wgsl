@@ -11,7 +11,7 @@ struct Precip {
     velocity: vec4<f32>,
     // x: kind (0 streaks, 1 flakes), y: particles, z: flake diameter (m), w: opacity.
     params: vec4<f32>,
-    // Lit radiance of a particle (rgb, light units), w: seconds for the snow's sway (0..1000).
+    // Lit radiance of a particle (rgb, light units), w: seconds for the snow's sway (0..20π, its period).
     colour: vec4<f32>,
     // Viewport width, height (px), smallest half size (px), seed.
     viewport: vec4<f32>,

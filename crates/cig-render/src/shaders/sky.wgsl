@@ -47,7 +47,7 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
             let limb = (1.0 - SUN_LIMB_U * (1.0 - mu_limb)) / (1.0 - SUN_LIMB_U / 3.0);
             let solid_angle = PI * ATM_SUN_RADIUS * ATM_SUN_RADIUS;
             // Shown as π L (the contract's emitter convention).
-            colour += exposed(g.sun_toa.rgb * view_t * (limb / solid_angle));
+            colour += exposed(g.sun_toa.rgb * view_t * (PI * limb / solid_angle));
         }
         // Moon and stars (celestial.wgsl, the pipeline's @group(2)), dimmed by their own
         // extinction model and hidden below the apparent horizon, under the fog below.

@@ -30,7 +30,10 @@ fn srgb_encode(c: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_main(in: ToneOut) -> @location(0) vec4<f32> {
-    var c = max(textureLoad(scene, vec2<i32>(in.clip.xy), 0).rgb, vec3<f32>(0.0));
+    var c = textureLoad(scene, vec2<i32>(in.clip.xy), 0).rgb;
+    // A NaN or infinity from any pass becomes black or the brightest value, on every GPU.
+    c = select(c, vec3<f32>(0.0), c != c);
+    c = clamp(c, vec3<f32>(0.0), vec3<f32>(65504.0));
     var out: vec3<f32>;
     if (g.flags.z > 0.5) {
         // Keyed test frames: linear radiance, clamped.
