@@ -176,6 +176,21 @@ pub struct CloudLayer {
     pub wind_from_deg: f64,
     /// Seed of the layer's noise.
     pub seed: u64,
+    /// How far the pattern had drifted when the wind last changed (none: it has drifted at
+    /// this wind since the epoch of Unix time).
+    #[serde(default)]
+    pub drift: CloudDrift,
+}
+
+/// The pattern's drift at an instant: the displacement is `offset_m + velocity (t - epoch)`,
+/// so a change of the wind turns the drift at that instant instead of moving the whole
+/// pattern by the new velocity times all the time since 1970.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CloudDrift {
+    /// When the wind last changed, seconds since 1970 UTC.
+    pub epoch_unix_s: f64,
+    /// Displacement (east, north) of the pattern at the epoch, metres.
+    pub offset_m: [f64; 2],
 }
 
 fn invalid(text: String) -> EnvironmentError {
@@ -193,6 +208,7 @@ impl CloudLayer {
             wind_speed_mps: 0.0,
             wind_from_deg: 0.0,
             seed: 1,
+            drift: CloudDrift::default(),
         }
     }
 
@@ -303,13 +319,39 @@ impl CloudLayer {
     /// of the plane at time `t_s`: the position minus the wind's displacement, over the
     /// kind's tile. Computed in f64 so large times and distances keep their precision.
     pub fn noise_coords(&self, east_m: f64, north_m: f64, t_s: f64) -> (f64, f64) {
-        let (ve, vn) = self.wind_velocity_mps();
+        let (de, dn) = self.displacement_m(t_s);
         let per_m = NOISE_SIZE as f64 / self.kind.params().tile_m;
         let size = NOISE_SIZE as f64;
         (
-            ((east_m - ve * t_s) * per_m).rem_euclid(size),
-            ((north_m - vn * t_s) * per_m).rem_euclid(size),
+            ((east_m - de) * per_m).rem_euclid(size),
+            ((north_m - dn) * per_m).rem_euclid(size),
         )
+    }
+
+    /// The pattern's displacement (east, north) at time `t_s`, metres.
+    pub fn displacement_m(&self, t_s: f64) -> (f64, f64) {
+        let (ve, vn) = self.wind_velocity_mps();
+        let dt = t_s - self.drift.epoch_unix_s;
+        (
+            self.drift.offset_m[0] + ve * dt,
+            self.drift.offset_m[1] + vn * dt,
+        )
+    }
+
+    /// This layer following `previous` (the same layer a frame earlier) at time `t_s`: the
+    /// drift carries on from where `previous` had taken the pattern, so a change of the wind
+    /// turns the drift without a jump.
+    pub fn continuing(self, previous: &CloudLayer, t_s: f64) -> CloudLayer {
+        let drift = if previous.wind_velocity_mps() == self.wind_velocity_mps() {
+            previous.drift
+        } else {
+            let (e, n) = previous.displacement_m(t_s);
+            CloudDrift {
+                epoch_unix_s: t_s,
+                offset_m: [e, n],
+            }
+        };
+        CloudLayer { drift, ..self }
     }
 
     /// Density profile over the slab: the extinction coefficient, 1/m, for the noise value
@@ -648,6 +690,48 @@ mod tests {
             }
         }
         covered as f64 / (n * n) as f64
+    }
+
+    #[test]
+    fn a_change_of_wind_turns_the_drift_without_a_jump() {
+        let before = CloudLayer {
+            wind_speed_mps: 10.0,
+            wind_from_deg: 270.0,
+            ..CloudLayer::new(1500.0, 500.0, 0.5, CloudKind::Cumulus)
+        };
+        let t0 = 1.8e9;
+        let after = CloudLayer {
+            wind_speed_mps: 10.5,
+            wind_from_deg: 280.0,
+            ..before
+        }
+        .continuing(&before, t0);
+        // At the change the pattern is where it was; a minute later it has moved by the new
+        // wind's minute only.
+        assert_eq!(after.displacement_m(t0), before.displacement_m(t0));
+        let (e0, n0) = after.displacement_m(t0);
+        let (e1, n1) = after.displacement_m(t0 + 60.0);
+        let (ve, vn) = after.wind_velocity_mps();
+        assert!((e1 - e0 - 60.0 * ve).abs() < 1e-3 && (n1 - n0 - 60.0 * vn).abs() < 1e-3);
+        // Without the continuation, the new wind times all the time since 1970 moves it by
+        // thousands of kilometres.
+        let jump = {
+            let fresh = CloudLayer {
+                drift: CloudDrift::default(),
+                ..after
+            };
+            let (e, n) = fresh.displacement_m(t0);
+            ((e - e0).powi(2) + (n - n0).powi(2)).sqrt()
+        };
+        assert!(jump > 1.0e6, "{jump}");
+        // The next frame's layer (as the host or scenario states it, with no drift) at the
+        // same wind keeps the drift it had.
+        let next = CloudLayer {
+            drift: CloudDrift::default(),
+            ..after
+        }
+        .continuing(&after, t0 + 5.0);
+        assert_eq!(next.drift, after.drift);
     }
 
     #[test]

@@ -64,7 +64,9 @@ pub mod vsop87;
 
 pub use atmosphere::{Atmosphere, AtmosphereParams, SUN_ILLUMINANCE_TOA_LUX};
 pub use clock::{light_state, BodyLight, LightState, SimClock};
-pub use clouds::{cloud_cover_fraction, CloudField, CloudKind, CloudLayer, CloudOrigin};
+pub use clouds::{
+    cloud_cover_fraction, CloudDrift, CloudField, CloudKind, CloudLayer, CloudOrigin,
+};
 pub use ephemeris::{ephemeris, BodyPosition, Ephemeris, Observer};
 pub use events::{day_events, DayEvents};
 pub use illuminance::{natural_illuminance, Illuminance};

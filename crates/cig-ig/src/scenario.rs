@@ -242,6 +242,7 @@ impl ScenarioCloud {
             wind_speed_mps: self.wind_speed_mps,
             wind_from_deg: self.wind_from_deg,
             seed: self.seed,
+            drift: cig_environment::CloudDrift::default(),
         })
     }
 

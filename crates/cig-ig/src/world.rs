@@ -602,7 +602,8 @@ impl IgWorld {
 
     /// This frame's cloud layers: the operator's, else the host's CIGI cloud layers over the
     /// first eye (values clamped into range, each correction told to the host; a Cloud Type of
-    /// 0 means no cloud), else the scenario's.
+    /// 0 means no cloud), else the scenario's. A layer that was there last frame (same seed
+    /// and kind) carries on its drift, so a change of its wind does not move the pattern.
     fn update_clouds(&mut self) {
         if self.cloud_origin.is_none() {
             self.cloud_origin = self.first_eye.map(|e| CloudOrigin {
@@ -610,19 +611,36 @@ impl IgWorld {
                 lon_deg: e.lon_deg.round(),
             });
         }
+        let wanted = self.wanted_clouds();
+        let now_unix_s = self.clock.now().unix_seconds();
+        let previous = std::mem::take(&mut self.clouds);
+        self.clouds = wanted
+            .into_iter()
+            .map(|layer| {
+                match previous
+                    .iter()
+                    .find(|p| p.seed == layer.seed && p.kind == layer.kind)
+                {
+                    Some(p) => layer.continuing(p, now_unix_s),
+                    None => layer,
+                }
+            })
+            .collect();
+    }
+
+    /// The cloud layers the operator, the host or the scenario state now (see `update_clouds`).
+    fn wanted_clouds(&mut self) -> Vec<CloudLayer> {
         if let Some(layers) = &self.operator_clouds {
-            self.clouds.clone_from(layers);
-            return;
+            return layers.clone();
         }
         let eye_msl = self.first_eye.map_or(Geodetic::new(0.0, 0.0, 0.0), |e| {
             Geodetic::new(e.lat_deg, e.lon_deg, e.alt_m - self.eye_geoid_m)
         });
         let host = self.session.environment().cloud_layers_at(eye_msl);
         if host.is_empty() {
-            self.clouds = self.scenario.cloud_layers();
-            return;
+            return self.scenario.cloud_layers();
         }
-        self.clouds.clear();
+        let mut clouds = Vec::new();
         for w in host {
             let Some(kind) = CloudKind::from_cigi(w.cloud_type) else {
                 continue;
@@ -635,14 +653,16 @@ impl IgWorld {
                 wind_speed_mps: f64::from(w.horizontal_wind_speed_mps),
                 wind_from_deg: f64::from(w.wind_direction_deg),
                 seed: u64::from(w.layer_id),
+                drift: cig_environment::CloudDrift::default(),
             }
             .clamped();
             for note in notes {
                 self.session
                     .tell_host(format!("Weather Control layer {}: {note}", w.layer_id));
             }
-            self.clouds.push(layer);
+            clouds.push(layer);
         }
+        clouds
     }
 
     /// Sets the operator's cloud layers (bases above MSL), or gives the clouds back to the

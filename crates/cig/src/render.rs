@@ -190,6 +190,7 @@ pub fn parse_cloud(text: &str, seed: u64) -> anyhow::Result<cig_environment::clo
         wind_speed_mps,
         wind_from_deg,
         seed,
+        drift: cig_environment::CloudDrift::default(),
     };
     layer
         .validate()

@@ -258,6 +258,7 @@ impl PanelState {
                 wind_speed_mps: self.cloud_wind_speed_mps,
                 wind_from_deg: self.cloud_wind_from_deg,
                 seed: 1,
+                drift: cig_environment::CloudDrift::default(),
             }
             .clamped()
             .0
