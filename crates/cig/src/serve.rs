@@ -483,6 +483,11 @@ fn run_windowed(
                         seed: operator_strikes ^ 0x5354_4f52_4d00_0000,
                     },
                 )),
+                cig_render::ObscurantOrder::SetClouds(layer) => {
+                    if let Err(e) = world.set_operator_clouds(layer.map(|l| vec![l])) {
+                        tracing::warn!("the operator's cloud layer is refused: {e}");
+                    }
+                }
             }
         }
         let mut t = totals

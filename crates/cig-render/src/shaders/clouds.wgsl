@@ -171,6 +171,12 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
     let sun_up = dot(sun, up);
     let cos_sun = dot(dir, sun);
     let phase = 0.6 * henyey_greenstein(cos_sun, 0.6) + 0.4 * henyey_greenstein(cos_sun, -0.2);
+    // The moon is a second light, as in `lit` (common.wgsl): the same phase and self-shadow.
+    let moon = g.moon_dir.xyz;
+    let moon_up = dot(moon, up);
+    let moon_lit = luminance(g.moon_colour.rgb) > 0.0 && moon_up > -0.05;
+    let cos_moon = dot(dir, moon);
+    let moon_phase = 0.6 * henyey_greenstein(cos_moon, 0.6) + 0.4 * henyey_greenstein(cos_moon, -0.2);
 
     // Each pixel's samples start at its own fraction of a step (interleaved gradient noise,
     // Jimenez 2014): the slices of a fixed-step march become fine noise instead of bands.
@@ -208,7 +214,12 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
             let zn_seen = clamp((height_above_eye(dir * seen) - layer.place.z) / layer.place.w, 0.0, 1.0);
             let to_top_m = (1.0 - zn_seen) * layer.place.w / max(sun_up, 0.1);
             let direct = max(exp(-sigma * to_top_m), 0.25 * exp(-0.1 * sigma * to_top_m));
-            let light = g.sun_colour.rgb * phase * direct + g.ambient.rgb * (0.7 + 0.3 * zn_seen);
+            var light = g.sun_colour.rgb * phase * direct + g.ambient.rgb * (0.7 + 0.3 * zn_seen);
+            if (moon_lit) {
+                let to_top_moon_m = (1.0 - zn_seen) * layer.place.w / max(moon_up, 0.1);
+                let moon_direct = max(exp(-sigma * to_top_moon_m), 0.25 * exp(-0.1 * sigma * to_top_moon_m));
+                light += g.moon_colour.rgb * moon_phase * moon_direct;
+            }
             let a = 1.0 - exp(-sigma * ds);
             radiance += transmittance * a * light;
             distance_sum += transmittance * a * s;

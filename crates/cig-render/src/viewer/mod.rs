@@ -114,6 +114,9 @@ pub enum ObscurantOrder {
         centre: Geodetic,
         strikes_per_minute: f64,
     },
+    /// The operator's cloud layer (base above mean sea level), or `None`: the clouds go back
+    /// to the host and the scenario. Sent when the panel's layer changes.
+    SetClouds(Option<cig_environment::CloudLayer>),
 }
 
 /// Without a driver, the panel's weather: rain or snow around the eye, and the last
@@ -346,6 +349,7 @@ pub fn run_viewer_driven(
         driver,
         effects: None,
         operator_plumes: Vec::new(),
+        sent_cloud_layer: None,
         own_bolt: None,
         own_strikes: 0,
         puff_scratch: Vec::new(),
@@ -376,6 +380,8 @@ struct App {
     /// The stand-alone viewer's own obscurants (a driven viewer's belong to its driver).
     effects: Option<cig_effects::EffectSystem>,
     operator_plumes: Vec<cig_effects::EffectHandle>,
+    /// With a driver: the panel's cloud layer last sent to it (`None`: nothing sent yet).
+    sent_cloud_layer: Option<Option<cig_environment::CloudLayer>>,
     /// Without a driver: the operator's last lightning strike (its time and bolt).
     own_bolt: Option<(f64, cig_scene::bolt::MadeBolt)>,
     own_strikes: u64,
@@ -745,6 +751,14 @@ impl App {
                 }),
             }
         }
+        // The panel's cloud layer goes to the world whenever it changes (with a driver, the
+        // world's clouds are the snapshot's, so the host's weather answers and the smoke's
+        // ceiling see the operator's layer too).
+        let cloud_layer = self.panel.cloud_layer();
+        if self.driver.is_some() && self.sent_cloud_layer != Some(cloud_layer) {
+            orders.push(ObscurantOrder::SetClouds(cloud_layer));
+            self.sent_cloud_layer = Some(cloud_layer);
+        }
         let mut snapshot = match self.driver.as_mut() {
             Some(driver) => {
                 let snapshot = driver(&ViewerTick {
@@ -803,8 +817,8 @@ impl App {
                 lon_deg: self.options.eye.lon_deg.round(),
             };
         }
-        // The operator's cloud layer wins over the driver's.
-        if let Some(layer) = self.panel.cloud_layer() {
+        // Without a driver, the operator's cloud layer is the frame's.
+        if let (None, Some(layer)) = (self.driver.as_ref(), cloud_layer) {
             snapshot.cloud_layers = vec![layer];
             snapshot.cloud_cover_fraction =
                 cig_environment::cloud_cover_fraction(&snapshot.cloud_layers);
@@ -1235,7 +1249,8 @@ fn run_own_obscurants(
             // Weather orders are not the obscurants' ([`own_weather`]).
             ObscurantOrder::SetPrecipitation(_)
             | ObscurantOrder::StrikeLightning { .. }
-            | ObscurantOrder::SetStorm { .. } => {}
+            | ObscurantOrder::SetStorm { .. }
+            | ObscurantOrder::SetClouds(_) => {}
         }
     }
     note

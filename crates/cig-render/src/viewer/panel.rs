@@ -103,7 +103,8 @@ pub struct PanelState {
     pub wind_from_deg: f64,
     /// A line about the last obscurant order (e.g. why it could not be done).
     pub obscurant_note: String,
-    /// One cloud layer: on, base (metres above the ellipsoid), thickness, coverage, kind, and
+    /// One cloud layer: on, base (metres above mean sea level; the stand-alone viewer draws it
+    /// above the ellipsoid), thickness, coverage, kind, and
     /// the wind it drifts in. When on, it replaces the world's clouds.
     pub clouds: bool,
     pub cloud_base_m: f64,
