@@ -33,7 +33,7 @@ pub enum Command {
     Bench(BenchCommand),
     /// Render one frame off-screen to a PNG file.
     #[command(allow_negative_numbers = true)]
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Fly over a database in a window, with an operator panel (needs a display).
     #[command(allow_negative_numbers = true)]
     View(ViewArgs),
