@@ -309,13 +309,16 @@ impl CloudPass {
         if !self.usable {
             return 0;
         }
-        let layers: Vec<CloudLayer> = snapshot
+        let mut layers: Vec<CloudLayer> = snapshot
             .cloud_layers
             .iter()
             .filter(|l| l.validate().is_ok() && l.coverage > 0.0)
             .take(MAX_CLOUD_LAYERS)
             .copied()
             .collect();
+        // Lowest first: the march takes the layers in the order a ray meets them (upward rays
+        // from the first, downward from the last), so the nearer layer composites in front.
+        layers.sort_by(|a, b| a.base_m.total_cmp(&b.base_m));
         if layers.is_empty() {
             return 0;
         }

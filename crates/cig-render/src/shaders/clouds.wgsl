@@ -185,7 +185,10 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
     var radiance = vec3<f32>(0.0);
     var distance_sum = 0.0;
     var weight_sum = 0.0;
-    for (var i = 0; i < count; i++) {
+    // Layers come lowest first: a rising ray meets them in that order, a falling one in the
+    // reverse order (front-to-back compositing needs the nearer layer first).
+    for (var j = 0; j < count; j++) {
+        let i = select(count - 1 - j, j, dz >= 0.0);
         let layer = c.layers[i];
         let seg = slab_segment(dz, layer.place.z, layer.place.z + layer.place.w);
         let s0 = seg.x;
