@@ -187,7 +187,7 @@ pub struct IgWorld {
     clouds: Vec<CloudLayer>,
     /// The operator's cloud layers, when set (they win over the host's and the scenario's).
     operator_clouds: Option<Vec<CloudLayer>>,
-    /// The clouds' world-fixed noise origin: the first eye's whole degrees, kept for the run.
+    /// The clouds' world-fixed noise origin: the database centre's whole degrees, kept for the run.
     cloud_origin: Option<CloudOrigin>,
     /// Lightning: the scenario's storm and the bolts lit now.
     lightning: crate::weather::Lightning,
@@ -595,6 +595,15 @@ impl IgWorld {
         self.eye_geoid_m = self
             .first_eye
             .map_or(0.0, |e| query.geoid_undulation_m(e.lat_deg, e.lon_deg));
+        if self.cloud_origin.is_none() {
+            // The clouds' pattern is anchored at the database's centre (whole degrees): every
+            // channel and IG on this database draws the same clouds, wherever its eye starts.
+            let grid = query.cache().database().layout().grid;
+            self.cloud_origin = Some(CloudOrigin {
+                lat_deg: (0.5 * (grid.south_lat_deg + grid.north_lat_deg())).round(),
+                lon_deg: (0.5 * (grid.west_lon_deg + grid.east_lon_deg())).round(),
+            });
+        }
         self.update_clouds();
         self.step_lightning(query);
         self.report_host_precipitation();
@@ -605,12 +614,6 @@ impl IgWorld {
     /// 0 means no cloud), else the scenario's. A layer that was there last frame (same seed
     /// and kind) carries on its drift, so a change of its wind does not move the pattern.
     fn update_clouds(&mut self) {
-        if self.cloud_origin.is_none() {
-            self.cloud_origin = self.first_eye.map(|e| CloudOrigin {
-                lat_deg: e.lat_deg.round(),
-                lon_deg: e.lon_deg.round(),
-            });
-        }
         let wanted = self.wanted_clouds();
         let now_unix_s = self.clock.now().unix_seconds();
         let previous = std::mem::take(&mut self.clouds);

@@ -444,7 +444,8 @@ fn demo_flies_to_png_frames_without_a_display_and_in_a_window_with_one() {
                 .unwrap_or(false)
         })
         .count();
-    assert_eq!(frames, 24);
+    // 24 of the flight, then the environment: moon, cumulus from below and above, a storm.
+    assert_eq!(frames, 28);
     let sheet = std::fs::read(out.join("contact-sheet.png")).expect("contact sheet");
     assert_eq!(&sheet[1..4], b"PNG");
 
