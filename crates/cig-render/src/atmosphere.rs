@@ -288,36 +288,14 @@ impl AtmosphereGpu {
         let scene_bind = bind("atmosphere (scene)", &sky_view);
         let lut_bind = bind("atmosphere (sky-view pass)", &placeholder);
         let module = atmosphere_shader(gpu, "sky view", include_str!("shaders/sky_view.wgsl"));
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("sky view"),
-            bind_group_layouts: &[Some(globals_layout), Some(&layout)],
-            immediate_size: 0,
-        });
-        let sky_view_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("sky view"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: HDR_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let sky_view_pipeline = crate::gpu::full_screen_pipeline(
+            gpu,
+            "sky view",
+            &module,
+            &[globals_layout, &layout],
+            HDR_FORMAT,
+            None,
+        );
         AtmosphereGpu {
             layout,
             scene_bind,
@@ -383,36 +361,14 @@ impl ToneMap {
             }],
         });
         let module = crate::renderer::shader(gpu, "tone map", include_str!("shaders/tonemap.wgsl"));
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("tone map"),
-            bind_group_layouts: &[Some(globals_layout), Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("tone map"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: target,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = crate::gpu::full_screen_pipeline(
+            gpu,
+            "tone map",
+            &module,
+            &[globals_layout, &layout],
+            target,
+            None,
+        );
         ToneMap { layout, pipeline }
     }
 

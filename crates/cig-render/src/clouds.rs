@@ -36,7 +36,7 @@
 //! against terrain silhouettes (a halo of up to two pixels) and the shade's edges; clouds beyond `FAR_M` (80 km) are not drawn; on wgpu's GL backend,
 //! which cannot sample multisampled depth, clouds are not drawn at all (logged once).
 
-use crate::gpu::Gpu;
+use crate::gpu::{full_screen_pipeline, Gpu};
 use crate::renderer::{shader, uniform_entry};
 use cig_environment::clouds::{CloudLayer, CloudNoise, CloudShape, MAX_CLOUD_LAYERS, NOISE_SIZE};
 use cig_scene::view::NEAR_PLANE_M;
@@ -159,7 +159,7 @@ impl CloudPass {
                     gpu,
                     "clouds",
                     &shader(gpu, "clouds", &source),
-                    &layout,
+                    &[&layout],
                     HALF_FORMAT,
                     None,
                 ),
@@ -465,50 +465,6 @@ impl CloudPass {
     }
 }
 
-/// A full-screen triangle pipeline (`vs_main`, `fs_main`) into one single-sample target.
-fn full_screen_pipeline(
-    gpu: &Gpu,
-    label: &str,
-    module: &wgpu::ShaderModule,
-    layout: &wgpu::BindGroupLayout,
-    format: wgpu::TextureFormat,
-    blend: Option<wgpu::BlendState>,
-) -> wgpu::RenderPipeline {
-    let pipeline_layout = gpu
-        .device
-        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(label),
-            bind_group_layouts: &[Some(layout)],
-            immediate_size: 0,
-        });
-    gpu.device
-        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(label),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format,
-                    blend,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
-}
-
 /// The composite: upsamples the half-resolution frame onto a `colour_format` target.
 fn composite_pipeline(
     gpu: &Gpu,
@@ -523,7 +479,7 @@ fn composite_pipeline(
             "clouds composite",
             include_str!("shaders/clouds_composite.wgsl"),
         ),
-        layout,
+        &[layout],
         colour_format,
         // frame = clouds + frame * alpha; the frame's alpha stays.
         Some(wgpu::BlendState {

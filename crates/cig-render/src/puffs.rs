@@ -158,13 +158,6 @@ impl PuffPass {
             "puff composite",
             include_str!("shaders/puff_composite.wgsl"),
         );
-        let layout = |label, bind: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: &[Some(bind)],
-                immediate_size: 0,
-            })
-        };
         let additive = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,
             dst_factor: wgpu::BlendFactor::One,
@@ -232,43 +225,26 @@ impl PuffPass {
             multiview_mask: None,
             cache: None,
         });
-        let composite_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("puff composite"),
-            layout: Some(&layout("puff composite", &composite_layout)),
-            vertex: wgpu::VertexState {
-                module: &composite_module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &composite_module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: colour_format,
-                    // frame = composite + frame * T (alpha carries T); the frame's alpha stays.
-                    blend: Some(wgpu::BlendState {
-                        color: wgpu::BlendComponent {
-                            src_factor: wgpu::BlendFactor::One,
-                            dst_factor: wgpu::BlendFactor::SrcAlpha,
-                            operation: wgpu::BlendOperation::Add,
-                        },
-                        alpha: wgpu::BlendComponent {
-                            src_factor: wgpu::BlendFactor::Zero,
-                            dst_factor: wgpu::BlendFactor::One,
-                            operation: wgpu::BlendOperation::Add,
-                        },
-                    }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
+        // frame = composite + frame * T (alpha carries T); the frame's alpha stays.
+        let composite_pipeline = crate::gpu::full_screen_pipeline(
+            gpu,
+            "puff composite",
+            &composite_module,
+            &[&composite_layout],
+            colour_format,
+            Some(wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::SrcAlpha,
+                    operation: wgpu::BlendOperation::Add,
+                },
+                alpha: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::Zero,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                },
             }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
         let capacity = 1024;
         PuffPass {
             mode,
