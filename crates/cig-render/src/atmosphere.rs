@@ -22,6 +22,7 @@
 //! air); the moon-lit sky uses the sun's spectrum.
 
 use crate::gpu::Gpu;
+use crate::renderer::{sampler_entry, texture_entry};
 use cig_environment::atmosphere::{Atmosphere, Lut, SUN_ANGULAR_RADIUS_DEG};
 
 /// Format of the scene target (pre-exposed linear radiance).
@@ -177,28 +178,6 @@ pub(crate) struct AtmosphereGpu {
     globals_bind: wgpu::BindGroup,
 }
 
-fn sampled_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
-fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-        count: None,
-    }
-}
-
 impl AtmosphereGpu {
     /// Uploads the tables (computed once per process) and builds the sky-view pass;
     /// `globals_layout` and `globals_bind` are group 0 (the frame's `Globals`).
@@ -250,9 +229,9 @@ impl AtmosphereGpu {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("atmosphere"),
             entries: &[
-                sampled_entry(0),
-                sampled_entry(1),
-                sampled_entry(2),
+                texture_entry(0),
+                texture_entry(1),
+                texture_entry(2),
                 sampler_entry(3),
                 sampler_entry(4),
             ],

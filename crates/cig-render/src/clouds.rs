@@ -37,7 +37,7 @@
 //! which cannot sample multisampled depth, clouds are not drawn at all (logged once).
 
 use crate::gpu::{full_screen_pipeline, Gpu};
-use crate::renderer::{shader, uniform_entry};
+use crate::renderer::{sampler_entry, shader, texture_entry, uniform_entry};
 use cig_environment::clouds::{CloudLayer, CloudNoise, CloudShape, MAX_CLOUD_LAYERS, NOISE_SIZE};
 use cig_scene::view::NEAR_PLANE_M;
 use cig_scene::{Camera, FrameSnapshot};
@@ -98,22 +98,8 @@ impl CloudPass {
             entries: &[
                 uniform_entry(0),
                 uniform_entry(1),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
+                texture_entry(2),
+                sampler_entry(3),
                 wgpu::BindGroupLayoutEntry {
                     binding: 4,
                     visibility: wgpu::ShaderStages::FRAGMENT,
@@ -133,25 +119,7 @@ impl CloudPass {
         );
         let composite_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("clouds composite"),
-            entries: &[
-                uniform_entry(0),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
+            entries: &[uniform_entry(0), texture_entry(1), sampler_entry(2)],
         });
         let pipelines = usable.then(|| {
             (

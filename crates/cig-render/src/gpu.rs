@@ -164,7 +164,7 @@ pub fn map_for_reading(gpu: &Gpu, slice: &wgpu::BufferSlice<'_>) -> Result<(), R
 
 /// A 2-D render target of `size` pixels: `format`, `sample_count` samples, usable as a render
 /// attachment and for `usage`, also viewable through `view_formats`.
-pub(crate) fn render_target(
+pub fn render_target(
     device: &wgpu::Device,
     label: &str,
     (width, height): (u32, u32),

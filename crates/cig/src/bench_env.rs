@@ -138,20 +138,15 @@ pub fn run(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
     let path = database(args, config)?;
     let db = Arc::new(cig_terrain_io::store::open_database(&path)?);
     let gpu = cig_render::Gpu::headless()?;
-    let target_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("bench target"),
-        size: wgpu::Extent3d {
-            width: size.0,
-            height: size.1,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: cig_render::FRAME_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
+    let target_texture = cig_render::gpu::render_target(
+        &gpu.device,
+        "bench target",
+        size,
+        cig_render::FRAME_FORMAT,
+        1,
+        wgpu::TextureUsages::empty(),
+        &[],
+    );
     let target = target_texture.create_view(&Default::default());
     let cache = Arc::new(TileCache::new(Arc::clone(&db), config.paging.clone())?);
     let mut session = QuerySession::new(Arc::clone(&cache));

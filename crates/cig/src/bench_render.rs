@@ -183,20 +183,15 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     );
     let database = Arc::new(cig_terrain_io::store::open_database(&args.db)?);
     let gpu = cig_render::Gpu::headless()?;
-    let target_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("bench target"),
-        size: wgpu::Extent3d {
-            width: size.0,
-            height: size.1,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: cig_render::FRAME_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
+    let target_texture = cig_render::gpu::render_target(
+        &gpu.device,
+        "bench target",
+        size,
+        cig_render::FRAME_FORMAT,
+        1,
+        wgpu::TextureUsages::empty(),
+        &[],
+    );
     let target = target_texture.create_view(&Default::default());
     let dt_s = 1.0 / 60.0;
     let leg = pass_leg(&database, 300.0, args.frames as f64 * dt_s);
