@@ -44,9 +44,7 @@
 //! projection spreads a length over up to `1 / cos^2` of the angle off the axis more pixels
 //! (1.33 at the side of a 60 degree view), a deliberate choice: a measure by distance alone
 //! gives every channel of a multi-channel display, and every heading, the same surface (no
-//! swimming when the view turns, no seam between channels). Within two cells of the
-//! database's last row or column the grid's vertices are clamped onto the edge and their morph
-//! targets slide along it, so the edge recedes by up to a cell while a node morphs. Node boxes
+//! swimming when the view turns, no seam between channels). Node boxes
 //! sample 9 points per height, which is conservative for nodes up to about 1000 km across. The
 //! arena holds at most about 50 000 nodes between frames (about 30 MB); past that it is emptied
 //! and rebuilt.
@@ -1293,17 +1291,22 @@ mod tests {
             let span = layout.finest_span(node.key.level);
             for r in r0..=(r0 + span).min(grid.rows as u64 - 1) {
                 for c in c0..=(c0 + span).min(grid.cols as u64 - 1) {
-                    // Within two cells of the database's last row or column the mesh's
-                    // vertices are clamped onto the edge and their morph targets (midpoints
-                    // of clamped neighbours) move along it: the edge recedes by up to a cell
-                    // while morphing, a known limit (module docs), not measured here.
-                    let (last_row, last_col) = (grid.rows as u64 - 1, grid.cols as u64 - 1);
-                    if r + 2 * step > last_row || c + 2 * step > last_col {
-                        continue;
-                    }
-                    let (fi, fj) = ((r - r0) as f64 / step as f64, (c - c0) as f64 / step as f64);
-                    let (i, j) = ((fi as usize).min(n - 1), (fj as usize).min(n - 1));
-                    let (u, v) = (fi - i as f64, fj - j as f64);
+                    // The mesh's rows and columns stop at the database's last post (its
+                    // vertices past the edge are clamped there): a post in the last cell lies
+                    // a fraction of that shorter cell along it.
+                    let along = |p: u64, p0: u64, last: u64| {
+                        let k = (((p - p0) / step) as usize).min(n - 1);
+                        let start = (p0 + k as u64 * step).min(last);
+                        let end = (p0 + (k as u64 + 1) * step).min(last);
+                        let fraction = if end > start {
+                            (p - start) as f64 / (end - start) as f64
+                        } else {
+                            0.0
+                        };
+                        (k, fraction)
+                    };
+                    let (i, u) = along(r, r0, grid.rows as u64 - 1);
+                    let (j, v) = along(c, c0, grid.cols as u64 - 1);
                     let (sw, se) = (drawn[i * s + j], drawn[i * s + j + 1]);
                     let (nw, ne) = (drawn[(i + 1) * s + j], drawn[(i + 1) * s + j + 1]);
                     // The mesh's triangles: (sw, se, ne) east of the diagonal, (sw, ne, nw)
@@ -1334,6 +1337,97 @@ mod tests {
             }
         }
         (worst_px, posts)
+    }
+
+    /// No pop when a parent takes over from its children: a child's fully morphed vertices lie
+    /// on the parent's own mesh (built from the parent's tile), everywhere, the nodes that
+    /// reach past the database's last row and column included (their vertices are clamped
+    /// onto the edge, and stay on it).
+    #[test]
+    fn fully_morphed_children_lie_on_their_parents_mesh() {
+        let db = rough_database();
+        let cache = cache_with(&db, 0..db.layout().levels, false);
+        let lod = lod_for(&db);
+        let layout = &lod.layout;
+        let n = layout.node_cells as usize;
+        let s = n + 1;
+        let build = |key: NodeKey| {
+            let tile_key = layout.tile_of(key, key.level);
+            let tile = cache.resident(tile_key).expect("every tile is resident");
+            crate::terrain_mesh::build_node_mesh(
+                layout,
+                lod.geoid(),
+                key,
+                (tile_key, &tile),
+                None,
+                0.0,
+            )
+        };
+        let grid = layout.pyramid.grid;
+        let (last_row, last_col) = ((grid.rows - 1) as f64, (grid.cols - 1) as f64);
+        let (mut checked, mut at_edge, mut worst_m) = (0usize, 0usize, 0.0f64);
+        for level in 0..layout.pyramid.levels - 1 {
+            let (tiles_rows, tiles_cols) = layout.pyramid.tiles_at(level);
+            let nodes_per_tile = layout.pyramid.tile_cells / layout.node_cells;
+            for row in 0..tiles_rows * nodes_per_tile {
+                for col in 0..tiles_cols * nodes_per_tile {
+                    let key = NodeKey { level, row, col };
+                    if !layout.exists(key) {
+                        continue;
+                    }
+                    let (child, parent) = (build(key), build(key.parent()));
+                    let parent_vertex = |a: usize, b: usize| {
+                        let v = parent.vertices[a * s + b].position.map(f64::from);
+                        parent.centre_ecef + DVec3::from(v)
+                    };
+                    let (r0, c0) = layout.finest_origin(key);
+                    let (pr0, pc0) = layout.finest_origin(key.parent());
+                    let step = (1u64 << level) as f64;
+                    // The parent cell (and fraction) holding a finest-grid row or column.
+                    let cell = |own: f64, p0: f64, last: f64| {
+                        let k = (((own - p0) / (2.0 * step)) as usize).min(n - 1);
+                        let start = (p0 + k as f64 * 2.0 * step).min(last);
+                        let end = (p0 + (k + 1) as f64 * 2.0 * step).min(last);
+                        let f = if end > start {
+                            (own - start) / (end - start)
+                        } else {
+                            0.0
+                        };
+                        (k, f)
+                    };
+                    for i in 0..s {
+                        for j in 0..s {
+                            let own_row = (r0 as f64 + i as f64 * step).min(last_row);
+                            let own_col = (c0 as f64 + j as f64 * step).min(last_col);
+                            let (a, v) = cell(own_row, pr0 as f64, last_row);
+                            let (b, u) = cell(own_col, pc0 as f64, last_col);
+                            let (sw, se) = (parent_vertex(a, b), parent_vertex(a, b + 1));
+                            let (nw, ne) = (parent_vertex(a + 1, b), parent_vertex(a + 1, b + 1));
+                            let on_parent = if u >= v {
+                                sw + (se - sw) * u + (ne - se) * v
+                            } else {
+                                sw + (nw - sw) * v + (ne - nw) * u
+                            };
+                            let target = child.vertices[i * s + j].morph_target.map(f64::from);
+                            let target = child.centre_ecef + DVec3::from(target);
+                            worst_m = worst_m.max((target - on_parent).length());
+                            checked += 1;
+                            if own_row == last_row || own_col == last_col {
+                                at_edge += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            checked > 10_000 && at_edge > 500,
+            "{checked} vertices, {at_edge} on the edge"
+        );
+        assert!(
+            worst_m < 0.02,
+            "a fully morphed vertex is {worst_m} m off its parent's mesh"
+        );
     }
 
     /// The level-of-detail guarantee, checked on the drawn surface itself: everywhere, morph

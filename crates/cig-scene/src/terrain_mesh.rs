@@ -3,11 +3,15 @@
 //! Algorithm: a node of level `L` is a regular `(n + 1) x (n + 1)` grid of the level's posts
 //! placed on the WGS84 ellipsoid (heights above mean sea level plus the database's geoid), in
 //! ECEF relative to the node's centre so that single precision holds centimetres. Each vertex
-//! carries a morph target: its position on the parent's grid, i.e. the midpoint of its even
+//! carries a morph target: its place on the parent's mesh, i.e. the midpoint of its even
 //! neighbours (along the south-west to north-east diagonal for cell centres, which is the
 //! diagonal every triangle of the database uses). At full morph the node's surface is exactly
 //! its parent's, so a node morphs continuously into its parent (CDLOD, Strugar 2010) and a fully
-//! morphed node meets its coarser neighbour exactly. Skirts (a strip hanging down from each edge) hide
+//! morphed node meets its coarser neighbour exactly. Where a node reaches past the database's
+//! last row or column its vertices are clamped onto the edge, and so are the parent's; the
+//! target is then taken on the parent's clamped cells with the parent level's heights, so the
+//! edge stays where it is while the node morphs (the midpoint rule moved it inwards by up to a
+//! cell and, with the finer level's heights, left a step of up to the parent's error there). Skirts (a strip hanging down from each edge) hide
 //! the gaps left where neighbours differ by more than one level or are drawn from different
 //! data while tiles load. Normals and colours are sampled at twice the vertex density, from the
 //! next finer level when it is resident, for per-pixel lighting.
@@ -19,6 +23,7 @@
 use crate::lod::{NodeKey, NodeLayout};
 use cig_geo::{metres_per_degree, EnuFrame, Geodetic};
 use cig_terrain::database::GeoidLookup;
+use cig_terrain::raster::triangulated_height;
 use cig_terrain::tile::Tile;
 use cig_terrain::{Material, TileKey};
 use glam::DVec3;
@@ -158,6 +163,28 @@ impl<'a> Sampler<'a> {
         self.tile.surface_height(fi, fj)
     }
 
+    /// The surface of the next coarser level as this tile's even posts define it (level
+    /// `L + 1` keeps every other post of level `L`), on finest-grid indices.
+    fn coarser_height_msl_m(&self, row: f64, col: f64) -> f64 {
+        let (fi, fj) = self.local(row, col);
+        let max_cell = (self.tile.cells() / 2).max(1) - 1;
+        let (ci, cj) = (
+            ((fi / 2.0).floor().max(0.0) as usize).min(max_cell),
+            ((fj / 2.0).floor().max(0.0) as usize).min(max_cell),
+        );
+        let v = (fi / 2.0 - ci as f64).clamp(0.0, 1.0);
+        let u = (fj / 2.0 - cj as f64).clamp(0.0, 1.0);
+        let (i, j) = (2 * ci, 2 * cj);
+        triangulated_height(
+            self.tile.elevation(i, j),
+            self.tile.elevation(i, j + 2),
+            self.tile.elevation(i + 2, j),
+            self.tile.elevation(i + 2, j + 2),
+            u,
+            v,
+        )
+    }
+
     fn material(&self, row: f64, col: f64) -> Material {
         let (fi, fj) = self.local(row, col);
         self.tile
@@ -204,10 +231,12 @@ pub fn build_node_mesh(
     // Grid positions (ECEF relative to the centre, double precision until the end).
     let mut rel = vec![DVec3::ZERO; s * s];
     let (mut h_min, mut h_max) = (f64::INFINITY, f64::NEG_INFINITY);
+    let rel_row = |i: usize| (r0 + i as f64 * step).min(max_row);
+    let rel_col = |j: usize| (c0 + j as f64 * step).min(max_col);
     for i in 0..s {
-        let row = (r0 + i as f64 * step).min(max_row);
+        let row = rel_row(i);
         for j in 0..s {
-            let col = (c0 + j as f64 * step).min(max_col);
+            let col = rel_col(j);
             let (lat, lon) = layout.lat_lon_of_finest(row, col);
             let h = data_sampler.height_msl_m(row, col);
             h_min = h_min.min(h);
@@ -216,12 +245,54 @@ pub fn build_node_mesh(
             rel[i * s + j] = ecef - centre_ecef;
         }
     }
+    // Morph targets: each vertex's place on the parent's mesh, i.e. on the parent's grid of
+    // vertices (every other one of this node's, clamped onto the database's edge the same way)
+    // with the parent level's heights, interpolated across the parent cell's triangles. Away
+    // from the edge this is the midpoint of the vertex's even neighbours (along the south-west
+    // to north-east diagonal for cell centres); at the edge it keeps the vertex where it is
+    // horizontally, so the edge does not recede while a node morphs.
+    let half = n as usize / 2;
+    let parent_row = |a: usize| (r0 + (2 * a) as f64 * step).min(max_row);
+    let parent_col = |b: usize| (c0 + (2 * b) as f64 * step).min(max_col);
+    let parent_height = |row: f64, col: f64| {
+        if data.0.level > key.level {
+            data_sampler.height_msl_m(row, col)
+        } else {
+            data_sampler.coarser_height_msl_m(row, col)
+        }
+    };
+    let ps = half + 1;
+    let mut parent_rel = vec![DVec3::ZERO; ps * ps];
+    for a in 0..ps {
+        for b in 0..ps {
+            let (row, col) = (parent_row(a), parent_col(b));
+            let (lat, lon) = layout.lat_lon_of_finest(row, col);
+            let h = parent_height(row, col) + geoid.undulation_m(lat, lon);
+            parent_rel[a * ps + b] = Geodetic::new(lat, lon, h).to_ecef() - centre_ecef;
+        }
+    }
+    // The parent cell holding grid line `k` (of `n + 1`) and the fraction across it.
+    let parent_cell = |k: usize, own: f64, parent: &dyn Fn(usize) -> f64| -> (usize, f64) {
+        let a = (k / 2).min(half - 1);
+        let (start, end) = (parent(a), parent(a + 1));
+        let fraction = if end > start {
+            ((own - start) / (end - start)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (a, fraction)
+    };
     let morph_target = |i: usize, j: usize| -> DVec3 {
-        match (i % 2 == 1, j % 2 == 1) {
-            (false, false) => rel[i * s + j],
-            (true, false) => (rel[(i - 1) * s + j] + rel[(i + 1) * s + j]) * 0.5,
-            (false, true) => (rel[i * s + j - 1] + rel[i * s + j + 1]) * 0.5,
-            (true, true) => (rel[(i - 1) * s + j - 1] + rel[(i + 1) * s + j + 1]) * 0.5,
+        let (a, v) = parent_cell(i, rel_row(i), &parent_row);
+        let (b, u) = parent_cell(j, rel_col(j), &parent_col);
+        let sw = parent_rel[a * ps + b];
+        let se = parent_rel[a * ps + b + 1];
+        let nw = parent_rel[(a + 1) * ps + b];
+        let ne = parent_rel[(a + 1) * ps + b + 1];
+        if u >= v {
+            sw + (se - sw) * u + (ne - se) * v
+        } else {
+            sw + (nw - sw) * v + (ne - nw) * u
         }
     };
     let span_m = span * grid.dlat_deg * metres_per_degree(lat_c).0;
