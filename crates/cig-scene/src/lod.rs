@@ -218,6 +218,73 @@ impl NodeLayout {
     }
 }
 
+/// How rough a database is for the level of detail: the geometric error of one level's nodes
+/// (the exact vertical error of the level's grid against the finest posts, what the selection
+/// refines by), as a distribution over the level's nodes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LevelErrors {
+    pub level: u8,
+    pub nodes: usize,
+    pub median_m: f32,
+    pub p90_m: f32,
+    pub max_m: f32,
+}
+
+impl LevelErrors {
+    /// The distance within which a node of `error_m` refines, for a view of `width_px` across a
+    /// horizontal field of view of `fov_deg` at `max_pixel_error` pixels (the selection's `R`,
+    /// without its margin), metres.
+    pub fn refine_distance_m(
+        error_m: f32,
+        width_px: u32,
+        fov_deg: f64,
+        max_pixel_error: f64,
+    ) -> f64 {
+        let pixels_per_tangent = f64::from(width_px) / 2.0 / (fov_deg.to_radians() / 2.0).tan();
+        f64::from(error_m) * pixels_per_tangent / max_pixel_error
+    }
+}
+
+impl NodeLayout {
+    /// The error distribution of the nodes of `level` that lie in `tiles` (tiles of that
+    /// level, any order); `None` when there are none.
+    pub fn level_errors<'a>(
+        &self,
+        level: u8,
+        tiles: impl IntoIterator<Item = (TileKey, &'a Tile)>,
+    ) -> Option<LevelErrors> {
+        let per_tile = (self.pyramid.tile_cells / self.node_cells).max(1);
+        let mut errors: Vec<f32> = Vec::new();
+        for (tile_key, tile) in tiles {
+            for r in 0..per_tile {
+                for c in 0..per_tile {
+                    let key = NodeKey {
+                        level,
+                        row: tile_key.row * per_tile + r,
+                        col: tile_key.col * per_tile + c,
+                    };
+                    if self.exists(key) {
+                        let bounds = self.node_bounds_in(key, tile_key, &tile.nodes);
+                        errors.push(bounds.error_m.max(0.0));
+                    }
+                }
+            }
+        }
+        if errors.is_empty() {
+            return None;
+        }
+        errors.sort_by(f32::total_cmp);
+        let at = |q: f64| errors[((errors.len() - 1) as f64 * q).round() as usize];
+        Some(LevelErrors {
+            level,
+            nodes: errors.len(),
+            median_m: at(0.5),
+            p90_m: at(0.9),
+            max_m: at(1.0),
+        })
+    }
+}
+
 /// Settings of the selection.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LodSettings {
@@ -1337,6 +1404,40 @@ mod tests {
             }
         }
         (worst_px, posts)
+    }
+
+    /// The rough test terrain: nothing at the finest level, more at every coarser one, and
+    /// the distribution ordered.
+    #[test]
+    fn level_errors_grow_with_the_level() {
+        let db = rough_database();
+        let cache = cache_with(&db, 0..db.layout().levels, false);
+        let layout = NodeLayout::new(*db.layout());
+        let mut previous_median = -1.0f32;
+        for level in 0..layout.pyramid.levels {
+            let tiles: Vec<_> = layout
+                .pyramid
+                .keys_at(level)
+                .map(|k| (k, cache.resident(k).expect("every tile is resident")))
+                .collect();
+            let errors = layout
+                .level_errors(level, tiles.iter().map(|(k, t)| (*k, t.as_ref())))
+                .expect("every level has nodes");
+            assert!(errors.nodes > 0);
+            assert!(errors.median_m <= errors.p90_m && errors.p90_m <= errors.max_m);
+            if level == 0 {
+                assert_eq!(errors.max_m, 0.0, "the finest level is exact");
+            } else {
+                assert!(
+                    errors.median_m > previous_median,
+                    "level {level}: {errors:?}"
+                );
+            }
+            previous_median = errors.median_m;
+        }
+        // 10 m at 1 px across 1920 px and 60 degrees: 16.6 km.
+        let r = LevelErrors::refine_distance_m(10.0, 1920, 60.0, 1.0);
+        assert!((r - 16_628.0).abs() < 1.0, "{r}");
     }
 
     /// No pop when a parent takes over from its children: a child's fully morphed vertices lie

@@ -187,6 +187,10 @@ pub struct InfoArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    /// Also read every tile and report, per level, the geometric error of the level-of-detail
+    /// nodes (median, p90, max): how far each level refines at a given pixel error.
+    #[arg(long)]
+    pub lod_errors: bool,
 }
 
 #[derive(Subcommand)]

@@ -3,6 +3,7 @@
 use crate::cli::{ImportArgs, InfoArgs, SynthArgs};
 use crate::config::Config;
 use anyhow::Context;
+use cig_scene::lod::{LevelErrors, NodeLayout};
 use cig_terrain::build::prepare_raster;
 use cig_terrain::raster::Raster;
 use cig_terrain_io::store::{check_output, open_database, write_database, BuildInputs};
@@ -167,11 +168,56 @@ pub fn info_json(manifest: &cig_terrain::Manifest) -> serde_json::Value {
     })
 }
 
+/// The reference view of `db info --lod-errors`' refinement distances.
+const LOD_REFERENCE: (u32, f64, f64) = (1920, 60.0, 1.0);
+
+/// Per level, the error distribution of the level-of-detail nodes (every tile is read).
+fn lod_errors(db: &cig_terrain::TerrainDatabase) -> anyhow::Result<Vec<LevelErrors>> {
+    let layout = NodeLayout::new(*db.layout());
+    let mut out = Vec::new();
+    for level in 0..layout.pyramid.levels {
+        let mut tiles = Vec::new();
+        for key in layout.pyramid.keys_at(level) {
+            let tile = db
+                .load_tile(key)
+                .with_context(|| format!("reading {}", db.tile_location(key)))?;
+            tiles.push((key, tile));
+        }
+        out.extend(layout.level_errors(level, tiles.iter().map(|(k, t)| (*k, t))));
+    }
+    Ok(out)
+}
+
+fn lod_errors_json(levels: &[LevelErrors]) -> serde_json::Value {
+    let (width_px, fov_deg, px) = LOD_REFERENCE;
+    serde_json::json!({
+        "reference_view": {"width_px": width_px, "fov_deg": fov_deg, "max_pixel_error": px},
+        "levels": levels.iter().map(|l| serde_json::json!({
+            "level": l.level,
+            "nodes": l.nodes,
+            "median_m": l.median_m,
+            "p90_m": l.p90_m,
+            "max_m": l.max_m,
+            "median_node_refines_within_m":
+                LevelErrors::refine_distance_m(l.median_m, width_px, fov_deg, px),
+        })).collect::<Vec<_>>(),
+    })
+}
+
 pub fn info(args: &InfoArgs) -> anyhow::Result<()> {
     let db = open_database(&args.db)?;
     let m = db.manifest();
+    let levels = if args.lod_errors {
+        Some(lod_errors(&db)?)
+    } else {
+        None
+    };
     if args.json {
-        println!("{}", info_json(m));
+        let mut json = info_json(m);
+        if let (Some(levels), Some(object)) = (&levels, json.as_object_mut()) {
+            object.insert("lod_errors".into(), lod_errors_json(levels));
+        }
+        println!("{json}");
         return Ok(());
     }
     let g = m.layout.grid;
@@ -211,6 +257,21 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<()> {
     }
     for s in &m.sources {
         println!("source        {s}");
+    }
+    if let Some(levels) = levels {
+        let (width_px, fov_deg, px) = LOD_REFERENCE;
+        println!(
+            "lod errors    per level: nodes, error median / p90 / max; a median node refines \
+             within (at {px} px, {width_px} px across {fov_deg} degrees)"
+        );
+        for l in &levels {
+            let within_km =
+                LevelErrors::refine_distance_m(l.median_m, width_px, fov_deg, px) / 1000.0;
+            println!(
+                "  level {:<2} {:6} nodes {:8.2} / {:8.2} / {:8.2} m  {:8.1} km",
+                l.level, l.nodes, l.median_m, l.p90_m, l.max_m, within_km
+            );
+        }
     }
     Ok(())
 }

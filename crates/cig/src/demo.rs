@@ -36,6 +36,7 @@ pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
     crate::db::info(&crate::cli::InfoArgs {
         db: args.db.clone(),
         json: false,
+        lod_errors: true,
     })?;
     let db = Arc::new(open_database(&args.db)?);
     let g = db.layout().grid;

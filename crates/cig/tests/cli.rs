@@ -79,6 +79,62 @@ fn synth_is_deterministic_and_info_describes_it() {
     assert!(info["min_elev_m"].as_f64() < info["max_elev_m"].as_f64());
 }
 
+/// `db info --lod-errors`: per level, the level-of-detail nodes' error against the finest
+/// posts, none at the finest level and growing with each coarser one; without the flag the
+/// tiles are not read and the key is absent.
+#[test]
+fn info_reports_the_level_of_detail_error_of_every_level() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = synth(dir.path(), "db", 5, "6", "30");
+    let out = cig()
+        .args(["db", "info"])
+        .arg(&db)
+        .args(["--json", "--lod-errors"])
+        .assert()
+        .success();
+    let info = json(&out.get_output().stdout);
+    let levels = info["lod_errors"]["levels"].as_array().expect("levels");
+    assert_eq!(
+        levels.len() as u64,
+        info["levels"].as_u64().expect("levels")
+    );
+    let value = |l: &serde_json::Value, k: &str| l[k].as_f64().expect(k);
+    assert_eq!(value(&levels[0], "max_m"), 0.0, "the finest level is exact");
+    for pair in levels.windows(2) {
+        assert!(
+            value(&pair[1], "median_m") > value(&pair[0], "median_m"),
+            "{pair:?}"
+        );
+    }
+    for l in levels {
+        assert!(value(l, "nodes") >= 1.0);
+        assert!(
+            value(l, "median_m") <= value(l, "p90_m") && value(l, "p90_m") <= value(l, "max_m")
+        );
+        // 1920 px across 60 degrees: 1662.8 px per unit tangent.
+        let within = value(l, "median_node_refines_within_m");
+        assert!((within - value(l, "median_m") * 1662.77).abs() < 1.0, "{l}");
+    }
+    let plain = cig()
+        .args(["db", "info"])
+        .arg(&db)
+        .arg("--json")
+        .assert()
+        .success();
+    assert!(json(&plain.get_output().stdout).get("lod_errors").is_none());
+    let text = cig()
+        .args(["db", "info"])
+        .arg(&db)
+        .arg("--lod-errors")
+        .assert()
+        .success();
+    let text = String::from_utf8_lossy(&text.get_output().stdout).to_string();
+    assert!(
+        text.contains("lod errors") && text.contains("level 1"),
+        "{text}"
+    );
+}
+
 #[test]
 fn hat_and_los_answer_in_json() {
     let dir = tempfile::tempdir().expect("tmp");
