@@ -17,9 +17,9 @@
 //! `RANGE_MARGIN` (1.05) covers the morph factor being taken per vertex rather than per point
 //! (without it a point inside a triangle showed up to 1.3 % more). CDLOD's fixed morph regions
 //! (refining at 1.3 R) drew 1.29 times the triangles on the demo pass. Nodes are culled against
-//! the frustum with the per-node min/max heights (source 003:
-//! quadtree culling). Node boxes are built from 9 sample points at the lowest and highest
-//! heights, in the node's local east-north-up frame, so curvature is included.
+//! the frustum with the per-node min/max heights (source 003: quadtree culling). Node boxes are
+//! built from 9 sample points at the lowest and highest heights, in the node's local
+//! east-north-up frame, so curvature is included.
 //!
 //! Cost per frame: the boxes persist across frames in a flat arena of slots linked as the
 //! quadtree (a node's four children in consecutive slots), so a visit reaches its node without
@@ -44,10 +44,9 @@
 //! projection spreads a length over up to `1 / cos^2` of the angle off the axis more pixels
 //! (1.33 at the side of a 60 degree view), a deliberate choice: a measure by distance alone
 //! gives every channel of a multi-channel display, and every heading, the same surface (no
-//! swimming when the view turns, no seam between channels). Node boxes
-//! sample 9 points per height, which is conservative for nodes up to about 1000 km across. The
-//! arena holds at most about 50 000 nodes between frames (about 30 MB); past that it is emptied
-//! and rebuilt.
+//! swimming when the view turns, no seam between channels). Node boxes sample 9 points per
+//! height, which is conservative for nodes up to about 1000 km across. The arena holds at most
+//! about 50 000 nodes between frames (about 30 MB); past that it is emptied and rebuilt.
 
 use crate::view::Camera;
 use cig_geo::{EnuFrame, Geodetic, LatLonTrig};
@@ -218,6 +217,19 @@ impl NodeLayout {
     }
 }
 
+/// The distance within which a node of `error_m` refines (its `R`, margin included) for a
+/// view of `pixels_per_tangent` at `max_pixel_error` pixels; infinite for any error at 0 px
+/// (full detail), 0 for a node with no error.
+pub fn error_range_m(error_m: f64, pixels_per_tangent: f64, max_pixel_error: f64) -> f64 {
+    if error_m <= 0.0 {
+        0.0
+    } else if max_pixel_error > 0.0 {
+        error_m * pixels_per_tangent / max_pixel_error * RANGE_MARGIN
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// How rough a database is for the level of detail: the geometric error of one level's nodes
 /// (the exact vertical error of the level's grid against the finest posts, what the selection
 /// refines by), as a distribution over the level's nodes.
@@ -231,57 +243,43 @@ pub struct LevelErrors {
 }
 
 impl LevelErrors {
-    /// The distance within which a node of `error_m` refines, for a view of `width_px` across a
-    /// horizontal field of view of `fov_deg` at `max_pixel_error` pixels (the selection's `R`,
-    /// without its margin), metres.
-    pub fn refine_distance_m(
-        error_m: f32,
-        width_px: u32,
-        fov_deg: f64,
-        max_pixel_error: f64,
-    ) -> f64 {
-        let pixels_per_tangent = f64::from(width_px) / 2.0 / (fov_deg.to_radians() / 2.0).tan();
-        f64::from(error_m) * pixels_per_tangent / max_pixel_error
-    }
-}
-
-impl NodeLayout {
-    /// The error distribution of the nodes of `level` that lie in `tiles` (tiles of that
-    /// level, any order); `None` when there are none.
-    pub fn level_errors<'a>(
-        &self,
-        level: u8,
-        tiles: impl IntoIterator<Item = (TileKey, &'a Tile)>,
-    ) -> Option<LevelErrors> {
-        let per_tile = (self.pyramid.tile_cells / self.node_cells).max(1);
-        let mut errors: Vec<f32> = Vec::new();
-        for (tile_key, tile) in tiles {
-            for r in 0..per_tile {
-                for c in 0..per_tile {
-                    let key = NodeKey {
-                        level,
-                        row: tile_key.row * per_tile + r,
-                        col: tile_key.col * per_tile + c,
-                    };
-                    if self.exists(key) {
-                        let bounds = self.node_bounds_in(key, tile_key, &tile.nodes);
-                        errors.push(bounds.error_m.max(0.0));
-                    }
-                }
-            }
-        }
-        if errors.is_empty() {
+    /// The distribution of `errors_m` (one per node, any order); `None` when there are none.
+    pub fn of(level: u8, mut errors_m: Vec<f32>) -> Option<LevelErrors> {
+        if errors_m.is_empty() {
             return None;
         }
-        errors.sort_by(f32::total_cmp);
-        let at = |q: f64| errors[((errors.len() - 1) as f64 * q).round() as usize];
+        errors_m.sort_by(f32::total_cmp);
+        let at = |q: f64| errors_m[((errors_m.len() - 1) as f64 * q).round() as usize];
         Some(LevelErrors {
             level,
-            nodes: errors.len(),
+            nodes: errors_m.len(),
             median_m: at(0.5),
             p90_m: at(0.9),
             max_m: at(1.0),
         })
+    }
+}
+
+impl NodeLayout {
+    /// Appends to `out` the error of every node of the tile's level that lies in `tile`.
+    pub fn node_errors_in(&self, tile_key: TileKey, tile: &Tile, out: &mut Vec<f32>) {
+        let per_tile = (self.pyramid.tile_cells / self.node_cells).max(1);
+        for r in 0..per_tile {
+            for c in 0..per_tile {
+                let key = NodeKey {
+                    level: tile_key.level,
+                    row: tile_key.row * per_tile + r,
+                    col: tile_key.col * per_tile + c,
+                };
+                if self.exists(key) {
+                    out.push(
+                        self.node_bounds_in(key, tile_key, &tile.nodes)
+                            .error_m
+                            .max(0.0),
+                    );
+                }
+            }
+        }
     }
 }
 
@@ -602,11 +600,6 @@ impl TerrainLod {
         scratch.wanted.clear();
         scratch.tiles.clear();
         scratch.seen.clear();
-        let pixels_per_metre_at_1m = if settings.max_pixel_error > 0.0 {
-            camera.pixels_per_tangent / settings.max_pixel_error
-        } else {
-            f64::INFINITY
-        };
         scratch.stack.extend(
             self.roots
                 .iter()
@@ -645,11 +638,8 @@ impl TerrainLod {
             let local = DVec3::new(d.dot(g.axes[0]), d.dot(g.axes[1]), d.dot(g.axes[2]));
             let distance_m = (local.clamp(g.box_min, g.box_max) - local).length();
             let error_m = f64::from(g.error_m.max(0.0));
-            let range_m = if error_m > 0.0 {
-                error_m * pixels_per_metre_at_1m * RANGE_MARGIN
-            } else {
-                0.0
-            };
+            let range_m =
+                error_range_m(error_m, camera.pixels_per_tangent, settings.max_pixel_error);
             let wants_refine = key.level > 0 && distance_m < range_m;
             if wants_refine {
                 let child_tile = self.layout.tile_of(key, key.level - 1);
@@ -989,11 +979,6 @@ mod tests {
             })
         };
         let mut selection = Selection::default();
-        let pixels_per_metre_at_1m = if settings.max_pixel_error > 0.0 {
-            camera.pixels_per_tangent / settings.max_pixel_error
-        } else {
-            f64::INFINITY
-        };
         let mut stack: Vec<(NodeKey, f64)> = layout
             .roots()
             .into_iter()
@@ -1014,11 +999,8 @@ mod tests {
             let local = DVec3::new(d.dot(g.axes[0]), d.dot(g.axes[1]), d.dot(g.axes[2]));
             let distance_m = (local.clamp(g.box_min, g.box_max) - local).length();
             let error_m = f64::from(g.bounds.error_m.max(0.0));
-            let range_m = if error_m > 0.0 {
-                error_m * pixels_per_metre_at_1m * RANGE_MARGIN
-            } else {
-                0.0
-            };
+            let range_m =
+                error_range_m(error_m, camera.pixels_per_tangent, settings.max_pixel_error);
             let wants_refine = key.level > 0 && distance_m < range_m;
             if wants_refine {
                 let child_tile = layout.tile_of(key, key.level - 1);
@@ -1374,15 +1356,12 @@ mod tests {
                     };
                     let (i, u) = along(r, r0, grid.rows as u64 - 1);
                     let (j, v) = along(c, c0, grid.cols as u64 - 1);
-                    let (sw, se) = (drawn[i * s + j], drawn[i * s + j + 1]);
-                    let (nw, ne) = (drawn[(i + 1) * s + j], drawn[(i + 1) * s + j + 1]);
-                    // The mesh's triangles: (sw, se, ne) east of the diagonal, (sw, ne, nw)
-                    // north of it.
-                    let shown = if v >= u {
-                        sw * (1.0 - v) + se * (v - u) + ne * u
-                    } else {
-                        sw * (1.0 - u) + nw * (u - v) + ne * v
-                    };
+                    let at = |di: usize, dj: usize| drawn[(i + di) * s + j + dj];
+                    let shown = crate::terrain_mesh::triangulated_point(
+                        [at(0, 0), at(0, 1), at(1, 0), at(1, 1)],
+                        v,
+                        u,
+                    );
                     let tile_key = TileKey {
                         level: 0,
                         row: (r / tile_cells) as u32,
@@ -1415,14 +1394,12 @@ mod tests {
         let layout = NodeLayout::new(*db.layout());
         let mut previous_median = -1.0f32;
         for level in 0..layout.pyramid.levels {
-            let tiles: Vec<_> = layout
-                .pyramid
-                .keys_at(level)
-                .map(|k| (k, cache.resident(k).expect("every tile is resident")))
-                .collect();
-            let errors = layout
-                .level_errors(level, tiles.iter().map(|(k, t)| (*k, t.as_ref())))
-                .expect("every level has nodes");
+            let mut node_errors = Vec::new();
+            for key in layout.pyramid.keys_at(level) {
+                let tile = cache.resident(key).expect("every tile is resident");
+                layout.node_errors_in(key, &tile, &mut node_errors);
+            }
+            let errors = LevelErrors::of(level, node_errors).expect("every level has nodes");
             assert!(errors.nodes > 0);
             assert!(errors.median_m <= errors.p90_m && errors.p90_m <= errors.max_m);
             if level == 0 {
@@ -1435,9 +1412,12 @@ mod tests {
             }
             previous_median = errors.median_m;
         }
-        // 10 m at 1 px across 1920 px and 60 degrees: 16.6 km.
-        let r = LevelErrors::refine_distance_m(10.0, 1920, 60.0, 1.0);
-        assert!((r - 16_628.0).abs() < 1.0, "{r}");
+        // 10 m at 1 px across 1920 px and 60 degrees: 16.6 km, and the 5 % margin.
+        let fov = crate::view::FovDeg::from_horizontal(60.0, 1920, 1080);
+        let r = error_range_m(10.0, fov.pixels_per_tangent(1920, 1080), 1.0);
+        assert!((r - 16_628.0 * RANGE_MARGIN).abs() < 1.0, "{r}");
+        assert_eq!(error_range_m(0.0, 1000.0, 1.0), 0.0);
+        assert_eq!(error_range_m(1.0, 1000.0, 0.0), f64::INFINITY);
     }
 
     /// No pop when a parent takes over from its children: a child's fully morphed vertices lie
@@ -1502,13 +1482,12 @@ mod tests {
                             let own_col = (c0 as f64 + j as f64 * step).min(last_col);
                             let (a, v) = cell(own_row, pr0 as f64, last_row);
                             let (b, u) = cell(own_col, pc0 as f64, last_col);
-                            let (sw, se) = (parent_vertex(a, b), parent_vertex(a, b + 1));
-                            let (nw, ne) = (parent_vertex(a + 1, b), parent_vertex(a + 1, b + 1));
-                            let on_parent = if u >= v {
-                                sw + (se - sw) * u + (ne - se) * v
-                            } else {
-                                sw + (nw - sw) * v + (ne - nw) * u
-                            };
+                            let at = |da: usize, db: usize| parent_vertex(a + da, b + db);
+                            let on_parent = crate::terrain_mesh::triangulated_point(
+                                [at(0, 0), at(0, 1), at(1, 0), at(1, 1)],
+                                u,
+                                v,
+                            );
                             let target = child.vertices[i * s + j].morph_target.map(f64::from);
                             let target = child.centre_ecef + DVec3::from(target);
                             worst_m = worst_m.max((target - on_parent).length());
@@ -1552,7 +1531,6 @@ mod tests {
                 let worst_m = worst_px * 1e4 / camera.pixels_per_tangent;
                 assert!(worst_m < 0.01, "view {k}: {worst_m} m at full detail");
             } else {
-                eprintln!("view {k}: {worst_px:.4} px drawn, {px} allowed, {posts} posts");
                 assert!(
                     worst_px <= px,
                     "view {k}: {worst_px:.3} px drawn, {px} allowed"

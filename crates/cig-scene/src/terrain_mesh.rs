@@ -11,9 +11,9 @@
 //! last row or column its vertices are clamped onto the edge, and so are the parent's; the
 //! target is then taken on the parent's clamped cells with the parent level's heights, so the
 //! edge stays where it is while the node morphs (the midpoint rule moved it inwards by up to a
-//! cell and, with the finer level's heights, left a step of up to the parent's error there). Skirts (a strip hanging down from each edge) hide
-//! the gaps left where neighbours differ by more than one level or are drawn from different
-//! data while tiles load. Normals and colours are sampled at twice the vertex density, from the
+//! cell and, with the finer level's heights, left a step of up to the parent's error there).
+//! Skirts (a strip hanging down from each edge) hide the gaps left where neighbours differ by
+//! more than one level or are drawn from different data while tiles load. Normals and colours are sampled at twice the vertex density, from the
 //! next finer level when it is resident, for per-pixel lighting.
 //!
 //! Limits: normals are expressed in the node centre's east-north-up frame, which differs from
@@ -102,6 +102,17 @@ fn edges(n: u32) -> [EdgeIndex; 4] {
         Box::new(move |t| t * s),
         Box::new(move |t| t * s + n),
     ]
+}
+
+/// A point of a grid cell's surface, split as the database splits every cell (south-west to
+/// north-east; see `cig_terrain::raster::triangulated_height`), from its corners and the
+/// fractions `east` and `north` across it.
+pub fn triangulated_point([sw, se, nw, ne]: [DVec3; 4], east: f64, north: f64) -> DVec3 {
+    if east >= north {
+        sw + (se - sw) * east + (ne - se) * north
+    } else {
+        sw + (nw - sw) * north + (ne - nw) * east
+    }
 }
 
 /// Base colour (sRGB) and specular weight of a material.
@@ -283,17 +294,14 @@ pub fn build_node_mesh(
         (a, fraction)
     };
     let morph_target = |i: usize, j: usize| -> DVec3 {
-        let (a, v) = parent_cell(i, rel_row(i), &parent_row);
-        let (b, u) = parent_cell(j, rel_col(j), &parent_col);
-        let sw = parent_rel[a * ps + b];
-        let se = parent_rel[a * ps + b + 1];
-        let nw = parent_rel[(a + 1) * ps + b];
-        let ne = parent_rel[(a + 1) * ps + b + 1];
-        if u >= v {
-            sw + (se - sw) * u + (ne - se) * v
-        } else {
-            sw + (nw - sw) * v + (ne - nw) * u
-        }
+        let (a, north) = parent_cell(i, rel_row(i), &parent_row);
+        let (b, east) = parent_cell(j, rel_col(j), &parent_col);
+        let corner = |da: usize, db: usize| parent_rel[(a + da) * ps + b + db];
+        triangulated_point(
+            [corner(0, 0), corner(0, 1), corner(1, 0), corner(1, 1)],
+            east,
+            north,
+        )
     };
     let span_m = span * grid.dlat_deg * metres_per_degree(lat_c).0;
     let skirt_depth_m =

@@ -63,6 +63,13 @@ impl FovDeg {
             self.up_deg.to_radians().tan(),
         ]
     }
+
+    /// Pixels per unit of tangent on a `width_px x height_px` frame (the larger of the two
+    /// axes): a length `e` seen across at distance `d` covers about `e * this / d` pixels.
+    pub fn pixels_per_tangent(&self, width_px: u32, height_px: u32) -> f64 {
+        let [tl, tr, td, tu] = self.tangents();
+        (f64::from(width_px) / (tl + tr)).max(f64::from(height_px) / (td + tu))
+    }
 }
 
 /// Orientation of a view or an entity: heading, pitch, roll in degrees.
@@ -218,8 +225,7 @@ impl View {
                 offset_m: NEAR_PLANE_M,
             },
         ];
-        let pixels_per_tangent =
-            (f64::from(self.width_px) / (tl + tr)).max(f64::from(self.height_px) / (td + tu));
+        let pixels_per_tangent = self.fov.pixels_per_tangent(self.width_px, self.height_px);
         Camera {
             view: *self,
             eye_ecef: enu.origin_ecef(),

@@ -3,7 +3,8 @@
 use crate::cli::{ImportArgs, InfoArgs, SynthArgs};
 use crate::config::Config;
 use anyhow::Context;
-use cig_scene::lod::{LevelErrors, NodeLayout};
+use cig_scene::lod::{error_range_m, LevelErrors, NodeLayout};
+use cig_scene::view::FovDeg;
 use cig_terrain::build::prepare_raster;
 use cig_terrain::raster::Raster;
 use cig_terrain_io::store::{check_output, open_database, write_database, BuildInputs};
@@ -168,38 +169,57 @@ pub fn info_json(manifest: &cig_terrain::Manifest) -> serde_json::Value {
     })
 }
 
-/// The reference view of `db info --lod-errors`' refinement distances.
-const LOD_REFERENCE: (u32, f64, f64) = (1920, 60.0, 1.0);
+/// The reference view of `db info --lod-errors`' refinement distances: 1920 x 1080 across 60
+/// degrees at 1 px.
+const LOD_REFERENCE_SIZE: (u32, u32) = (1920, 1080);
+const LOD_REFERENCE_FOV_DEG: f64 = 60.0;
+const LOD_REFERENCE_PX: f64 = 1.0;
 
-/// Per level, the error distribution of the level-of-detail nodes (every tile is read).
+/// Where a node of `error_m` refines on the reference view, metres.
+fn reference_range_m(error_m: f32) -> f64 {
+    let (w, h) = LOD_REFERENCE_SIZE;
+    let fov = FovDeg::from_horizontal(LOD_REFERENCE_FOV_DEG, w, h);
+    error_range_m(
+        f64::from(error_m),
+        fov.pixels_per_tangent(w, h),
+        LOD_REFERENCE_PX,
+    )
+}
+
+/// Per level, the error distribution of the level-of-detail nodes (every tile is read, one at
+/// a time).
 fn lod_errors(db: &cig_terrain::TerrainDatabase) -> anyhow::Result<Vec<LevelErrors>> {
     let layout = NodeLayout::new(*db.layout());
     let mut out = Vec::new();
     for level in 0..layout.pyramid.levels {
-        let mut tiles = Vec::new();
+        let mut node_errors = Vec::new();
         for key in layout.pyramid.keys_at(level) {
             let tile = db
                 .load_tile(key)
                 .with_context(|| format!("reading {}", db.tile_location(key)))?;
-            tiles.push((key, tile));
+            layout.node_errors_in(key, &tile, &mut node_errors);
         }
-        out.extend(layout.level_errors(level, tiles.iter().map(|(k, t)| (*k, t))));
+        out.extend(LevelErrors::of(level, node_errors));
     }
     Ok(out)
 }
 
 fn lod_errors_json(levels: &[LevelErrors]) -> serde_json::Value {
-    let (width_px, fov_deg, px) = LOD_REFERENCE;
+    let (width_px, height_px) = LOD_REFERENCE_SIZE;
     serde_json::json!({
-        "reference_view": {"width_px": width_px, "fov_deg": fov_deg, "max_pixel_error": px},
+        "reference_view": {
+            "width_px": width_px,
+            "height_px": height_px,
+            "fov_deg": LOD_REFERENCE_FOV_DEG,
+            "max_pixel_error": LOD_REFERENCE_PX,
+        },
         "levels": levels.iter().map(|l| serde_json::json!({
             "level": l.level,
             "nodes": l.nodes,
             "median_m": l.median_m,
             "p90_m": l.p90_m,
             "max_m": l.max_m,
-            "median_node_refines_within_m":
-                LevelErrors::refine_distance_m(l.median_m, width_px, fov_deg, px),
+            "median_node_refines_within_m": reference_range_m(l.median_m),
         })).collect::<Vec<_>>(),
     })
 }
@@ -259,17 +279,21 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<()> {
         println!("source        {s}");
     }
     if let Some(levels) = levels {
-        let (width_px, fov_deg, px) = LOD_REFERENCE;
+        let (width_px, height_px) = LOD_REFERENCE_SIZE;
         println!(
             "lod errors    per level: nodes, error median / p90 / max; a median node refines \
-             within (at {px} px, {width_px} px across {fov_deg} degrees)"
+             within (at {LOD_REFERENCE_PX} px, {width_px} x {height_px} across \
+             {LOD_REFERENCE_FOV_DEG} degrees)"
         );
         for l in &levels {
-            let within_km =
-                LevelErrors::refine_distance_m(l.median_m, width_px, fov_deg, px) / 1000.0;
             println!(
                 "  level {:<2} {:6} nodes {:8.2} / {:8.2} / {:8.2} m  {:8.1} km",
-                l.level, l.nodes, l.median_m, l.p90_m, l.max_m, within_km
+                l.level,
+                l.nodes,
+                l.median_m,
+                l.p90_m,
+                l.max_m,
+                reference_range_m(l.median_m) / 1000.0
             );
         }
     }
