@@ -27,7 +27,7 @@ use crate::celestial::CelestialPass;
 use crate::clouds::CloudPass;
 use crate::gpu::{Gpu, RenderError};
 use crate::puffs::PuffPass;
-use crate::terrain::{MeshStats, NodeRecord, TerrainGpu};
+use crate::terrain::{MeshStats, NodeRecord, TerrainFrame, TerrainGpu};
 use cig_geo::Geodetic;
 use cig_scene::lighting::{FogMode, Lighting, SkyModel};
 use cig_scene::lod::{LodSettings, NodeLayout, TerrainLod};
@@ -129,6 +129,33 @@ struct Globals {
     atmos: [f32; 4],
     night_sky: [f32; 4],
     tonemap: [f32; 4],
+    sky_frame_x: [f32; 4],
+    sky_frame_y: [f32; 4],
+}
+
+/// The sky-view table's frame for the frame's up and sun (single precision, as the shaders
+/// used to work it out for every pixel): its x axis (horizontal towards the sun's azimuth,
+/// or a fixed horizontal with the sun at the zenith) with the horizon's zenith angle for the
+/// eye's radius `eye_radius_m` in w, and its y axis (`up x x`).
+fn sky_frame(up: [f32; 4], sun: [f32; 4], eye_radius_m: f32) -> ([f32; 4], [f32; 4]) {
+    let up = glam::Vec3::new(up[0], up[1], up[2]);
+    let sun = glam::Vec3::new(sun[0], sun[1], sun[2]);
+    let mut toward = sun - up * sun.dot(up);
+    if toward.dot(toward) < 1e-8 {
+        let other = if up.z.abs() > 0.9 {
+            glam::Vec3::X
+        } else {
+            glam::Vec3::Z
+        };
+        toward = other - up * other.dot(up);
+    }
+    let x = toward.normalize_or_zero();
+    let y = up.cross(x);
+    let bottom = cig_environment::AtmosphereParams::EARTH.bottom_radius_m as f32;
+    let r = eye_radius_m.max(1.0);
+    let cos_beta = (r * r - bottom * bottom).max(0.0).sqrt() / r;
+    let horizon_zenith = std::f32::consts::PI - cos_beta.clamp(-1.0, 1.0).acos();
+    ([x.x, x.y, x.z, horizon_zenith], [y.x, y.y, y.z, 0.0])
 }
 
 /// Timestamp queries of the frame: 0 start, 1 end, then pass starts and ends as needed.
@@ -496,7 +523,12 @@ impl Renderer {
         let terrain_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<cig_scene::terrain_mesh::TerrainVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+            attributes: &wgpu::vertex_attr_array![
+                0 => Float32x3,
+                1 => Float32x3,
+                2 => Float32x2,
+                3 => Float32
+            ],
         })];
         let model_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<ModelVertex>() as u64,
@@ -775,13 +807,18 @@ impl Renderer {
         cache.prefetch(&selection.wanted_tiles, PREFETCH_PER_FRAME);
         let nodes = &selection.nodes[..selection.nodes.len().min(MAX_NODE_RECORDS)];
         let min_morph = self.fade_in(view_index, nodes, options.fade_in_s);
-        let (records, mesh_stats): (Vec<NodeRecord>, MeshStats) = self.terrain.prepare(
+        let (terrain_frame, mesh_stats): (TerrainFrame, MeshStats) = self.terrain.prepare(
             &self.gpu,
             &self.lod,
             cache,
             nodes,
             &min_morph,
             camera.eye_ecef,
+            if snapshot.max_pixel_error > 0.0 {
+                snapshot.max_pixel_error / camera.pixels_per_tangent
+            } else {
+                0.0
+            },
             self.frame,
             options.mesh_budget,
         );
@@ -796,11 +833,15 @@ impl Renderer {
         let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
         self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
         self.celestial.prepare(&self.gpu, snapshot, view.eye);
-        if !records.is_empty() {
-            self.gpu
-                .queue
-                .write_buffer(&self.node_records, 0, bytemuck::cast_slice(&records));
+        if !terrain_frame.records.is_empty() {
+            self.gpu.queue.write_buffer(
+                &self.node_records,
+                0,
+                bytemuck::cast_slice(&terrain_frame.records),
+            );
         }
+        self.terrain
+            .write_indices(&self.gpu, &terrain_frame.indices);
         let draws = self.entity_draws(&camera, snapshot);
         let instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
         if !instance_records.is_empty() {
@@ -837,7 +878,7 @@ impl Renderer {
                 label: Some("frame"),
             });
         let mut stats = FrameStats {
-            terrain_nodes: records.len() as u32,
+            terrain_nodes: terrain_frame.nodes as u32,
             nodes_visited: selection.visited as u32,
             meshes_built: mesh_stats.built as u32,
             meshes_deferred: mesh_stats.deferred as u32,
@@ -919,21 +960,15 @@ impl Renderer {
             pass.set_bind_group(0, &self.terrain_bind, &[]);
             pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
             pass.set_vertex_buffer(0, self.terrain.vertex_pool.slice(..));
-            pass.set_index_buffer(
-                self.terrain.index_buffer.slice(..),
-                wgpu::IndexFormat::Uint32,
-            );
-            for (i, record) in records.iter().enumerate() {
-                let base_vertex = record.offset[3] as i32;
-                pass.draw_indexed(
-                    0..self.terrain.index_count,
-                    base_vertex,
-                    i as u32..i as u32 + 1,
+            if !terrain_frame.indices.is_empty() {
+                pass.set_index_buffer(
+                    self.terrain.index_buffer.slice(..),
+                    wgpu::IndexFormat::Uint32,
                 );
+                pass.draw_indexed(0..terrain_frame.indices.len() as u32, 0, 0..1);
+                stats.draw_calls += 1;
             }
-            stats.draw_calls += records.len() as u32;
-            stats.terrain_triangles =
-                records.len() as u64 * u64::from(self.terrain.triangles_per_node());
+            stats.terrain_triangles = terrain_frame.indices.len() as u64 / 3;
 
             if !draws.is_empty() {
                 pass.set_pipeline(&self.model_pipeline);
@@ -1089,9 +1124,10 @@ impl Renderer {
             let m = |x: f64| x.rem_euclid(256.0);
             [m(p.x) as f32, m(p.y) as f32, m(p.z) as f32, cell as f32]
         };
-        let globals = Globals {
+        let mut globals = Globals {
             view_proj: camera.view_projection().to_cols_array_2d(),
-            cam_forward: v4(camera.forward, 0.0),
+            // w: vertices of each terrain node's slot (the shader's slot of a vertex).
+            cam_forward: v4(camera.forward, f64::from(self.terrain.vertices_per_node)),
             cam_right: v4(camera.right, 0.0),
             cam_up: v4(camera.up, 0.0),
             tangents: [tl as f32, tr as f32, td as f32, tu as f32],
@@ -1151,7 +1187,11 @@ impl Renderer {
                 lighting.natural_illuminance_lux as f32,
                 0.0,
             ],
+            sky_frame_x: [0.0; 4],
+            sky_frame_y: [0.0; 4],
         };
+        (globals.sky_frame_x, globals.sky_frame_y) =
+            sky_frame(globals.eye_up, globals.sun_dir, globals.atmos[0]);
         self.gpu
             .queue
             .write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));

@@ -1,19 +1,22 @@
 //! GPU side of the terrain: a pool of fixed-size node meshes in one vertex buffer, their normal
 //! and colour texels in two atlases, and the pipeline that morphs and shades them.
 //!
-//! Algorithm: every node mesh has the same vertex count and topology, so one shared index
-//! buffer serves them all and a node is drawn with `base_vertex = slot * vertices_per_node`;
-//! its per-node record (eye-relative centre, frame, morph distances, atlas rectangle) is read by
-//! instance index from a storage buffer written once per view. Slots are recycled least
-//! recently used. Meshes are rebuilt when finer data becomes resident.
+//! Algorithm: every node's vertices live in its slot of one vertex pool (`vertices_per_node`
+//! each), and its triangles are the node's own cut of its level's posts
+//! (`cig_scene::terrain_mesh`), kept on the CPU; each view concatenates the drawn nodes'
+//! triangles, nearest first, into one index list of pool vertices and draws them all in one
+//! call (a software rasterizer pays for every draw). The shader finds a vertex's slot from its
+//! index, and the slot's record (eye-relative centre, frame, morph distances, skirt depth,
+//! atlas rectangle) in a storage buffer written once per view. Slots are recycled least
+//! recently used. Meshes are rebuilt when finer data becomes resident or a node's cut changes.
 //!
 //! Limits: the pool holds `capacity` nodes (the database's node count, at most 16384 of 16 cells,
-//! about 270 MB with the atlases); a view that needs more (full detail over a very large
+//! about 280 MB with the atlases, and its triangles' indices); a view that needs more (full detail over a very large
 //! database) draws the nearest ones and reports the rest as dropped in its statistics.
 
 use crate::gpu::Gpu;
 use cig_scene::lod::{NodeKey, SelectedNode, TerrainLod};
-use cig_scene::terrain_mesh::{self, TerrainVertex};
+use cig_scene::terrain_mesh::{self, NodeCut, TerrainVertex};
 use cig_terrain::TileCache;
 use std::collections::HashMap;
 
@@ -31,6 +34,10 @@ pub struct NodeRecord {
 
 struct Slot {
     key: NodeKey,
+    cut: NodeCut,
+    /// The mesh's triangles, on the slot's vertices.
+    indices: Vec<u16>,
+    loading_skirt_m: f32,
     data_level: u8,
     detail_level: u8,
     centre_ecef: glam::DVec3,
@@ -42,14 +49,15 @@ struct Slot {
 pub struct TerrainGpu {
     pub node_cells: u32,
     pub vertices_per_node: u32,
-    pub index_count: u32,
-    pub grid_triangles: u32,
+
     pub capacity: usize,
     texels: u32,
     slots_per_row: u32,
     atlas_size: u32,
     pub vertex_pool: wgpu::Buffer,
+    /// The drawn triangles of one view, on the vertex pool (grown as views need).
     pub index_buffer: wgpu::Buffer,
+    index_capacity: u64,
     pub normal_atlas: wgpu::Texture,
     pub colour_atlas: wgpu::Texture,
     slots: Vec<Option<Slot>>,
@@ -67,11 +75,31 @@ pub struct MeshStats {
     pub stand_ins: usize,
 }
 
+/// What one view draws of the terrain.
+#[derive(Clone, Debug, Default)]
+pub struct TerrainFrame {
+    /// Shader records by slot (zero for slots not drawn).
+    pub records: Vec<NodeRecord>,
+    /// The drawn nodes' triangles, nearest node first, as vertex pool indices.
+    pub indices: Vec<u32>,
+    /// Nodes drawn (stand-ins included).
+    pub nodes: usize,
+}
+
+/// Skirt depth of a node drawn from its own level's data, metres: the floor under the depth
+/// that grows with distance (see [`TerrainGpu::prepare`]).
+const SKIRT_FLOOR_M: f32 = 0.5;
+
+/// Skirt depth per metre of distance over the error the view allows per metre: neighbours each
+/// lie within the allowed error of the finest surface, so at most twice it apart; 10 % more.
+const SKIRT_OVER_ALLOWED_ERROR: f64 = 2.2;
+
 impl TerrainGpu {
     pub fn new(gpu: &Gpu, node_cells: u32, capacity: usize) -> TerrainGpu {
         let device = &gpu.device;
         let vertices_per_node = terrain_mesh::vertex_count(node_cells) as u32;
-        let indices = terrain_mesh::indices(node_cells);
+        let index_capacity =
+            (capacity as u64 * terrain_mesh::max_index_count(node_cells) as u64).min(1 << 20);
         let texels = terrain_mesh::texels_per_side(node_cells) as u32;
         let max_dim = device.limits().max_texture_dimension_2d;
         let slots_per_row = ((capacity as f64).sqrt().ceil() as u32)
@@ -87,14 +115,7 @@ impl TerrainGpu {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let index_buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("terrain indices"),
-            size: (indices.len() * 4) as u64,
-            usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        gpu.queue
-            .write_buffer(&index_buffer, 0, bytemuck::cast_slice(&indices));
+        let index_buffer = index_buffer(device, index_capacity);
         let atlas = |label, format| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -114,25 +135,19 @@ impl TerrainGpu {
         TerrainGpu {
             node_cells,
             vertices_per_node,
-            index_count: indices.len() as u32,
-            grid_triangles: node_cells * node_cells * 2,
             capacity,
             texels,
             slots_per_row,
             atlas_size,
             vertex_pool,
             index_buffer,
+            index_capacity,
             normal_atlas: atlas("terrain normals", wgpu::TextureFormat::Rgba8Unorm),
             colour_atlas: atlas("terrain colours", wgpu::TextureFormat::Rgba8UnormSrgb),
             slots: (0..capacity).map(|_| None).collect(),
             by_key: HashMap::new(),
             free: (0..capacity).rev().collect(),
         }
-    }
-
-    /// Triangles of one node (grid and skirts).
-    pub fn triangles_per_node(&self) -> u32 {
-        self.index_count / 3
     }
 
     fn allocate(&mut self, frame: u64) -> Option<usize> {
@@ -167,9 +182,11 @@ impl TerrainGpu {
         nodes: &[SelectedNode],
         min_morph: &[f32],
         eye_ecef: glam::DVec3,
+        allowed_error_per_m: f64,
         frame: u64,
         build_budget: usize,
-    ) -> (Vec<NodeRecord>, MeshStats) {
+    ) -> (TerrainFrame, MeshStats) {
+        let skirt_per_m = (SKIRT_OVER_ALLOWED_ERROR * allowed_error_per_m) as f32;
         let mut stats = MeshStats::default();
         // Pass 1: a slot for every node that can have one this frame.
         let mut slot_of: Vec<Option<usize>> = Vec::with_capacity(nodes.len());
@@ -184,7 +201,9 @@ impl TerrainGpu {
             let up_to_date = existing
                 .and_then(|i| self.slots[i].as_ref())
                 .is_some_and(|s| {
-                    s.data_level == node.data_level && s.detail_level == wanted_detail
+                    s.data_level == node.data_level
+                        && s.detail_level == wanted_detail
+                        && s.cut == node.cut
                 });
             let slot_index = if up_to_date {
                 existing
@@ -203,10 +222,14 @@ impl TerrainGpu {
                                 (data_key, &data_tile),
                                 detail_key.as_ref().map(|(k, t)| (*k, t.as_ref())),
                                 node.error_m,
+                                node.cut,
                             );
                             self.upload(gpu, index, &mesh);
                             self.slots[index] = Some(Slot {
                                 key: node.key,
+                                cut: node.cut,
+                                indices: mesh.indices.clone(),
+                                loading_skirt_m: mesh.skirt_depth_m,
                                 data_level: mesh.data_level,
                                 detail_level: mesh.detail_level,
                                 centre_ecef: mesh.centre_ecef,
@@ -255,18 +278,52 @@ impl TerrainGpu {
                     && key.col >> (a.level - key.level) == a.col
             })
         };
-        let mut records = Vec::with_capacity(nodes.len() + stand_ins.len());
+        // Where a node shows more error than its distance allows (its finer tiles or its mesh
+        // are not there yet), its neighbours may be that far from it: every skirt of the view
+        // reaches that deep while it lasts.
+        let mut floor_m = SKIRT_FLOOR_M;
+        for (node, slot) in nodes.iter().zip(&slot_of) {
+            let Some(index) = slot else { continue };
+            let settled = self.slots[*index]
+                .as_ref()
+                .is_some_and(|s| s.data_level == node.key.level && s.cut == node.cut);
+            let shown_m = if settled {
+                f64::from(node.cut.tolerance_m.max(node.error_m))
+            } else {
+                f64::from(self.loading_skirt_m(*index))
+            };
+            let excess_m = shown_m - allowed_error_per_m * node.distance_m;
+            if excess_m > 0.0 {
+                floor_m = floor_m.max((SKIRT_OVER_ALLOWED_ERROR * excess_m) as f32);
+            }
+        }
+        for (_, index) in &stand_ins {
+            floor_m = floor_m.max(self.loading_skirt_m(*index));
+        }
+        let mut out = TerrainFrame::default();
         for (i, (node, slot)) in nodes.iter().zip(&slot_of).enumerate() {
             if let Some(index) = slot {
                 if !covered(node.key) {
                     let least = min_morph.get(i).copied().unwrap_or(0.0);
-                    records.extend(self.record(
+                    let settled = self.slots[*index]
+                        .as_ref()
+                        .is_some_and(|s| s.data_level == node.key.level && s.cut == node.cut);
+                    let loading_m = self.loading_skirt_m(*index).max(floor_m);
+                    let skirt = if settled {
+                        (floor_m, skirt_per_m, loading_m)
+                    } else {
+                        (loading_m, 0.0, loading_m)
+                    };
+                    if let Some(record) = self.record(
                         *index,
                         node.morph_start_m,
                         node.morph_end_m,
                         least,
+                        skirt,
                         eye_ecef,
-                    ));
+                    ) {
+                        self.add_to_frame(&mut out, *index, record);
+                    }
                 }
             }
         }
@@ -274,19 +331,63 @@ impl TerrainGpu {
             if let Some(slot) = self.slots[*index].as_mut() {
                 slot.last_used_frame = frame;
             }
-            records.extend(self.record(*index, f32::INFINITY, f32::INFINITY, 0.0, eye_ecef));
+            let loading_m = self.loading_skirt_m(*index).max(floor_m);
+            let skirt = (loading_m, 0.0, loading_m);
+            if let Some(record) =
+                self.record(*index, f32::INFINITY, f32::INFINITY, 0.0, skirt, eye_ecef)
+            {
+                self.add_to_frame(&mut out, *index, record);
+            }
         }
         stats.stand_ins = stand_ins.len();
-        (records, stats)
+        (out, stats)
     }
 
-    /// The shader record of the mesh in slot `index`.
+    /// The skirt depth of slot `index`'s mesh drawn while data loads.
+    fn loading_skirt_m(&self, index: usize) -> f32 {
+        self.slots
+            .get(index)
+            .and_then(|s| s.as_ref())
+            .map_or(SKIRT_FLOOR_M, |s| s.loading_skirt_m)
+    }
+
+    /// Adds slot `index`'s triangles and record to a view's frame.
+    fn add_to_frame(&self, out: &mut TerrainFrame, index: usize, record: NodeRecord) {
+        let Some(slot) = self.slots.get(index).and_then(|s| s.as_ref()) else {
+            return;
+        };
+        if out.records.len() <= index {
+            out.records.resize(index + 1, NodeRecord::default());
+        }
+        out.records[index] = record;
+        let base = index as u32 * self.vertices_per_node;
+        out.indices
+            .extend(slot.indices.iter().map(|&i| base + u32::from(i)));
+        out.nodes += 1;
+    }
+
+    /// Writes a view's triangles to the index buffer, growing it when they do not fit.
+    pub fn write_indices(&mut self, gpu: &Gpu, indices: &[u32]) {
+        let needed = indices.len() as u64;
+        if needed > self.index_capacity {
+            self.index_capacity = needed.next_power_of_two();
+            self.index_buffer = index_buffer(&gpu.device, self.index_capacity);
+        }
+        if !indices.is_empty() {
+            gpu.queue
+                .write_buffer(&self.index_buffer, 0, bytemuck::cast_slice(indices));
+        }
+    }
+
+    /// The shader record of the mesh in slot `index`; its skirts hang `floor_m + per_m * d`
+    /// at distance `d`, at most `most_m`.
     fn record(
         &self,
         index: usize,
         morph_start_m: f32,
         morph_end_m: f32,
         least_morph: f32,
+        (skirt_floor_m, skirt_per_m, skirt_most_m): (f32, f32, f32),
         eye_ecef: glam::DVec3,
     ) -> Option<NodeRecord> {
         let slot = self.slots.get(index)?.as_ref()?;
@@ -296,24 +397,19 @@ impl TerrainGpu {
             index as u32 / self.slots_per_row,
         );
         let texel = 1.0 / self.atlas_size as f32;
-        let axis = |v: glam::DVec3| {
+        let axis = |v: glam::DVec3, w: f32| {
             let v = v.as_vec3();
-            [v.x, v.y, v.z, 0.0]
+            [v.x, v.y, v.z, w]
         };
         Some(NodeRecord {
-            offset: [
-                offset.x,
-                offset.y,
-                offset.z,
-                (index as u32 * self.vertices_per_node) as f32,
-            ],
-            axis_e: axis(slot.axes[0]),
-            axis_n: axis(slot.axes[1]),
-            axis_u: axis(slot.axes[2]),
+            offset: [offset.x, offset.y, offset.z, skirt_per_m],
+            axis_e: axis(slot.axes[0], 0.0),
+            axis_n: axis(slot.axes[1], 0.0),
+            axis_u: axis(slot.axes[2], skirt_most_m),
             morph: [
                 morph_start_m.min(1e30),
                 morph_end_m.min(1.5e30),
-                self.node_cells as f32,
+                skirt_floor_m,
                 least_morph.clamp(0.0, 1.0),
             ],
             // Texel centres of the slot's first and last texel span the node.
@@ -333,6 +429,7 @@ impl TerrainGpu {
             index as u64 * u64::from(self.vertices_per_node) * stride,
             bytemuck::cast_slice(&mesh.vertices),
         );
+
         let (sx, sy) = (
             index as u32 % self.slots_per_row,
             index as u32 / self.slots_per_row,
@@ -371,4 +468,14 @@ impl TerrainGpu {
     pub fn resident_nodes(&self) -> usize {
         self.by_key.len()
     }
+}
+
+/// An index buffer of `entries` 32-bit indices.
+fn index_buffer(device: &wgpu::Device, entries: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("terrain indices"),
+        size: entries.max(1) * 4,
+        usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }

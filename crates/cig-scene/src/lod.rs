@@ -36,10 +36,19 @@
 //! their parent's shape over half a second (a floor on the morph factor), so finer data morphs
 //! in as it arrives. The selection lists the tiles it would have refined into.
 //!
+//! Meshes: each drawn node's triangles are a cut of the triangulated irregular network over
+//! its level's posts at a tolerance (`terrain_mesh::NodeCut`): the least error along its
+//! ancestors, so that children keep their parents' posts. Between its parent's tolerance and
+//! its own error a drawn node takes tolerance steps by distance (half its parent's, a quarter,
+//! ...; [`TOLERANCE_STEPS`]), each morphing into the next larger one over its band, which is
+//! what lets the finest level, which has nothing finer to refine into, be drawn coarse where
+//! the eye is far from it.
+//!
 //! Limits: morph ranges come from each node's own error, not one range per level, so
 //! neighbours may differ by more than one level or meet while one is still partly morphed, and a
-//! node may be drawn from coarser data than its level while its tile loads; the resulting
-//! T-junction gaps are hidden by skirts (see `terrain_mesh`). Pixels are measured as a length
+//! node may be drawn from coarser data than its level while its tile loads; neighbours' cuts
+//! differ along shared edges. The resulting T-junction gaps are hidden by skirts (see
+//! `terrain_mesh`). Pixels are measured as a length
 //! seen across at the node's distance (`e K / d`): towards the frame's edges a perspective
 //! projection spreads a length over up to `1 / cos^2` of the angle off the axis more pixels
 //! (1.33 at the side of a 60 degree view), a deliberate choice: a measure by distance alone
@@ -48,6 +57,7 @@
 //! height, which is conservative for nodes up to about 1000 km across. The arena holds at most
 //! about 50 000 nodes between frames (about 30 MB); past that it is emptied and rebuilt.
 
+use crate::terrain_mesh::NodeCut;
 use crate::view::Camera;
 use cig_geo::{EnuFrame, Geodetic, LatLonTrig};
 use cig_terrain::database::GeoidLookup;
@@ -159,6 +169,15 @@ impl NodeLayout {
             row: (r0 / tile_span) as u32,
             col: (c0 / tile_span) as u32,
         }
+    }
+
+    /// True when the node reaches past the database's last row or column (its mesh's vertices
+    /// are clamped onto the edge there).
+    pub fn reaches_past_edge(&self, key: NodeKey) -> bool {
+        let (r0, c0) = self.finest_origin(key);
+        let span = self.finest_span(key.level);
+        r0 + span > (self.pyramid.grid.rows.max(2) - 1) as u64
+            || c0 + span > (self.pyramid.grid.cols.max(2) - 1) as u64
     }
 
     /// Nodes of the whole quadtree, every level.
@@ -313,6 +332,8 @@ pub struct SelectedNode {
     pub error_m: f32,
     /// Distance from the eye to the node's box, metres.
     pub distance_m: f64,
+    /// How its mesh is cut from its level's posts.
+    pub cut: NodeCut,
 }
 
 /// Result of one selection.
@@ -404,11 +425,15 @@ impl Hasher for KeyHasher {
 
 type KeyHash = BuildHasherDefault<KeyHasher>;
 
+/// A refined node's cut, level and whether it is drawn as a regular grid, handed to its
+/// children.
+type ParentCut = (NodeCut, u8, bool);
+
 /// Memory of one selection: what it asked the tile cache, so each tile is looked up once
 /// (the cache marks a tile used at the current paging step however often it is asked).
 #[derive(Default)]
 struct Scratch {
-    stack: Vec<(u32, NodeKey, f64)>,
+    stack: Vec<(u32, NodeKey, f64, Option<ParentCut>)>,
     wanted: Vec<(f64, TileKey)>,
     tiles: HashMap<TileKey, Option<Arc<Tile>>, KeyHash>,
     seen: HashSet<TileKey, KeyHash>,
@@ -604,9 +629,9 @@ impl TerrainLod {
             self.roots
                 .iter()
                 .enumerate()
-                .map(|(slot, &key)| (slot as u32, key, f64::INFINITY)),
+                .map(|(slot, &key)| (slot as u32, key, f64::INFINITY, None)),
         );
-        while let Some((slot, key, parent_range_m)) = scratch.stack.pop() {
+        while let Some((slot, key, parent_range_m, parent_cut)) = scratch.stack.pop() {
             let slot = slot as usize;
             selection.visited += 1;
             let Some(data_level) = scratch.source_level(cache, &self.layout, key) else {
@@ -640,25 +665,36 @@ impl TerrainLod {
             let error_m = f64::from(g.error_m.max(0.0));
             let range_m =
                 error_range_m(error_m, camera.pixels_per_tangent, settings.max_pixel_error);
+            let cut = if settings.max_pixel_error > 0.0 {
+                NodeCut::below(parent_cut, error_m as f32)
+            } else {
+                NodeCut::REGULAR
+            };
             let wants_refine = key.level > 0 && distance_m < range_m;
             if wants_refine {
                 let child_tile = self.layout.tile_of(key, key.level - 1);
                 if scratch.resident(cache, child_tile).is_some() {
                     let first = self.children_of(slot);
+                    let handed = Some((cut, key.level, self.layout.reaches_past_edge(key)));
                     for (i, child) in key.children().into_iter().enumerate() {
                         if self.layout.exists(child) {
-                            scratch.stack.push((first + i as u32, child, range_m));
+                            scratch
+                                .stack
+                                .push((first + i as u32, child, range_m, handed));
                         }
                     }
                     continue;
                 }
                 scratch.wanted.push((distance_m, child_tile));
             }
-            let (morph_start_m, morph_end_m) = if parent_range_m.is_finite() {
-                (morph_start(range_m, parent_range_m), parent_range_m)
-            } else {
-                (f64::INFINITY, f64::INFINITY)
-            };
+            let (cut, morph_start_m, morph_end_m) = drawn_cut(
+                &self.layout,
+                key,
+                cut,
+                (distance_m, range_m, parent_range_m),
+                camera,
+                settings,
+            );
             selection.nodes.push(SelectedNode {
                 key,
                 data_level: g.data_level,
@@ -666,6 +702,7 @@ impl TerrainLod {
                 morph_end_m: morph_end_m as f32,
                 error_m: error_m as f32,
                 distance_m,
+                cut,
             });
         }
         let wanted = &mut scratch.wanted;
@@ -696,6 +733,109 @@ impl TerrainLod {
     pub fn cached_nodes(&self) -> usize {
         self.boxes.len()
     }
+}
+
+/// A drawn node's cut and morph band (start, end), from its cut at its own error and its box
+/// distance, own range and parent's range: a tolerance step inside the database (nodes that
+/// reach past its edge are regular grids), CDLOD's band between the node's and its parent's
+/// range otherwise, none for a root.
+fn drawn_cut(
+    layout: &NodeLayout,
+    key: NodeKey,
+    cut: NodeCut,
+    (distance_m, range_m, parent_range_m): (f64, f64, f64),
+    camera: &Camera,
+    settings: &LodSettings,
+) -> (NodeCut, f64, f64) {
+    if !parent_range_m.is_finite() {
+        return (cut, f64::INFINITY, f64::INFINITY);
+    }
+    if settings.max_pixel_error > 0.0 && !layout.reaches_past_edge(key) {
+        return tolerance_step(
+            cut,
+            distance_m,
+            camera.pixels_per_tangent,
+            settings.max_pixel_error,
+            range_m,
+            parent_range_m,
+        );
+    }
+    (cut, morph_start(range_m, parent_range_m), parent_range_m)
+}
+
+/// Tolerance steps of a drawn node: between its parent's tolerance and its own error a node is
+/// cut at half its parent's tolerance, a quarter nearer still, and so on for at most this
+/// many steps; the finest level (whose own error is zero) then at zero (every post that is not
+/// on a plane with its neighbours).
+pub const TOLERANCE_STEPS: i32 = 8;
+
+/// The cut and morph band of a drawn node at box distance `distance_m`, from `cut` (its cut
+/// at its own error, `min(e, t_parent)`): the largest step tolerance `t_j = t_parent / 2^j`
+/// above its own whose error distance `R(t_j)` the node's box is beyond (its own error when
+/// none is), morphing to the next larger step's cut (to the parent's at the first step), from
+/// `R(t_j)` to `R(t_(j-1))`. A vertex a fraction `m` through the band shows at most
+/// `(1 - m) t_j + m t_(j-1)`, the error its distance allows, as across levels; when the box
+/// comes nearer than `R(t_j)` the node takes the next step, whose vertices beyond `R(t_j)`
+/// are fully morphed onto this cut, so nothing pops. These are CDLOD's morph bands in
+/// tolerance instead of post spacing (the cuts of one node nest: the same post errors,
+/// smaller tolerances). The finest level, which has nothing finer to refine into, gains the
+/// most: its nodes are drawn from their parent's range inwards.
+fn tolerance_step(
+    cut: NodeCut,
+    distance_m: f64,
+    pixels_per_tangent: f64,
+    max_pixel_error: f64,
+    range_m: f64,
+    parent_range_m: f64,
+) -> (NodeCut, f64, f64) {
+    let parent_tolerance_m = cut.parent_tolerance_m;
+    let own_m = cut.tolerance_m;
+    let range_of = |t: f32| error_range_m(f64::from(t), pixels_per_tangent, max_pixel_error);
+    let unstepped = (cut, morph_start(range_m, parent_range_m), parent_range_m);
+    if !(parent_tolerance_m > 0.0 && parent_tolerance_m.is_finite() && parent_range_m.is_finite()) {
+        return unstepped;
+    }
+    // Step `j`'s tolerance, or `None` past the last step above the node's own.
+    let step_tolerance = |j: i32| {
+        let t = parent_tolerance_m * 0.5f32.powi(j);
+        (j <= TOLERANCE_STEPS && t > own_m).then_some(t)
+    };
+    let mut j = 1;
+    let tolerance_m = loop {
+        match step_tolerance(j) {
+            Some(t) if range_of(t) > distance_m => j += 1,
+            Some(t) => break t,
+            None => break own_m,
+        }
+    };
+    if j == 1 {
+        if tolerance_m == own_m {
+            return unstepped;
+        }
+        let stepped = NodeCut { tolerance_m, ..cut };
+        return (
+            stepped,
+            morph_start(range_of(tolerance_m), parent_range_m),
+            parent_range_m,
+        );
+    }
+    let morph_to_m = parent_tolerance_m * 0.5f32.powi(j - 1);
+    let morph_end_m = range_of(morph_to_m);
+    let start_m = if tolerance_m == own_m {
+        range_m
+    } else {
+        range_of(tolerance_m)
+    };
+    (
+        NodeCut {
+            tolerance_m,
+            parent_tolerance_m: morph_to_m,
+            morphs_within_level: true,
+            regular_ancestor_level: cut.regular_ancestor_level,
+        },
+        morph_start(start_m, morph_end_m),
+        morph_end_m,
+    )
 }
 
 /// Where a drawn node's vertices start morphing towards the parent's grid: at its own error
@@ -979,13 +1119,13 @@ mod tests {
             })
         };
         let mut selection = Selection::default();
-        let mut stack: Vec<(NodeKey, f64)> = layout
+        let mut stack: Vec<(NodeKey, f64, Option<ParentCut>)> = layout
             .roots()
             .into_iter()
-            .map(|k| (k, f64::INFINITY))
+            .map(|k| (k, f64::INFINITY, None))
             .collect();
         let mut wanted: Vec<(f64, TileKey)> = Vec::new();
-        while let Some((key, parent_range_m)) = stack.pop() {
+        while let Some((key, parent_range_m, parent_cut)) = stack.pop() {
             selection.visited += 1;
             let Some(g) = geometry(key) else {
                 wanted.push((f64::INFINITY, layout.tile_of(key, key.level)));
@@ -1001,24 +1141,36 @@ mod tests {
             let error_m = f64::from(g.bounds.error_m.max(0.0));
             let range_m =
                 error_range_m(error_m, camera.pixels_per_tangent, settings.max_pixel_error);
+            let cut = if settings.max_pixel_error > 0.0 {
+                NodeCut::below(parent_cut, error_m as f32)
+            } else {
+                NodeCut::REGULAR
+            };
             let wants_refine = key.level > 0 && distance_m < range_m;
             if wants_refine {
                 let child_tile = layout.tile_of(key, key.level - 1);
                 if cache.resident(child_tile).is_some() {
                     for child in key.children() {
                         if layout.exists(child) {
-                            stack.push((child, range_m));
+                            stack.push((
+                                child,
+                                range_m,
+                                Some((cut, key.level, layout.reaches_past_edge(key))),
+                            ));
                         }
                     }
                     continue;
                 }
                 wanted.push((distance_m, child_tile));
             }
-            let (morph_start_m, morph_end_m) = if parent_range_m.is_finite() {
-                (morph_start(range_m, parent_range_m), parent_range_m)
-            } else {
-                (f64::INFINITY, f64::INFINITY)
-            };
+            let (cut, morph_start_m, morph_end_m) = drawn_cut(
+                layout,
+                key,
+                cut,
+                (distance_m, range_m, parent_range_m),
+                camera,
+                settings,
+            );
             selection.nodes.push(SelectedNode {
                 key,
                 data_level: g.data_level,
@@ -1026,6 +1178,7 @@ mod tests {
                 morph_end_m: morph_end_m as f32,
                 error_m: error_m as f32,
                 distance_m,
+                cut,
             });
         }
         wanted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -1179,6 +1332,7 @@ mod tests {
             );
             assert_eq!(a.morph_end_m.to_bits(), b.morph_end_m.to_bits(), "{what}");
             assert_eq!(a.error_m.to_bits(), b.error_m.to_bits(), "{what}");
+            assert_eq!(a.cut, b.cut, "{what}: {:?}", a.key);
             assert_eq!(
                 a.distance_m.to_bits(),
                 b.distance_m.to_bits(),
@@ -1293,6 +1447,78 @@ mod tests {
         assert_eq!(lod.cached_nodes(), lod.layout.roots().len());
     }
 
+    /// A node mesh's grid triangles, found by cell: the surface a mesh draws at any point of
+    /// its grid, read from its index list (an independent reading of what the GPU draws).
+    struct MeshSurface {
+        n: usize,
+        /// Grid (row, column) of each grid vertex.
+        at: Vec<(usize, usize)>,
+        triangles: Vec<[usize; 3]>,
+        by_cell: Vec<Vec<usize>>,
+    }
+
+    impl MeshSurface {
+        fn new(mesh: &crate::terrain_mesh::NodeMesh, n: u32) -> MeshSurface {
+            let n = n as usize;
+            let at: Vec<(usize, usize)> = mesh.vertices[..mesh.grid_vertices]
+                .iter()
+                .map(|v| {
+                    let k = |f: f32| (f64::from(f) * n as f64).round() as usize;
+                    (k(v.grid_uv[1]), k(v.grid_uv[0]))
+                })
+                .collect();
+            let triangles: Vec<[usize; 3]> = mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| [t[0] as usize, t[1] as usize, t[2] as usize])
+                .filter(|t| t.iter().all(|&v| v < mesh.grid_vertices))
+                .collect();
+            let mut by_cell = vec![Vec::new(); n * n];
+            for (k, t) in triangles.iter().enumerate() {
+                let rows = t.map(|v| at[v].0);
+                let cols = t.map(|v| at[v].1);
+                let (r_lo, r_hi) = (*rows.iter().min().unwrap(), *rows.iter().max().unwrap());
+                let (c_lo, c_hi) = (*cols.iter().min().unwrap(), *cols.iter().max().unwrap());
+                for r in r_lo..r_hi.max(r_lo + 1).min(n) {
+                    for c in c_lo..c_hi.max(c_lo + 1).min(n) {
+                        by_cell[r * n + c].push(k);
+                    }
+                }
+            }
+            MeshSurface {
+                n,
+                at,
+                triangles,
+                by_cell,
+            }
+        }
+
+        /// The point of the mesh (vertex positions `at`) over grid point `(row, col)`.
+        fn point(&self, at: &[DVec3], row: f64, col: f64) -> DVec3 {
+            let cell = (row.floor() as usize).min(self.n - 1) * self.n
+                + (col.floor() as usize).min(self.n - 1);
+            let rc = |v: usize| (self.at[v].0 as f64, self.at[v].1 as f64);
+            for &k in &self.by_cell[cell] {
+                let [a, b, c] = self.triangles[k].map(rc);
+                let cross = |o: (f64, f64), p: (f64, f64), q: (f64, f64)| {
+                    (p.0 - o.0) * (q.1 - o.1) - (p.1 - o.1) * (q.0 - o.0)
+                };
+                let p = (row, col);
+                let area = cross(a, b, c);
+                let w = [
+                    cross(p, b, c) / area,
+                    cross(a, p, c) / area,
+                    cross(a, b, p) / area,
+                ];
+                if w.iter().all(|&w| w >= -1e-9) {
+                    let [va, vb, vc] = self.triangles[k];
+                    return at[va] * w[0] + at[vb] * w[1] + at[vc] * w[2];
+                }
+            }
+            panic!("no triangle of the mesh holds grid point ({row}, {col})");
+        }
+    }
+
     /// The largest error, in pixels as the selection measures them (`pixels_per_tangent` over
     /// the distance), between the surface a selection draws (its nodes' meshes morphed as the
     /// terrain shader morphs them) and the finest posts, over every finest post of every drawn
@@ -1307,7 +1533,6 @@ mod tests {
         let grid = layout.pyramid.grid;
         let tile_cells = layout.pyramid.finest_cells_per_tile(0);
         let n = layout.node_cells as usize;
-        let s = n + 1;
         let (mut worst_px, mut posts) = (0.0f64, 0usize);
         for node in &selection.nodes {
             let data_key = layout.tile_of(node.key, node.data_level);
@@ -1319,13 +1544,14 @@ mod tests {
                 (data_key, &data),
                 None,
                 node.error_m,
+                node.cut,
             );
             // The terrain shader's morph: by the distance of each vertex's morph target.
             let (start, end) = (
                 f64::from(node.morph_start_m.min(1e30)),
                 f64::from(node.morph_end_m.min(1.5e30)),
             );
-            let drawn: Vec<DVec3> = mesh.vertices[..s * s]
+            let drawn: Vec<DVec3> = mesh.vertices[..mesh.grid_vertices]
                 .iter()
                 .map(|v| {
                     let position = DVec3::from(v.position.map(f64::from));
@@ -1335,6 +1561,7 @@ mod tests {
                     mesh.centre_ecef + position.lerp(target, m)
                 })
                 .collect();
+            let surface = MeshSurface::new(&mesh, layout.node_cells);
             let (r0, c0) = layout.finest_origin(node.key);
             let step = 1u64 << node.key.level;
             let span = layout.finest_span(node.key.level);
@@ -1356,12 +1583,7 @@ mod tests {
                     };
                     let (i, u) = along(r, r0, grid.rows as u64 - 1);
                     let (j, v) = along(c, c0, grid.cols as u64 - 1);
-                    let at = |di: usize, dj: usize| drawn[(i + di) * s + j + dj];
-                    let shown = crate::terrain_mesh::triangulated_point(
-                        [at(0, 0), at(0, 1), at(1, 0), at(1, 1)],
-                        v,
-                        u,
-                    );
+                    let shown = surface.point(&drawn, i as f64 + u, j as f64 + v);
                     let tile_key = TileKey {
                         level: 0,
                         row: (r / tile_cells) as u32,
@@ -1420,10 +1642,58 @@ mod tests {
         assert_eq!(error_range_m(1.0, 1000.0, 0.0), f64::INFINITY);
     }
 
+    /// The mesh of `key` cut at `cut`, from its own level's tile.
+    fn own_mesh(
+        lod: &TerrainLod,
+        cache: &TileCache,
+        key: NodeKey,
+        cut: NodeCut,
+    ) -> crate::terrain_mesh::NodeMesh {
+        let tile_key = lod.layout.tile_of(key, key.level);
+        let tile = cache.resident(tile_key).expect("every tile is resident");
+        crate::terrain_mesh::build_node_mesh(
+            &lod.layout,
+            lod.geoid(),
+            key,
+            (tile_key, &tile),
+            None,
+            0.0,
+            cut,
+        )
+    }
+
+    /// The cut a selection gives `key` when every tile is resident: the least error along the
+    /// path from its root, and the level of its nearest ancestor that reaches past the edge.
+    fn cut_of(layout: &NodeLayout, cache: &TileCache, key: NodeKey) -> NodeCut {
+        let error_of = |k: NodeKey| {
+            let tile_key = layout.tile_of(k, k.level);
+            let tile = cache.resident(tile_key).expect("every tile is resident");
+            layout
+                .node_bounds_in(k, tile_key, &tile.nodes)
+                .error_m
+                .max(0.0)
+        };
+        let mut chain = vec![key];
+        while chain
+            .last()
+            .is_some_and(|k| k.level + 1 < layout.pyramid.levels)
+        {
+            let parent = chain.last().map(|k| k.parent()).expect("not empty");
+            chain.push(parent);
+        }
+        let mut parent = None;
+        let mut cut = NodeCut::REGULAR;
+        for k in chain.into_iter().rev() {
+            cut = NodeCut::below(parent, error_of(k));
+            parent = Some((cut, k.level, layout.reaches_past_edge(k)));
+        }
+        cut
+    }
+
     /// No pop when a parent takes over from its children: a child's fully morphed vertices lie
-    /// on the parent's own mesh (built from the parent's tile), everywhere, the nodes that
-    /// reach past the database's last row and column included (their vertices are clamped
-    /// onto the edge, and stay on it).
+    /// on the parent's own mesh (built from the parent's tile with the parent's cut, and read
+    /// back from its triangle list), everywhere, the nodes that reach past the database's last
+    /// row and column included (their vertices are clamped onto the edge, and stay on it).
     #[test]
     fn fully_morphed_children_lie_on_their_parents_mesh() {
         let db = rough_database();
@@ -1431,22 +1701,11 @@ mod tests {
         let lod = lod_for(&db);
         let layout = &lod.layout;
         let n = layout.node_cells as usize;
-        let s = n + 1;
-        let build = |key: NodeKey| {
-            let tile_key = layout.tile_of(key, key.level);
-            let tile = cache.resident(tile_key).expect("every tile is resident");
-            crate::terrain_mesh::build_node_mesh(
-                layout,
-                lod.geoid(),
-                key,
-                (tile_key, &tile),
-                None,
-                0.0,
-            )
-        };
+        let build = |key: NodeKey| own_mesh(&lod, &cache, key, cut_of(layout, &cache, key));
         let grid = layout.pyramid.grid;
         let (last_row, last_col) = ((grid.rows - 1) as f64, (grid.cols - 1) as f64);
         let (mut checked, mut at_edge, mut worst_m) = (0usize, 0usize, 0.0f64);
+        let (mut child_triangles, mut grid_triangles) = (0usize, 0usize);
         for level in 0..layout.pyramid.levels - 1 {
             let (tiles_rows, tiles_cols) = layout.pyramid.tiles_at(level);
             let nodes_per_tile = layout.pyramid.tile_cells / layout.node_cells;
@@ -1457,10 +1716,16 @@ mod tests {
                         continue;
                     }
                     let (child, parent) = (build(key), build(key.parent()));
-                    let parent_vertex = |a: usize, b: usize| {
-                        let v = parent.vertices[a * s + b].position.map(f64::from);
-                        parent.centre_ecef + DVec3::from(v)
-                    };
+                    if !layout.reaches_past_edge(key) {
+                        child_triangles += child.indices.len() / 3;
+                        grid_triangles += 2 * n * n + 8 * n;
+                    }
+                    let parent_positions: Vec<DVec3> = parent
+                        .vertices
+                        .iter()
+                        .map(|v| parent.centre_ecef + DVec3::from(v.position.map(f64::from)))
+                        .collect();
+                    let parent_surface = MeshSurface::new(&parent, layout.node_cells);
                     let (r0, c0) = layout.finest_origin(key);
                     let (pr0, pc0) = layout.finest_origin(key.parent());
                     let step = (1u64 << level) as f64;
@@ -1476,19 +1741,16 @@ mod tests {
                         };
                         (k, f)
                     };
-                    for i in 0..s {
-                        for j in 0..s {
+                    let child_surface = MeshSurface::new(&child, layout.node_cells);
+                    for (k, &(i, j)) in child_surface.at.iter().enumerate() {
+                        {
                             let own_row = (r0 as f64 + i as f64 * step).min(last_row);
                             let own_col = (c0 as f64 + j as f64 * step).min(last_col);
                             let (a, v) = cell(own_row, pr0 as f64, last_row);
                             let (b, u) = cell(own_col, pc0 as f64, last_col);
-                            let at = |da: usize, db: usize| parent_vertex(a + da, b + db);
-                            let on_parent = crate::terrain_mesh::triangulated_point(
-                                [at(0, 0), at(0, 1), at(1, 0), at(1, 1)],
-                                u,
-                                v,
-                            );
-                            let target = child.vertices[i * s + j].morph_target.map(f64::from);
+                            let on_parent =
+                                parent_surface.point(&parent_positions, a as f64 + v, b as f64 + u);
+                            let target = child.vertices[k].morph_target.map(f64::from);
                             let target = child.centre_ecef + DVec3::from(target);
                             worst_m = worst_m.max((target - on_parent).length());
                             checked += 1;
@@ -1507,6 +1769,69 @@ mod tests {
         assert!(
             worst_m < 0.02,
             "a fully morphed vertex is {worst_m} m off its parent's mesh"
+        );
+        // The cuts are adaptive: inside the database, fewer triangles than the regular grids.
+        assert!(
+            child_triangles * 10 < grid_triangles * 9,
+            "{child_triangles} triangles where the grids have {grid_triangles}"
+        );
+    }
+
+    /// No pop between a node's tolerance steps: a node cut at a step's tolerance, fully
+    /// morphed, lies on its own cut at the next larger step (read back from that mesh's
+    /// triangles), and the smaller step keeps more of the posts.
+    #[test]
+    fn fully_morphed_tolerance_steps_lie_on_the_larger_step() {
+        let db = rough_database();
+        let cache = cache_with(&db, 0..db.layout().levels, false);
+        let lod = lod_for(&db);
+        let layout = &lod.layout;
+        let (mut checked, mut worst_m) = (0usize, 0.0f64);
+        let (mut fine_triangles, mut coarse_triangles) = (0usize, 0usize);
+        for level in 0..2u8 {
+            for key in (0..8)
+                .flat_map(|row| (0..8).map(move |col| NodeKey { level, row, col }))
+                .filter(|&k| layout.exists(k) && !layout.reaches_past_edge(k))
+            {
+                let base = cut_of(layout, &cache, key);
+                let larger = (base.parent_tolerance_m * 0.5).max(base.tolerance_m);
+                let build = |cut: NodeCut| own_mesh(&lod, &cache, key, cut);
+                let coarse = build(NodeCut {
+                    tolerance_m: larger,
+                    ..base
+                });
+                let fine = build(NodeCut {
+                    tolerance_m: (larger * 0.5).max(base.tolerance_m),
+                    parent_tolerance_m: larger,
+                    morphs_within_level: true,
+                    ..base
+                });
+                fine_triangles += fine.indices.len() / 3;
+                coarse_triangles += coarse.indices.len() / 3;
+                let positions: Vec<DVec3> = coarse
+                    .vertices
+                    .iter()
+                    .map(|v| coarse.centre_ecef + DVec3::from(v.position.map(f64::from)))
+                    .collect();
+                let coarse_surface = MeshSurface::new(&coarse, layout.node_cells);
+                let fine_surface = MeshSurface::new(&fine, layout.node_cells);
+                for (k, &(i, j)) in fine_surface.at.iter().enumerate() {
+                    let on_coarse = coarse_surface.point(&positions, i as f64, j as f64);
+                    let target = fine.vertices[k].morph_target.map(f64::from);
+                    let target = fine.centre_ecef + DVec3::from(target);
+                    worst_m = worst_m.max((target - on_coarse).length());
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 2000, "{checked} vertices");
+        assert!(
+            worst_m < 0.02,
+            "a fully morphed vertex is {worst_m} m off the larger step"
+        );
+        assert!(
+            fine_triangles > coarse_triangles,
+            "{fine_triangles} triangles at the smaller step, {coarse_triangles} at the larger"
         );
     }
 
@@ -1586,6 +1911,7 @@ mod tests {
                 morph_end_m: 0.0,
                 error_m: 0.0,
                 distance_m: d,
+                cut: NodeCut::REGULAR,
             };
             let mut nodes: Vec<SelectedNode> = distances.iter().enumerate().map(|(i, &d)| node(i, d)).collect();
             let mut expected = nodes.clone();

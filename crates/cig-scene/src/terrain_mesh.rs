@@ -1,39 +1,61 @@
-//! Vertex data, skirts and per-pixel surface textures of one terrain node.
+//! Vertex data, triangles, skirts and per-pixel surface textures of one terrain node.
 //!
-//! Algorithm: a node of level `L` is a regular `(n + 1) x (n + 1)` grid of the level's posts
-//! placed on the WGS84 ellipsoid (heights above mean sea level plus the database's geoid), in
-//! ECEF relative to the node's centre so that single precision holds centimetres. Each vertex
-//! carries a morph target: its place on the parent's mesh, i.e. the midpoint of its even
-//! neighbours (along the south-west to north-east diagonal for cell centres, which is the
-//! diagonal every triangle of the database uses). At full morph the node's surface is exactly
-//! its parent's, so a node morphs continuously into its parent (CDLOD, Strugar 2010) and a fully
-//! morphed node meets its coarser neighbour exactly. Where a node reaches past the database's
-//! last row or column its vertices are clamped onto the edge, and so are the parent's; the
-//! target is then taken on the parent's clamped cells with the parent level's heights, so the
-//! edge stays where it is while the node morphs (the midpoint rule moved it inwards by up to a
-//! cell and, with the finer level's heights, left a step of up to the parent's error there).
-//! Skirts (a strip hanging down from each edge) hide the gaps left where neighbours differ by
-//! more than one level or are drawn from different data while tiles load. Normals and colours are sampled at twice the vertex density, from the
-//! next finer level when it is resident, for per-pixel lighting.
+//! Algorithm: a node of level `L` covers `n x n` cells of the level's posts, placed on the
+//! WGS84 ellipsoid (heights above mean sea level plus the database's geoid), in ECEF relative
+//! to the node's centre so that single precision holds centimetres. Its triangles are a cut of
+//! the right-triangulated irregular network (RTIN) over those posts ([`rtin_triangles`];
+//! Evans, Kirkpatrick and Townsend 2001): the node's square split by its diagonal, each right
+//! triangle split at its hypotenuse's midpoint while that post is kept, down to the level's
+//! cells, which are split as the database splits them (a checkerboard, see
+//! `cig_terrain::raster::Diagonal`), so keeping every post gives the database's own surface.
+//! A post is kept when its level error (`cig_terrain::rtin`, stored in the tile) exceeds the
+//! node's tolerance ([`NodeCut`]: the least error along the node's ancestors, or a larger step
+//! of it, see `cig_scene::lod`), so every triangle of the cut is within the tolerance of the
+//! finest posts, and the cut conforms. The node's quadrants are always split (the cut holds at
+//! least 8 triangles) so that a child's share of its parent's cut depends on the child's posts
+//! alone; every post of a level drawn as a regular grid above (a node reaching past the
+//! database's edge) is kept. Each vertex carries a morph target: its place on the cut it
+//! morphs to (its parent's, whose posts are this node's even posts, or its own at a larger
+//! tolerance), found by walking that cut's hierarchy ([`locate`]). A child keeps every post its
+//! parent keeps (post errors never decrease towards finer levels, tolerances never increase),
+//! so its triangles lie inside its parent's and at full morph the node's surface is exactly
+//! the one it morphs to (CDLOD, Strugar 2010): nothing pops when the selection switches.
+//! Where a node reaches past the database's last row or column its vertices are clamped onto
+//! the edge, and so are the parent's; such a node keeps every post, and its targets are taken
+//! on the parent's clamped cells with the parent level's heights, so the edge stays where it is
+//! while the node morphs. Only the vertices the triangles use are stored, each with its place
+//! on the node's grid (for its texels). Skirts (a strip hanging from each edge's kept posts,
+//! lowered by the shader as far as neighbours can differ at that distance) hide the gaps where
+//! neighbours are cut differently or differ in level. Normals and colours are sampled at twice
+//! the post density, from the next finer level when it is resident, for per-pixel lighting.
 //!
 //! Limits: normals are expressed in the node centre's east-north-up frame, which differs from
 //! the local vertical by up to half the node's angular size (under 0.3 degree for nodes below
-//! 60 km); materials are blended bilinearly in colour, not per class.
+//! 60 km); materials are blended bilinearly in colour, not per class. Nodes drawn from a
+//! coarser level's data while their tile loads, and tiles without post errors (format 1),
+//! are drawn as regular grids; a parent drawn from coarser data is not the cut its children
+//! morph to (a pop of up to its error when its own tile arrives, which the renderer's fade-in
+//! covers).
 
 use crate::lod::{NodeKey, NodeLayout};
 use cig_geo::{metres_per_degree, EnuFrame, Geodetic};
 use cig_terrain::database::GeoidLookup;
-use cig_terrain::raster::triangulated_height;
-use cig_terrain::tile::Tile;
+use cig_terrain::raster::{triangulated_height, Diagonal};
+use cig_terrain::tile::{even_posts_per_side, Tile};
 use cig_terrain::{Material, TileKey};
 use glam::DVec3;
 
-/// One terrain vertex: position and morph target relative to the node centre (ECEF axes).
+/// One terrain vertex: position and morph target relative to the node centre (ECEF axes),
+/// its place on the node's grid (east, north; 0 to 1), where its texels are, and whether it
+/// is the foot of a skirt (1) rather than a post (0): a skirt's foot lies at its edge post and
+/// the shader lowers it by the skirt's depth for the view.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct TerrainVertex {
     pub position: [f32; 3],
     pub morph_target: [f32; 3],
+    pub grid_uv: [f32; 2],
+    pub skirt: f32,
 }
 
 /// The CPU-side mesh and textures of one node.
@@ -47,12 +69,19 @@ pub struct NodeMesh {
     pub centre_ecef: DVec3,
     /// East, north and up at the centre (ECEF unit vectors): the frame of the normals.
     pub axes: [DVec3; 3],
+    /// The vertices the mesh uses: its kept grid posts, then its skirts' (at most
+    /// [`vertex_count`]).
     pub vertices: Vec<TerrainVertex>,
+    /// How many of `vertices` are grid posts (the rest hang from the edges).
+    pub grid_vertices: usize,
+    /// The triangle list, grid then skirts (at most [`max_index_count`]).
+    pub indices: Vec<u16>,
     /// `texels_per_side(n)^2` normals, RGBA8: xyz in the node's ENU frame mapped to 0..255.
     pub normals: Vec<[u8; 4]>,
     /// Same grid: sRGB colour of the surface material, alpha = specular (water, wet roads).
     pub colours: Vec<[u8; 4]>,
-    /// Skirt depth, metres.
+    /// Skirt depth for a node drawn while its data is still loading (from a coarser level, or
+    /// in place of its descendants), metres: enough for neighbours drawn from other data.
     pub skirt_depth_m: f32,
 }
 
@@ -67,27 +96,195 @@ pub fn texels_per_side(n: u32) -> usize {
     2 * n as usize + 1
 }
 
-/// The triangle list shared by every node of `n` cells a side (grid, then skirts).
-pub fn indices(n: u32) -> Vec<u32> {
-    let s = n + 1;
-    let mut out = Vec::with_capacity((n * n * 6 + 4 * n * 6) as usize);
-    for i in 0..n {
-        for j in 0..n {
-            let sw = i * s + j;
-            let (se, nw) = (sw + 1, sw + s);
-            let ne = nw + 1;
-            out.extend_from_slice(&[sw, se, ne, sw, ne, nw]);
+/// Indices of a node's mesh at most (every cell's two triangles and every skirt quad).
+pub fn max_index_count(n: u32) -> usize {
+    (n as usize * n as usize * 2 + 4 * n as usize * 2) * 3
+}
+
+/// How a node's mesh is cut from its level's posts (see [`build_node_mesh`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeCut {
+    /// Posts whose level error ([`cig_terrain::tile::LodErrors`]) exceeds this are kept,
+    /// metres: the least geometric error along the node and its ancestors, so that a child's
+    /// kept posts include its parent's.
+    pub tolerance_m: f32,
+    /// The tolerance of the cut the mesh morphs to: the parent's (infinite for a root, which
+    /// never morphs), or with `morphs_within_level` this node's own at a larger tolerance (the
+    /// finest level's refinement steps, see `cig_scene::lod`).
+    pub parent_tolerance_m: f32,
+    pub morphs_within_level: bool,
+    /// The level of the nearest ancestor drawn as a regular grid (one that reaches past the
+    /// database's edge): every post of that level is kept, so that the node's mesh holds its
+    /// ancestors' meshes.
+    pub regular_ancestor_level: Option<u8>,
+}
+
+impl NodeCut {
+    /// Every post kept (full detail, and the cut of nodes without level errors).
+    pub const REGULAR: NodeCut = NodeCut {
+        tolerance_m: -1.0,
+        parent_tolerance_m: -1.0,
+        morphs_within_level: false,
+        regular_ancestor_level: None,
+    };
+
+    /// The cut of a node of geometric error `error_m` below a parent cut `parent` (`None` for
+    /// a root), and whether the node itself is drawn as a regular grid.
+    pub fn below(parent: Option<(NodeCut, u8, bool)>, error_m: f32) -> NodeCut {
+        match parent {
+            None => NodeCut {
+                tolerance_m: error_m,
+                parent_tolerance_m: f32::INFINITY,
+                morphs_within_level: false,
+                regular_ancestor_level: None,
+            },
+            Some((cut, parent_level, parent_regular)) => NodeCut {
+                tolerance_m: error_m.min(cut.tolerance_m),
+                parent_tolerance_m: cut.tolerance_m,
+                morphs_within_level: false,
+                regular_ancestor_level: if parent_regular {
+                    Some(parent_level)
+                } else {
+                    cut.regular_ancestor_level
+                },
+            },
+        }
+    }
+}
+
+/// A triangle of the hierarchy on a node's grid: its hypotenuse's ends and its right-angled
+/// apex, as (row, column) grid indices.
+type GridTriangle = [(i32, i32); 3];
+
+/// The node square's two root triangles: its diagonal splits it as the database's checkerboard
+/// of squares of its size splits it (`square_parity` = node row + column).
+fn root_triangles(n: i32, square_parity: u32) -> [GridTriangle; 2] {
+    let (sw, se, nw, ne) = ((0, 0), (0, n), (n, 0), (n, n));
+    if square_parity.is_multiple_of(2) {
+        [[sw, ne, se], [ne, sw, nw]]
+    } else {
+        [[se, nw, ne], [nw, se, sw]]
+    }
+}
+
+fn midpoint([a, b, _]: &GridTriangle) -> Option<(i32, i32)> {
+    let (r, c) = (a.0 + b.0, a.1 + b.1);
+    (r % 2 == 0 && c % 2 == 0).then_some((r / 2, c / 2))
+}
+
+/// The two triangles a triangle splits into at its hypotenuse's midpoint `m`.
+fn split([a, b, apex]: &GridTriangle, m: (i32, i32)) -> [GridTriangle; 2] {
+    [[*apex, *a, m], [*b, *apex, m]]
+}
+
+fn cross(o: (i32, i32), p: (i32, i32), q: (i32, i32)) -> i64 {
+    i64::from(p.0 - o.0) * i64::from(q.1 - o.1) - i64::from(p.1 - o.1) * i64::from(q.0 - o.0)
+}
+
+/// The triangles of the hierarchy on an `n`-cell grid that a set of kept posts cuts, down to
+/// the grid's cells: a triangle splits where the midpoint of its hypotenuse is kept.
+pub fn rtin_triangles(
+    n: u32,
+    square_parity: u32,
+    kept: &dyn Fn(i32, i32) -> bool,
+) -> Vec<GridTriangle> {
+    let mut out = Vec::new();
+    let mut stack: Vec<GridTriangle> = root_triangles(n as i32, square_parity).to_vec();
+    while let Some(t) = stack.pop() {
+        match midpoint(&t) {
+            Some(m) if kept(m.0, m.1) => stack.extend(split(&t, m)),
+            _ => out.push(t),
+        }
+    }
+    out
+}
+
+/// The triangle of the hierarchy cut by `kept` (on grid posts `2x`, i.e. a parent's posts on a
+/// child's grid when `step` is 2) that holds grid point `p`, and `p`'s barycentric weights in it.
+fn locate(
+    n: u32,
+    square_parity: u32,
+    step: i32,
+    kept: &dyn Fn(i32, i32) -> bool,
+    p: (i32, i32),
+) -> (GridTriangle, [f64; 3]) {
+    let roots = root_triangles(n as i32, square_parity);
+    let side = cross(roots[0][0], roots[0][1], p);
+    let mut t = if side * cross(roots[0][0], roots[0][1], roots[0][2]) >= 0 {
+        roots[0]
+    } else {
+        roots[1]
+    };
+    loop {
+        let m = midpoint(&t).filter(|m| m.0 % step == 0 && m.1 % step == 0);
+        match m {
+            Some(m) if kept(m.0, m.1) => {
+                let [first, second] = split(&t, m);
+                // The children meet along apex-m; `first` lies on the side of the old `a`.
+                let (apex, a) = (t[2], t[0]);
+                t = if cross(apex, m, p) * cross(apex, m, a) >= 0 {
+                    first
+                } else {
+                    second
+                };
+            }
+            _ => break,
+        }
+    }
+    let [a, b, c] = t;
+    let area = cross(a, b, c) as f64;
+    let weights = [
+        cross(p, b, c) as f64 / area,
+        cross(a, p, c) as f64 / area,
+        cross(a, b, p) as f64 / area,
+    ];
+    (t, weights)
+}
+
+/// A node's triangle list (grid, then skirts), counter-clockwise seen from above, as indices
+/// into its vertices (grid `i * (n + 1) + j`, then the four skirts).
+pub fn mesh_indices(triangles: &[GridTriangle], n: u32) -> Vec<u16> {
+    let s = n as i32 + 1;
+    let index = |(r, c): (i32, i32)| (r * s + c) as u16;
+    let mut out = Vec::with_capacity(triangles.len() * 3 + 8 * n as usize * 3);
+    let mut used = vec![false; (s * s) as usize];
+    for t in triangles {
+        let [a, b, c] = *t;
+        // (row, col) is (y, x): counter-clockwise in (x, y) is clockwise in (row, col).
+        let (b, c) = if cross(a, b, c) < 0 { (b, c) } else { (c, b) };
+        for v in [a, b, c] {
+            used[index(v) as usize] = true;
+            out.push(index(v));
         }
     }
     for (edge, grid_index) in edges(n).iter().enumerate() {
-        let base = s * s + edge as u32 * s;
-        for t in 0..n {
-            let (a, b) = (grid_index(t), grid_index(t + 1));
-            let (sa, sb) = (base + t, base + t + 1);
+        let base = (s * s) as u32 + edge as u32 * s as u32;
+        let kept: Vec<u32> = (0..=n).filter(|&t| used[grid_index(t) as usize]).collect();
+        for pair in kept.windows(2) {
+            let (ta, tb) = (pair[0], pair[1]);
+            let (a, b) = (grid_index(ta) as u16, grid_index(tb) as u16);
+            let (sa, sb) = ((base + ta) as u16, (base + tb) as u16);
             out.extend_from_slice(&[a, b, sb, a, sb, sa]);
         }
     }
     out
+}
+
+/// Renumbers a mesh's indices (on the full grid-and-skirts numbering) to the vertices they
+/// use, in that numbering's order, and returns them with the old numbers of those vertices.
+fn compact_indices(indices: &[u16], n: u32) -> (Vec<u16>, Vec<u16>) {
+    let mut new_of = vec![u16::MAX; vertex_count(n)];
+    for &i in indices {
+        new_of[i as usize] = 0;
+    }
+    let mut used = Vec::new();
+    for (old, new) in new_of.iter_mut().enumerate() {
+        if *new == 0 {
+            *new = used.len() as u16;
+            used.push(old as u16);
+        }
+    }
+    (indices.iter().map(|&i| new_of[i as usize]).collect(), used)
 }
 
 type EdgeIndex = Box<dyn Fn(u32) -> u32>;
@@ -104,14 +301,30 @@ fn edges(n: u32) -> [EdgeIndex; 4] {
     ]
 }
 
-/// A point of a grid cell's surface, split as the database splits every cell (south-west to
-/// north-east; see `cig_terrain::raster::triangulated_height`), from its corners and the
-/// fractions `east` and `north` across it.
-pub fn triangulated_point([sw, se, nw, ne]: [DVec3; 4], east: f64, north: f64) -> DVec3 {
-    if east >= north {
-        sw + (se - sw) * east + (ne - se) * north
-    } else {
-        sw + (nw - sw) * north + (ne - nw) * east
+/// A point of a grid cell's surface, split as the database splits the cell (see
+/// `cig_terrain::raster::triangulated_height`), from its corners and the fractions `east` and
+/// `north` across it.
+pub fn triangulated_point(
+    [sw, se, nw, ne]: [DVec3; 4],
+    east: f64,
+    north: f64,
+    diagonal: Diagonal,
+) -> DVec3 {
+    match diagonal {
+        Diagonal::SouthWestNorthEast => {
+            if east >= north {
+                sw + (se - sw) * east + (ne - se) * north
+            } else {
+                sw + (nw - sw) * north + (ne - nw) * east
+            }
+        }
+        Diagonal::NorthWestSouthEast => {
+            if east + north <= 1.0 {
+                sw + (se - sw) * east + (nw - sw) * north
+            } else {
+                ne + (nw - ne) * (1.0 - east) + (se - ne) * (1.0 - north)
+            }
+        }
     }
 }
 
@@ -187,12 +400,17 @@ impl<'a> Sampler<'a> {
         let u = (fj / 2.0 - cj as f64).clamp(0.0, 1.0);
         let (i, j) = (2 * ci, 2 * cj);
         triangulated_height(
-            self.tile.elevation(i, j),
-            self.tile.elevation(i, j + 2),
-            self.tile.elevation(i + 2, j),
-            self.tile.elevation(i + 2, j + 2),
+            [
+                self.tile.elevation(i, j),
+                self.tile.elevation(i, j + 2),
+                self.tile.elevation(i + 2, j),
+                self.tile.elevation(i + 2, j + 2),
+            ],
             u,
             v,
+            // The coarser level's cell (ci, cj) of this tile's even grid: the checkerboard of
+            // that level (tiles start at even cells of it).
+            Diagonal::of_cell(ci, cj),
         )
     }
 
@@ -212,6 +430,7 @@ pub fn build_node_mesh(
     data: (TileKey, &Tile),
     detail: Option<(TileKey, &Tile)>,
     error_m: f32,
+    cut: NodeCut,
 ) -> NodeMesh {
     let n = layout.node_cells;
     let s = n as usize + 1;
@@ -256,13 +475,85 @@ pub fn build_node_mesh(
             rel[i * s + j] = ecef - centre_ecef;
         }
     }
-    // Morph targets: each vertex's place on the parent's mesh, i.e. on the parent's grid of
-    // vertices (every other one of this node's, clamped onto the database's edge the same way)
-    // with the parent level's heights, interpolated across the parent cell's triangles. Away
-    // from the edge this is the midpoint of the vertex's even neighbours (along the south-west
-    // to north-east diagonal for cell centres); at the edge it keeps the vertex where it is
+    // Which posts the mesh keeps, and which the parent's mesh keeps (on this node's grid).
+    let clamped = layout.reaches_past_edge(key);
+    let errors = (data.0.level == key.level)
+        .then_some(data.1.lod_errors.as_ref())
+        .flatten()
+        .filter(|e| {
+            e.own_m.len() == data.1.elevation_m.len()
+                && e.coarser_m.len() == even_posts_per_side(data.1.posts_per_side).pow(2)
+        });
+    let regular = clamped || errors.is_none();
+    let ni = n as i32;
+    let half = ni / 2;
+    let tile_span = layout.pyramid.finest_cells_per_tile(data.0.level);
+    let level_step = 1u64 << key.level;
+    let (ti0, tj0) = (
+        ((r0 as u64).saturating_sub(u64::from(data.0.row) * tile_span) / level_step) as i32,
+        ((c0 as u64).saturating_sub(u64::from(data.0.col) * tile_span) / level_step) as i32,
+    );
+    let posts = data.1.posts_per_side as i32;
+    let even_posts = even_posts_per_side(data.1.posts_per_side) as i32;
+    let (global_row, global_col) = (
+        key.row as i64 * i64::from(ni),
+        key.col as i64 * i64::from(ni),
+    );
+    let forced_level = cut.regular_ancestor_level.filter(|&f| f > key.level);
+    let on_forced_level = |i: i32, j: i32| {
+        forced_level.is_some_and(|f| {
+            let every = 1i64 << (f - key.level);
+            (global_row + i64::from(i)) % every == 0 && (global_col + i64::from(j)) % every == 0
+        })
+    };
+    let kept = |i: i32, j: i32| -> bool {
+        let Some(errors) = errors.filter(|_| !regular) else {
+            return true;
+        };
+        // The node's quadrants are always split, so that a child's part of this mesh depends
+        // on the child's posts alone.
+        let quadrant_post = (i % half == 0) && (j % half == 0);
+        quadrant_post
+            || on_forced_level(i, j)
+            || errors
+                .own_m
+                .get(((ti0 + i) * posts + tj0 + j) as usize)
+                .is_none_or(|&e| e > cut.tolerance_m)
+    };
+    let parent_regular =
+        !cut.morphs_within_level && cut.regular_ancestor_level == Some(key.level + 1);
+    let parent_kept = |i: i32, j: i32| -> bool {
+        let Some(errors) = errors.filter(|_| !regular && !parent_regular) else {
+            return true;
+        };
+        if cut.morphs_within_level {
+            let quadrant_post = (i % half == 0) && (j % half == 0);
+            return quadrant_post
+                || on_forced_level(i, j)
+                || errors
+                    .own_m
+                    .get(((ti0 + i) * posts + tj0 + j) as usize)
+                    .is_none_or(|&e| e > cut.parent_tolerance_m);
+        }
+        on_forced_level(i, j)
+            || errors
+                .coarser_m
+                .get((((ti0 + i) / 2) * even_posts + (tj0 + j) / 2) as usize)
+                .is_none_or(|&e| e > cut.parent_tolerance_m)
+    };
+    let parent_step = if cut.morphs_within_level { 1 } else { 2 };
+    let square_parity = key.row + key.col;
+    let triangles = rtin_triangles(n, square_parity, &kept);
+    let indices = mesh_indices(&triangles, n);
+
+    // Morph targets: each vertex's place on the parent's mesh. Inside the database that is the
+    // triangle of the parent's cut holding the vertex (the parent's posts are this node's even
+    // posts, at the same heights), interpolated linearly as the GPU draws it. Where the node
+    // reaches past the database's last row or column, the parent's grid of vertices (every
+    // other one of this node's, clamped onto the edge the same way) with the parent level's
+    // heights, interpolated across the parent cell's triangles, keeps the vertex where it is
     // horizontally, so the edge does not recede while a node morphs.
-    let half = n as usize / 2;
+    let half_cells = n as usize / 2;
     let parent_row = |a: usize| (r0 + (2 * a) as f64 * step).min(max_row);
     let parent_col = |b: usize| (c0 + (2 * b) as f64 * step).min(max_col);
     let parent_height = |row: f64, col: f64| {
@@ -272,19 +563,21 @@ pub fn build_node_mesh(
             data_sampler.coarser_height_msl_m(row, col)
         }
     };
-    let ps = half + 1;
-    let mut parent_rel = vec![DVec3::ZERO; ps * ps];
-    for a in 0..ps {
-        for b in 0..ps {
-            let (row, col) = (parent_row(a), parent_col(b));
-            let (lat, lon) = layout.lat_lon_of_finest(row, col);
-            let h = parent_height(row, col) + geoid.undulation_m(lat, lon);
-            parent_rel[a * ps + b] = Geodetic::new(lat, lon, h).to_ecef() - centre_ecef;
+    let ps = half_cells + 1;
+    let mut parent_rel = vec![DVec3::ZERO; if clamped { ps * ps } else { 0 }];
+    if clamped {
+        for a in 0..ps {
+            for b in 0..ps {
+                let (row, col) = (parent_row(a), parent_col(b));
+                let (lat, lon) = layout.lat_lon_of_finest(row, col);
+                let h = parent_height(row, col) + geoid.undulation_m(lat, lon);
+                parent_rel[a * ps + b] = Geodetic::new(lat, lon, h).to_ecef() - centre_ecef;
+            }
         }
     }
     // The parent cell holding grid line `k` (of `n + 1`) and the fraction across it.
     let parent_cell = |k: usize, own: f64, parent: &dyn Fn(usize) -> f64| -> (usize, f64) {
-        let a = (k / 2).min(half - 1);
+        let a = (k / 2).min(half_cells - 1);
         let (start, end) = (parent(a), parent(a + 1));
         let fraction = if end > start {
             ((own - start) / (end - start)).clamp(0.0, 1.0)
@@ -294,37 +587,53 @@ pub fn build_node_mesh(
         (a, fraction)
     };
     let morph_target = |i: usize, j: usize| -> DVec3 {
-        let (a, north) = parent_cell(i, rel_row(i), &parent_row);
-        let (b, east) = parent_cell(j, rel_col(j), &parent_col);
-        let corner = |da: usize, db: usize| parent_rel[(a + da) * ps + b + db];
-        triangulated_point(
-            [corner(0, 0), corner(0, 1), corner(1, 0), corner(1, 1)],
-            east,
-            north,
-        )
+        if clamped {
+            let (a, north) = parent_cell(i, rel_row(i), &parent_row);
+            let (b, east) = parent_cell(j, rel_col(j), &parent_col);
+            let corner = |da: usize, db: usize| parent_rel[(a + da) * ps + b + db];
+            triangulated_point(
+                [corner(0, 0), corner(0, 1), corner(1, 0), corner(1, 1)],
+                east,
+                north,
+                Diagonal::of_cell(a, b),
+            )
+        } else {
+            let (t, w) = locate(
+                n,
+                square_parity,
+                parent_step,
+                &parent_kept,
+                (i as i32, j as i32),
+            );
+            t.iter()
+                .zip(w)
+                .map(|(&(r, c), w)| rel[r as usize * s + c as usize] * w)
+                .sum()
+        }
     };
     let span_m = span * grid.dlat_deg * metres_per_degree(lat_c).0;
     let skirt_depth_m =
         (5.0 + 0.02 * span_m + 3.0 * f64::from(error_m) + (h_max - h_min) * 0.1) as f32;
-    let down = -axes[2] * f64::from(skirt_depth_m);
-    let mut vertices = Vec::with_capacity(vertex_count(n));
-    for i in 0..s {
-        for j in 0..s {
-            vertices.push(TerrainVertex {
-                position: rel[i * s + j].as_vec3().to_array(),
-                morph_target: morph_target(i, j).as_vec3().to_array(),
-            });
-        }
-    }
-    for grid_index in edges(n).iter() {
-        for t in 0..=n {
-            let g = grid_index(t) as usize;
-            let (i, j) = (g / s, g % s);
-            vertices.push(TerrainVertex {
-                position: (rel[g] + down).as_vec3().to_array(),
-                morph_target: (morph_target(i, j) + down).as_vec3().to_array(),
-            });
-        }
+    // The vertices the triangles use, grid first (row-major), then the skirts'.
+    let grid_uv = |g: usize| [(g % s) as f32 / n as f32, (g / s) as f32 / n as f32];
+    let (indices, used) = compact_indices(&indices, n);
+    let mut vertices = Vec::with_capacity(used.len());
+    let mut grid_vertices = 0;
+    for &old in &used {
+        let old = old as usize;
+        let (g, skirt) = if old < s * s {
+            grid_vertices += 1;
+            (old, 0.0)
+        } else {
+            let k = old - s * s;
+            (edges(n)[k / s]((k % s) as u32) as usize, 1.0)
+        };
+        vertices.push(TerrainVertex {
+            position: rel[g].as_vec3().to_array(),
+            morph_target: morph_target(g / s, g % s).as_vec3().to_array(),
+            grid_uv: grid_uv(g),
+            skirt,
+        });
     }
 
     // Normals and colours at twice the vertex density.
@@ -377,8 +686,155 @@ pub fn build_node_mesh(
         centre_ecef,
         axes,
         vertices,
+        grid_vertices,
+        indices,
         normals,
         colours,
         skirt_depth_m,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cig_terrain::raster::{GeoGrid, Raster};
+    use cig_terrain::rtin::{level_errors, own_errors};
+    use proptest::prelude::*;
+
+    fn twice_area(t: &GridTriangle) -> i64 {
+        cross(t[0], t[1], t[2]).abs()
+    }
+
+    /// The triangles of a cut, checked to tile the node's square with no vertex inside
+    /// another triangle's edge (no T-junction).
+    fn assert_conforming(triangles: &[GridTriangle], n: i32) {
+        let area: i64 = triangles.iter().map(twice_area).sum();
+        assert_eq!(
+            area,
+            2 * i64::from(n) * i64::from(n),
+            "the triangles tile the square"
+        );
+        let vertices: std::collections::HashSet<(i32, i32)> =
+            triangles.iter().flatten().copied().collect();
+        for t in triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                for &v in &vertices {
+                    if v == a || v == b || cross(a, b, v) != 0 {
+                        continue;
+                    }
+                    let inside = (v.0 - a.0) * (v.0 - b.0) <= 0 && (v.1 - a.1) * (v.1 - b.1) <= 0;
+                    assert!(!inside, "{v:?} lies inside edge {a:?}-{b:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn keeping_every_post_cuts_the_checkerboard_of_cells() {
+        for n in [8u32, 16] {
+            for parity in [0u32, 1] {
+                let triangles = rtin_triangles(n, parity, &|_, _| true);
+                assert_eq!(triangles.len(), (2 * n * n) as usize);
+                assert_conforming(&triangles, n as i32);
+                for t in &triangles {
+                    // Each is half of one cell, split along that cell's diagonal.
+                    let (r, c) = (
+                        t.iter().map(|v| v.0).min().unwrap(),
+                        t.iter().map(|v| v.1).min().unwrap(),
+                    );
+                    let [a, b, _] = *t;
+                    let along_sw_ne = (b.0 - a.0) * (b.1 - a.1) > 0;
+                    let expected = Diagonal::of_cell(r as usize, c as usize);
+                    assert_eq!(
+                        along_sw_ne,
+                        expected == Diagonal::SouthWestNorthEast,
+                        "cell ({r}, {c}) of a square of parity {parity}"
+                    );
+                }
+            }
+        }
+    }
+
+    fn random_raster(n: usize, seed: u64, roughness_m: f32) -> Raster {
+        Raster::from_fn(GeoGrid::at_origin(n, n, 0.001), |r, c| {
+            // A hash of the post (xorshift of its index and the seed) for the noise.
+            let mut state = (seed | 1) ^ ((r * n + c) as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let noise = (state % 10_000) as f32 / 10_000.0 - 0.5;
+            30.0 * (r as f32 / 5.0).sin() + 0.7 * c as f32 + roughness_m * noise
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        /// A cut by the stored post errors conforms, and every post of the level lies within
+        /// the tolerance of the cut's surface (the exact bound the level of detail relies on),
+        /// and so does every finest post below a coarser level's cut.
+        #[test]
+        fn cuts_conform_and_stay_within_their_tolerance(
+            seed in 1u64..1_000_000, tolerance_m in 0.0f32..40.0, roughness_m in 0.0f32..20.0,
+            level in 0u8..2,
+        ) {
+            let n = 16usize;
+            let step = 1usize << level;
+            let raster = random_raster(n * step + 1, seed, roughness_m);
+            let own = own_errors(&raster);
+            let errors = level_errors(&raster, &own, level);
+            let half = (n / 2) as i32;
+            let kept = |i: i32, j: i32| {
+                (i % half == 0 && j % half == 0) || errors.at(i as usize, j as usize) > tolerance_m
+            };
+            let triangles = rtin_triangles(n as u32, 0, &kept);
+            assert_conforming(&triangles, n as i32);
+            let fine = raster.grid.cols;
+            let height = |r: usize, c: usize| f64::from(raster.elevation_m[r * fine + c]);
+            let mut worst = 0.0f64;
+            let cells = 2 * n * n;
+            for r in 0..=n * step {
+                for c in 0..=n * step {
+                    let p = ((r / step) as i32, (c / step) as i32);
+                    // The finest post in level coordinates (exact fractions of a cell).
+                    let (fr, fc) = (r as f64 / step as f64, c as f64 / step as f64);
+                    let (t, w) = locate(n as u32, 0, 1, &kept, p);
+                    let mut value = 0.0;
+                    let mut inside = true;
+                    // Weights at the fractional point, from the triangle `locate` gave for
+                    // its cell's corner, refound among all triangles when it does not hold it.
+                    let weights = |t: &GridTriangle| {
+                        let [a, b, cc] = t.map(|v| (f64::from(v.0), f64::from(v.1)));
+                        let x = |o: (f64, f64), p: (f64, f64), q: (f64, f64)| {
+                            (p.0 - o.0) * (q.1 - o.1) - (p.1 - o.1) * (q.0 - o.0)
+                        };
+                        let area = x(a, b, cc);
+                        let q = (fr, fc);
+                        [x(q, b, cc) / area, x(a, q, cc) / area, x(a, b, q) / area]
+                    };
+                    let holder = if step == 1 {
+                        prop_assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+                        prop_assert!(w.iter().all(|&w| w >= -1e-12));
+                        t
+                    } else {
+                        *triangles
+                            .iter()
+                            .find(|t| weights(t).iter().all(|&w| w >= -1e-12))
+                            .expect("a triangle holds every point")
+                    };
+                    for (v, w) in holder.iter().zip(weights(&holder)) {
+                        inside &= w >= -1e-12;
+                        value += w * height(v.0 as usize * step, v.1 as usize * step);
+                    }
+                    prop_assert!(inside);
+                    let big = twice_area(&holder) > 1;
+                    if big || level == 0 {
+                        worst = worst.max((value - height(r, c)).abs());
+                    }
+                }
+            }
+            prop_assert!(worst <= f64::from(tolerance_m) + 1e-3, "{worst} m against {tolerance_m} m");
+            prop_assert!(triangles.len() <= cells);
+        }
     }
 }

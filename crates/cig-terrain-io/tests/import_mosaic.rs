@@ -3,7 +3,7 @@
 
 mod import_support;
 
-use cig_terrain::raster::{triangulated_height, GeoGrid, Raster};
+use cig_terrain::raster::{triangulated_height, Diagonal, GeoGrid, Raster};
 use cig_terrain_io::import::{import_files, mosaic, read_dted_bytes, ImportError, SourceFormat};
 use import_support::*;
 
@@ -176,7 +176,12 @@ fn finer_dted2_over_coarser_dted1_keeps_the_finer_posts_unchanged() {
                 } else if u == v {
                     lerp(h(cr, cc), h(r1, c1), u)
                 } else {
-                    triangulated_height(h(cr, cc), h(cr, c1), h(r1, cc), h(r1, c1), u, v)
+                    triangulated_height(
+                        [h(cr, cc), h(cr, c1), h(r1, cc), h(r1, c1)],
+                        u,
+                        v,
+                        Diagonal::SouthWestNorthEast,
+                    )
                 };
                 if want.is_nan() {
                     assert!(got.is_nan(), "({row}, {col}) next to a void got {got}");

@@ -6,7 +6,9 @@
 //! between levels without popping), its materials are the majority of the 3 x 3 finer posts
 //! around each kept post, and every quadtree node of every level records the min/max of the
 //! *finest* surface below it and the largest vertical error of its own surface against the
-//! finest posts — the bounds culling, line of sight and level-of-detail selection need.
+//! finest posts — the bounds culling, line of sight and level-of-detail selection need — and
+//! every post the error of the triangulated irregular network over its level ([`crate::rtin`]),
+//! from which the renderer draws adaptive meshes that nest across levels.
 //!
 //! Limits: the whole raster is held in memory while building (5 bytes per post plus the tiles
 //! of one level); the error bound is measured at the finest posts, which is exact for the
@@ -15,7 +17,8 @@
 use crate::material::Material;
 use crate::pyramid::{quadtree_index, quadtree_node_count, PyramidLayout, TileKey};
 use crate::raster::Raster;
-use crate::tile::{quadtree_depth_for, NodeBounds, Tile};
+use crate::rtin::{level_errors, own_errors, LevelErrorGrid};
+use crate::tile::{even_posts_per_side, quadtree_depth_for, LodErrors, NodeBounds, Tile};
 use rayon::prelude::*;
 
 /// Why a pyramid could not be built.
@@ -94,15 +97,25 @@ pub fn build_pyramid<E: From<BuildError>>(
     let mut tiles = 0u64;
     let mut min_elevation_m = f32::INFINITY;
     let mut max_elevation_m = f32::NEG_INFINITY;
+    let own = own_errors(raster);
+    let mut errors = level_errors(raster, &own, 0);
     for level in 0..layout.levels {
         if level > 0 {
             level_materials = level_materials.majority_halved();
         }
+        let coarser = (level + 1 < layout.levels).then(|| level_errors(raster, &own, level + 1));
         let keys: Vec<TileKey> = layout.keys_at(level).collect();
         let built: Vec<Tile> = keys
             .par_iter()
-            .map(|&key| build_tile(raster, &layout, &level_materials, key))
+            .map(|&key| {
+                let mut tile = build_tile(raster, &layout, &level_materials, key);
+                tile.lod_errors = Some(tile_lod_errors(&layout, key, &errors, coarser.as_ref()));
+                tile
+            })
             .collect();
+        if let Some(next) = coarser {
+            errors = next;
+        }
         for tile in &built {
             let b = tile.bounds();
             min_elevation_m = min_elevation_m.min(b.min_m);
@@ -118,6 +131,24 @@ pub fn build_pyramid<E: From<BuildError>>(
         max_elevation_m,
         material_posts,
     })
+}
+
+/// The adaptive-mesh errors of tile `key`'s posts and of its even posts one level coarser.
+fn tile_lod_errors(
+    layout: &PyramidLayout,
+    key: TileKey,
+    own: &LevelErrorGrid,
+    coarser: Option<&LevelErrorGrid>,
+) -> LodErrors {
+    let n = layout.posts_per_side();
+    let span = layout.tile_cells as usize;
+    let (i0, j0) = (key.row as usize * span, key.col as usize * span);
+    let own_m = (0..n * n).map(|k| own.at(i0 + k / n, j0 + k % n)).collect();
+    let m = even_posts_per_side(n);
+    let coarser_m = (0..m * m)
+        .map(|k| coarser.map_or(0.0, |c| c.at(i0 / 2 + k / m, j0 / 2 + k % m)))
+        .collect();
+    LodErrors { own_m, coarser_m }
 }
 
 /// A whole-area grid of material bytes at one level's resolution.
@@ -189,6 +220,7 @@ fn build_tile(
         material,
         nodes: vec![NodeBounds::EMPTY; quadtree_node_count(depth)],
         quadtree_depth: depth,
+        lod_errors: None,
         degraded_from_level: None,
     };
     fill_bounds(&mut tile, raster, layout);

@@ -122,18 +122,7 @@ mod tests {
     use crate::raster::GeoGrid;
 
     fn raster(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f32) -> Raster {
-        Raster {
-            grid: GeoGrid {
-                south_lat_deg: 0.0,
-                west_lon_deg: 0.0,
-                dlat_deg: 0.001,
-                dlon_deg: 0.001,
-                rows,
-                cols,
-            },
-            elevation_m: (0..rows * cols).map(|k| f(k / cols, k % cols)).collect(),
-            material: None,
-        }
+        Raster::from_fn(GeoGrid::at_origin(rows, cols, 0.001), f)
     }
 
     #[test]

@@ -2,7 +2,8 @@
 //!
 //! Data flows one way: a [`raster::Raster`] (from an importer or the synthetic generator) has
 //! its voids filled ([`fill`]) and its materials derived when it has none ([`classify`]), then
-//! [`build`] cuts it into the tiles of a quadtree pyramid ([`pyramid`], [`tile`]). An open
+//! [`build`] cuts it into the tiles of a quadtree pyramid ([`pyramid`], [`tile`]), with each
+//! post's error for adaptive meshes ([`rtin`]). An open
 //! [`database::TerrainDatabase`] hands tiles to the paging [`cache::TileCache`], and
 //! [`query::QuerySession`] answers HOT, HAT and line of sight on the finest surface.
 //!
@@ -18,6 +19,7 @@ pub mod material;
 pub mod pyramid;
 pub mod query;
 pub mod raster;
+pub mod rtin;
 pub mod tile;
 
 pub use cache::{PagingConfig, TileCache};

@@ -22,7 +22,7 @@ use crate::cache::TileCache;
 use crate::database::{GeoidLookup, LoadError, TerrainDatabase};
 use crate::material::Material;
 use crate::pyramid::{quadtree_index, PyramidLayout, TileKey};
-use crate::raster::triangulated_height;
+use crate::raster::{triangulated_height, triangulated_slopes, Diagonal};
 use crate::tile::Tile;
 use cig_geo::Geodetic;
 use std::sync::Arc;
@@ -228,8 +228,12 @@ impl QuerySession {
     pub fn height_msl_m(&mut self, lat_deg: f64, lon_deg: f64) -> Result<f64, QueryError> {
         let cell = self.cell(lat_deg, lon_deg)?;
         let tile = self.tiles.get(cell.key)?;
-        let [h00, h01, h10, h11] = tile.cell_corners(cell.i, cell.j);
-        Ok(triangulated_height(h00, h01, h10, h11, cell.u, cell.v))
+        Ok(triangulated_height(
+            tile.cell_corners(cell.i, cell.j),
+            cell.u,
+            cell.v,
+            Tile::cell_diagonal(cell.i, cell.j),
+        ))
     }
 
     /// Heights above terrain of many points (a frame's worth of host requests), height only:
@@ -282,14 +286,11 @@ impl QuerySession {
         let g = self.layout.grid;
         let tile = self.tiles.get(key)?;
         let n = tile.posts_per_side;
-        let [h00, h01, h10, h11] = tile.cell_corners(i, j);
-        let height = triangulated_height(h00, h01, h10, h11, u, v);
-        // Slopes along the cell's edges, per post, then per metre.
-        let (dh_du, dh_dv) = if u >= v {
-            (f64::from(h01 - h00), f64::from(h11 - h01))
-        } else {
-            (f64::from(h11 - h10), f64::from(h10 - h00))
-        };
+        let corners = tile.cell_corners(i, j);
+        let diagonal = Tile::cell_diagonal(i, j);
+        let height = triangulated_height(corners, u, v, diagonal);
+        // Slopes of the cell's triangle, per post, then per metre.
+        let (dh_du, dh_dv) = triangulated_slopes(corners, u, v, diagonal);
         let (north_m_per_deg, east_m_per_deg) = cig_geo::metres_per_degree(lat_deg);
         let dx_m = g.dlon_deg * east_m_per_deg;
         let dy_m = g.dlat_deg * north_m_per_deg;
@@ -581,6 +582,7 @@ fn resample_from_parent(layout: &PyramidLayout, coarse: &Tile, key: TileKey) -> 
         material,
         nodes: vec![coarse.bounds(); crate::pyramid::quadtree_node_count(depth)],
         quadtree_depth: depth,
+        lod_errors: None,
         degraded_from_level: Some(coarse.key.level),
     }
 }
@@ -610,6 +612,7 @@ fn snap(x: f64) -> f64 {
 }
 
 /// One piece of a sightline: linear in grid space, quadratic in altitude above sea level.
+#[derive(Clone, Copy)]
 struct Piece {
     x0: f64,
     y0: f64,
@@ -738,7 +741,31 @@ impl Walk {
 /// south-west post is `(cx, cy)` and whose corners are `[h00, h01, h10, h11]`.
 #[inline]
 fn cell_hit(corners: [f32; 4], piece: &Piece, cx: f64, cy: f64, s0: f64, s1: f64) -> Option<f64> {
-    let [h00, h01, h10, h11] = corners;
+    match Diagonal::of_cell(cy as usize, cx as usize) {
+        Diagonal::SouthWestNorthEast => south_west_split_hit(corners, piece, cx, cy, s0, s1),
+        Diagonal::NorthWestSouthEast => {
+            // Mirrored east-west about the cell's middle, the cell is split south-west to
+            // north-east; the piece's parameter (and so the answer) is unchanged.
+            let [h00, h01, h10, h11] = corners;
+            let mirrored = Piece {
+                x0: 2.0 * cx + 1.0 - piece.x0,
+                x1: 2.0 * cx + 1.0 - piece.x1,
+                ..*piece
+            };
+            south_west_split_hit([h01, h00, h11, h10], &mirrored, cx, cy, s0, s1)
+        }
+    }
+}
+
+/// [`cell_hit`] on a cell split south-west to north-east.
+fn south_west_split_hit(
+    corners: [f32; 4],
+    piece: &Piece,
+    cx: f64,
+    cy: f64,
+    s0: f64,
+    s1: f64,
+) -> Option<f64> {
     let (dx, dy) = (piece.x1 - piece.x0, piece.y1 - piece.y0);
     let uv = |s: f64| {
         (
@@ -763,7 +790,7 @@ fn cell_hit(corners: [f32; 4], piece: &Piece, cx: f64, cy: f64, s0: f64, s1: f64
         // Within one triangle the terrain is linear along the piece: its ends decide.
         let height = |s: f64| {
             let (u, v) = uv(s);
-            triangulated_height(h00, h01, h10, h11, u, v)
+            triangulated_height(corners, u, v, Diagonal::SouthWestNorthEast)
         };
         let fa = piece.alt.at(sa) - height(sa);
         if fa <= 0.0 {

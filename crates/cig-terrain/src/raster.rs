@@ -26,6 +26,19 @@ pub struct GeoGrid {
 }
 
 impl GeoGrid {
+    /// A grid of `rows x cols` posts `spacing_deg` apart both ways, its south-west post at
+    /// 0 N 0 E (for tests and examples).
+    pub fn at_origin(rows: usize, cols: usize, spacing_deg: f64) -> GeoGrid {
+        GeoGrid {
+            south_lat_deg: 0.0,
+            west_lon_deg: 0.0,
+            dlat_deg: spacing_deg,
+            dlon_deg: spacing_deg,
+            rows,
+            cols,
+        }
+    }
+
     /// Latitude of the northernmost row, degrees.
     pub fn north_lat_deg(&self) -> f64 {
         self.south_lat_deg + (self.rows.saturating_sub(1)) as f64 * self.dlat_deg
@@ -85,6 +98,17 @@ pub struct Raster {
 }
 
 impl Raster {
+    /// A raster of the heights `height_m(row, col)` on `grid`, without materials.
+    pub fn from_fn(grid: GeoGrid, height_m: impl Fn(usize, usize) -> f32) -> Raster {
+        Raster {
+            grid,
+            elevation_m: (0..grid.len())
+                .map(|k| height_m(k / grid.cols, k % grid.cols))
+                .collect(),
+            material: None,
+        }
+    }
+
     /// Index of post `(row, col)` in the row-major arrays.
     pub fn index(&self, row: usize, col: usize) -> usize {
         row * self.grid.cols + col
@@ -101,20 +125,92 @@ impl Raster {
     }
 }
 
+/// How a grid cell is split into its two triangles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Diagonal {
+    /// Along the south-west to north-east diagonal: triangles `(sw, se, ne)` and `(sw, nw, ne)`.
+    SouthWestNorthEast,
+    /// Along the north-west to south-east diagonal: triangles `(sw, se, nw)` and `(se, ne, nw)`.
+    NorthWestSouthEast,
+}
+
+impl Diagonal {
+    /// The split of cell `(row, col)` of any level's grid (indices counted on that level from
+    /// the database's south-west post): a checkerboard, south-west to north-east where
+    /// `row + col` is even. This is the finest cut of a right-triangulated irregular network
+    /// (each square split by a diagonal, each right triangle at its hypotenuse's midpoint), so
+    /// the grid of every level and every adaptive mesh the renderer draws (`cig_scene::rtin`)
+    /// are cuts of one hierarchy: a level's cells are unions of the finer level's triangles.
+    #[inline]
+    pub fn of_cell(row: usize, col: usize) -> Diagonal {
+        if (row + col).is_multiple_of(2) {
+            Diagonal::SouthWestNorthEast
+        } else {
+            Diagonal::NorthWestSouthEast
+        }
+    }
+}
+
 /// Height on the triangulated surface of one grid cell.
 ///
 /// This is *the* surface of the database: every query and the renderer at full detail use it.
 /// The cell's corners are `h00` (south-west), `h01` (south-east), `h10` (north-west) and `h11`
 /// (north-east); `u` is the fraction eastwards and `v` northwards, both in `[0, 1]`. The cell is
-/// split along the south-west to north-east diagonal: the south-east triangle (`u >= v`) is
-/// `(h00, h01, h11)`, the north-west one is `(h00, h10, h11)`. At a corner the result is that
-/// corner's height exactly.
+/// split along `diagonal` ([`Diagonal::of_cell`] for a database's cells): along the south-west
+/// to north-east diagonal the south-east triangle (`u >= v`) is `(h00, h01, h11)` and the
+/// north-west one `(h00, h10, h11)`; along the other diagonal the south-west triangle
+/// (`u + v <= 1`) is `(h00, h01, h10)` and the north-east one `(h01, h11, h10)`. At a corner the
+/// result is that corner's height exactly.
 #[inline]
-pub fn triangulated_height(h00: f32, h01: f32, h10: f32, h11: f32, u: f64, v: f64) -> f64 {
+pub fn triangulated_height(
+    [h00, h01, h10, h11]: [f32; 4],
+    u: f64,
+    v: f64,
+    diagonal: Diagonal,
+) -> f64 {
     let (h00, h01, h10, h11) = (h00 as f64, h01 as f64, h10 as f64, h11 as f64);
-    if u >= v {
-        h00 + u * (h01 - h00) + v * (h11 - h01)
-    } else {
-        h00 + v * (h10 - h00) + u * (h11 - h10)
+    match diagonal {
+        Diagonal::SouthWestNorthEast => {
+            if u >= v {
+                h00 + u * (h01 - h00) + v * (h11 - h01)
+            } else {
+                h00 + v * (h10 - h00) + u * (h11 - h10)
+            }
+        }
+        Diagonal::NorthWestSouthEast => {
+            if u + v <= 1.0 {
+                h00 + u * (h01 - h00) + v * (h10 - h00)
+            } else {
+                h11 + (1.0 - u) * (h10 - h11) + (1.0 - v) * (h01 - h11)
+            }
+        }
+    }
+}
+
+/// The slopes `(dh/du, dh/dv)` per cell of the triangle of a cell holding `(u, v)`, split as in
+/// [`triangulated_height`].
+#[inline]
+pub fn triangulated_slopes(
+    [h00, h01, h10, h11]: [f32; 4],
+    u: f64,
+    v: f64,
+    diagonal: Diagonal,
+) -> (f64, f64) {
+    let (h00, h01, h10, h11) = (h00 as f64, h01 as f64, h10 as f64, h11 as f64);
+    match diagonal {
+        Diagonal::SouthWestNorthEast => {
+            if u >= v {
+                (h01 - h00, h11 - h01)
+            } else {
+                (h11 - h10, h10 - h00)
+            }
+        }
+        Diagonal::NorthWestSouthEast => {
+            if u + v <= 1.0 {
+                (h01 - h00, h10 - h00)
+            } else {
+                (h11 - h10, h11 - h01)
+            }
+        }
     }
 }

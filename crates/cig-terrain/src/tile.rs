@@ -6,7 +6,8 @@
 //! mean sea level, material byte), and a min/max quadtree whose leaves are 8 x 8 cells, each node
 //! carrying the minimum and maximum height of the *finest* surface below it (for culling and line
 //! of sight) and the largest vertical error of this level's surface against the finest one (for
-//! level-of-detail selection).
+//! level-of-detail selection). Since format 2 a tile also holds, per post, the error of the
+//! right-triangulated irregular network the renderer draws adaptively (see [`LodErrors`]).
 //!
 //! File layout (little-endian, 64-byte header, then the payload):
 //!
@@ -21,17 +22,21 @@
 //! | 32 | payload length in bytes (u64) |
 //! | 40 | CRC-32 (IEEE) of every byte of the file but these four (u32) |
 //! | 44 | reserved, zero (20 bytes) |
-//! | 64 | elevations `f32[n*n]`, nodes `[min, max, error] f32[3*count]`, materials `u8[n*n]`, zero padding to 4 bytes |
+//! | 64 | elevations `f32[n*n]`, nodes `[min, max, error] f32[3*count]`, (format 2 only) [`LodErrors`]: `own f32[n*n]`, `coarser f32[m*m]` with `m = (n - 1) / 2 + 1`, then materials `u8[n*n]`, zero padding to 4 bytes |
+//!
+//! Format 1 (no level-of-detail errors) is still read; its tiles are drawn as regular grids.
 //!
 //! Limits: little-endian hosts read the arrays with one copy and no conversion; big-endian hosts
 //! would convert each value (the code does, through `from_le_bytes`).
 
 use crate::material::Material;
 use crate::pyramid::{quadtree_node_count, TileKey};
-use crate::raster::triangulated_height;
+use crate::raster::{triangulated_height, Diagonal};
 
-/// Version of the tile file format written by this build.
-pub const TILE_FORMAT_VERSION: u32 = 1;
+/// Version of the tile file format written by this build (format 1 is read too).
+pub const TILE_FORMAT_VERSION: u32 = 2;
+/// The format without level-of-detail errors.
+const TILE_FORMAT_WITHOUT_LOD_ERRORS: u32 = 1;
 const MAGIC: &[u8; 8] = b"CIGTILE\0";
 const HEADER_BYTES: usize = 64;
 /// Cells along the side of a quadtree leaf.
@@ -75,7 +80,7 @@ pub enum TileDecodeError {
     #[error("not a cig tile (bad magic)")]
     BadMagic,
     #[error(
-        "tile format version {found} is not supported (this build reads {TILE_FORMAT_VERSION})"
+        "tile format version {found} is not supported (this build reads 1 to {TILE_FORMAT_VERSION})"
     )]
     Version { found: u32 },
     #[error("tile header is inconsistent: {0}")]
@@ -86,6 +91,32 @@ pub enum TileDecodeError {
     WrongTile { found: TileKey, expected: TileKey },
     #[error("tile holds invalid material byte {0}")]
     Material(u8),
+}
+
+/// The error of each post as a vertex of the right-triangulated irregular network (RTIN) over
+/// its level's posts, against the finest posts.
+///
+/// Every post but the corners of the network's root squares is the midpoint of the hypotenuse
+/// of two of the network's triangles. `own_m[i * n + j]` is the largest vertical distance from
+/// the finest posts of either triangle, or of any triangle below them down to this level's cells
+/// (propagated upwards as in Martini, Agafonkin 2019, but exact: measured at the finest posts,
+/// which bound two piecewise-linear surfaces whose vertices are finest posts). So a mesh of this
+/// level's posts that keeps every post with `own_m > tol` is a conforming triangulation (every
+/// kept post's ancestors are kept) within `tol` of the finest posts wherever its triangles are
+/// larger than this level's cells. `coarser_m` holds the same for the next coarser level at this
+/// tile's even posts, which is what the renderer needs to morph towards the parent's mesh. A
+/// post's error never decreases towards finer levels (a finer level's network has more
+/// triangles below each post), so meshes of nested nodes nest. Built by `build`; zero past the
+/// database's edge.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LodErrors {
+    pub own_m: Vec<f32>,
+    pub coarser_m: Vec<f32>,
+}
+
+/// Posts along the side of a tile's even-post grid.
+pub fn even_posts_per_side(posts_per_side: usize) -> usize {
+    (posts_per_side - 1) / 2 + 1
 }
 
 /// A decoded tile.
@@ -102,6 +133,8 @@ pub struct Tile {
     pub nodes: Vec<NodeBounds>,
     /// Depth of the quadtree below the root.
     pub quadtree_depth: u32,
+    /// Errors for adaptive meshes (`None` in format 1 tiles and rebuilt stand-ins).
+    pub lod_errors: Option<LodErrors>,
     /// `Some(level)` when this tile was not read but rebuilt from a coarser level because the
     /// real one was unreadable (see `cache`).
     pub degraded_from_level: Option<u8>,
@@ -134,6 +167,13 @@ impl Tile {
         [e[0], e[1], e[n], e[n + 1]]
     }
 
+    /// How cell `(i, j)` is split (tiles start at a multiple of their even cell count, so the
+    /// database-wide checkerboard of [`Diagonal::of_cell`] holds in tile indices).
+    #[inline]
+    pub fn cell_diagonal(i: usize, j: usize) -> Diagonal {
+        Diagonal::of_cell(i, j)
+    }
+
     /// Material of post `(i, j)`.
     #[inline]
     pub fn material_at(&self, i: usize, j: usize) -> Material {
@@ -150,8 +190,7 @@ impl Tile {
     #[inline]
     pub fn surface_height(&self, fi: f64, fj: f64) -> f64 {
         let (i, j, u, v) = self.cell_of(fi, fj);
-        let [h00, h01, h10, h11] = self.cell_corners(i, j);
-        triangulated_height(h00, h01, h10, h11, u, v)
+        triangulated_height(self.cell_corners(i, j), u, v, Self::cell_diagonal(i, j))
     }
 
     /// Cell `(i, j)` holding fractional index `(fi, fj)` and the fractions `(u, v)` within it.
@@ -168,11 +207,20 @@ impl Tile {
     /// Encodes the tile in its memory-image file format.
     pub fn encode(&self) -> Vec<u8> {
         let n2 = self.posts_per_side * self.posts_per_side;
-        let payload_len = n2 * 4 + self.nodes.len() * 12 + n2;
+        let lod_len = self
+            .lod_errors
+            .as_ref()
+            .map_or(0, |e| (e.own_m.len() + e.coarser_m.len()) * 4);
+        let version = if self.lod_errors.is_some() {
+            TILE_FORMAT_VERSION
+        } else {
+            TILE_FORMAT_WITHOUT_LOD_ERRORS
+        };
+        let payload_len = n2 * 4 + self.nodes.len() * 12 + lod_len + n2;
         let padded = payload_len.next_multiple_of(4);
         let mut out = Vec::with_capacity(HEADER_BYTES + padded);
         out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&TILE_FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&version.to_le_bytes());
         out.push(self.key.level);
         out.push(self.quadtree_depth as u8);
         out.extend_from_slice(&[0, 0]);
@@ -187,6 +235,11 @@ impl Tile {
         }
         for node in &self.nodes {
             for v in [node.min_m, node.max_m, node.error_m] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        if let Some(errors) = &self.lod_errors {
+            for v in errors.own_m.iter().chain(&errors.coarser_m) {
                 out.extend_from_slice(&v.to_le_bytes());
             }
         }
@@ -208,7 +261,7 @@ impl Tile {
         let u32_at =
             |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
         let version = u32_at(8);
-        if version != TILE_FORMAT_VERSION {
+        if version != TILE_FORMAT_VERSION && version != TILE_FORMAT_WITHOUT_LOD_ERRORS {
             return Err(TileDecodeError::Version { found: version });
         }
         let key = TileKey {
@@ -234,7 +287,13 @@ impl Tile {
             )));
         }
         let n2 = n * n;
-        let needed = n2 * 5 + node_count * 12;
+        let m = even_posts_per_side(n);
+        let lod_len = if version == TILE_FORMAT_VERSION {
+            (n2 + m * m) * 4
+        } else {
+            0
+        };
+        let needed = n2 * 5 + node_count * 12 + lod_len;
         if payload_len != needed.next_multiple_of(4) as u64
             || bytes.len() as u64 != HEADER_BYTES as u64 + payload_len
         {
@@ -278,7 +337,12 @@ impl Tile {
                 error_m: c[2],
             })
             .collect();
-        let material = p[n2 * 4 + node_count * 12..n2 * 5 + node_count * 12].to_vec();
+        let lod_start = n2 * 4 + node_count * 12;
+        let lod_errors = (lod_len > 0).then(|| LodErrors {
+            own_m: f32_vec(&p[lod_start..lod_start + n2 * 4]),
+            coarser_m: f32_vec(&p[lod_start + n2 * 4..lod_start + lod_len]),
+        });
+        let material = p[lod_start + lod_len..lod_start + lod_len + n2].to_vec();
         if let Some(&bad) = material.iter().find(|&&m| Material::from_byte(m).is_none()) {
             return Err(TileDecodeError::Material(bad));
         }
@@ -292,6 +356,7 @@ impl Tile {
             material,
             nodes,
             quadtree_depth: depth,
+            lod_errors,
             degraded_from_level: None,
         })
     }
@@ -299,8 +364,10 @@ impl Tile {
 
 /// Resident bytes of a tile with `posts_per_side` posts and a quadtree of `depth`.
 pub fn tile_memory_bytes(posts_per_side: usize, depth: u32) -> usize {
+    let even = even_posts_per_side(posts_per_side);
     std::mem::size_of::<Tile>()
-        + posts_per_side * posts_per_side * 5
+        + posts_per_side * posts_per_side * 9
+        + even * even * 4
         + quadtree_node_count(depth) * std::mem::size_of::<NodeBounds>()
 }
 
@@ -352,6 +419,12 @@ mod tests {
                 })
                 .collect(),
             quadtree_depth: depth,
+            lod_errors: Some(LodErrors {
+                own_m: (0..n * n).map(|k| (k % 7) as f32 * 1.5).collect(),
+                coarser_m: (0..even_posts_per_side(n).pow(2))
+                    .map(|k| (k % 5) as f32 * 2.5)
+                    .collect(),
+            }),
             degraded_from_level: None,
         }
     }
@@ -360,6 +433,28 @@ mod tests {
     fn encode_decode_round_trip() {
         let tile = sample_tile(33, 3);
         let bytes = tile.encode();
+        assert_eq!(
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]),
+            2
+        );
+        assert_eq!(Tile::decode(&bytes, Some(tile.key)), Ok(tile));
+    }
+
+    #[test]
+    fn format_1_tiles_without_lod_errors_still_round_trip() {
+        let tile = Tile {
+            lod_errors: None,
+            ..sample_tile(17, 4)
+        };
+        let bytes = tile.encode();
+        assert_eq!(
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]),
+            1
+        );
+        assert_eq!(
+            bytes.len(),
+            64 + (17 * 17 * 5 + tile.nodes.len() * 12).next_multiple_of(4)
+        );
         assert_eq!(Tile::decode(&bytes, Some(tile.key)), Ok(tile));
     }
 

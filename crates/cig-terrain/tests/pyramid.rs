@@ -3,7 +3,7 @@
 mod common;
 
 use cig_terrain::pyramid::quadtree_index;
-use cig_terrain::raster::triangulated_height;
+use cig_terrain::raster::{triangulated_height, Diagonal};
 use cig_terrain::TileKey;
 use common::*;
 use proptest::prelude::*;
@@ -83,12 +83,28 @@ fn top_level_is_one_tile_and_parents_nest() {
 
 #[test]
 fn triangulated_height_is_exact_at_corners_and_linear_on_edges() {
-    let (a, b, c, d) = (1.0f32, 5.0, -3.0, 10.0);
-    assert_eq!(triangulated_height(a, b, c, d, 0.0, 0.0), 1.0);
-    assert_eq!(triangulated_height(a, b, c, d, 1.0, 0.0), 5.0);
-    assert_eq!(triangulated_height(a, b, c, d, 0.0, 1.0), -3.0);
-    assert_eq!(triangulated_height(a, b, c, d, 1.0, 1.0), 10.0);
-    // Along the diagonal both triangles agree.
-    assert!((triangulated_height(a, b, c, d, 0.5, 0.5) - 5.5).abs() < 1e-12);
-    assert!((triangulated_height(a, b, c, d, 0.5, 0.0) - 3.0).abs() < 1e-12);
+    let corners = [1.0f32, 5.0, -3.0, 10.0];
+    for diagonal in [Diagonal::SouthWestNorthEast, Diagonal::NorthWestSouthEast] {
+        let h = |u, v| triangulated_height(corners, u, v, diagonal);
+        assert_eq!(h(0.0, 0.0), 1.0);
+        assert_eq!(h(1.0, 0.0), 5.0);
+        assert_eq!(h(0.0, 1.0), -3.0);
+        assert_eq!(h(1.0, 1.0), 10.0);
+        assert!((h(0.5, 0.0) - 3.0).abs() < 1e-12);
+        assert!((h(1.0, 0.5) - 7.5).abs() < 1e-12);
+    }
+    // Along its diagonal both triangles agree: the south-west to north-east split passes
+    // through the mean of those corners, the other split through the mean of the others.
+    let sw_ne = Diagonal::SouthWestNorthEast;
+    assert!((triangulated_height(corners, 0.5, 0.5, sw_ne) - 5.5).abs() < 1e-12);
+    let nw_se = Diagonal::NorthWestSouthEast;
+    assert!((triangulated_height(corners, 0.5, 0.5, nw_se) - 1.0).abs() < 1e-12);
+    assert!(
+        (triangulated_height(corners, 0.3, 0.7, nw_se) - (0.3 * 5.0 + 0.7 * -3.0)).abs() < 1e-12
+    );
+    // The checkerboard: neighbours differ, diagonal neighbours agree.
+    assert_eq!(Diagonal::of_cell(0, 0), sw_ne);
+    assert_eq!(Diagonal::of_cell(0, 1), nw_se);
+    assert_eq!(Diagonal::of_cell(1, 0), nw_se);
+    assert_eq!(Diagonal::of_cell(7, 3), sw_ne);
 }

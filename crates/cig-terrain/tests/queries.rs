@@ -3,7 +3,7 @@ mod common;
 
 use cig_geo::Geodetic;
 use cig_terrain::material::Material;
-use cig_terrain::raster::triangulated_height;
+use cig_terrain::raster::{triangulated_height, Diagonal};
 use cig_terrain::{PagingConfig, QueryError, QuerySession};
 use common::*;
 use proptest::prelude::*;
@@ -53,12 +53,15 @@ fn hot_between_posts_lies_on_the_drawn_triangle() {
         let (row, col) = (fr.floor() as usize, fc.floor() as usize);
         let (u, v) = (fc - col as f64, fr - row as f64);
         let expected = triangulated_height(
-            bumpy(row, col),
-            bumpy(row, col + 1),
-            bumpy(row + 1, col),
-            bumpy(row + 1, col + 1),
+            [
+                bumpy(row, col),
+                bumpy(row, col + 1),
+                bumpy(row + 1, col),
+                bumpy(row + 1, col + 1),
+            ],
             u,
             v,
+            Diagonal::of_cell(row, col),
         );
         let got = q.hot(lat, lon).expect("inside").height_msl_m;
         assert!((got - expected).abs() < 1e-6, "{got} vs {expected}");

@@ -103,8 +103,12 @@ pub fn db(args: &BenchDbArgs, config: &Config) -> anyhow::Result<()> {
     for _ in 0..5 {
         base.push(rate(round, gather.len(), || {
             for &(t, i, j, u, v) in &gather {
-                let [a, b, c, d] = resident[t].cell_corners(i, j);
-                black_box(cig_terrain::raster::triangulated_height(a, b, c, d, u, v));
+                black_box(cig_terrain::raster::triangulated_height(
+                    resident[t].cell_corners(i, j),
+                    u,
+                    v,
+                    cig_terrain::tile::Tile::cell_diagonal(i, j),
+                ));
             }
             Ok(())
         })?);

@@ -74,25 +74,15 @@ fn eye_radius() -> f32 {
     return g.atmos.x;
 }
 
-// The sky-view frame: local up, the horizontal toward the sun's azimuth and the third axis.
+// The sky-view frame: the horizontal toward the sun's azimuth, the third axis and local up
+// (from the globals, worked out once per frame by the renderer).
 fn sky_frame() -> mat3x3<f32> {
-    let up = g.eye_up.xyz;
-    var toward = g.sun_dir.xyz - up * dot(g.sun_dir.xyz, up);
-    if (dot(toward, toward) < 1e-8) {
-        var other = vec3<f32>(0.0, 0.0, 1.0);
-        if (abs(up.z) > 0.9) {
-            other = vec3<f32>(1.0, 0.0, 0.0);
-        }
-        toward = other - up * dot(other, up);
-    }
-    let x = normalize(toward);
-    return mat3x3<f32>(x, cross(up, x), up);
+    return mat3x3<f32>(g.sky_frame_x.xyz, g.sky_frame_y.xyz, g.eye_up.xyz);
 }
 
 // Hillaire's latitude mapping (concentrated at the horizon) for the eye's radius.
-fn horizon_zenith_angle(r: f32) -> f32 {
-    let cos_beta = sqrt(max(r * r - ATM_BOTTOM * ATM_BOTTOM, 0.0)) / r;
-    return PI - acos(clamp(cos_beta, -1.0, 1.0));
+fn horizon_zenith_angle() -> f32 {
+    return g.sky_frame_x.w;
 }
 
 // Sky-view table coordinates of a world direction.
@@ -100,7 +90,7 @@ fn sky_view_uv(dir: vec3<f32>) -> vec2<f32> {
     let f = sky_frame();
     let local = vec3<f32>(dot(dir, f[0]), dot(dir, f[1]), dot(dir, f[2]));
     let zenith = acos(clamp(local.z, -1.0, 1.0));
-    let zh = horizon_zenith_angle(eye_radius());
+    let zh = horizon_zenith_angle();
     let beta = PI - zh;
     var v: f32;
     if (zenith < zh) {
@@ -114,7 +104,7 @@ fn sky_view_uv(dir: vec3<f32>) -> vec2<f32> {
 
 // World direction of sky-view table coordinates.
 fn sky_view_dir(uv: vec2<f32>) -> vec3<f32> {
-    let zh = horizon_zenith_angle(eye_radius());
+    let zh = horizon_zenith_angle();
     let beta = PI - zh;
     var zenith: f32;
     if (uv.y < 0.5) {

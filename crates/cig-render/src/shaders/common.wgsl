@@ -2,7 +2,7 @@
 
 struct Globals {
     view_proj: mat4x4<f32>,
-    // Camera basis (ECEF axes): xyz, w unused.
+    // Camera basis (ECEF axes): xyz; cam_forward.w: vertices per terrain node slot.
     cam_forward: vec4<f32>,
     cam_right: vec4<f32>,
     cam_up: vec4<f32>,
@@ -40,6 +40,10 @@ struct Globals {
     night_sky: vec4<f32>,
     // x: encode sRGB in the tone map, y: scotopic blend, z: natural illuminance (lux).
     tonemap: vec4<f32>,
+    // The sky-view table's frame (its third axis is eye_up), worked out once per frame:
+    // x axis with the horizon's zenith angle for the eye in w, and the y axis.
+    sky_frame_x: vec4<f32>,
+    sky_frame_y: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;

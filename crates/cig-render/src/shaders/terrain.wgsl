@@ -1,10 +1,12 @@
 struct Node {
-    // Node centre relative to the eye (metres, ECEF axes); w: base vertex of its slot.
+    // Node centre relative to the eye (metres, ECEF axes); w: skirt depth per metre of
+    // distance (twice the error the view allows there, and a margin).
     offset: vec4<f32>,
     axis_e: vec4<f32>,
     axis_n: vec4<f32>,
+    // w: the skirt's greatest depth (m).
     axis_u: vec4<f32>,
-    // Morph start and end distances (m), cells per side, least morph (fade-in).
+    // Morph start and end distances (m), skirt depth at the eye (m), least morph (fade-in).
     morph: vec4<f32>,
     // Atlas rectangle of the node's texels: u0, v0, du, dv.
     atlas: vec4<f32>,
@@ -26,35 +28,25 @@ struct VertexOut {
 fn vs_main(
     @location(0) position: vec3<f32>,
     @location(1) morph_target: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) skirt: f32,
     @builtin(vertex_index) vertex_index: u32,
-    @builtin(instance_index) instance: u32,
 ) -> VertexOut {
-    let node = nodes[instance];
-    let n = u32(node.morph.z + 0.5);
-    let s = n + 1u;
-    let local = vertex_index - u32(node.offset.w + 0.5);
-    var uv: vec2<f32>;
-    if (local < s * s) {
-        uv = vec2<f32>(f32(local % s), f32(local / s)) / f32(n);
-    } else {
-        let k = local - s * s;
-        let edge = k / s;
-        let t = f32(k % s) / f32(n);
-        if (edge == 0u) { uv = vec2<f32>(t, 0.0); }
-        else if (edge == 1u) { uv = vec2<f32>(t, 1.0); }
-        else if (edge == 2u) { uv = vec2<f32>(0.0, t); }
-        else { uv = vec2<f32>(1.0, t); }
-    }
+    // One draw covers every node: a vertex's slot of the pool is its node.
+    let slot = vertex_index / u32(g.cam_forward.w + 0.5);
+    let node = nodes[slot];
     let target_rel = morph_target + node.offset.xyz;
     let d = length(target_rel);
     // Morph by distance, and never less than the node's fade-in floor (finer data arriving).
     let m = max(clamp((d - node.morph.x) / max(node.morph.y - node.morph.x, 1e-3), 0.0, 1.0), node.morph.w);
-    let rel = mix(position, morph_target, m) + node.offset.xyz;
+    var rel = mix(position, morph_target, m) + node.offset.xyz;
+    // A skirt's foot hangs below its edge post by what neighbours can differ there.
+    rel -= node.axis_u.xyz * (skirt * min(node.morph.z + node.offset.w * d, node.axis_u.w));
     var out: VertexOut;
     out.clip = g.view_proj * vec4<f32>(rel, 1.0);
     out.rel = rel;
     out.uv = node.atlas.xy + uv * node.atlas.zw;
-    out.node = instance;
+    out.node = slot;
     return out;
 }
 

@@ -11,7 +11,7 @@
 //! are dropped (the mosaic's `material` is `None`) unless there is a single source, which is
 //! returned unchanged.
 
-use cig_terrain::raster::{triangulated_height, GeoGrid, Raster};
+use cig_terrain::raster::{triangulated_height, Diagonal, GeoGrid, Raster};
 use rayon::prelude::*;
 
 use super::{ImportError, MAX_POSTS};
@@ -222,7 +222,14 @@ fn sample(source: &Raster, fr: f64, fc: f64) -> f32 {
         (false, true) => lerp(at(r0, fc as usize), at(r1, fc as usize), v),
         // On the cell's diagonal, between the south-west and north-east posts.
         (false, false) if (u - v).abs() <= INDEX_EPS => lerp(at(r0, c0), at(r1, c1), u),
-        (false, false) => triangulated_height(at(r0, c0), at(r0, c1), at(r1, c0), at(r1, c1), u, v),
+        // A source cell is read as split south-west to north-east (the source has no
+        // triangulation of its own; this one is exact on the diagonal branch above).
+        (false, false) => triangulated_height(
+            [at(r0, c0), at(r0, c1), at(r1, c0), at(r1, c1)],
+            u,
+            v,
+            Diagonal::SouthWestNorthEast,
+        ),
     } as f32;
     if h.is_nan() {
         f32::NAN
