@@ -59,6 +59,8 @@ struct Run {
     draw_calls: Vec<f64>,
     puffs: Vec<f64>,
     puff_gpu_ms: Vec<f64>,
+    meshes_built: Vec<f64>,
+    meshes_deferred: Vec<f64>,
 }
 
 /// Fires of the plume comparison: 16 points on the terrain ahead of the pass's start, from a
@@ -113,6 +115,8 @@ fn render_frames(
         draw_calls: Vec::new(),
         puffs: Vec::new(),
         puff_gpu_ms: Vec::new(),
+        meshes_built: Vec::new(),
+        meshes_deferred: Vec::new(),
     };
     for snapshot in snapshots {
         let started = Instant::now();
@@ -139,6 +143,8 @@ fn render_frames(
         run.draw_calls.push(f64::from(stats.draw_calls));
         run.puffs.push(f64::from(stats.puffs_drawn));
         run.puff_gpu_ms.push(stats.puff_gpu_ms);
+        run.meshes_built.push(f64::from(stats.meshes_built));
+        run.meshes_deferred.push(f64::from(stats.meshes_deferred));
     }
     Ok(run)
 }
@@ -216,7 +222,8 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     let mut renderer = Renderer::new(Arc::clone(&gpu), &cache, cig_render::FRAME_FORMAT);
     let streaming = render_frames(&mut renderer, &cache, &snapshots, &target, true)?;
     // The first frames compile pipelines and fill the empty pool; the stall measure skips 10.
-    let settled = &streaming.frame_ms[10.min(streaming.frame_ms.len() / 2)..];
+    let settled_from = 10.min(streaming.frame_ms.len() / 2);
+    let settled = &streaming.frame_ms[settled_from..];
     let stall_ratio = percentile(settled, 1.0) / percentile(settled, 0.5);
 
     // 2. The same frames (every k-th), everything resident: level of detail against full detail.
@@ -310,6 +317,10 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
             "cpu_select_ms": summary(&streaming.select_ms),
             "triangles_mean": mean(&streaming.triangles),
             "draw_calls_mean": mean(&streaming.draw_calls),
+            // Node meshes built per frame after the warm-up (new nodes, finer data, new
+            // tolerance steps) and those left for a later frame by the per-frame budget.
+            "meshes_built_after_warmup": summary(&streaming.meshes_built[settled_from..]),
+            "meshes_deferred_after_warmup": summary(&streaming.meshes_deferred[settled_from..]),
         },
         "comparison_frames": sample.len(),
         "lod": {

@@ -103,10 +103,17 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let fade0 = clamp((g.noise0.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
     let fade1 = clamp((g.noise1.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
     let fade2 = clamp((g.noise2.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
-    let detail = 1.0
-        + 0.18 * (value_noise(p0) - 0.5) * fade0
-        + 0.22 * (value_noise(p1) - 0.5) * fade1
-        + 0.25 * (value_noise(p2) - 0.5) * fade2;
+    // An octave that has faded out is not evaluated (the same colour, less work far away).
+    var detail = 1.0;
+    if (fade0 > 0.0) {
+        detail += 0.18 * (value_noise(p0) - 0.5) * fade0;
+    }
+    if (fade1 > 0.0) {
+        detail += 0.22 * (value_noise(p1) - 0.5) * fade1;
+    }
+    if (fade2 > 0.0) {
+        detail += 0.25 * (value_noise(p2) - 0.5) * fade2;
+    }
     let albedo = base.rgb * detail;
     var colour = lit(albedo, n);
     // Water and wet surfaces: a sun glint.
