@@ -7,10 +7,10 @@
 //! exposure (`cig_scene::Lighting::with_sky`: sun and moon from the ephemeris, colours from the
 //! physical atmosphere, exposure from the natural illuminance), and records: the sky-view table
 //! of the physical atmosphere ([`crate::atmosphere`], Hillaire 2020); one render pass with the
-//! sky as a full-screen triangle (the sky-view table, the limb-darkened sun disc through the
-//! atmosphere's transmittance), then every node (one indexed draw each, sharing one vertex pool,
-//! index buffer and bind group), then entity models, terrain and models with the aerial
-//! perspective, the classic fog and the ground fog layer; the obscurant puffs
+//! terrain (every node in one indexed draw, nearest first, from one vertex pool), then entity
+//! models, terrain and models with the aerial perspective, the classic fog and the ground fog
+//! layer, then the sky as a full-screen triangle where nothing was drawn (the sky-view table,
+//! the limb-darkened sun disc through the atmosphere's transmittance); the obscurant puffs
 //! ([`crate::puffs`]) composited onto the resolved scene; and the tone map (scotopic shift at
 //! night, ACES filmic curve, sRGB) into the caller's target. Every pass writes pre-exposed
 //! linear radiance (`exposed()` in common.wgsl) into Rgba16Float, so a moonless night and noon
@@ -381,7 +381,9 @@ fn sky_pipeline(
             layouts: &[globals_layout, atmosphere_layout, celestial_layout],
             buffers: &[],
             depth_write: false,
-            depth_compare: wgpu::CompareFunction::Always,
+            // Drawn after the opaque geometry, at the far plane (reversed Z: depth 0), only
+            // where nothing was drawn: no sky is shaded under the terrain.
+            depth_compare: wgpu::CompareFunction::Equal,
             polygon_mode: wgpu::PolygonMode::Fill,
             cull: None,
         },
@@ -949,13 +951,6 @@ impl Renderer {
                 timestamp_writes,
                 ..Default::default()
             });
-            pass.set_pipeline(&self.sky_pipeline);
-            pass.set_bind_group(0, &self.sky_bind, &[]);
-            pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
-            pass.set_bind_group(2, self.celestial.bind_group(), &[]);
-            pass.draw(0..3, 0..1);
-            stats.draw_calls += 1;
-
             pass.set_pipeline(terrain_pipeline);
             pass.set_bind_group(0, &self.terrain_bind, &[]);
             pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
@@ -985,7 +980,16 @@ impl Renderer {
                 // A model blending two levels is drawn twice; count it once.
                 stats.entities_drawn = draws.iter().filter(|d| d.1.col0[3] == 0.0).count() as u32;
             }
-            // After the opaque geometry: lightning (additive) and rain or snow (over).
+            // The sky where no geometry was drawn (its depth test passes at the cleared far
+            // plane only).
+            pass.set_pipeline(&self.sky_pipeline);
+            pass.set_bind_group(0, &self.sky_bind, &[]);
+            pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
+            pass.set_bind_group(2, self.celestial.bind_group(), &[]);
+            pass.draw(0..3, 0..1);
+            stats.draw_calls += 1;
+            // After the opaque geometry and the sky: lightning (additive) and rain or snow
+            // (over).
             stats.draw_calls += self.bolts.draw(&mut pass, bolt_lines);
             stats.draw_calls += self.precipitation.draw(&mut pass, particles);
             stats.bolt_lines_drawn = bolt_lines as u32;
