@@ -108,3 +108,76 @@ fn triangulated_height_is_exact_at_corners_and_linear_on_edges() {
     assert_eq!(Diagonal::of_cell(1, 0), nw_se);
     assert_eq!(Diagonal::of_cell(7, 3), sw_ne);
 }
+
+/// Every built tile holds its posts' hierarchy errors; the even posts' coarser errors are the
+/// next level's own, and a post's error never grows towards coarser levels (so the renderer's
+/// meshes nest); past the database's edge they are zero.
+#[test]
+fn tiles_hold_hierarchy_errors_that_nest_across_levels() {
+    let (rows, cols) = (150, 110);
+    let f = |r: usize, c: usize| {
+        let x = (r as u32).wrapping_mul(73_856_093) ^ (c as u32).wrapping_mul(19_349_663);
+        (x % 1000) as f32 / 10.0 + (r as f32 * 0.2).sin() * 80.0
+    };
+    let raster = raster(grid(rows, cols, 30.0), f);
+    let (db, _) = database(&raster, 16, 0.0);
+    let layout = *db.layout();
+    let n = layout.posts_per_side();
+    let m = cig_terrain::tile::even_posts_per_side(n);
+    // Level errors by global level post, gathered from the tiles.
+    let mut own: Vec<std::collections::HashMap<(usize, usize), f32>> = Vec::new();
+    let mut coarser: Vec<std::collections::HashMap<(usize, usize), f32>> = Vec::new();
+    let mut positive = 0usize;
+    for level in 0..layout.levels {
+        let (mut o, mut c) = (
+            std::collections::HashMap::new(),
+            std::collections::HashMap::new(),
+        );
+        for key in layout.keys_at(level) {
+            let tile = db.load_tile(key).expect("tile");
+            let errors = tile
+                .lod_errors
+                .as_ref()
+                .expect("format 2 tiles hold errors");
+            assert_eq!(errors.own_m.len(), n * n);
+            assert_eq!(errors.coarser_m.len(), m * m);
+            let (i0, j0) = (key.row as usize * 16, key.col as usize * 16);
+            for i in 0..n {
+                for j in 0..n {
+                    let e = errors.own_m[i * n + j];
+                    assert!(e >= 0.0 && e.is_finite());
+                    let (fr, fc) = ((i0 + i) << level, (j0 + j) << level);
+                    if fr >= rows || fc >= cols {
+                        assert_eq!(e, 0.0, "{key}: post ({i}, {j}) past the edge");
+                    }
+                    positive += usize::from(e > 0.0);
+                    o.insert((i0 + i, j0 + j), e);
+                }
+            }
+            for a in 0..m {
+                for b in 0..m {
+                    c.insert((i0 / 2 + a, j0 / 2 + b), errors.coarser_m[a * m + b]);
+                }
+            }
+        }
+        own.push(o);
+        coarser.push(c);
+    }
+    assert!(positive > 1000, "{positive} posts with an error");
+    for level in 0..layout.levels as usize - 1 {
+        for (&(i, j), &e) in &own[level + 1] {
+            if let Some(&fine) = own[level].get(&(2 * i, 2 * j)) {
+                assert!(
+                    fine >= e,
+                    "level {level} ({i}, {j}): {fine} below the coarser {e}"
+                );
+            }
+            if let Some(&stored) = coarser[level].get(&(i, j)) {
+                assert_eq!(
+                    stored, e,
+                    "level {level} holds the next level's error at ({i}, {j})"
+                );
+            }
+        }
+    }
+}
