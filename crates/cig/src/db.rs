@@ -186,11 +186,21 @@ fn reference_range_m(error_m: f32) -> f64 {
     )
 }
 
-/// Per level, the error distribution of the level-of-detail nodes (every tile is read, one at
-/// a time).
-fn lod_errors(db: &cig_terrain::TerrainDatabase) -> anyhow::Result<Vec<LevelErrors>> {
+/// What `db info --lod-errors` reads from every tile.
+struct LodReport {
+    levels: Vec<LevelErrors>,
+    /// Tiles without their posts' hierarchy errors (tile format 1), drawn as regular grids.
+    tiles_without_post_errors: u64,
+}
+
+/// Per level, the error distribution of the level-of-detail nodes, and how many tiles lack the
+/// posts' hierarchy errors (every tile is read, one at a time).
+fn lod_errors(db: &cig_terrain::TerrainDatabase) -> anyhow::Result<LodReport> {
     let layout = NodeLayout::new(*db.layout());
-    let mut out = Vec::new();
+    let mut report = LodReport {
+        levels: Vec::new(),
+        tiles_without_post_errors: 0,
+    };
     for level in 0..layout.pyramid.levels {
         let mut node_errors = Vec::new();
         for key in layout.pyramid.keys_at(level) {
@@ -198,15 +208,18 @@ fn lod_errors(db: &cig_terrain::TerrainDatabase) -> anyhow::Result<Vec<LevelErro
                 .load_tile(key)
                 .with_context(|| format!("reading {}", db.tile_location(key)))?;
             layout.node_errors_in(key, &tile, &mut node_errors);
+            report.tiles_without_post_errors += u64::from(tile.lod_errors.is_none());
         }
-        out.extend(LevelErrors::of(level, node_errors));
+        report.levels.extend(LevelErrors::of(level, node_errors));
     }
-    Ok(out)
+    Ok(report)
 }
 
-fn lod_errors_json(levels: &[LevelErrors]) -> serde_json::Value {
+fn lod_errors_json(report: &LodReport) -> serde_json::Value {
     let (width_px, height_px) = LOD_REFERENCE_SIZE;
+    let levels = &report.levels;
     serde_json::json!({
+        "tiles_without_post_errors": report.tiles_without_post_errors,
         "reference_view": {
             "width_px": width_px,
             "height_px": height_px,
@@ -278,8 +291,20 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<()> {
     for s in &m.sources {
         println!("source        {s}");
     }
-    if let Some(levels) = levels {
+    if let Some(report) = levels {
         let (width_px, height_px) = LOD_REFERENCE_SIZE;
+        if report.tiles_without_post_errors > 0 {
+            println!(
+                "mesh errors   {} of {} tiles lack their posts' hierarchy errors (tile format 1): \
+                 drawn as regular grids; rebuild the database for adaptive meshes",
+                report.tiles_without_post_errors, m.tile_count
+            );
+        } else {
+            println!(
+                "mesh errors   every tile holds its posts' hierarchy errors (adaptive meshes)"
+            );
+        }
+        let levels = report.levels;
         println!(
             "lod errors    per level: nodes, error median / p90 / max; a median node refines \
              within (at {LOD_REFERENCE_PX} px, {width_px} x {height_px} across \

@@ -136,6 +136,34 @@ fn info_reports_the_level_of_detail_error_of_every_level() {
         text.contains("lod errors") && text.contains("level 1"),
         "{text}"
     );
+    // A freshly built database holds every post's hierarchy error; a tile rewritten in format 1
+    // (as an older build wrote it) is counted and named as drawn with regular grids.
+    assert_eq!(info["lod_errors"]["tiles_without_post_errors"], 0);
+    assert!(text.contains("every tile holds"), "{text}");
+    let path = db.join("tiles").join("L0").join("0_0.tile");
+    let bytes = std::fs::read(&path).expect("tile file");
+    let mut tile = cig_terrain::tile::Tile::decode(&bytes, None).expect("a tile");
+    tile.lod_errors = None;
+    std::fs::write(&path, tile.encode()).expect("rewrite");
+    let out = cig()
+        .args(["db", "info"])
+        .arg(&db)
+        .args(["--json", "--lod-errors"])
+        .assert()
+        .success();
+    let info = json(&out.get_output().stdout);
+    assert_eq!(info["lod_errors"]["tiles_without_post_errors"], 1);
+    let text = cig()
+        .args(["db", "info"])
+        .arg(&db)
+        .arg("--lod-errors")
+        .assert()
+        .success();
+    let text = String::from_utf8_lossy(&text.get_output().stdout).to_string();
+    assert!(
+        text.contains("1 of ") && text.contains("regular grids"),
+        "{text}"
+    );
 }
 
 #[test]
