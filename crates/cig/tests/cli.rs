@@ -86,13 +86,16 @@ fn synth_is_deterministic_and_info_describes_it() {
 fn info_reports_the_level_of_detail_error_of_every_level() {
     let dir = tempfile::tempdir().expect("tmp");
     let db = synth(dir.path(), "db", 5, "6", "30");
-    let out = cig()
-        .args(["db", "info"])
-        .arg(&db)
-        .args(["--json", "--lod-errors"])
-        .assert()
-        .success();
-    let info = json(&out.get_output().stdout);
+    // `db info --lod-errors`, in JSON or as text.
+    let info_of = |db: &std::path::Path, as_json: bool| {
+        let mut command = cig();
+        command.args(["db", "info"]).arg(db).arg("--lod-errors");
+        if as_json {
+            command.arg("--json");
+        }
+        command.assert().success().get_output().stdout.clone()
+    };
+    let info = json(&info_of(&db, true));
     let levels = info["lod_errors"]["levels"].as_array().expect("levels");
     assert_eq!(
         levels.len() as u64,
@@ -125,13 +128,7 @@ fn info_reports_the_level_of_detail_error_of_every_level() {
         .assert()
         .success();
     assert!(json(&plain.get_output().stdout).get("lod_errors").is_none());
-    let text = cig()
-        .args(["db", "info"])
-        .arg(&db)
-        .arg("--lod-errors")
-        .assert()
-        .success();
-    let text = String::from_utf8_lossy(&text.get_output().stdout).to_string();
+    let text = String::from_utf8_lossy(&info_of(&db, false)).to_string();
     assert!(
         text.contains("lod errors") && text.contains("level 1"),
         "{text}"
@@ -145,21 +142,9 @@ fn info_reports_the_level_of_detail_error_of_every_level() {
     let mut tile = cig_terrain::tile::Tile::decode(&bytes, None).expect("a tile");
     tile.lod_errors = None;
     std::fs::write(&path, tile.encode()).expect("rewrite");
-    let out = cig()
-        .args(["db", "info"])
-        .arg(&db)
-        .args(["--json", "--lod-errors"])
-        .assert()
-        .success();
-    let info = json(&out.get_output().stdout);
+    let info = json(&info_of(&db, true));
     assert_eq!(info["lod_errors"]["tiles_without_post_errors"], 1);
-    let text = cig()
-        .args(["db", "info"])
-        .arg(&db)
-        .arg("--lod-errors")
-        .assert()
-        .success();
-    let text = String::from_utf8_lossy(&text.get_output().stdout).to_string();
+    let text = String::from_utf8_lossy(&info_of(&db, false)).to_string();
     assert!(
         text.contains("1 of ") && text.contains("regular grids"),
         "{text}"
