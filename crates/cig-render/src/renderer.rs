@@ -92,9 +92,10 @@ pub const MSAA_SAMPLES: u32 = 4;
 /// Format of off-screen frames.
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-const MAX_NODE_RECORDS: usize = 16384;
 /// Node meshes the GPU pool holds at most (about 280 MB with the atlases at 16 cells).
 const MAX_NODE_SLOTS: usize = 16384;
+/// Terrain records are kept by slot, so there is room for one per slot.
+const MAX_NODE_RECORDS: usize = MAX_NODE_SLOTS;
 const MAX_INSTANCES: usize = 8192;
 /// Tile loads a view may request per frame beyond the paging areas.
 const PREFETCH_PER_FRAME: usize = 8;
