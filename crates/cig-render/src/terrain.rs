@@ -10,9 +10,10 @@
 //! atlas rectangle) in a storage buffer written once per view. Slots are recycled least
 //! recently used. Meshes are rebuilt when finer data becomes resident or a node's cut changes.
 //!
-//! Limits: the pool holds `capacity` nodes (the database's node count, at most 16384 of 16 cells,
-//! about 280 MB with the atlases, and its triangles' indices); a view that needs more (full detail over a very large
-//! database) draws the nearest ones and reports the rest as dropped in its statistics.
+//! Limits: the pool holds `capacity` nodes (the database's node count, at most 16384 of 16
+//! cells, about 280 MB with the atlases and the meshes' indices); a view that needs more (full
+//! detail over a very large database) draws the nearest ones and reports the rest as dropped in
+//! its statistics.
 
 use crate::gpu::Gpu;
 use cig_scene::lod::{NodeKey, SelectedNode, TerrainLod};
@@ -215,12 +216,19 @@ impl TerrainGpu {
                             None => self.allocate(frame),
                         };
                         if let Some(index) = index {
+                            let parent = lod
+                                .layout
+                                .parent_tile(node.key)
+                                .and_then(|k| cache.resident(k).map(|t| (k, t)));
                             let mesh = terrain_mesh::build_node_mesh(
                                 &lod.layout,
                                 lod.geoid(),
                                 node.key,
-                                (data_key, &data_tile),
-                                detail_key.as_ref().map(|(k, t)| (*k, t.as_ref())),
+                                terrain_mesh::NodeTiles {
+                                    data: (data_key, &data_tile),
+                                    detail: detail_key.as_ref().map(|(k, t)| (*k, t.as_ref())),
+                                    parent: parent.as_ref().map(|(k, t)| (*k, t.as_ref())),
+                                },
                                 node.error_m,
                                 node.cut,
                             );
@@ -314,14 +322,16 @@ impl TerrainGpu {
                     } else {
                         (loading_m, 0.0, loading_m)
                     };
-                    if let Some(record) = self.record(
-                        *index,
-                        node.morph_start_m,
-                        node.morph_end_m,
-                        least,
-                        skirt,
-                        eye_ecef,
-                    ) {
+                    // A mesh kept past the build budget morphs as its own cut does.
+                    let (start_m, end_m) = match self.slots[*index].as_ref() {
+                        Some(s) if s.cut != node.cut => {
+                            band_of(s.cut, node.morph_end_m, allowed_error_per_m)
+                        }
+                        _ => (node.morph_start_m, node.morph_end_m),
+                    };
+                    if let Some(record) =
+                        self.record(*index, start_m, end_m, least, skirt, eye_ecef)
+                    {
                         self.add_to_frame(&mut out, *index, record);
                     }
                 }
@@ -478,4 +488,26 @@ fn index_buffer(device: &wgpu::Device, entries: u64) -> wgpu::Buffer {
         usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
+}
+
+/// The morph band (start, end) of a mesh cut at `cut` for a view that allows
+/// `allowed_error_per_m` per metre of distance (the selection's, for a mesh built for an
+/// earlier cut of its node): from its tolerance's error distance to the one it morphs to, or
+/// to the parent's range `parent_range_m`.
+fn band_of(cut: NodeCut, parent_range_m: f32, allowed_error_per_m: f64) -> (f32, f32) {
+    if allowed_error_per_m.is_nan()
+        || allowed_error_per_m <= 0.0
+        || !cut.parent_tolerance_m.is_finite()
+    {
+        return (f32::INFINITY, f32::INFINITY);
+    }
+    let range_m = |t: f32| {
+        (f64::from(t.max(0.0)) / allowed_error_per_m * cig_scene::lod::RANGE_MARGIN) as f32
+    };
+    let end_m = if cut.morphs_within_level {
+        range_m(cut.parent_tolerance_m)
+    } else {
+        parent_range_m
+    };
+    (range_m(cut.tolerance_m).min(end_m), end_m)
 }

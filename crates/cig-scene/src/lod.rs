@@ -171,6 +171,11 @@ impl NodeLayout {
         }
     }
 
+    /// The tile of the next coarser level holding the node's parent (`None` for a root).
+    pub fn parent_tile(&self, key: NodeKey) -> Option<TileKey> {
+        (key.level + 1 < self.pyramid.levels).then(|| self.tile_of(key.parent(), key.level + 1))
+    }
+
     /// True when the node reaches past the database's last row or column (its mesh's vertices
     /// are clamped onto the edge there).
     pub fn reaches_past_edge(&self, key: NodeKey) -> bool {
@@ -363,6 +368,10 @@ struct NodeBox {
     first_child: u32,
     /// Pyramid level of the data the box was built from, or [`UNBUILT`].
     data_level: u8,
+    /// The node's mesh is a cut of its own level's posts (its tile holds their hierarchy
+    /// errors); otherwise it is drawn as a regular grid, with no tolerance steps, and its
+    /// descendants keep its posts.
+    adaptive: bool,
 }
 
 /// `NodeBox::data_level` of a slot whose box is not built yet.
@@ -386,6 +395,7 @@ const EMPTY_BOX: NodeBox = NodeBox {
     error_m: 0.0,
     first_child: NO_CHILDREN,
     data_level: UNBUILT,
+    adaptive: false,
 };
 
 /// Fast multiplicative hash for the small integer keys of nodes and tiles (the keys come from
@@ -581,6 +591,7 @@ impl TerrainLod {
         if let (Some(dst), Some(points)) = (self.boxes.get_mut(slot), self.points.get_mut(slot)) {
             *dst = NodeBox {
                 first_child: dst.first_child,
+                adaptive: adaptive_mesh(key, tile_key, tile),
                 ..node_box(
                     &self.layout,
                     &self.geoid,
@@ -675,7 +686,8 @@ impl TerrainLod {
                 let child_tile = self.layout.tile_of(key, key.level - 1);
                 if scratch.resident(cache, child_tile).is_some() {
                     let first = self.children_of(slot);
-                    let handed = Some((cut, key.level, self.layout.reaches_past_edge(key)));
+                    let regular = self.layout.reaches_past_edge(key) || !g.adaptive;
+                    let handed = Some((cut, key.level, regular));
                     for (i, child) in key.children().into_iter().enumerate() {
                         if self.layout.exists(child) {
                             scratch
@@ -690,6 +702,7 @@ impl TerrainLod {
             let (cut, morph_start_m, morph_end_m) = drawn_cut(
                 &self.layout,
                 key,
+                g.adaptive,
                 cut,
                 (distance_m, range_m, parent_range_m),
                 camera,
@@ -735,13 +748,21 @@ impl TerrainLod {
     }
 }
 
+/// True when `key`'s mesh, built from `tile` (of level `tile_key.level`), is a cut of its own
+/// level's posts: the tile is the node's level and holds their hierarchy errors.
+fn adaptive_mesh(key: NodeKey, tile_key: TileKey, tile: &Tile) -> bool {
+    tile_key.level == key.level && tile.lod_errors.is_some()
+}
+
 /// A drawn node's cut and morph band (start, end), from its cut at its own error and its box
-/// distance, own range and parent's range: a tolerance step inside the database (nodes that
-/// reach past its edge are regular grids), CDLOD's band between the node's and its parent's
-/// range otherwise, none for a root.
+/// distance, own range and parent's range: a tolerance step for an adaptive mesh inside the
+/// database (nodes that reach past its edge, and nodes without their level's errors, are
+/// regular grids), CDLOD's band between the node's and its parent's range otherwise, none for
+/// a root.
 fn drawn_cut(
     layout: &NodeLayout,
     key: NodeKey,
+    adaptive: bool,
     cut: NodeCut,
     (distance_m, range_m, parent_range_m): (f64, f64, f64),
     camera: &Camera,
@@ -750,7 +771,7 @@ fn drawn_cut(
     if !parent_range_m.is_finite() {
         return (cut, f64::INFINITY, f64::INFINITY);
     }
-    if settings.max_pixel_error > 0.0 && !layout.reaches_past_edge(key) {
+    if settings.max_pixel_error > 0.0 && adaptive && !layout.reaches_past_edge(key) {
         return tolerance_step(
             cut,
             distance_m,
@@ -788,13 +809,13 @@ fn step_factor(j: i32) -> f32 {
 /// at its own error, `min(e, t_parent)`): the largest step tolerance `t_j = t_parent 2^(-j/4)`
 /// above its own whose error distance `R(t_j)` the node's box is beyond (its own error when
 /// none is), morphing to the next larger step's cut (to the parent's at the first step), from
-/// `R(t_j)` to `R(t_(j-1))` (with `t_j = t_parent 2^(-j/4)`, see [`TOLERANCE_STEPS`]). A vertex a fraction `m` through the band shows at most
-/// `(1 - m) t_j + m t_(j-1)`, the error its distance allows, as across levels; when the box
-/// comes nearer than `R(t_j)` the node takes the next step, whose vertices beyond `R(t_j)`
-/// are fully morphed onto this cut, so nothing pops. These are CDLOD's morph bands in
-/// tolerance instead of post spacing (the cuts of one node nest: the same post errors,
-/// smaller tolerances). The finest level, which has nothing finer to refine into, gains the
-/// most: its nodes are drawn from their parent's range inwards.
+/// `R(t_j)` to `R(t_(j-1))` (see [`TOLERANCE_STEPS`]). A vertex a fraction `m` through the
+/// band shows at most `(1 - m) t_j + m t_(j-1)`, the error its distance allows, as across
+/// levels; when the box comes nearer than `R(t_j)` the node takes the next step, whose
+/// vertices beyond `R(t_j)` are fully morphed onto this cut, so nothing pops. These are
+/// CDLOD's morph bands in tolerance instead of post spacing (the cuts of one node nest: the
+/// same post errors, smaller tolerances). The finest level, which has nothing finer to refine
+/// into, gains the most: its nodes are drawn from their parent's range inwards.
 fn tolerance_step(
     cut: NodeCut,
     distance_m: f64,
@@ -1030,6 +1051,7 @@ fn node_box(
         error_m: bounds.error_m,
         first_child: NO_CHILDREN,
         data_level,
+        adaptive: false,
     }
 }
 
@@ -1056,6 +1078,7 @@ mod tests {
     ) -> Selection {
         struct Geometry {
             data_level: u8,
+            adaptive: bool,
             bounds: NodeBounds,
             points: [DVec3; 18],
             frame_origin: DVec3,
@@ -1125,6 +1148,7 @@ mod tests {
             }
             Some(Geometry {
                 data_level: tile_key.level,
+                adaptive: adaptive_mesh(key, tile_key, &tile),
                 bounds,
                 points,
                 frame_origin: frame.origin_ecef(),
@@ -1167,11 +1191,8 @@ mod tests {
                 if cache.resident(child_tile).is_some() {
                     for child in key.children() {
                         if layout.exists(child) {
-                            stack.push((
-                                child,
-                                range_m,
-                                Some((cut, key.level, layout.reaches_past_edge(key))),
-                            ));
+                            let regular = layout.reaches_past_edge(key) || !g.adaptive;
+                            stack.push((child, range_m, Some((cut, key.level, regular))));
                         }
                     }
                     continue;
@@ -1181,6 +1202,7 @@ mod tests {
             let (cut, morph_start_m, morph_end_m) = drawn_cut(
                 layout,
                 key,
+                g.adaptive,
                 cut,
                 (distance_m, range_m, parent_range_m),
                 camera,
@@ -1220,7 +1242,18 @@ mod tests {
     /// varies across it, in 16-cell tiles so that its pyramid has five levels.
     fn rough_database() -> Arc<TerrainDatabase> {
         static DB: OnceLock<Arc<TerrainDatabase>> = OnceLock::new();
-        Arc::clone(DB.get_or_init(|| {
+        Arc::clone(DB.get_or_init(|| rough_database_with(None)))
+    }
+
+    /// The rough database with the tiles of one level written in format 1 (no post errors), as
+    /// a database partly rewritten by an older build would be.
+    fn rough_database_mixing_formats() -> Arc<TerrainDatabase> {
+        static DB: OnceLock<Arc<TerrainDatabase>> = OnceLock::new();
+        Arc::clone(DB.get_or_init(|| rough_database_with(Some(2))))
+    }
+
+    fn rough_database_with(format_1_level: Option<u8>) -> Arc<TerrainDatabase> {
+        {
             let grid = GeoGrid {
                 south_lat_deg: SOUTH_LAT_DEG,
                 west_lon_deg: WEST_LON_DEG,
@@ -1247,7 +1280,15 @@ mod tests {
             };
             let store = Arc::new(MemoryTileStore::new());
             let summary = build_pyramid::<BuildError>(&raster, 16, &mut |t| {
-                store.insert(t.key, t.encode());
+                if Some(t.key.level) == format_1_level {
+                    let older = Tile {
+                        lod_errors: None,
+                        ..t.clone()
+                    };
+                    store.insert(t.key, older.encode());
+                } else {
+                    store.insert(t.key, t.encode());
+                }
                 Ok(())
             })
             .expect("the test pyramid builds");
@@ -1263,7 +1304,7 @@ mod tests {
                 TerrainDatabase::new(Manifest::from_build(&summary, geoid, 0, vec![]), store)
                     .expect("the test database opens"),
             )
-        }))
+        }
     }
 
     fn lod_for(db: &TerrainDatabase) -> TerrainLod {
@@ -1552,12 +1593,17 @@ mod tests {
         for node in &selection.nodes {
             let data_key = layout.tile_of(node.key, node.data_level);
             let data = cache.resident(data_key).expect("every tile is resident");
+            let parent_key = layout.parent_tile(node.key);
+            let parent = parent_key.and_then(|k| cache.resident(k).map(|t| (k, t)));
             let mesh = crate::terrain_mesh::build_node_mesh(
                 layout,
                 lod.geoid(),
                 node.key,
-                (data_key, &data),
-                None,
+                crate::terrain_mesh::NodeTiles {
+                    data: (data_key, &data),
+                    detail: None,
+                    parent: parent.as_ref().map(|(k, t)| (*k, t.as_ref())),
+                },
                 node.error_m,
                 node.cut,
             );
@@ -1666,12 +1712,17 @@ mod tests {
     ) -> crate::terrain_mesh::NodeMesh {
         let tile_key = lod.layout.tile_of(key, key.level);
         let tile = cache.resident(tile_key).expect("every tile is resident");
+        let parent_key = lod.layout.parent_tile(key);
+        let parent = parent_key.and_then(|k| cache.resident(k).map(|t| (k, t)));
         crate::terrain_mesh::build_node_mesh(
             &lod.layout,
             lod.geoid(),
             key,
-            (tile_key, &tile),
-            None,
+            crate::terrain_mesh::NodeTiles {
+                data: (tile_key, &tile),
+                detail: None,
+                parent: parent.as_ref().map(|(k, t)| (*k, t.as_ref())),
+            },
             0.0,
             cut,
         )
@@ -1680,13 +1731,15 @@ mod tests {
     /// The cut a selection gives `key` when every tile is resident: the least error along the
     /// path from its root, and the level of its nearest ancestor that reaches past the edge.
     fn cut_of(layout: &NodeLayout, cache: &TileCache, key: NodeKey) -> NodeCut {
-        let error_of = |k: NodeKey| {
+        let error_and_regular = |k: NodeKey| {
             let tile_key = layout.tile_of(k, k.level);
             let tile = cache.resident(tile_key).expect("every tile is resident");
-            layout
+            let error_m = layout
                 .node_bounds_in(k, tile_key, &tile.nodes)
                 .error_m
-                .max(0.0)
+                .max(0.0);
+            let regular = layout.reaches_past_edge(k) || tile.lod_errors.is_none();
+            (error_m, regular)
         };
         let mut chain = vec![key];
         while chain
@@ -1699,8 +1752,9 @@ mod tests {
         let mut parent = None;
         let mut cut = NodeCut::REGULAR;
         for k in chain.into_iter().rev() {
-            cut = NodeCut::below(parent, error_of(k));
-            parent = Some((cut, k.level, layout.reaches_past_edge(k)));
+            let (error_m, regular) = error_and_regular(k);
+            cut = NodeCut::below(parent, error_m);
+            parent = Some((cut, k.level, regular));
         }
         cut
     }
@@ -1711,9 +1765,19 @@ mod tests {
     /// row and column included (their vertices are clamped onto the edge, and stay on it).
     #[test]
     fn fully_morphed_children_lie_on_their_parents_mesh() {
-        let db = rough_database();
-        let cache = cache_with(&db, 0..db.layout().levels, false);
-        let lod = lod_for(&db);
+        children_lie_on_their_parents_mesh(&rough_database());
+    }
+
+    /// The same where one level's tiles are format 1: they are regular grids, and the cuts
+    /// below them keep all their posts.
+    #[test]
+    fn fully_morphed_children_lie_on_a_format_1_parents_grid() {
+        children_lie_on_their_parents_mesh(&rough_database_mixing_formats());
+    }
+
+    fn children_lie_on_their_parents_mesh(db: &Arc<TerrainDatabase>) {
+        let cache = cache_with(db, 0..db.layout().levels, false);
+        let lod = lod_for(db);
         let layout = &lod.layout;
         let n = layout.node_cells as usize;
         let build = |key: NodeKey| own_mesh(&lod, &cache, key, cut_of(layout, &cache, key));

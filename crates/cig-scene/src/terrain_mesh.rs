@@ -14,7 +14,9 @@
 //! finest posts, and the cut conforms. The node's quadrants are always split (the cut holds at
 //! least 8 triangles) so that a child's share of its parent's cut depends on the child's posts
 //! alone; every post of a level drawn as a regular grid above (a node reaching past the
-//! database's edge) is kept. Each vertex carries a morph target: its place on the cut it
+//! database's edge, or one whose tile lacks its posts' errors) is kept, and the kept posts are
+//! closed under the hierarchy whatever a tile's bytes say ([`closed`]), so a cut always
+//! conforms. Each vertex carries a morph target: its place on the cut it
 //! morphs to (its parent's, whose posts are this node's even posts, or its own at a larger
 //! tolerance), found by walking that cut's hierarchy ([`locate`]). A child keeps every post its
 //! parent keeps (post errors never decrease towards finer levels, tolerances never increase),
@@ -33,9 +35,10 @@
 //! the local vertical by up to half the node's angular size (under 0.3 degree for nodes below
 //! 60 km); materials are blended bilinearly in colour, not per class. Nodes drawn from a
 //! coarser level's data while their tile loads, and tiles without post errors (format 1),
-//! are drawn as regular grids; a parent drawn from coarser data is not the cut its children
-//! morph to (a pop of up to its error when its own tile arrives, which the renderer's fade-in
-//! covers).
+//! are drawn as regular grids (their children keep all their posts); a parent drawn from
+//! coarser data is not the cut its children morph to (a pop of up to its error when its own
+//! tile arrives, which the renderer's fade-in covers). A mesh kept past the renderer's build
+//! budget is drawn with its own cut's morph band until it is rebuilt.
 
 use crate::lod::{NodeKey, NodeLayout};
 use cig_geo::{metres_per_degree, EnuFrame, Geodetic};
@@ -150,6 +153,38 @@ impl NodeCut {
             },
         }
     }
+}
+
+/// The posts of an `m`-cell square grid that `kept` keeps, and every post above a kept one in
+/// the hierarchy (row-major, `(m + 1)^2`), so that the cut conforms whatever `kept` says.
+fn closed(m: u32, kept: &dyn Fn(i32, i32) -> bool) -> Vec<bool> {
+    let s = m as usize + 1;
+    let mut out: Vec<bool> = (0..s * s)
+        .map(|k| kept((k / s) as i32, (k % s) as i32))
+        .collect();
+    let mut k = 2usize;
+    while k <= m as usize {
+        let h = k / 2;
+        // Side posts of squares of k cells, then their centres (which split into them).
+        for (first_i, first_j) in [(0, h), (h, 0), (h, h)] {
+            for i in (first_i..s).step_by(k) {
+                for j in (first_j..s).step_by(k) {
+                    let below = cig_terrain::rtin::child_vertices(i as u64, j as u64)
+                        .into_iter()
+                        .any(|(ci, cj)| {
+                            ci >= 0
+                                && cj >= 0
+                                && (ci as usize) < s
+                                && (cj as usize) < s
+                                && out[ci as usize * s + cj as usize]
+                        });
+                    out[i * s + j] |= below;
+                }
+            }
+        }
+        k *= 2;
+    }
+    out
 }
 
 /// A triangle of the hierarchy on a node's grid: its hypotenuse's ends and its right-angled
@@ -421,18 +456,39 @@ impl<'a> Sampler<'a> {
     }
 }
 
+/// The resident tiles a node's mesh is built from.
+#[derive(Clone, Copy)]
+pub struct NodeTiles<'a> {
+    /// The node's level or coarser: the vertices.
+    pub data: (TileKey, &'a Tile),
+    /// The next finer level, when resident: normals and colours.
+    pub detail: Option<(TileKey, &'a Tile)>,
+    /// The parent's level, when resident: the parent's cut when `data` has no post errors.
+    pub parent: Option<(TileKey, &'a Tile)>,
+}
+
 /// Builds the mesh of `key` from the tile `data` (the node's level or coarser) and, when
-/// resident, the finer tile `detail` for normals and colours.
+/// resident, the finer tile `detail` for normals and colours and the parent level's tile
+/// `parent` (whose post errors give the parent's cut when `data` has none).
 pub fn build_node_mesh(
     layout: &NodeLayout,
     geoid: &GeoidLookup,
     key: NodeKey,
-    data: (TileKey, &Tile),
-    detail: Option<(TileKey, &Tile)>,
+    tiles: NodeTiles<'_>,
     error_m: f32,
     cut: NodeCut,
 ) -> NodeMesh {
+    let NodeTiles {
+        data,
+        detail,
+        parent,
+    } = tiles;
     let n = layout.node_cells;
+    // 16-bit indices and the quadrant split: `NodeLayout::new` keeps nodes at 8 or 16 cells.
+    debug_assert!(
+        n.is_power_of_two() && (2..=128).contains(&n),
+        "{n} cells a node"
+    );
     let s = n as usize + 1;
     let grid = &layout.pyramid.grid;
     let max_row = (grid.rows.max(1) - 1) as f64;
@@ -522,11 +578,32 @@ pub fn build_node_mesh(
     };
     let parent_regular =
         !cut.morphs_within_level && cut.regular_ancestor_level == Some(key.level + 1);
+    // The parent's posts' errors (at this node's even posts): from this tile's coarser errors,
+    // or, when this tile has none (format 1, or data still coarser), from the parent's tile.
+    let parent_tile_errors = parent.and_then(|(k, t)| {
+        let e = t.lod_errors.as_ref()?;
+        (k.level == key.level + 1 && e.own_m.len() == t.elevation_m.len()).then(|| {
+            let span = i64::from(layout.pyramid.tile_cells);
+            let origin = |node: u32, tile: u32| {
+                (i64::from(node) * i64::from(ni) / 2 - i64::from(tile) * span) as i32
+            };
+            (
+                e.own_m.as_slice(),
+                t.posts_per_side as i32,
+                origin(key.row, k.row),
+                origin(key.col, k.col),
+            )
+        })
+    });
+    let parent_errors: Option<(&[f32], i32, i32, i32)> = match errors {
+        Some(e) if !regular => Some((e.coarser_m.as_slice(), even_posts, ti0 / 2, tj0 / 2)),
+        _ => parent_tile_errors,
+    };
     let parent_kept = |i: i32, j: i32| -> bool {
-        let Some(errors) = errors.filter(|_| !regular && !parent_regular) else {
-            return true;
-        };
         if cut.morphs_within_level {
+            let Some(errors) = errors.filter(|_| !regular) else {
+                return true;
+            };
             let quadrant_post = (i % half == 0) && (j % half == 0);
             return quadrant_post
                 || on_forced_level(i, j)
@@ -535,13 +612,36 @@ pub fn build_node_mesh(
                     .get(((ti0 + i) * posts + tj0 + j) as usize)
                     .is_none_or(|&e| e > cut.parent_tolerance_m);
         }
+        let Some((values, stride, pi0, pj0)) = parent_errors.filter(|_| !parent_regular) else {
+            return true;
+        };
+        let (a, b) = (pi0 + i / 2, pj0 + j / 2);
         on_forced_level(i, j)
-            || errors
-                .coarser_m
-                .get((((ti0 + i) / 2) * even_posts + (tj0 + j) / 2) as usize)
+            || a < 0
+            || b < 0
+            || values
+                .get((a * stride + b) as usize)
                 .is_none_or(|&e| e > cut.parent_tolerance_m)
     };
     let parent_step = if cut.morphs_within_level { 1 } else { 2 };
+    // Closed under the hierarchy (a post is kept when any post below it is): stored errors do
+    // that already, but a tile's bytes come from outside and must not open a crack.
+    let kept_closed = closed(n, &kept);
+    let kept = |i: i32, j: i32| kept_closed[(i * (ni + 1) + j) as usize];
+    let parent_closed = if cut.morphs_within_level {
+        closed(n, &parent_kept)
+    } else {
+        // The parent's posts are this node's even ones: its hierarchy on a grid of n / 2.
+        let on_parent_grid = closed(n / 2, &|a, b| parent_kept(2 * a, 2 * b));
+        let h = half + 1;
+        (0..(ni + 1) * (ni + 1))
+            .map(|k| {
+                let (i, j) = (k / (ni + 1), k % (ni + 1));
+                i % 2 == 0 && j % 2 == 0 && on_parent_grid[((i / 2) * h + j / 2) as usize]
+            })
+            .collect()
+    };
+    let parent_kept = |i: i32, j: i32| parent_closed[(i * (ni + 1) + j) as usize];
     let square_parity = key.row + key.col;
     let triangles = rtin_triangles(n, square_parity, &kept);
     let indices = mesh_indices(&triangles, n);
@@ -751,6 +851,29 @@ mod tests {
                         expected == Diagonal::SouthWestNorthEast,
                         "cell ({r}, {c}) of a square of parity {parity}"
                     );
+                }
+            }
+        }
+    }
+
+    proptest! {
+        /// Whatever a tile's bytes say, the kept set is closed before cutting: the cut
+        /// conforms, and every post the bytes keep is a vertex of it.
+        #[test]
+        fn any_kept_set_once_closed_cuts_a_conforming_mesh(
+            bits in proptest::collection::vec(any::<bool>(), 17 * 17), parity in 0u32..2,
+        ) {
+            let raw = |i: i32, j: i32| bits[(i * 17 + j) as usize];
+            let kept = closed(16, &raw);
+            let triangles = rtin_triangles(16, parity, &|i, j| kept[(i * 17 + j) as usize]);
+            assert_conforming(&triangles, 16);
+            let vertices: std::collections::HashSet<(i32, i32)> =
+                triangles.iter().flatten().copied().collect();
+            for i in 0..17 {
+                for j in 0..17 {
+                    if raw(i, j) {
+                        prop_assert!(vertices.contains(&(i, j)), "({i}, {j}) kept but not cut");
+                    }
                 }
             }
         }

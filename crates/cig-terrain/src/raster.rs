@@ -139,8 +139,9 @@ impl Diagonal {
     /// the database's south-west post): a checkerboard, south-west to north-east where
     /// `row + col` is even. This is the finest cut of a right-triangulated irregular network
     /// (each square split by a diagonal, each right triangle at its hypotenuse's midpoint), so
-    /// the grid of every level and every adaptive mesh the renderer draws (`cig_scene::rtin`)
-    /// are cuts of one hierarchy: a level's cells are unions of the finer level's triangles.
+    /// the grid of every level and every adaptive mesh the renderer draws
+    /// (`cig_scene::terrain_mesh`) are cuts of one hierarchy: a level's cells are unions of the
+    /// finer level's triangles (see [`crate::rtin`]).
     #[inline]
     pub fn of_cell(row: usize, col: usize) -> Diagonal {
         if (row + col).is_multiple_of(2) {

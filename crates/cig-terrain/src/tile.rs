@@ -342,6 +342,18 @@ impl Tile {
             own_m: f32_vec(&p[lod_start..lod_start + n2 * 4]),
             coarser_m: f32_vec(&p[lod_start + n2 * 4..lod_start + lod_len]),
         });
+        if let Some(errors) = &lod_errors {
+            if errors
+                .own_m
+                .iter()
+                .chain(&errors.coarser_m)
+                .any(|e| !(e.is_finite() && *e >= 0.0))
+            {
+                return Err(TileDecodeError::Header(
+                    "level-of-detail errors must be finite and not negative".into(),
+                ));
+            }
+        }
         let material = p[lod_start + lod_len..lod_start + lod_len + n2].to_vec();
         if let Some(&bad) = material.iter().find(|&&m| Material::from_byte(m).is_none()) {
             return Err(TileDecodeError::Material(bad));
@@ -438,6 +450,23 @@ mod tests {
             2
         );
         assert_eq!(Tile::decode(&bytes, Some(tile.key)), Ok(tile));
+    }
+
+    #[test]
+    fn level_of_detail_errors_that_are_not_finite_or_are_negative_are_refused() {
+        for bad in [f32::NAN, f32::INFINITY, -1.0] {
+            let mut tile = sample_tile(17, 5);
+            if let Some(errors) = tile.lod_errors.as_mut() {
+                errors.own_m[40] = bad;
+            }
+            assert!(
+                matches!(
+                    Tile::decode(&tile.encode(), None),
+                    Err(TileDecodeError::Header(_))
+                ),
+                "{bad}"
+            );
+        }
     }
 
     #[test]
