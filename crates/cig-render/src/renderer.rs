@@ -201,6 +201,8 @@ pub struct Renderer {
     gpu: Arc<Gpu>,
     pub lod: TerrainLod,
     terrain: TerrainGpu,
+    /// The last view's terrain draw (its buffers are reused).
+    terrain_frame: TerrainFrame,
     colour_format: wgpu::TextureFormat,
     globals: wgpu::Buffer,
     node_records: wgpu::Buffer,
@@ -621,6 +623,7 @@ impl Renderer {
             gpu,
             lod,
             terrain,
+            terrain_frame: TerrainFrame::default(),
             colour_format,
             globals,
             node_records,
@@ -810,7 +813,9 @@ impl Renderer {
         cache.prefetch(&selection.wanted_tiles, PREFETCH_PER_FRAME);
         let nodes = &selection.nodes[..selection.nodes.len().min(MAX_NODE_RECORDS)];
         let min_morph = self.fade_in(view_index, nodes, options.fade_in_s);
-        let (terrain_frame, mesh_stats): (TerrainFrame, MeshStats) = self.terrain.prepare(
+        // The view's terrain, in buffers kept from frame to frame.
+        let mut terrain_frame = std::mem::take(&mut self.terrain_frame);
+        let mesh_stats: MeshStats = self.terrain.prepare(
             &self.gpu,
             &self.lod,
             cache,
@@ -824,6 +829,7 @@ impl Renderer {
             },
             self.frame,
             options.mesh_budget,
+            &mut terrain_frame,
         );
         let lighting = Lighting::with_sky(
             snapshot.unix_time_s,
@@ -996,6 +1002,7 @@ impl Renderer {
             stats.bolt_lines_drawn = bolt_lines as u32;
             stats.precipitation_particles = particles;
         }
+        self.terrain_frame = terrain_frame;
         let set = self.timestamps.as_ref().map(|(set, _, _)| set);
         if clouds_first {
             let Some(targets) = self.targets.as_ref() else {

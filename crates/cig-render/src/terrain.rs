@@ -186,7 +186,8 @@ impl TerrainGpu {
         allowed_error_per_m: f64,
         frame: u64,
         build_budget: usize,
-    ) -> (TerrainFrame, MeshStats) {
+        out: &mut TerrainFrame,
+    ) -> MeshStats {
         let skirt_per_m = (SKIRT_OVER_ALLOWED_ERROR * allowed_error_per_m) as f32;
         let mut stats = MeshStats::default();
         // Pass 1: a slot for every node that can have one this frame.
@@ -220,7 +221,7 @@ impl TerrainGpu {
                                 .layout
                                 .parent_tile(node.key)
                                 .and_then(|k| cache.resident(k).map(|t| (k, t)));
-                            let mesh = terrain_mesh::build_node_mesh(
+                            let mut mesh = terrain_mesh::build_node_mesh(
                                 &lod.layout,
                                 lod.geoid(),
                                 node.key,
@@ -236,7 +237,7 @@ impl TerrainGpu {
                             self.slots[index] = Some(Slot {
                                 key: node.key,
                                 cut: node.cut,
-                                indices: mesh.indices.clone(),
+                                indices: std::mem::take(&mut mesh.indices),
                                 loading_skirt_m: mesh.skirt_depth_m,
                                 data_level: mesh.data_level,
                                 detail_level: mesh.detail_level,
@@ -292,10 +293,7 @@ impl TerrainGpu {
         let mut floor_m = SKIRT_FLOOR_M;
         for (node, slot) in nodes.iter().zip(&slot_of) {
             let Some(index) = slot else { continue };
-            let settled = self.slots[*index]
-                .as_ref()
-                .is_some_and(|s| s.data_level == node.key.level && s.cut == node.cut);
-            let shown_m = if settled {
+            let shown_m = if self.settled(*index, node) {
                 f64::from(node.cut.tolerance_m.max(node.error_m))
             } else {
                 f64::from(self.loading_skirt_m(*index))
@@ -308,16 +306,16 @@ impl TerrainGpu {
         for (_, index) in &stand_ins {
             floor_m = floor_m.max(self.loading_skirt_m(*index));
         }
-        let mut out = TerrainFrame::default();
+        // The caller's buffers, kept from frame to frame.
+        out.records.clear();
+        out.indices.clear();
+        out.nodes = 0;
         for (i, (node, slot)) in nodes.iter().zip(&slot_of).enumerate() {
             if let Some(index) = slot {
                 if !covered(node.key) {
                     let least = min_morph.get(i).copied().unwrap_or(0.0);
-                    let settled = self.slots[*index]
-                        .as_ref()
-                        .is_some_and(|s| s.data_level == node.key.level && s.cut == node.cut);
                     let loading_m = self.loading_skirt_m(*index).max(floor_m);
-                    let skirt = if settled {
+                    let skirt = if self.settled(*index, node) {
                         (floor_m, skirt_per_m, loading_m)
                     } else {
                         (loading_m, 0.0, loading_m)
@@ -332,7 +330,7 @@ impl TerrainGpu {
                     if let Some(record) =
                         self.record(*index, start_m, end_m, least, skirt, eye_ecef)
                     {
-                        self.add_to_frame(&mut out, *index, record);
+                        self.add_to_frame(out, *index, record);
                     }
                 }
             }
@@ -346,11 +344,19 @@ impl TerrainGpu {
             if let Some(record) =
                 self.record(*index, f32::INFINITY, f32::INFINITY, 0.0, skirt, eye_ecef)
             {
-                self.add_to_frame(&mut out, *index, record);
+                self.add_to_frame(out, *index, record);
             }
         }
         stats.stand_ins = stand_ins.len();
-        (out, stats)
+        stats
+    }
+
+    /// True when slot `index` holds `node`'s mesh from its own level's data and its cut.
+    fn settled(&self, index: usize, node: &SelectedNode) -> bool {
+        self.slots
+            .get(index)
+            .and_then(|s| s.as_ref())
+            .is_some_and(|s| s.data_level == node.key.level && s.cut == node.cut)
     }
 
     /// The skirt depth of slot `index`'s mesh drawn while data loads.
@@ -501,9 +507,9 @@ fn band_of(cut: NodeCut, parent_range_m: f32, allowed_error_per_m: f64) -> (f32,
     {
         return (f32::INFINITY, f32::INFINITY);
     }
-    let range_m = |t: f32| {
-        (f64::from(t.max(0.0)) / allowed_error_per_m * cig_scene::lod::RANGE_MARGIN) as f32
-    };
+    // The selection's range function, with pixels per unit of error for pixels per tangent.
+    let range_m =
+        |t: f32| cig_scene::lod::error_range_m(f64::from(t), 1.0 / allowed_error_per_m, 1.0) as f32;
     let end_m = if cut.morphs_within_level {
         range_m(cut.parent_tolerance_m)
     } else {

@@ -57,7 +57,7 @@
 //! height, which is conservative for nodes up to about 1000 km across. The arena holds at most
 //! about 50 000 nodes between frames (about 30 MB); past that it is emptied and rebuilt.
 
-use crate::terrain_mesh::NodeCut;
+use crate::terrain_mesh::{adaptive_errors, NodeCut};
 use crate::view::Camera;
 use cig_geo::{EnuFrame, Geodetic, LatLonTrig};
 use cig_terrain::database::GeoidLookup;
@@ -368,9 +368,9 @@ struct NodeBox {
     first_child: u32,
     /// Pyramid level of the data the box was built from, or [`UNBUILT`].
     data_level: u8,
-    /// The node's mesh is a cut of its own level's posts (its tile holds their hierarchy
-    /// errors); otherwise it is drawn as a regular grid, with no tolerance steps, and its
-    /// descendants keep its posts.
+    /// The node's mesh is a cut of its own level's posts (`terrain_mesh::adaptive_errors`);
+    /// otherwise it is drawn as a regular grid, with no tolerance steps, and its descendants
+    /// keep its posts.
     adaptive: bool,
 }
 
@@ -591,7 +591,7 @@ impl TerrainLod {
         if let (Some(dst), Some(points)) = (self.boxes.get_mut(slot), self.points.get_mut(slot)) {
             *dst = NodeBox {
                 first_child: dst.first_child,
-                adaptive: adaptive_mesh(key, tile_key, tile),
+                adaptive: adaptive_errors(&self.layout, key, (tile_key, tile)).is_some(),
                 ..node_box(
                     &self.layout,
                     &self.geoid,
@@ -676,18 +676,13 @@ impl TerrainLod {
             let error_m = f64::from(g.error_m.max(0.0));
             let range_m =
                 error_range_m(error_m, camera.pixels_per_tangent, settings.max_pixel_error);
-            let cut = if settings.max_pixel_error > 0.0 {
-                NodeCut::below(parent_cut, error_m as f32)
-            } else {
-                NodeCut::REGULAR
-            };
+            let cut = own_cut(parent_cut, error_m, settings);
             let wants_refine = key.level > 0 && distance_m < range_m;
             if wants_refine {
                 let child_tile = self.layout.tile_of(key, key.level - 1);
                 if scratch.resident(cache, child_tile).is_some() {
                     let first = self.children_of(slot);
-                    let regular = self.layout.reaches_past_edge(key) || !g.adaptive;
-                    let handed = Some((cut, key.level, regular));
+                    let handed = Some((cut, key.level, !g.adaptive));
                     for (i, child) in key.children().into_iter().enumerate() {
                         if self.layout.exists(child) {
                             scratch
@@ -700,8 +695,6 @@ impl TerrainLod {
                 scratch.wanted.push((distance_m, child_tile));
             }
             let (cut, morph_start_m, morph_end_m) = drawn_cut(
-                &self.layout,
-                key,
                 g.adaptive,
                 cut,
                 (distance_m, range_m, parent_range_m),
@@ -748,20 +741,20 @@ impl TerrainLod {
     }
 }
 
-/// True when `key`'s mesh, built from `tile` (of level `tile_key.level`), is a cut of its own
-/// level's posts: the tile is the node's level and holds their hierarchy errors.
-fn adaptive_mesh(key: NodeKey, tile_key: TileKey, tile: &Tile) -> bool {
-    tile_key.level == key.level && tile.lod_errors.is_some()
+/// A node's cut at its own error, below its parent's (full detail keeps every post).
+fn own_cut(parent: Option<ParentCut>, error_m: f64, settings: &LodSettings) -> NodeCut {
+    if settings.max_pixel_error > 0.0 {
+        NodeCut::below(parent, error_m as f32)
+    } else {
+        NodeCut::REGULAR
+    }
 }
 
 /// A drawn node's cut and morph band (start, end), from its cut at its own error and its box
-/// distance, own range and parent's range: a tolerance step for an adaptive mesh inside the
-/// database (nodes that reach past its edge, and nodes without their level's errors, are
-/// regular grids), CDLOD's band between the node's and its parent's range otherwise, none for
-/// a root.
+/// distance, own range and parent's range: a tolerance step for an adaptive mesh (regular
+/// grids take none; see `terrain_mesh::adaptive_errors`), CDLOD's band between the node's and
+/// its parent's range otherwise, none for a root.
 fn drawn_cut(
-    layout: &NodeLayout,
-    key: NodeKey,
     adaptive: bool,
     cut: NodeCut,
     (distance_m, range_m, parent_range_m): (f64, f64, f64),
@@ -771,7 +764,7 @@ fn drawn_cut(
     if !parent_range_m.is_finite() {
         return (cut, f64::INFINITY, f64::INFINITY);
     }
-    if settings.max_pixel_error > 0.0 && adaptive && !layout.reaches_past_edge(key) {
+    if settings.max_pixel_error > 0.0 && adaptive {
         return tolerance_step(
             cut,
             distance_m,
@@ -827,9 +820,8 @@ fn tolerance_step(
     let parent_tolerance_m = cut.parent_tolerance_m;
     let own_m = cut.tolerance_m;
     let range_of = |t: f32| error_range_m(f64::from(t), pixels_per_tangent, max_pixel_error);
-    let unstepped = (cut, morph_start(range_m, parent_range_m), parent_range_m);
-    if !(parent_tolerance_m > 0.0 && parent_tolerance_m.is_finite() && parent_range_m.is_finite()) {
-        return unstepped;
+    if !(parent_tolerance_m > 0.0 && parent_tolerance_m.is_finite()) {
+        return (cut, morph_start(range_m, parent_range_m), parent_range_m);
     }
     // Step `j`'s tolerance, or `None` past the last step above the node's own.
     let step_tolerance = |j: i32| {
@@ -844,19 +836,14 @@ fn tolerance_step(
             None => break own_m,
         }
     };
-    if j == 1 {
-        if tolerance_m == own_m {
-            return unstepped;
-        }
-        let stepped = NodeCut { tolerance_m, ..cut };
-        return (
-            stepped,
-            morph_start(range_of(tolerance_m), parent_range_m),
-            parent_range_m,
-        );
-    }
-    let morph_to_m = parent_tolerance_m * step_factor(j - 1);
-    let morph_end_m = range_of(morph_to_m);
+    // The first step morphs to the parent's cut over CDLOD's band, later ones to the previous
+    // step's cut of this node.
+    let (morph_to_m, morph_end_m, within) = if j == 1 {
+        (parent_tolerance_m, parent_range_m, false)
+    } else {
+        let t = parent_tolerance_m * step_factor(j - 1);
+        (t, range_of(t), true)
+    };
     let start_m = if tolerance_m == own_m {
         range_m
     } else {
@@ -866,8 +853,8 @@ fn tolerance_step(
         NodeCut {
             tolerance_m,
             parent_tolerance_m: morph_to_m,
-            morphs_within_level: true,
-            regular_ancestor_level: cut.regular_ancestor_level,
+            morphs_within_level: within,
+            ..cut
         },
         morph_start(start_m, morph_end_m),
         morph_end_m,
@@ -1148,7 +1135,7 @@ mod tests {
             }
             Some(Geometry {
                 data_level: tile_key.level,
-                adaptive: adaptive_mesh(key, tile_key, &tile),
+                adaptive: adaptive_errors(layout, key, (tile_key, &tile)).is_some(),
                 bounds,
                 points,
                 frame_origin: frame.origin_ecef(),
@@ -1180,19 +1167,14 @@ mod tests {
             let error_m = f64::from(g.bounds.error_m.max(0.0));
             let range_m =
                 error_range_m(error_m, camera.pixels_per_tangent, settings.max_pixel_error);
-            let cut = if settings.max_pixel_error > 0.0 {
-                NodeCut::below(parent_cut, error_m as f32)
-            } else {
-                NodeCut::REGULAR
-            };
+            let cut = own_cut(parent_cut, error_m, settings);
             let wants_refine = key.level > 0 && distance_m < range_m;
             if wants_refine {
                 let child_tile = layout.tile_of(key, key.level - 1);
                 if cache.resident(child_tile).is_some() {
                     for child in key.children() {
                         if layout.exists(child) {
-                            let regular = layout.reaches_past_edge(key) || !g.adaptive;
-                            stack.push((child, range_m, Some((cut, key.level, regular))));
+                            stack.push((child, range_m, Some((cut, key.level, !g.adaptive))));
                         }
                     }
                     continue;
@@ -1200,8 +1182,6 @@ mod tests {
                 wanted.push((distance_m, child_tile));
             }
             let (cut, morph_start_m, morph_end_m) = drawn_cut(
-                layout,
-                key,
                 g.adaptive,
                 cut,
                 (distance_m, range_m, parent_range_m),
@@ -1738,7 +1718,7 @@ mod tests {
                 .node_bounds_in(k, tile_key, &tile.nodes)
                 .error_m
                 .max(0.0);
-            let regular = layout.reaches_past_edge(k) || tile.lod_errors.is_none();
+            let regular = adaptive_errors(layout, k, (tile_key, &tile)).is_none();
             (error_m, regular)
         };
         let mut chain = vec![key];

@@ -44,7 +44,7 @@ use crate::lod::{NodeKey, NodeLayout};
 use cig_geo::{metres_per_degree, EnuFrame, Geodetic};
 use cig_terrain::database::GeoidLookup;
 use cig_terrain::raster::{triangulated_height, Diagonal};
-use cig_terrain::tile::{even_posts_per_side, Tile};
+use cig_terrain::tile::{even_posts_per_side, LodErrors, Tile};
 use cig_terrain::{Material, TileKey};
 use glam::DVec3;
 
@@ -162,28 +162,7 @@ fn closed(m: u32, kept: &dyn Fn(i32, i32) -> bool) -> Vec<bool> {
     let mut out: Vec<bool> = (0..s * s)
         .map(|k| kept((k / s) as i32, (k % s) as i32))
         .collect();
-    let mut k = 2usize;
-    while k <= m as usize {
-        let h = k / 2;
-        // Side posts of squares of k cells, then their centres (which split into them).
-        for (first_i, first_j) in [(0, h), (h, 0), (h, h)] {
-            for i in (first_i..s).step_by(k) {
-                for j in (first_j..s).step_by(k) {
-                    let below = cig_terrain::rtin::child_vertices(i as u64, j as u64)
-                        .into_iter()
-                        .any(|(ci, cj)| {
-                            ci >= 0
-                                && cj >= 0
-                                && (ci as usize) < s
-                                && (cj as usize) < s
-                                && out[ci as usize * s + cj as usize]
-                        });
-                    out[i * s + j] |= below;
-                }
-            }
-        }
-        k *= 2;
-    }
+    cig_terrain::rtin::fold_into_ancestors(s, s, &mut out, |a, b| a || b);
     out
 }
 
@@ -456,6 +435,151 @@ impl<'a> Sampler<'a> {
     }
 }
 
+/// The post errors a node's mesh is cut by: its own level's, from its own level's tile, for a
+/// node inside the database; `None` for a node drawn as a regular grid (reaching past the
+/// database's edge, drawn from a coarser level's data, or from a format 1 tile).
+pub fn adaptive_errors<'a>(
+    layout: &NodeLayout,
+    key: NodeKey,
+    (data_key, data): (TileKey, &'a Tile),
+) -> Option<&'a LodErrors> {
+    let errors = data.lod_errors.as_ref()?;
+    (data_key.level == key.level
+        && !layout.reaches_past_edge(key)
+        && errors.own_m.len() == data.elevation_m.len()
+        && errors.coarser_m.len() == even_posts_per_side(data.posts_per_side).pow(2))
+    .then_some(errors)
+}
+
+/// Which of a node's grid posts its cut keeps, and which of them the cut it morphs to keeps
+/// (row-major on the `(n + 1)^2` grid), both closed under the hierarchy whatever a tile's
+/// bytes say, so that every cut conforms.
+struct CutPosts {
+    s: usize,
+    kept: Vec<bool>,
+    morph_to: Vec<bool>,
+    /// Grid steps between the posts of the cut morphed to: 2 for the parent's, 1 for the
+    /// node's own at a larger tolerance.
+    morph_to_step: i32,
+}
+
+impl CutPosts {
+    fn of(
+        layout: &NodeLayout,
+        key: NodeKey,
+        data: (TileKey, &Tile),
+        parent: Option<(TileKey, &Tile)>,
+        cut: NodeCut,
+    ) -> CutPosts {
+        let n = layout.node_cells;
+        let (ni, s) = (n as i32, n as usize + 1);
+        let half = ni / 2;
+        let errors = adaptive_errors(layout, key, data);
+        let forced_level = cut.regular_ancestor_level.filter(|&f| f > key.level);
+        let (global_row, global_col) = (
+            i64::from(key.row) * i64::from(ni),
+            i64::from(key.col) * i64::from(ni),
+        );
+        // Posts of a level drawn as a regular grid above, which every cut below keeps.
+        let on_forced_level = |i: i32, j: i32| {
+            forced_level.is_some_and(|f| {
+                let every = 1i64 << (f - key.level);
+                (global_row + i64::from(i)) % every == 0 && (global_col + i64::from(j)) % every == 0
+            })
+        };
+        // The node's own posts in its tile.
+        let (data_key, data_tile) = data;
+        let tile_span = i64::from(layout.pyramid.tile_cells);
+        let (ti0, tj0) = (
+            (global_row - i64::from(data_key.row) * tile_span) as i32,
+            (global_col - i64::from(data_key.col) * tile_span) as i32,
+        );
+        let posts = data_tile.posts_per_side as i32;
+        // A cut of the node's own posts at `tolerance_m`. The quadrants are always split, so
+        // that a child's part of this mesh depends on the child's posts alone.
+        let own_cut = |tolerance_m: f32| -> Vec<bool> {
+            let Some(errors) = errors else {
+                return vec![true; s * s];
+            };
+            closed(n, &|i, j| {
+                (i % half == 0 && j % half == 0)
+                    || on_forced_level(i, j)
+                    || errors
+                        .own_m
+                        .get(((ti0 + i) * posts + tj0 + j) as usize)
+                        .is_none_or(|&e| e > tolerance_m)
+            })
+        };
+        let kept = own_cut(cut.tolerance_m);
+        if cut.morphs_within_level {
+            return CutPosts {
+                s,
+                kept,
+                morph_to: own_cut(cut.parent_tolerance_m),
+                morph_to_step: 1,
+            };
+        }
+        // The parent's posts are this node's even ones: its errors from this tile's coarser
+        // errors, or, when this tile has none (format 1, or data still coarser), from the
+        // parent's tile; none when the parent is a regular grid.
+        let parent_regular = cut.regular_ancestor_level == Some(key.level + 1);
+        let parent_errors: Option<(&[f32], i32, i32, i32)> = match errors {
+            _ if parent_regular => None,
+            Some(e) => Some((
+                e.coarser_m.as_slice(),
+                even_posts_per_side(data_tile.posts_per_side) as i32,
+                ti0 / 2,
+                tj0 / 2,
+            )),
+            None => parent.and_then(|(k, t)| {
+                let e = t.lod_errors.as_ref()?;
+                (k.level == key.level + 1 && e.own_m.len() == t.elevation_m.len()).then(|| {
+                    let origin = |node: i64, tile: u32| node / 2 - i64::from(tile) * tile_span;
+                    (
+                        e.own_m.as_slice(),
+                        t.posts_per_side as i32,
+                        origin(global_row, k.row) as i32,
+                        origin(global_col, k.col) as i32,
+                    )
+                })
+            }),
+        };
+        let on_parent_grid = closed(n / 2, &|a, b| {
+            let Some((values, stride, pi0, pj0)) = parent_errors else {
+                return true;
+            };
+            let (pa, pb) = (pi0 + a, pj0 + b);
+            on_forced_level(2 * a, 2 * b)
+                || pa < 0
+                || pb < 0
+                || values
+                    .get((pa * stride + pb) as usize)
+                    .is_none_or(|&e| e > cut.parent_tolerance_m)
+        });
+        let h = half as usize + 1;
+        let morph_to = (0..s * s)
+            .map(|k| {
+                let (i, j) = (k / s, k % s);
+                i % 2 == 0 && j % 2 == 0 && on_parent_grid[(i / 2) * h + j / 2]
+            })
+            .collect();
+        CutPosts {
+            s,
+            kept,
+            morph_to,
+            morph_to_step: 2,
+        }
+    }
+
+    fn kept(&self, i: i32, j: i32) -> bool {
+        self.kept[i as usize * self.s + j as usize]
+    }
+
+    fn morph_to(&self, i: i32, j: i32) -> bool {
+        self.morph_to[i as usize * self.s + j as usize]
+    }
+}
+
 /// The resident tiles a node's mesh is built from.
 #[derive(Clone, Copy)]
 pub struct NodeTiles<'a> {
@@ -531,117 +655,9 @@ pub fn build_node_mesh(
             rel[i * s + j] = ecef - centre_ecef;
         }
     }
-    // Which posts the mesh keeps, and which the parent's mesh keeps (on this node's grid).
     let clamped = layout.reaches_past_edge(key);
-    let errors = (data.0.level == key.level)
-        .then_some(data.1.lod_errors.as_ref())
-        .flatten()
-        .filter(|e| {
-            e.own_m.len() == data.1.elevation_m.len()
-                && e.coarser_m.len() == even_posts_per_side(data.1.posts_per_side).pow(2)
-        });
-    let regular = clamped || errors.is_none();
-    let ni = n as i32;
-    let half = ni / 2;
-    let tile_span = layout.pyramid.finest_cells_per_tile(data.0.level);
-    let level_step = 1u64 << key.level;
-    let (ti0, tj0) = (
-        ((r0 as u64).saturating_sub(u64::from(data.0.row) * tile_span) / level_step) as i32,
-        ((c0 as u64).saturating_sub(u64::from(data.0.col) * tile_span) / level_step) as i32,
-    );
-    let posts = data.1.posts_per_side as i32;
-    let even_posts = even_posts_per_side(data.1.posts_per_side) as i32;
-    let (global_row, global_col) = (
-        key.row as i64 * i64::from(ni),
-        key.col as i64 * i64::from(ni),
-    );
-    let forced_level = cut.regular_ancestor_level.filter(|&f| f > key.level);
-    let on_forced_level = |i: i32, j: i32| {
-        forced_level.is_some_and(|f| {
-            let every = 1i64 << (f - key.level);
-            (global_row + i64::from(i)) % every == 0 && (global_col + i64::from(j)) % every == 0
-        })
-    };
-    let kept = |i: i32, j: i32| -> bool {
-        let Some(errors) = errors.filter(|_| !regular) else {
-            return true;
-        };
-        // The node's quadrants are always split, so that a child's part of this mesh depends
-        // on the child's posts alone.
-        let quadrant_post = (i % half == 0) && (j % half == 0);
-        quadrant_post
-            || on_forced_level(i, j)
-            || errors
-                .own_m
-                .get(((ti0 + i) * posts + tj0 + j) as usize)
-                .is_none_or(|&e| e > cut.tolerance_m)
-    };
-    let parent_regular =
-        !cut.morphs_within_level && cut.regular_ancestor_level == Some(key.level + 1);
-    // The parent's posts' errors (at this node's even posts): from this tile's coarser errors,
-    // or, when this tile has none (format 1, or data still coarser), from the parent's tile.
-    let parent_tile_errors = parent.and_then(|(k, t)| {
-        let e = t.lod_errors.as_ref()?;
-        (k.level == key.level + 1 && e.own_m.len() == t.elevation_m.len()).then(|| {
-            let span = i64::from(layout.pyramid.tile_cells);
-            let origin = |node: u32, tile: u32| {
-                (i64::from(node) * i64::from(ni) / 2 - i64::from(tile) * span) as i32
-            };
-            (
-                e.own_m.as_slice(),
-                t.posts_per_side as i32,
-                origin(key.row, k.row),
-                origin(key.col, k.col),
-            )
-        })
-    });
-    let parent_errors: Option<(&[f32], i32, i32, i32)> = match errors {
-        Some(e) if !regular => Some((e.coarser_m.as_slice(), even_posts, ti0 / 2, tj0 / 2)),
-        _ => parent_tile_errors,
-    };
-    let parent_kept = |i: i32, j: i32| -> bool {
-        if cut.morphs_within_level {
-            let Some(errors) = errors.filter(|_| !regular) else {
-                return true;
-            };
-            let quadrant_post = (i % half == 0) && (j % half == 0);
-            return quadrant_post
-                || on_forced_level(i, j)
-                || errors
-                    .own_m
-                    .get(((ti0 + i) * posts + tj0 + j) as usize)
-                    .is_none_or(|&e| e > cut.parent_tolerance_m);
-        }
-        let Some((values, stride, pi0, pj0)) = parent_errors.filter(|_| !parent_regular) else {
-            return true;
-        };
-        let (a, b) = (pi0 + i / 2, pj0 + j / 2);
-        on_forced_level(i, j)
-            || a < 0
-            || b < 0
-            || values
-                .get((a * stride + b) as usize)
-                .is_none_or(|&e| e > cut.parent_tolerance_m)
-    };
-    let parent_step = if cut.morphs_within_level { 1 } else { 2 };
-    // Closed under the hierarchy (a post is kept when any post below it is): stored errors do
-    // that already, but a tile's bytes come from outside and must not open a crack.
-    let kept_closed = closed(n, &kept);
-    let kept = |i: i32, j: i32| kept_closed[(i * (ni + 1) + j) as usize];
-    let parent_closed = if cut.morphs_within_level {
-        closed(n, &parent_kept)
-    } else {
-        // The parent's posts are this node's even ones: its hierarchy on a grid of n / 2.
-        let on_parent_grid = closed(n / 2, &|a, b| parent_kept(2 * a, 2 * b));
-        let h = half + 1;
-        (0..(ni + 1) * (ni + 1))
-            .map(|k| {
-                let (i, j) = (k / (ni + 1), k % (ni + 1));
-                i % 2 == 0 && j % 2 == 0 && on_parent_grid[((i / 2) * h + j / 2) as usize]
-            })
-            .collect()
-    };
-    let parent_kept = |i: i32, j: i32| parent_closed[(i * (ni + 1) + j) as usize];
+    let cut_posts = CutPosts::of(layout, key, data, parent, cut);
+    let kept = |i: i32, j: i32| cut_posts.kept(i, j);
     let square_parity = key.row + key.col;
     let triangles = rtin_triangles(n, square_parity, &kept);
     let indices = mesh_indices(&triangles, n);
@@ -701,8 +717,8 @@ pub fn build_node_mesh(
             let (t, w) = locate(
                 n,
                 square_parity,
-                parent_step,
-                &parent_kept,
+                cut_posts.morph_to_step,
+                &|i, j| cut_posts.morph_to(i, j),
                 (i as i32, j as i32),
             );
             t.iter()

@@ -116,24 +116,58 @@ pub fn split_triangles(i: u64, j: u64) -> Option<[[(i64, i64); 3]; 2]> {
 
 /// The posts that the two triangles split at `(i, j)` are split at next: none below squares of
 /// two cells.
-pub fn child_vertices(i: u64, j: u64) -> Vec<(i64, i64)> {
+pub fn child_vertices(i: u64, j: u64) -> Option<[(i64, i64); 4]> {
     let (i, j) = (i as i64, j as i64);
     match vertex_kind(i as u64, j as u64) {
-        Vertex::Origin => Vec::new(),
+        Vertex::Origin => None,
         Vertex::Diagonal { k } => {
             let h = k as i64 / 2;
-            vec![(i - h, j), (i + h, j), (i, j - h), (i, j + h)]
+            Some([(i - h, j), (i + h, j), (i, j - h), (i, j + h)])
         }
         Vertex::Side { k, .. } if k >= 4 => {
             let q = k as i64 / 4;
-            vec![
+            Some([
                 (i - q, j - q),
                 (i - q, j + q),
                 (i + q, j - q),
                 (i + q, j + q),
-            ]
+            ])
         }
-        Vertex::Side { .. } => Vec::new(),
+        Vertex::Side { .. } => None,
+    }
+}
+
+/// Folds each post's value into its ancestors' on a `rows x cols` grid of posts (row-major):
+/// from the smallest squares up, every post's value becomes `combine` of its own and its
+/// children's (those on the grid), so a post's value covers everything below it. Level errors
+/// take the maximum; a mesh's kept posts take "any".
+pub fn fold_into_ancestors<T: Copy>(
+    rows: usize,
+    cols: usize,
+    values: &mut [T],
+    combine: impl Fn(T, T) -> T,
+) {
+    let mut k = 2usize;
+    while k / 2 < rows.max(cols) {
+        let h = k / 2;
+        // Side vertices of squares of k cells, then their centres (which split into them).
+        for (first_i, first_j) in [(0, h), (h, 0), (h, h)] {
+            for i in (first_i..rows).step_by(k) {
+                for j in (first_j..cols).step_by(k) {
+                    let Some(children) = child_vertices(i as u64, j as u64) else {
+                        continue;
+                    };
+                    let mut value = values[i * cols + j];
+                    for (ci, cj) in children {
+                        if ci >= 0 && cj >= 0 && (ci as usize) < rows && (cj as usize) < cols {
+                            value = combine(value, values[ci as usize * cols + cj as usize]);
+                        }
+                    }
+                    values[i * cols + j] = value;
+                }
+            }
+        }
+        k *= 2;
     }
 }
 
@@ -216,29 +250,7 @@ pub fn level_errors(raster: &Raster, own: &[f32], level: u8) -> LevelErrorGrid {
     let mut values: Vec<f32> = (0..rows * cols)
         .map(|k| own[(k / cols) * step * fine_cols + (k % cols) * step])
         .collect();
-    let mut k = 2u64;
-    while k / 2 < rows.max(cols) as u64 {
-        let h = (k / 2) as usize;
-        // Side vertices of squares of k cells, then their centres (which split into them).
-        for phase in [(0usize, h), (h, 0), (h, h)] {
-            let (mut i, k_us) = (phase.0, k as usize);
-            while i < rows {
-                let mut j = phase.1;
-                while j < cols {
-                    let mut e = values[i * cols + j];
-                    for (ci, cj) in child_vertices(i as u64, j as u64) {
-                        if ci >= 0 && cj >= 0 && (ci as usize) < rows && (cj as usize) < cols {
-                            e = e.max(values[ci as usize * cols + cj as usize]);
-                        }
-                    }
-                    values[i * cols + j] = e;
-                    j += k_us;
-                }
-                i += k_us;
-            }
-        }
-        k *= 2;
-    }
+    fold_into_ancestors(rows, cols, &mut values, f32::max);
     LevelErrorGrid { rows, cols, values }
 }
 
