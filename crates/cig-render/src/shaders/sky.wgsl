@@ -3,7 +3,9 @@
 // layer. The flat sky model paints the fog colour.
 
 struct SkyOut {
-    @builtin(position) clip: vec4<f32>,
+    // Depth 0 exactly, tested Equal against the cleared far plane: invariant, so no compiler
+    // may compute it differently between passes.
+    @builtin(position) @invariant clip: vec4<f32>,
     @location(0) ndc: vec2<f32>,
 };
 
