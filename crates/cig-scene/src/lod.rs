@@ -21,6 +21,13 @@
 //! built from 9 sample points at the lowest and highest heights, in the node's local
 //! east-north-up frame, so curvature is included.
 //!
+//! Round earth: triangles are straight chords through ECEF between posts on the curved
+//! ellipsoid, so every error also counts the chord sag of the triangles it stands for
+//! ([`NodeLayout::chord_sag_m`]: a post's error at least its triangles' sag, a node's at least
+//! its level's cells'). Without it a flat sea, whose posts carry no error, was drawn from a
+//! few triangles tens of kilometres across whose middles lay tens of metres under the sea
+//! (1165 px of error seen from a ship's bridge, now within the pixel).
+//!
 //! Cost per frame: the boxes persist across frames in a flat arena of slots linked as the
 //! quadtree (a node's four children in consecutive slots), so a visit reaches its node without
 //! hashing and reads one small record; a node is culled when all 18 sample points lie outside
@@ -185,6 +192,65 @@ impl NodeLayout {
             || c0 + span > (self.pyramid.grid.cols.max(2) - 1) as u64
     }
 
+    /// The most a cell's diagonal at `level` measures, in metres (at the database's latitude
+    /// nearest the equator, where a degree of longitude is longest).
+    pub fn cell_diagonal_m(&self, level: u8) -> f64 {
+        let g = &self.pyramid.grid;
+        let north_lat_deg = g.south_lat_deg + (g.rows.max(1) - 1) as f64 * g.dlat_deg;
+        let nearest_equator_deg = if g.south_lat_deg <= 0.0 && north_lat_deg >= 0.0 {
+            0.0
+        } else {
+            g.south_lat_deg.abs().min(north_lat_deg.abs())
+        };
+        let (m_per_deg_lat, m_per_deg_lon) = cig_geo::metres_per_degree(nearest_equator_deg);
+        let scale = f64::from(1u32 << level.min(31));
+        (g.dlat_deg * m_per_deg_lat).hypot(g.dlon_deg * m_per_deg_lon) * scale
+    }
+
+    /// How far a triangle's interpolated points may lie from the surface's own points over a
+    /// hypotenuse of `hypotenuse_m`: the drawn mesh's triangles are straight in ECEF while the
+    /// posts lie on the curved ellipsoid on a latitude-longitude grid, so a triangle's plane
+    /// dips under the surface by the sagitta of its circumcircle (radius half the hypotenuse,
+    /// on the smallest radius of curvature; a flat sea's 10 km triangle by 2 m), and the
+    /// grid's parallels, which curve by `1 / (R cos lat)` and converge by `tan lat / R`, move
+    /// its points up to `(1 + sin lat) / cos lat` times that (at the database's latitude
+    /// farthest from the equator; 1.96 at 36 degrees). The level of detail counts it as error
+    /// like any other.
+    pub fn chord_sag_m(&self, hypotenuse_m: f64) -> f32 {
+        let g = &self.pyramid.grid;
+        let north_lat_deg = g.south_lat_deg + (g.rows.max(1) - 1) as f64 * g.dlat_deg;
+        let farthest = g
+            .south_lat_deg
+            .abs()
+            .max(north_lat_deg.abs())
+            .min(89.0)
+            .to_radians();
+        let grid_factor = (1.0 + farthest.sin()) / farthest.cos();
+        (hypotenuse_m * hypotenuse_m * grid_factor / (8.0 * SMALLEST_RADIUS_OF_CURVATURE_M)) as f32
+    }
+
+    /// The chord sag of the two triangles that post `(i, j)` of `level`'s grid splits (the
+    /// triangles of the RTIN whose hypotenuse midpoint it is; see `cig_terrain::rtin`).
+    pub fn post_sag_m(&self, level: u8, i: u64, j: u64) -> f32 {
+        let k = match cig_terrain::rtin::vertex_kind(i, j) {
+            cig_terrain::rtin::Vertex::Diagonal { k }
+            | cig_terrain::rtin::Vertex::Side { k, .. } => k,
+            cig_terrain::rtin::Vertex::Origin => return 0.0,
+        };
+        self.chord_sag_m(k as f64 * self.cell_diagonal_m(level))
+    }
+
+    /// The chord sag of the cells of `level` (the triangles of a node drawn with every post of
+    /// its level), a floor under a node's error: what refining to that level can reach.
+    pub fn node_sag_m(&self, level: u8) -> f32 {
+        self.chord_sag_m(self.cell_diagonal_m(level))
+    }
+
+    /// A node's error for the selection: its data's error, and at least its chord sag.
+    pub fn node_error_m(&self, level: u8, data_error_m: f32) -> f32 {
+        data_error_m.max(0.0).max(self.node_sag_m(level))
+    }
+
     /// Nodes of the whole quadtree, every level.
     pub fn node_count(&self) -> u64 {
         (0..self.pyramid.levels)
@@ -296,16 +362,17 @@ impl NodeLayout {
                     col: tile_key.col * per_tile + c,
                 };
                 if self.exists(key) {
-                    out.push(
-                        self.node_bounds_in(key, tile_key, &tile.nodes)
-                            .error_m
-                            .max(0.0),
-                    );
+                    let data_error_m = self.node_bounds_in(key, tile_key, &tile.nodes).error_m;
+                    out.push(self.node_error_m(key.level, data_error_m));
                 }
             }
         }
     }
 }
+
+/// The WGS84 ellipsoid's smallest radius of curvature, `a (1 - e^2)` (the meridian's at the
+/// equator), metres.
+const SMALLEST_RADIUS_OF_CURVATURE_M: f64 = 6_335_439.3;
 
 /// Settings of the selection.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -1035,7 +1102,7 @@ fn node_box(
         axes,
         box_min,
         box_max,
-        error_m: bounds.error_m,
+        error_m: layout.node_error_m(key.level, bounds.error_m),
         first_child: NO_CHILDREN,
         data_level,
         adaptive: false,
@@ -1164,7 +1231,7 @@ mod tests {
             let d = camera.eye_ecef - g.frame_origin;
             let local = DVec3::new(d.dot(g.axes[0]), d.dot(g.axes[1]), d.dot(g.axes[2]));
             let distance_m = (local.clamp(g.box_min, g.box_max) - local).length();
-            let error_m = f64::from(g.bounds.error_m.max(0.0));
+            let error_m = f64::from(layout.node_error_m(key.level, g.bounds.error_m));
             let range_m =
                 error_range_m(error_m, camera.pixels_per_tangent, settings.max_pixel_error);
             let cut = own_cut(parent_cut, error_m, settings);
@@ -1666,7 +1733,13 @@ mod tests {
             assert!(errors.nodes > 0);
             assert!(errors.median_m <= errors.p90_m && errors.p90_m <= errors.max_m);
             if level == 0 {
-                assert_eq!(errors.max_m, 0.0, "the finest level is exact");
+                // Its data is exact; what is left is the chord sag of its nodes' triangles.
+                assert_eq!(
+                    errors.max_m,
+                    layout.node_sag_m(0),
+                    "the finest level is exact"
+                );
+                assert!(errors.max_m < 0.001);
             } else {
                 assert!(
                     errors.median_m > previous_median,
@@ -1926,6 +1999,80 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// A flat sea at 0 m, 301 x 301 posts 300 m apart (90 km), geoid 0, in 16-cell tiles: its
+    /// posts carry no error at all, so only the earth's curvature says how coarse it may be
+    /// drawn.
+    fn flat_sea_database() -> Arc<TerrainDatabase> {
+        static DB: OnceLock<Arc<TerrainDatabase>> = OnceLock::new();
+        Arc::clone(DB.get_or_init(|| {
+            let grid = GeoGrid {
+                south_lat_deg: SOUTH_LAT_DEG,
+                west_lon_deg: WEST_LON_DEG,
+                dlat_deg: DLAT_DEG * 10.0,
+                dlon_deg: DLON_DEG * 10.0,
+                rows: POSTS,
+                cols: POSTS,
+            };
+            let raster = Raster {
+                grid,
+                elevation_m: vec![0.0; POSTS * POSTS],
+                material: Some(vec![Material::Water; POSTS * POSTS]),
+            };
+            let store = Arc::new(MemoryTileStore::new());
+            let summary = build_pyramid::<BuildError>(&raster, 16, &mut |t| {
+                store.insert(t.key, t.encode());
+                Ok(())
+            })
+            .expect("the sea pyramid builds");
+            let manifest = Manifest::from_build(&summary, GeoidGrid::zero(), 0, vec![]);
+            Arc::new(TerrainDatabase::new(manifest, store).expect("the sea database opens"))
+        }))
+    }
+
+    /// The level-of-detail guarantee over a flat sea seen from a ship's bridge and from the
+    /// air: the chords of coarse triangles cut below the curved surface (a 10 km triangle's
+    /// middle lies 2 m under the sea), so the sea, too, is drawn within the allowed pixels.
+    #[test]
+    fn a_flat_sea_is_drawn_within_the_allowed_pixels_of_the_curved_surface() {
+        let db = flat_sea_database();
+        let cache = cache_with(&db, 0..db.layout().levels, false);
+        let mut lod = lod_for(&db);
+        let at = |north: f64, east: f64, alt_m: f64, hpr: (f64, f64, f64), size: (u32, u32)| {
+            let mut view = view_at(north * 10.0, east * 10.0, alt_m, hpr, 60.0, size);
+            view.fov = FovDeg::from_horizontal(60.0, size.0, size.1);
+            view
+        };
+        for (k, view) in [
+            at(0.5, 0.5, 20.0, (0.0, -3.0, 0.0), (640, 480)),
+            at(0.3, 0.6, 15.0, (130.0, -8.0, 0.0), (1920, 1080)),
+            at(0.5, 0.5, 3000.0, (45.0, -30.0, 0.0), (640, 480)),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let camera = view.camera();
+            let selection = lod.select(
+                &cache,
+                &camera,
+                &LodSettings {
+                    max_pixel_error: 1.0,
+                },
+            );
+            let (worst_px, posts) = drawn_error_px(&lod, &cache, &camera, &selection);
+            assert!(posts > 1000, "view {k}: {posts} posts measured");
+            assert!(
+                worst_px <= 1.0,
+                "view {k}: {worst_px:.3} px drawn, 1 allowed"
+            );
+            // The bound is conservative (the grid factor, side posts sized as diagonals) and the
+            // finest cells cannot refine: well short of the pixel, but not far short.
+            assert!(
+                worst_px > 0.1,
+                "view {k}: {worst_px:.3} px drawn: refined too far"
+            );
         }
     }
 

@@ -501,13 +501,22 @@ impl CutPosts {
             let Some(errors) = errors else {
                 return vec![true; s * s];
             };
+            // Each post's error counts its triangles' chord sag too (the curved surface they
+            // span; `NodeLayout::post_sag_m`).
+            let sag_m = |i: i32, j: i32| {
+                layout.post_sag_m(
+                    key.level,
+                    (global_row + i64::from(i)) as u64,
+                    (global_col + i64::from(j)) as u64,
+                )
+            };
             closed(n, &|i, j| {
                 (i % half == 0 && j % half == 0)
                     || on_forced_level(i, j)
                     || errors
                         .own_m
                         .get(((ti0 + i) * posts + tj0 + j) as usize)
-                        .is_none_or(|&e| e > tolerance_m)
+                        .is_none_or(|&e| e.max(sag_m(i, j)) > tolerance_m)
             })
         };
         let kept = own_cut(cut.tolerance_m);
@@ -549,12 +558,17 @@ impl CutPosts {
                 return true;
             };
             let (pa, pb) = (pi0 + a, pj0 + b);
+            let sag_m = layout.post_sag_m(
+                key.level + 1,
+                (global_row / 2 + i64::from(a)) as u64,
+                (global_col / 2 + i64::from(b)) as u64,
+            );
             on_forced_level(2 * a, 2 * b)
                 || pa < 0
                 || pb < 0
                 || values
                     .get((pa * stride + pb) as usize)
-                    .is_none_or(|&e| e > cut.parent_tolerance_m)
+                    .is_none_or(|&e| e.max(sag_m) > cut.parent_tolerance_m)
         });
         let h = half as usize + 1;
         let morph_to = (0..s * s)

@@ -80,7 +80,8 @@ fn synth_is_deterministic_and_info_describes_it() {
 }
 
 /// `db info --lod-errors`: per level, the level-of-detail nodes' error against the finest
-/// posts, none at the finest level and growing with each coarser one; without the flag the
+/// posts, at the finest level only its cells' chord sag on the curved earth (under a
+/// millimetre at 30 m posts) and growing with each coarser one; without the flag the
 /// tiles are not read and the key is absent.
 #[test]
 fn info_reports_the_level_of_detail_error_of_every_level() {
@@ -102,7 +103,11 @@ fn info_reports_the_level_of_detail_error_of_every_level() {
         info["levels"].as_u64().expect("levels")
     );
     let value = |l: &serde_json::Value, k: &str| l[k].as_f64().expect(k);
-    assert_eq!(value(&levels[0], "max_m"), 0.0, "the finest level is exact");
+    let finest_m = value(&levels[0], "max_m");
+    assert!(
+        finest_m > 0.0 && finest_m < 0.001,
+        "the finest level: {finest_m} m"
+    );
     for pair in levels.windows(2) {
         assert!(
             value(&pair[1], "median_m") > value(&pair[0], "median_m"),
