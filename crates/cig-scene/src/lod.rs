@@ -2016,11 +2016,8 @@ mod tests {
                 rows: POSTS,
                 cols: POSTS,
             };
-            let raster = Raster {
-                grid,
-                elevation_m: vec![0.0; POSTS * POSTS],
-                material: Some(vec![Material::Water; POSTS * POSTS]),
-            };
+            let mut raster = Raster::from_fn(grid, |_, _| 0.0);
+            raster.material = Some(vec![Material::Water; grid.len()]);
             let store = Arc::new(MemoryTileStore::new());
             let summary = build_pyramid::<BuildError>(&raster, 16, &mut |t| {
                 store.insert(t.key, t.encode());
