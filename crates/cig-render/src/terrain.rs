@@ -50,7 +50,6 @@ struct Slot {
 pub struct TerrainGpu {
     pub node_cells: u32,
     pub vertices_per_node: u32,
-
     pub capacity: usize,
     texels: u32,
     slots_per_row: u32,

@@ -23,7 +23,7 @@
 //!
 //! Round earth: triangles are straight chords through ECEF between posts on the curved
 //! ellipsoid, so every error also counts the chord sag of the triangles it stands for
-//! ([`NodeLayout::chord_sag_m`]: a post's error at least its triangles' sag, a node's at least
+//! ([`NodeLayout::post_sag_m`]: a post's error at least its triangles' sag, a node's at least
 //! its level's cells'). Without it a flat sea, whose posts carry no error, was drawn from a
 //! few triangles tens of kilometres across whose middles lay tens of metres under the sea
 //! (1165 px of error seen from a ship's bridge, now within the pixel).
@@ -69,6 +69,7 @@ use crate::view::Camera;
 use cig_geo::{EnuFrame, Geodetic, LatLonTrig};
 use cig_terrain::database::GeoidLookup;
 use cig_terrain::pyramid::quadtree_index;
+use cig_terrain::raster::GeoGrid;
 use cig_terrain::tile::{NodeBounds, Tile};
 use cig_terrain::{PyramidLayout, TileCache, TileKey};
 use glam::DVec3;
@@ -137,6 +138,9 @@ impl NodeKey {
 pub struct NodeLayout {
     pub pyramid: PyramidLayout,
     pub node_cells: u32,
+    /// The chord sag of a triangle whose hypotenuse is one finest cell's diagonal
+    /// ([`finest_cell_sag_m`]); a triangle `n` finest cells across sags `n^2` times as much.
+    finest_cell_sag_m: f64,
 }
 
 impl NodeLayout {
@@ -145,6 +149,7 @@ impl NodeLayout {
             pyramid,
             // A node's four children must lie in one tile of the finer level.
             node_cells: DEFAULT_NODE_CELLS.min(pyramid.tile_cells / 2).max(1),
+            finest_cell_sag_m: finest_cell_sag_m(&pyramid.grid),
         }
     }
 
@@ -192,43 +197,6 @@ impl NodeLayout {
             || c0 + span > (self.pyramid.grid.cols.max(2) - 1) as u64
     }
 
-    /// The most a cell's diagonal at `level` measures, in metres (at the database's latitude
-    /// nearest the equator, where a degree of longitude is longest).
-    pub fn cell_diagonal_m(&self, level: u8) -> f64 {
-        let g = &self.pyramid.grid;
-        let north_lat_deg = g.south_lat_deg + (g.rows.max(1) - 1) as f64 * g.dlat_deg;
-        let nearest_equator_deg = if g.south_lat_deg <= 0.0 && north_lat_deg >= 0.0 {
-            0.0
-        } else {
-            g.south_lat_deg.abs().min(north_lat_deg.abs())
-        };
-        let (m_per_deg_lat, m_per_deg_lon) = cig_geo::metres_per_degree(nearest_equator_deg);
-        let scale = f64::from(1u32 << level.min(31));
-        (g.dlat_deg * m_per_deg_lat).hypot(g.dlon_deg * m_per_deg_lon) * scale
-    }
-
-    /// How far a triangle's interpolated points may lie from the surface's own points over a
-    /// hypotenuse of `hypotenuse_m`: the drawn mesh's triangles are straight in ECEF while the
-    /// posts lie on the curved ellipsoid on a latitude-longitude grid, so a triangle's plane
-    /// dips under the surface by the sagitta of its circumcircle (radius half the hypotenuse,
-    /// on the smallest radius of curvature; a flat sea's 10 km triangle by 2 m), and the
-    /// grid's parallels, which curve by `1 / (R cos lat)` and converge by `tan lat / R`, move
-    /// its points up to `(1 + sin lat) / cos lat` times that (at the database's latitude
-    /// farthest from the equator; 1.96 at 36 degrees). The level of detail counts it as error
-    /// like any other.
-    pub fn chord_sag_m(&self, hypotenuse_m: f64) -> f32 {
-        let g = &self.pyramid.grid;
-        let north_lat_deg = g.south_lat_deg + (g.rows.max(1) - 1) as f64 * g.dlat_deg;
-        let farthest = g
-            .south_lat_deg
-            .abs()
-            .max(north_lat_deg.abs())
-            .min(89.0)
-            .to_radians();
-        let grid_factor = (1.0 + farthest.sin()) / farthest.cos();
-        (hypotenuse_m * hypotenuse_m * grid_factor / (8.0 * SMALLEST_RADIUS_OF_CURVATURE_M)) as f32
-    }
-
     /// The chord sag of the two triangles that post `(i, j)` of `level`'s grid splits (the
     /// triangles of the RTIN whose hypotenuse midpoint it is; see `cig_terrain::rtin`).
     pub fn post_sag_m(&self, level: u8, i: u64, j: u64) -> f32 {
@@ -237,13 +205,15 @@ impl NodeLayout {
             | cig_terrain::rtin::Vertex::Side { k, .. } => k,
             cig_terrain::rtin::Vertex::Origin => return 0.0,
         };
-        self.chord_sag_m(k as f64 * self.cell_diagonal_m(level))
+        let cells = k as f64 * f64::from(1u32 << level.min(31));
+        (self.finest_cell_sag_m * cells * cells) as f32
     }
 
     /// The chord sag of the cells of `level` (the triangles of a node drawn with every post of
     /// its level), a floor under a node's error: what refining to that level can reach.
     pub fn node_sag_m(&self, level: u8) -> f32 {
-        self.chord_sag_m(self.cell_diagonal_m(level))
+        let cells = f64::from(1u32 << level.min(31));
+        (self.finest_cell_sag_m * cells * cells) as f32
     }
 
     /// A node's error for the selection: its data's error, and at least its chord sag.
@@ -368,6 +338,30 @@ impl NodeLayout {
             }
         }
     }
+}
+
+/// How far a triangle's interpolated points may lie from the surface's own points, for a
+/// triangle whose hypotenuse is the diagonal of one cell of `grid`: the drawn mesh's triangles
+/// are straight in ECEF while the posts lie on the curved ellipsoid on a latitude-longitude
+/// grid, so a triangle's plane dips under the surface by the sagitta of its circumcircle
+/// (radius half the hypotenuse `h`, on the smallest radius of curvature `R`: `h^2 / 8R`; a flat
+/// sea's 10 km triangle by 2 m), and the grid's parallels, which curve by `1 / (R cos lat)` and
+/// converge by `tan lat / R`, move its points up to `(1 + sin lat) / cos lat` times that (at the
+/// database's latitude farthest from the equator; 1.96 at 36 degrees). The cell's diagonal is
+/// measured where a degree of longitude is longest (the latitude nearest the equator). The
+/// level of detail counts the sag as error like any other.
+fn finest_cell_sag_m(grid: &GeoGrid) -> f64 {
+    let (south, north) = (grid.south_lat_deg, grid.north_lat_deg());
+    let nearest_equator_deg = if south <= 0.0 && north >= 0.0 {
+        0.0
+    } else {
+        south.abs().min(north.abs())
+    };
+    let (m_per_deg_lat, m_per_deg_lon) = cig_geo::metres_per_degree(nearest_equator_deg);
+    let diagonal_m = (grid.dlat_deg * m_per_deg_lat).hypot(grid.dlon_deg * m_per_deg_lon);
+    let farthest = south.abs().max(north.abs()).min(89.0).to_radians();
+    let grid_factor = (1.0 + farthest.sin()) / farthest.cos();
+    diagonal_m * diagonal_m * grid_factor / (8.0 * SMALLEST_RADIUS_OF_CURVATURE_M)
 }
 
 /// The WGS84 ellipsoid's smallest radius of curvature, `a (1 - e^2)` (the meridian's at the

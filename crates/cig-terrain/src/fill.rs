@@ -119,16 +119,11 @@ fn pull_push(values: &[f32], rows: usize, cols: usize) -> Vec<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raster::GeoGrid;
-
-    fn raster(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f32) -> Raster {
-        Raster::from_fn(GeoGrid::at_origin(rows, cols, 0.001), f)
-    }
 
     #[test]
     fn fills_a_hole_in_a_plane_close_to_the_plane_and_keeps_known_posts() {
         let plane = |r: usize, c: usize| 100.0 + r as f32 * 2.0 + c as f32;
-        let mut r = raster(40, 50, |row, col| {
+        let mut r = Raster::for_test(40, 50, |row, col| {
             if (10..20).contains(&row) && (15..30).contains(&col) {
                 f32::NAN
             } else {
@@ -153,7 +148,7 @@ mod tests {
 
     #[test]
     fn all_void_is_an_error() {
-        let mut r = raster(4, 4, |_, _| f32::NAN);
+        let mut r = Raster::for_test(4, 4, |_, _| f32::NAN);
         assert_eq!(fill_voids(&mut r), Err(FillError::AllVoid(16)));
     }
 }

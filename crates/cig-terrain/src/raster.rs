@@ -109,6 +109,16 @@ impl Raster {
         }
     }
 
+    /// A test raster of `rows x cols` posts 0.001 degrees apart at the origin.
+    #[cfg(test)]
+    pub(crate) fn for_test(
+        rows: usize,
+        cols: usize,
+        height_m: impl Fn(usize, usize) -> f32,
+    ) -> Raster {
+        Raster::from_fn(GeoGrid::at_origin(rows, cols, 0.001), height_m)
+    }
+
     /// Index of post `(row, col)` in the row-major arrays.
     pub fn index(&self, row: usize, col: usize) -> usize {
         row * self.grid.cols + col

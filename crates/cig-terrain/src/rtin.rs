@@ -257,11 +257,6 @@ pub fn level_errors(raster: &Raster, own: &[f32], level: u8) -> LevelErrorGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raster::GeoGrid;
-
-    fn raster(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f32) -> Raster {
-        Raster::from_fn(GeoGrid::at_origin(rows, cols, 0.001), f)
-    }
 
     #[test]
     fn every_post_but_the_origin_splits_two_triangles_with_it_as_hypotenuse_midpoint() {
@@ -284,7 +279,7 @@ mod tests {
 
     #[test]
     fn a_plane_has_no_error_and_a_spike_reaches_its_ancestors() {
-        let plane = raster(33, 33, |r, c| 3.0 * r as f32 - 2.0 * c as f32 + 7.0);
+        let plane = Raster::for_test(33, 33, |r, c| 3.0 * r as f32 - 2.0 * c as f32 + 7.0);
         let own = own_errors(&plane);
         let inside = |(r, c): (i64, i64)| (0..33).contains(&r) && (0..33).contains(&c);
         for (k, &e) in own.iter().enumerate() {
@@ -293,7 +288,7 @@ mod tests {
                 assert!(e < 1e-3, "({r}, {c}): {e}");
             }
         }
-        let spiky = raster(33, 33, |r, c| if (r, c) == (5, 9) { 10.0 } else { 0.0 });
+        let spiky = Raster::for_test(33, 33, |r, c| if (r, c) == (5, 9) { 10.0 } else { 0.0 });
         let own = own_errors(&spiky);
         for level in 0..3u8 {
             let grid = level_errors(&spiky, &own, level);
