@@ -6,13 +6,16 @@
 //! multiple-scattering (32 × 32) tables are computed once on the CPU by
 //! [`cig_environment::atmosphere`] and uploaded as half floats. Each frame a 192 × 108 sky-view
 //! table (latitude concentrated at the horizon, longitude from the sun's azimuth, full circle
-//! so the moon-lit sky fits too) is ray marched in 24 steps by a full-screen fragment pass; the
-//! sky pass, the aerial perspective of terrain and models and the horizon fog colour sample
-//! it (`shaders/atmosphere.wgsl`). Aerial perspective: the transmittance between the eye and a
-//! surface is the flat-layer closed form of the exponential Rayleigh and Mie profiles, and the
-//! in-scattered light is the sky-view radiance along the ray times the share of the whole
-//! ray's in-scattering that lies in front of the surface, `(1 − T(d)) / (1 − T(ray))` — one
-//! table sample instead of Hillaire's 32³ froxel volume. The scene is drawn into a half-float
+//! so the moon-lit sky fits too) is ray marched in 24 steps by a full-screen fragment pass (one
+//! pipeline with the moon's light, one without, so a moonless sky is not charged for it); the
+//! sky pass and the horizon fog colour sample it (`shaders/atmosphere.wgsl`). The same pass
+//! writes a second table, each direction's source function `L / (1 − T(ray))`: its radiance
+//! over the share of light the whole ray scatters in, with `T(ray)` the march's own
+//! transmittance. Aerial perspective: the transmittance `T(d)` between the eye and a surface is
+//! the flat-layer closed form of the exponential Rayleigh and Mie profiles (their densities at
+//! the eye worked out once per frame), and the in-scattered light is the source function along
+//! the ray times the surface's share `1 − T(d)` — one table sample per pixel instead of
+//! Hillaire's 32³ froxel volume. The scene is drawn into a half-float
 //! target as pre-exposed radiance; [`ToneMap`] maps it to the caller's target (scotopic blue
 //! shift at night, ACES filmic curve, sRGB encoding where the target is not sRGB).
 //!
@@ -172,9 +175,12 @@ pub(crate) struct AtmosphereGpu {
     /// Group 1 for the scene's pipelines (samples the sky-view table).
     pub scene_bind: wgpu::BindGroup,
     sky_view: wgpu::TextureView,
-    /// Group 1 for the sky-view pass (a placeholder in the sky-view slot).
+    /// The sky-view pass's second table: each direction's source function.
+    sky_source: wgpu::TextureView,
+    /// Group 1 for the sky-view pass (placeholders in the sky-view tables' slots).
     lut_bind: wgpu::BindGroup,
-    sky_view_pipeline: wgpu::RenderPipeline,
+    /// The sky-view pass without and with the moon's light.
+    sky_view_pipelines: [wgpu::RenderPipeline; 2],
     globals_bind: wgpu::BindGroup,
 }
 
@@ -203,16 +209,20 @@ impl AtmosphereGpu {
                 texels: vec![[0.0; 4]],
             },
         );
-        let sky_view = crate::gpu::render_target(
-            device,
-            "sky-view table",
-            SKY_VIEW_SIZE,
-            HDR_FORMAT,
-            1,
-            wgpu::TextureUsages::TEXTURE_BINDING,
-            &[],
-        )
-        .create_view(&Default::default());
+        let table = |label| {
+            crate::gpu::render_target(
+                device,
+                label,
+                SKY_VIEW_SIZE,
+                HDR_FORMAT,
+                1,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+                &[],
+            )
+            .create_view(&Default::default())
+        };
+        let sky_view = table("sky-view table");
+        let sky_source = table("sky-view source table");
         let clamp = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("atmosphere tables"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -234,16 +244,17 @@ impl AtmosphereGpu {
                 texture_entry(2),
                 sampler_entry(3),
                 sampler_entry(4),
+                texture_entry(5),
             ],
         });
-        let bind = |label, first: &wgpu::TextureView| {
+        let bind = |label, radiance: &wgpu::TextureView, source: &wgpu::TextureView| {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(label),
                 layout: &layout,
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
-                        resource: wgpu::BindingResource::TextureView(first),
+                        resource: wgpu::BindingResource::TextureView(radiance),
                     },
                     wgpu::BindGroupEntry {
                         binding: 1,
@@ -261,52 +272,68 @@ impl AtmosphereGpu {
                         binding: 4,
                         resource: wgpu::BindingResource::Sampler(&wrap),
                     },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::TextureView(source),
+                    },
                 ],
             })
         };
-        let scene_bind = bind("atmosphere (scene)", &sky_view);
-        let lut_bind = bind("atmosphere (sky-view pass)", &placeholder);
+        let scene_bind = bind("atmosphere (scene)", &sky_view, &sky_source);
+        let lut_bind = bind("atmosphere (sky-view pass)", &placeholder, &placeholder);
         let module = atmosphere_shader(gpu, "sky view", include_str!("shaders/sky_view.wgsl"));
-        let sky_view_pipeline = crate::gpu::full_screen_pipeline(
-            gpu,
-            "sky view",
-            &module,
-            &[globals_layout, &layout],
-            HDR_FORMAT,
-            None,
-        );
+        let table_target = Some(wgpu::ColorTargetState {
+            format: HDR_FORMAT,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        });
+        let sky_view_pipelines = [0.0, 1.0].map(|moon_sky| {
+            crate::gpu::full_screen_pipeline_to(
+                gpu,
+                "sky view",
+                &module,
+                &[globals_layout, &layout],
+                &[table_target.clone(), table_target.clone()],
+                &[("MOON_SKY", moon_sky)],
+            )
+        });
         AtmosphereGpu {
             layout,
             scene_bind,
             sky_view,
+            sky_source,
             lut_bind,
-            sky_view_pipeline,
+            sky_view_pipelines,
             globals_bind,
         }
     }
 
-    /// Records the sky-view table's pass (the frame's globals must be written).
+    /// Records the sky-view table's pass (the frame's globals must be written); `moon_lit`:
+    /// whether the moon's light above the atmosphere is not zero.
     pub fn encode_sky_view(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        moon_lit: bool,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("sky view"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.sky_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            color_attachments: &[&self.sky_view, &self.sky_source].map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            }),
             depth_stencil_attachment: None,
             timestamp_writes,
             ..Default::default()
         });
-        pass.set_pipeline(&self.sky_view_pipeline);
+        pass.set_pipeline(&self.sky_view_pipelines[usize::from(moon_lit)]);
         pass.set_bind_group(0, &self.globals_bind, &[]);
         pass.set_bind_group(1, &self.lut_bind, &[]);
         pass.draw(0..3, 0..1);

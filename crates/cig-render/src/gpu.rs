@@ -199,6 +199,30 @@ pub(crate) fn full_screen_pipeline(
     format: wgpu::TextureFormat,
     blend: Option<wgpu::BlendState>,
 ) -> wgpu::RenderPipeline {
+    full_screen_pipeline_to(
+        gpu,
+        label,
+        module,
+        layouts,
+        &[Some(wgpu::ColorTargetState {
+            format,
+            blend,
+            write_mask: wgpu::ColorWrites::ALL,
+        })],
+        &[],
+    )
+}
+
+/// A full-screen pass's pipeline writing several colour targets, with the values of the
+/// module's pipeline-overridable constants.
+pub(crate) fn full_screen_pipeline_to(
+    gpu: &Gpu,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    layouts: &[&wgpu::BindGroupLayout],
+    targets: &[Option<wgpu::ColorTargetState>],
+    constants: &[(&str, f64)],
+) -> wgpu::RenderPipeline {
     let pipeline_layout = gpu
         .device
         .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -213,7 +237,10 @@ pub(crate) fn full_screen_pipeline(
             vertex: wgpu::VertexState {
                 module,
                 entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
                 buffers: &[],
             },
             primitive: wgpu::PrimitiveState::default(),
@@ -222,12 +249,11 @@ pub(crate) fn full_screen_pipeline(
             fragment: Some(wgpu::FragmentState {
                 module,
                 entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format,
-                    blend,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
+                targets,
             }),
             multiview_mask: None,
             cache: None,

@@ -137,7 +137,8 @@ struct Globals {
 /// The sky-view table's frame for the frame's up and sun (single precision, as the shaders
 /// used to work it out for every pixel): its x axis (horizontal towards the sun's azimuth,
 /// or a fixed horizontal with the sun at the zenith) with the horizon's zenith angle for the
-/// eye's radius `eye_radius_m` in w, and its y axis (`up x x`).
+/// eye's radius `eye_radius_m` in w, and its y axis (`up x x`) with the table row of the fog's
+/// horizon sky in w.
 fn sky_frame(up: [f32; 4], sun: [f32; 4], eye_radius_m: f32) -> ([f32; 4], [f32; 4]) {
     let up = glam::Vec3::new(up[0], up[1], up[2]);
     let sun = glam::Vec3::new(sun[0], sun[1], sun[2]);
@@ -156,7 +157,38 @@ fn sky_frame(up: [f32; 4], sun: [f32; 4], eye_radius_m: f32) -> ([f32; 4], [f32;
     let r = eye_radius_m.max(1.0);
     let cos_beta = (r * r - bottom * bottom).max(0.0).sqrt() / r;
     let horizon_zenith = std::f32::consts::PI - cos_beta.clamp(-1.0, 1.0).acos();
-    ([x.x, x.y, x.z, horizon_zenith], [y.x, y.y, y.z, 0.0])
+    let fog_row = sky_view_row(
+        std::f32::consts::FRAC_PI_2 - FOG_SKY_ELEVATION_RAD,
+        horizon_zenith,
+    );
+    ([x.x, x.y, x.z, horizon_zenith], [y.x, y.y, y.z, fog_row])
+}
+
+/// How far above the horizontal the fog takes its colour from the sky (radians): the horizon
+/// sky of the ray's azimuth, clear of the ground at any altitude the sky-view table covers.
+const FOG_SKY_ELEVATION_RAD: f32 = 0.02;
+
+/// The sky-view table's row (v) of a zenith angle: Hillaire's latitude mapping, concentrated at
+/// the horizon's zenith angle `horizon_zenith` (the same mapping as `sky_view_uv` in
+/// `shaders/atmosphere.wgsl`).
+fn sky_view_row(zenith: f32, horizon_zenith: f32) -> f32 {
+    let beta = std::f32::consts::PI - horizon_zenith;
+    if zenith < horizon_zenith {
+        0.5 * (1.0 - (1.0 - zenith / horizon_zenith).max(0.0).sqrt())
+    } else {
+        0.5 + 0.5 * ((zenith - horizon_zenith) / beta).clamp(0.0, 1.0).sqrt()
+    }
+}
+
+/// The Rayleigh and Mie profiles' relative densities at the eye's altitude, for the aerial
+/// perspective's optical depth (`g.atmos.zw`).
+fn eye_densities(eye_radius_m: f32) -> (f32, f32) {
+    let p = cig_environment::AtmosphereParams::EARTH;
+    let altitude_m = f64::from(eye_radius_m) - p.bottom_radius_m;
+    (
+        (-altitude_m / p.rayleigh_scale_height_m).exp() as f32,
+        (-altitude_m / p.mie_scale_height_m).exp() as f32,
+    )
 }
 
 /// Timestamp queries of the frame: 0 start, 1 end, then pass starts and ends as needed.
@@ -210,8 +242,10 @@ pub struct Renderer {
     terrain_bind: wgpu::BindGroup,
     model_bind: wgpu::BindGroup,
     sky_bind: wgpu::BindGroup,
-    terrain_pipeline: wgpu::RenderPipeline,
-    terrain_wire_pipeline: Option<wgpu::RenderPipeline>,
+    terrain_pipelines: TerrainPipelines,
+    /// Draw the terrain with pipelines built for the frame's switches (see
+    /// `set_shader_specialisation`).
+    specialise: bool,
     model_pipeline: wgpu::RenderPipeline,
     sky_pipeline: wgpu::RenderPipeline,
     atmosphere: AtmosphereGpu,
@@ -304,6 +338,8 @@ struct PipelineSpec<'a> {
     depth_compare: wgpu::CompareFunction,
     polygon_mode: wgpu::PolygonMode,
     cull: Option<wgpu::Face>,
+    /// Values of the module's pipeline-overridable constants (`ShaderSwitches`).
+    constants: &'a [(&'a str, f64)],
 }
 
 fn pipeline(
@@ -325,7 +361,10 @@ fn pipeline(
             vertex: wgpu::VertexState {
                 module: spec.module,
                 entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: spec.constants,
+                    ..Default::default()
+                },
                 buffers: spec.buffers,
             },
             primitive: wgpu::PrimitiveState {
@@ -350,7 +389,10 @@ fn pipeline(
             fragment: Some(wgpu::FragmentState {
                 module: spec.module,
                 entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: spec.constants,
+                    ..Default::default()
+                },
                 targets: &[Some(wgpu::ColorTargetState {
                     format,
                     blend: None,
@@ -389,8 +431,115 @@ fn sky_pipeline(
             depth_compare: wgpu::CompareFunction::Equal,
             polygon_mode: wgpu::PolygonMode::Fill,
             cull: None,
+            constants: &[],
         },
     )
+}
+
+/// The frame's uniform switches a pipeline can be built for (the `override`s of
+/// `shaders/common.wgsl`). A pipeline built for them has the other settings' paths folded away
+/// by the shader compiler: on GPUs that is fewer registers, and on lavapipe, which runs every
+/// branch of a shader under a mask, it is every path the frame does not take.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct ShaderSwitches {
+    /// As `Globals.fog.x`: 0 off, 1 linear, 2 exponential, 3 exponential-squared.
+    fog_mode: u8,
+    ground_fog: bool,
+    physical_sky: bool,
+}
+
+impl ShaderSwitches {
+    fn of(snapshot: &FrameSnapshot) -> ShaderSwitches {
+        ShaderSwitches {
+            fog_mode: fog_mode_index(snapshot.fog.mode),
+            ground_fog: drawn_ground_fog(snapshot).is_some(),
+            physical_sky: snapshot.sky.model == SkyModel::Physical,
+        }
+    }
+
+    fn constants(self) -> [(&'static str, f64); 3] {
+        [
+            ("FOG_MODE", f64::from(self.fog_mode)),
+            ("GROUND_FOG", f64::from(u8::from(self.ground_fog))),
+            ("PHYSICAL_SKY", f64::from(u8::from(self.physical_sky))),
+        ]
+    }
+}
+
+fn fog_mode_index(mode: FogMode) -> u8 {
+    match mode {
+        FogMode::Off => 0,
+        FogMode::Linear => 1,
+        FogMode::Exponential => 2,
+        FogMode::ExponentialSquared => 3,
+    }
+}
+
+/// The frame's ground fog layer, where it has one the shaders can draw.
+fn drawn_ground_fog(snapshot: &FrameSnapshot) -> Option<cig_scene::FogLayer> {
+    snapshot
+        .ground_fog
+        .filter(|layer| layer.visibility_m.is_finite() && layer.top_m.is_finite())
+}
+
+/// The terrain's pipelines, one per `ShaderSwitches` (or none: the unspecialised pipeline that
+/// reads every switch from the globals) and fill or wireframe, each built when a frame first
+/// needs it (the default settings' at start-up): a frame that first uses another fog mode, the
+/// ground fog or the flat sky waits for one pipeline's compilation.
+struct TerrainPipelines {
+    module: wgpu::ShaderModule,
+    layouts: [wgpu::BindGroupLayout; 2],
+    /// Whether the device draws lines (wireframe).
+    wire_supported: bool,
+    built: HashMap<(Option<ShaderSwitches>, bool), wgpu::RenderPipeline>,
+}
+
+impl TerrainPipelines {
+    fn get(
+        &mut self,
+        gpu: &Gpu,
+        switches: Option<ShaderSwitches>,
+        wire: bool,
+    ) -> &wgpu::RenderPipeline {
+        let wire = wire && self.wire_supported;
+        self.built.entry((switches, wire)).or_insert_with(|| {
+            let buffers = [Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<cig_scene::terrain_mesh::TerrainVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![
+                    0 => Float32x3,
+                    1 => Float32x3,
+                    2 => Float32x2,
+                    3 => Float32
+                ],
+            })];
+            let [terrain_layout, atmosphere_layout] = &self.layouts;
+            let constants = switches.map(ShaderSwitches::constants);
+            pipeline(
+                gpu,
+                HDR_FORMAT,
+                &PipelineSpec {
+                    label: if wire { "terrain wireframe" } else { "terrain" },
+                    module: &self.module,
+                    layouts: &[terrain_layout, atmosphere_layout],
+                    buffers: &buffers,
+                    depth_write: true,
+                    depth_compare: if wire {
+                        wgpu::CompareFunction::GreaterEqual
+                    } else {
+                        wgpu::CompareFunction::Greater
+                    },
+                    polygon_mode: if wire {
+                        wgpu::PolygonMode::Line
+                    } else {
+                        wgpu::PolygonMode::Fill
+                    },
+                    cull: None,
+                    constants: constants.as_ref().map_or(&[], |c| &c[..]),
+                },
+            )
+        })
+    }
 }
 
 /// Options of one frame.
@@ -525,48 +674,25 @@ impl Renderer {
             atmosphere_shader(&gpu, "terrain", include_str!("shaders/terrain.wgsl"));
         let model_module = atmosphere_shader(&gpu, "model", include_str!("shaders/model.wgsl"));
         let celestial = CelestialPass::new(&gpu);
-        let terrain_buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<cig_scene::terrain_mesh::TerrainVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &wgpu::vertex_attr_array![
-                0 => Float32x3,
-                1 => Float32x3,
-                2 => Float32x2,
-                3 => Float32
-            ],
-        })];
         let model_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<ModelVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4],
         })];
-        let terrain_spec = PipelineSpec {
-            label: "terrain",
-            module: &terrain_module,
-            layouts: &[&terrain_layout, &atmosphere.layout],
-            buffers: &terrain_buffers,
-            depth_write: true,
-            depth_compare: wgpu::CompareFunction::Greater,
-            polygon_mode: wgpu::PolygonMode::Fill,
-            cull: None,
+        let mut terrain_pipelines = TerrainPipelines {
+            module: terrain_module,
+            layouts: [terrain_layout, atmosphere.layout.clone()],
+            wire_supported: gpu
+                .device
+                .features()
+                .contains(wgpu::Features::POLYGON_MODE_LINE),
+            built: HashMap::new(),
         };
-        let terrain_pipeline = pipeline(&gpu, HDR_FORMAT, &terrain_spec);
-        let terrain_wire_pipeline = gpu
-            .device
-            .features()
-            .contains(wgpu::Features::POLYGON_MODE_LINE)
-            .then(|| {
-                pipeline(
-                    &gpu,
-                    HDR_FORMAT,
-                    &PipelineSpec {
-                        label: "terrain wireframe",
-                        polygon_mode: wgpu::PolygonMode::Line,
-                        depth_compare: wgpu::CompareFunction::GreaterEqual,
-                        ..terrain_spec
-                    },
-                )
-            });
+        terrain_pipelines.get(
+            &gpu,
+            Some(ShaderSwitches::of(&FrameSnapshot::new(0.0, Vec::new()))),
+            false,
+        );
         let model_pipeline = pipeline(
             &gpu,
             HDR_FORMAT,
@@ -579,6 +705,7 @@ impl Renderer {
                 depth_compare: wgpu::CompareFunction::Greater,
                 polygon_mode: wgpu::PolygonMode::Fill,
                 cull: None,
+                constants: &[],
             },
         );
         let sky_pipeline = sky_pipeline(&gpu, &sky_layout, &atmosphere.layout, celestial.layout());
@@ -631,8 +758,8 @@ impl Renderer {
             terrain_bind,
             model_bind,
             sky_bind,
-            terrain_pipeline,
-            terrain_wire_pipeline,
+            terrain_pipelines,
+            specialise: true,
             model_pipeline,
             sky_pipeline,
             atmosphere,
@@ -654,6 +781,13 @@ impl Renderer {
             .collect();
         renderer.set_models(builtins);
         renderer
+    }
+
+    /// Whether the terrain is drawn with pipelines built for each frame's fog mode, ground fog
+    /// and sky model (on, the default) or with one pipeline that reads them every frame (the
+    /// same image, more shader work; for diagnosing a shader compiler).
+    pub fn set_shader_specialisation(&mut self, on: bool) {
+        self.specialise = on;
     }
 
     pub fn gpu(&self) -> &Arc<Gpu> {
@@ -839,7 +973,7 @@ impl Renderer {
         )
         .with_flash(snapshot.flash_lux);
         let physical_sky = snapshot.sky.model == SkyModel::Physical;
-        let wire = snapshot.wireframe && self.terrain_wire_pipeline.is_some();
+        let wire = snapshot.wireframe && self.terrain_pipelines.wire_supported;
         self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
         self.celestial.prepare(&self.gpu, snapshot, view.eye);
         if !terrain_frame.records.is_empty() {
@@ -911,6 +1045,7 @@ impl Renderer {
         if physical_sky {
             self.atmosphere.encode_sky_view(
                 &mut encoder,
+                lighting.moon_toa_colour.iter().sum::<f32>() > 0.0,
                 self.timestamps.as_ref().map(|(set, _, _)| begin(set)),
             );
             stats.draw_calls += 1;
@@ -921,13 +1056,8 @@ impl Renderer {
                 .as_ref()
                 .filter(|_| !physical_sky)
                 .map(|(set, _, _)| begin(set));
-            let terrain_pipeline = if wire {
-                self.terrain_wire_pipeline
-                    .as_ref()
-                    .unwrap_or(&self.terrain_pipeline)
-            } else {
-                &self.terrain_pipeline
-            };
+            let switches = self.specialise.then(|| ShaderSwitches::of(snapshot));
+            let terrain_pipeline = self.terrain_pipelines.get(&self.gpu, switches, wire);
             let Some(targets) = self.targets.as_ref() else {
                 return Err(RenderError::Gpu("render targets missing".into()));
             };
@@ -1125,12 +1255,7 @@ impl Renderer {
         let alt = camera.view.eye.alt_m.max(0.0);
         let dip = (2.0 * alt / cig_geo::WGS84_A_M).sqrt();
         let fog = snapshot.fog;
-        let mode = match fog.mode {
-            FogMode::Off => 0.0,
-            FogMode::Linear => 1.0,
-            FogMode::Exponential => 2.0,
-            FogMode::ExponentialSquared => 3.0,
-        };
+        let mode = f32::from(fog_mode_index(fog.mode));
         let noise = |cell: f64| {
             let p = camera.eye_ecef / cell;
             let m = |x: f64| x.rem_euclid(256.0);
@@ -1165,8 +1290,8 @@ impl Renderer {
                 if key_background { 1.0 } else { 0.0 },
                 camera.pixels_per_tangent as f32,
             ],
-            fog_layer: match snapshot.ground_fog {
-                Some(layer) if layer.visibility_m.is_finite() && layer.top_m.is_finite() => [
+            fog_layer: match drawn_ground_fog(snapshot) {
+                Some(layer) => [
                     (layer.top_m - camera.view.eye.alt_m) as f32,
                     layer.extinction_per_m() as f32,
                     1.0,
@@ -1204,6 +1329,7 @@ impl Renderer {
         };
         (globals.sky_frame_x, globals.sky_frame_y) =
             sky_frame(globals.eye_up, globals.sun_dir, globals.atmos[0]);
+        (globals.atmos[2], globals.atmos[3]) = eye_densities(globals.atmos[0]);
         self.gpu
             .queue
             .write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));

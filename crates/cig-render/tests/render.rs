@@ -5,7 +5,7 @@ mod common;
 
 use cig_geo::{EnuFrame, Geodetic};
 use cig_render::Image;
-use cig_scene::lighting::{Fog, FogMode};
+use cig_scene::lighting::{Fog, FogMode, SkyModel};
 use cig_scene::models::{Model, ModelMesh};
 use cig_scene::{EntityInstance, FrameSnapshot, Hpr};
 use common::*;
@@ -637,6 +637,71 @@ fn a_ground_fog_layer_fills_the_valleys_and_leaves_the_hills_clear() {
     let hill = change_at(high.1);
     assert!(valley > 25.0, "the valley floor is fogged: {valley}");
     assert!(hill < 6.0, "the hilltop above the layer is clear: {hill}");
+}
+
+#[test]
+fn terrain_pipelines_built_for_the_frames_switches_draw_what_the_unspecialised_one_does() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let eye = hills_eye(-1500.0, -1500.0, 400.0);
+    let base = FrameSnapshot::new(
+        MORNING_UNIX_S,
+        vec![view(eye, (45.0, -12.0, 0.0), 60.0, (96, 72))],
+    );
+    let mut frames: Vec<(&str, FrameSnapshot)> = Vec::new();
+    for (name, mode) in [
+        ("no fog", FogMode::Off),
+        ("linear fog", FogMode::Linear),
+        ("exponential fog", FogMode::Exponential),
+        ("exponential-squared fog", FogMode::ExponentialSquared),
+    ] {
+        let mut s = base.clone();
+        s.fog = Fog::from_visibility(mode, 2500.0);
+        frames.push((name, s));
+    }
+    let mut layer = frames[0].1.clone();
+    layer.ground_fog = Some(cig_scene::FogLayer {
+        top_m: eye.alt_m - 250.0,
+        visibility_m: 100.0,
+    });
+    frames.push(("ground fog", layer));
+    let mut flat = frames[1].1.clone();
+    flat.sky.model = SkyModel::Flat;
+    frames.push(("flat sky, linear fog", flat));
+    // Mean difference (0..255 per channel) under which two images count as the same.
+    const SAME_MEAN: f64 = 0.05;
+    let mut images = Vec::new();
+    for (name, frame) in &frames {
+        renderer.set_shader_specialisation(true);
+        let (specialised, _) = render(&mut renderer, &cache, frame, false);
+        renderer.set_shader_specialisation(false);
+        let (unspecialised, _) = render(&mut renderer, &cache, frame, false);
+        let largest = specialised
+            .rgba
+            .iter()
+            .zip(&unspecialised.rgba)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap_or(0);
+        let mean = mean_abs_diff(&specialised, &unspecialised);
+        assert!(
+            largest <= 2 && mean < SAME_MEAN,
+            "{name}: the specialised pipeline differs (largest {largest}, mean {mean})"
+        );
+        images.push((name, specialised));
+    }
+    // Each switch changes the picture far beyond that, so a pipeline built for the wrong one
+    // would show.
+    for (i, (a_name, a)) in images.iter().enumerate() {
+        for (b_name, b) in &images[i + 1..] {
+            let d = mean_abs_diff(a, b);
+            assert!(
+                d > 10.0 * SAME_MEAN,
+                "{a_name} and {b_name} look alike: {d}"
+            );
+        }
+    }
 }
 
 /// A box whose finest level is red and coarser levels blue, to see which level covers a pixel.

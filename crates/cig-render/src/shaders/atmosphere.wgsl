@@ -8,6 +8,8 @@
 @group(1) @binding(2) var multi_scattering_lut: texture_2d<f32>;
 @group(1) @binding(3) var lut_sampler: sampler;
 @group(1) @binding(4) var sky_view_sampler: sampler;
+// The sky-view pass's second table: the source function L / (1 − T(ray)) of each direction.
+@group(1) @binding(5) var sky_source_lut: texture_2d<f32>;
 
 const PI: f32 = 3.14159265;
 
@@ -125,47 +127,36 @@ fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
     return textureSampleLevel(sky_view_lut, sky_view_sampler, sky_view_uv(dir), 0.0).rgb;
 }
 
-// Optical depth along a straight path of length d from altitude h0 to h1 (flat-layer
+// Optical depth from the eye to a point `dh` metres above it and `d` metres away (flat-layer
 // exponential profiles, exact for a plane-parallel atmosphere; ozone omitted near the ground).
-fn optical_depth(h0: f32, h1: f32, d: f32) -> vec3<f32> {
-    let dh = h1 - h0;
+// The profiles' densities at the eye are the frame's `g.atmos.zw`.
+fn optical_depth_from_eye(dh: f32, d: f32) -> vec3<f32> {
     var kr = d;
     var km = d;
     if (abs(dh) > 1.0) {
         kr = d * ATM_RAYLEIGH_H / dh * (1.0 - exp(-dh / ATM_RAYLEIGH_H));
         km = d * ATM_MIE_H / dh * (1.0 - exp(-dh / ATM_MIE_H));
     }
-    let h = max(h0, 0.0);
-    return ATM_RAYLEIGH * exp(-h / ATM_RAYLEIGH_H) * kr + vec3<f32>(ATM_MIE_EXT * exp(-h / ATM_MIE_H) * km);
+    return ATM_RAYLEIGH * (g.atmos.z * kr) + vec3<f32>(ATM_MIE_EXT * g.atmos.w * km);
 }
 
 // Aerial perspective on a pre-exposed surface colour at the eye-relative point `rel`: the
-// atmosphere's transmittance over the path and the in-scattered light, taken as the sky-view
-// radiance along the ray scaled by the fraction of the whole ray's in-scattering that lies in
-// front of the surface, (1 - T(d)) / (1 - T(ray)). Then the classic fog and the ground fog
-// layer toward the horizon sky of that azimuth.
+// atmosphere's transmittance T(d) over the path and the in-scattered light, the sky-view
+// source function along the ray (its radiance over the whole ray's in-scattering share,
+// L / (1 − T(ray)), tabled by the sky-view pass) times the surface's share 1 − T(d). Then the
+// classic fog and the ground fog layer toward the horizon sky of the ray's azimuth (the sky
+// 0.02 rad above the horizontal, whose table row `g.sky_frame_y.w` is worked out per frame).
 fn apply_atmosphere_exposed(exposed_colour: vec3<f32>, rel: vec3<f32>) -> vec3<f32> {
     let d = length(rel);
     let dir = rel / max(d, 1e-3);
     var colour = exposed_colour;
     var fog_colour = exposed(g.fog_colour.rgb);
-    if (g.atmos.y < 0.5) {
-        let r = eye_radius();
-        let h0 = r - ATM_BOTTOM;
-        let h1 = h0 + height_above_eye(rel);
-        let t = exp(-optical_depth(h0, h1, d));
-        let mu = dot(dir, g.eye_up.xyz);
-        let ground = distance_to_ground(r, mu);
-        var t_ray: vec3<f32>;
-        if (ground >= 0.0) {
-            t_ray = exp(-optical_depth(h0, 0.0, ground));
-        } else {
-            t_ray = transmittance_to_top(r, mu);
-        }
-        let share = clamp((1.0 - t) / max(1.0 - t_ray, vec3<f32>(1e-4)), vec3<f32>(0.0), vec3<f32>(1.0));
-        colour = colour * t + sky_radiance(dir) * share;
-        let horizontal = normalize(dir - g.eye_up.xyz * (mu - 0.02));
-        fog_colour = sky_radiance(horizontal);
+    if (physical_sky()) {
+        let t = exp(-optical_depth_from_eye(height_above_eye(rel), d));
+        let uv = sky_view_uv(dir);
+        let source = textureSampleLevel(sky_source_lut, sky_view_sampler, uv, 0.0).rgb;
+        colour = colour * t + source * (vec3<f32>(1.0) - t);
+        fog_colour = textureSampleLevel(sky_view_lut, sky_view_sampler, vec2<f32>(uv.x, g.sky_frame_y.w), 0.0).rgb;
     }
     let f = fog_factor(d) * fog_layer_transmittance(rel);
     return f * colour + (1.0 - f) * fog_colour;

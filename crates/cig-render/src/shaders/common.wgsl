@@ -34,26 +34,57 @@ struct Globals {
     // Sun's and moon's illuminance above the atmosphere (light units).
     sun_toa: vec4<f32>,
     moon_toa: vec4<f32>,
-    // x: eye radius from the planet's centre (m), y: sky model (0 physical, 1 flat).
+    // x: eye radius from the planet's centre (m), y: sky model (0 physical, 1 flat), z and w:
+    // the Rayleigh and Mie profiles' relative densities at the eye.
     atmos: vec4<f32>,
     // Night-sky background radiance (π L, light units).
     night_sky: vec4<f32>,
     // x: encode sRGB in the tone map, y: scotopic blend, z: natural illuminance (lux).
     tonemap: vec4<f32>,
     // The sky-view table's frame (its third axis is eye_up), worked out once per frame:
-    // x axis with the horizon's zenith angle for the eye in w, and the y axis.
+    // x axis with the horizon's zenith angle for the eye in w, and the y axis with the table
+    // row of the fog's horizon sky in w.
     sky_frame_x: vec4<f32>,
     sky_frame_y: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;
 
+// The frame's uniform switches, for pipelines built for them (crate::renderer::ShaderSwitches),
+// so the compiler folds the other settings' paths away; -1 (the default) reads the switch from
+// the globals each frame.
+override FOG_MODE: i32 = -1;
+override GROUND_FOG: i32 = -1;
+override PHYSICAL_SKY: i32 = -1;
+
+// 0 off, 1 linear, 2 exponential, 3 exponential-squared.
+fn fog_mode() -> i32 {
+    if (FOG_MODE >= 0) {
+        return FOG_MODE;
+    }
+    return i32(g.fog.x + 0.5);
+}
+
+fn ground_fog_on() -> bool {
+    if (GROUND_FOG >= 0) {
+        return GROUND_FOG == 1;
+    }
+    return g.fog_layer.z > 0.5;
+}
+
+fn physical_sky() -> bool {
+    if (PHYSICAL_SKY >= 0) {
+        return PHYSICAL_SKY == 1;
+    }
+    return g.atmos.y < 0.5;
+}
+
 // The sky's keyed background (tests): pure magenta; with the key on, the tone map passes
 // linear radiance through unchanged (clamped to 1), so tests can read it back.
 const KEY_RADIANCE: f32 = 1.0;
 
 fn fog_factor(distance_m: f32) -> f32 {
-    let mode = i32(g.fog.x + 0.5);
+    let mode = fog_mode();
     if (mode == 1) {
         return clamp((g.fog.w - distance_m) / max(g.fog.w - g.fog.z, 1e-3), 0.0, 1.0);
     } else if (mode == 2) {
@@ -77,7 +108,7 @@ fn height_above_eye(rel: vec3<f32>) -> f32 {
 // length of the ray below the layer's top times its extinction (heights vary linearly along
 // the ray).
 fn fog_layer_transmittance(rel: vec3<f32>) -> f32 {
-    if (g.fog_layer.z < 0.5) {
+    if (!ground_fog_on()) {
         return 1.0;
     }
     let top = g.fog_layer.x;

@@ -32,7 +32,7 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
     let y_tan = mix(-t.z, t.w, in.ndc.y * 0.5 + 0.5);
     let dir = normalize(g.cam_forward.xyz + g.cam_right.xyz * x_tan + g.cam_up.xyz * y_tan);
     var colour = exposed(g.fog_colour.rgb);
-    if (g.atmos.y < 0.5) {
+    if (physical_sky()) {
         colour = sky_radiance(dir);
         // The sky behind, un-exposed: the background of the eye's threshold for the stars.
         let sky_behind = colour / max(g.flags.y, 1e-30);
@@ -57,7 +57,7 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
     }
     // Inside the ground fog layer, the sky is seen through the rest of it: up to its top for
     // rays that climb out, through all of it for the others.
-    if (g.fog_layer.z > 0.5 && g.fog_layer.x > 0.0) {
+    if (ground_fog_on() && g.fog_layer.x > 0.0) {
         let rise = dot(dir, g.eye_up.xyz);
         var through = 0.0;
         if (rise > 1e-4) {

@@ -7,6 +7,14 @@ struct LutOut {
     @builtin(position) clip: vec4<f32>,
 };
 
+// The two tables of a texel: the sky's radiance along the ray, and its source function (the
+// radiance over the ray's in-scattering share 1 − T(ray)), which aerial perspective scales by a
+// surface's own share 1 − T(d).
+struct SkyViewOut {
+    @location(0) radiance: vec4<f32>,
+    @location(1) source: vec4<f32>,
+};
+
 @vertex
 fn vs_main(@builtin(vertex_index) i: u32) -> LutOut {
     let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
@@ -27,8 +35,12 @@ fn cornette_shanks_phase(nu: f32) -> f32 {
 
 const STEPS: i32 = 24;
 
+// 1: the moon lights the sky, 0: it does not (a pipeline for each, so a sky without the moon
+// is not charged for it where every branch runs); -1 reads it from the globals.
+override MOON_SKY: i32 = -1;
+
 @fragment
-fn fs_main(in: LutOut) -> @location(0) vec4<f32> {
+fn fs_main(in: LutOut) -> SkyViewOut {
     let uv = in.clip.xy / SKY_VIEW_SIZE;
     let dir = sky_view_dir(uv);
     let up = g.eye_up.xyz;
@@ -46,7 +58,10 @@ fn fs_main(in: LutOut) -> @location(0) vec4<f32> {
     let phase_sun_m = cornette_shanks_phase(nu_sun);
     let phase_moon_r = rayleigh_phase(nu_moon);
     let phase_moon_m = cornette_shanks_phase(nu_moon);
-    let with_moon = dot(g.moon_toa.rgb, vec3<f32>(1.0)) > 0.0;
+    var with_moon = dot(g.moon_toa.rgb, vec3<f32>(1.0)) > 0.0;
+    if (MOON_SKY >= 0) {
+        with_moon = MOON_SKY == 1;
+    }
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
     var t_prev = 0.0;
@@ -80,6 +95,10 @@ fn fs_main(in: LutOut) -> @location(0) vec4<f32> {
         radiance += throughput * integral;
         throughput *= step_t;
     }
-    let shown = exposed(PI * radiance + g.night_sky.rgb);
-    return vec4<f32>(min(shown, vec3<f32>(60000.0)), 1.0);
+    let shown = min(exposed(PI * radiance + g.night_sky.rgb), vec3<f32>(60000.0));
+    var out: SkyViewOut;
+    out.radiance = vec4<f32>(shown, 1.0);
+    let in_scattering_share = max(vec3<f32>(1.0) - throughput, vec3<f32>(1e-4));
+    out.source = vec4<f32>(min(shown / in_scattering_share, vec3<f32>(60000.0)), 1.0);
+    return out;
 }

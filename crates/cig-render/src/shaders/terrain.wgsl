@@ -55,8 +55,11 @@ fn wrap(i: vec3<f32>, c: f32) -> vec3<f32> {
     return i - c * floor(i / c);
 }
 
-fn hash3(p: vec3<f32>) -> f32 {
-    let q = fract(p * vec3<f32>(0.1031, 0.1030, 0.0973));
+// The hash of a lattice point from its per-axis fractions q = fract(p * K): each axis's
+// fraction depends on that axis alone, so a cell's eight corners share two per axis.
+const HASH_K: vec3<f32> = vec3<f32>(0.1031, 0.1030, 0.0973);
+
+fn hash_of_fractions(q: vec3<f32>) -> f32 {
     let r = q + dot(q, q.yxz + 33.33);
     return fract((r.x + r.y) * r.z);
 }
@@ -67,14 +70,16 @@ fn value_noise(p: vec3<f32>) -> f32 {
     let f = fract(p);
     let u = f * f * (3.0 - 2.0 * f);
     let c = 256.0;
-    let a = hash3(wrap(i + vec3<f32>(0.0, 0.0, 0.0), c));
-    let b = hash3(wrap(i + vec3<f32>(1.0, 0.0, 0.0), c));
-    let cc = hash3(wrap(i + vec3<f32>(0.0, 1.0, 0.0), c));
-    let d = hash3(wrap(i + vec3<f32>(1.0, 1.0, 0.0), c));
-    let e = hash3(wrap(i + vec3<f32>(0.0, 0.0, 1.0), c));
-    let ff = hash3(wrap(i + vec3<f32>(1.0, 0.0, 1.0), c));
-    let gg = hash3(wrap(i + vec3<f32>(0.0, 1.0, 1.0), c));
-    let h = hash3(wrap(i + vec3<f32>(1.0, 1.0, 1.0), c));
+    let q0 = fract(wrap(i, c) * HASH_K);
+    let q1 = fract(wrap(i + 1.0, c) * HASH_K);
+    let a = hash_of_fractions(vec3<f32>(q0.x, q0.y, q0.z));
+    let b = hash_of_fractions(vec3<f32>(q1.x, q0.y, q0.z));
+    let cc = hash_of_fractions(vec3<f32>(q0.x, q1.y, q0.z));
+    let d = hash_of_fractions(vec3<f32>(q1.x, q1.y, q0.z));
+    let e = hash_of_fractions(vec3<f32>(q0.x, q0.y, q1.z));
+    let ff = hash_of_fractions(vec3<f32>(q1.x, q0.y, q1.z));
+    let gg = hash_of_fractions(vec3<f32>(q0.x, q1.y, q1.z));
+    let h = hash_of_fractions(vec3<f32>(q1.x, q1.y, q1.z));
     return mix(
         mix(mix(a, b, u.x), mix(cc, d, u.x), u.y),
         mix(mix(e, ff, u.x), mix(gg, h, u.x), u.y),
