@@ -192,6 +192,106 @@ fn white_block() -> Model {
     Model::new("block", vec![mesh.clone(), mesh.clone(), mesh])
 }
 
+/// The exposed linear radiance of an 8-bit sRGB pixel of a daylight frame: the tone map's sRGB
+/// encoding and ACES curve undone (no scotopic shift by day).
+fn exposed_radiance(px: [f64; 3]) -> [f64; 3] {
+    px.map(|v| {
+        let e = v / 255.0;
+        let y = if e <= 0.04045 {
+            e / 12.92
+        } else {
+            ((e + 0.055) / 1.055).powf(2.4)
+        };
+        // y = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), solved for x.
+        let (a, b, c) = (2.51 - 2.43 * y, 0.03 - 0.59 * y, -0.14 * y);
+        (-b + (b * b - 4.0 * a * c).sqrt()) / (2.0 * a)
+    })
+}
+
+/// A black slab lying on the sea, `size_m` square and 5 m high: what is seen of it is the air's
+/// in-scattered light alone.
+fn black_slab(name: &str, size_m: f32) -> Model {
+    let mut mesh = ModelMesh::default();
+    let h = size_m / 2.0;
+    mesh.add_box(Vec3::new(-h, -h, 0.0), Vec3::new(h, h, 5.0), [0, 0, 0, 255]);
+    Model::new(name, vec![mesh.clone(), mesh.clone(), mesh])
+}
+
+#[test]
+fn aerial_perspective_over_descending_rays_matches_a_march_of_the_same_air() {
+    // The slabs' in-scattered light against the sky 15 degrees up, both drawn, and the same
+    // ratio from cig_environment's march to the slab (64 steps) and to space: the sky-view
+    // source function times 1 - T(d) must give the march's light to within 8 %.
+    let db = sea();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let eye = Geodetic::new(36.0, -122.0, 1500.0);
+    let at_eye = EnuFrame::new(eye);
+    let sea_level = EnuFrame::new(Geodetic::new(36.0, -122.0, 0.0));
+    let distances_m = [3_000.0, 6_000.0, 12_000.0, 25_000.0];
+    renderer.set_models(
+        distances_m
+            .iter()
+            .map(|d| black_slab(&format!("slab {d}"), (0.15 * d) as f32))
+            .collect(),
+    );
+    // One narrow frame aimed at each target, all at one fixed exposure.
+    let seen = |renderer: &mut cig_render::Renderer, time: f64, pitch: f64, slab: Option<f64>| {
+        let mut snapshot =
+            FrameSnapshot::new(time, vec![view(eye, (0.0, pitch, 0.0), 3.0, (16, 16))]);
+        snapshot.fog = Fog::from_visibility(FogMode::Off, 1e6);
+        snapshot.sky.fixed_exposure_ev = Some(14.0);
+        if let Some(d) = slab {
+            let at = sea_level.enu_to_geodetic(DVec3::new(0.0, d, 0.0));
+            snapshot.entities = vec![EntityInstance {
+                id: 1,
+                model: format!("slab {d}"),
+                position: Geodetic::new(at.lat_deg, at.lon_deg, 0.0),
+                orientation: Hpr::default(),
+            }];
+        }
+        let (image, _) = render(renderer, &cache, &snapshot, false);
+        let mut sum = [0.0; 3];
+        for (x, y) in [(7, 7), (8, 7), (7, 8), (8, 8)] {
+            let p = exposed_radiance(pixel(&image, x, y));
+            for c in 0..3 {
+                sum[c] += p[c] / 4.0;
+            }
+        }
+        sum
+    };
+    let atmosphere = cig_environment::atmosphere::Atmosphere::earth();
+    // Mid-morning (the sun 35 degrees up, to the east) and evening (11 degrees, west-north-west).
+    for time in [unix(2026, 6, 21, 16.0), unix(2026, 6, 21, 26.4)] {
+        let (sun_az, sun_alt) = sun_at(eye, time);
+        let (az, alt) = (sun_az.to_radians(), sun_alt.to_radians());
+        let sun_enu = [alt.cos() * az.sin(), alt.cos() * az.cos(), alt.sin()];
+        // The sky 15 degrees up sets the scale between the frame's units and the march's.
+        let sky = seen(&mut renderer, time, 15.0, None);
+        let sky_dir = [0.0, 15f64.to_radians().cos(), 15f64.to_radians().sin()];
+        let sky_ref = atmosphere.sky_radiance(eye.alt_m, sky_dir, sun_enu);
+        for d in distances_m {
+            let top = sea_level.enu_to_geodetic(DVec3::new(0.0, d, 0.0));
+            let target = at_eye.geodetic_to_enu(Geodetic::new(top.lat_deg, top.lon_deg, 5.0));
+            let range_m = target.length();
+            let dir = target / range_m;
+            let pitch = dir.z.asin().to_degrees();
+            let slab = seen(&mut renderer, time, pitch, Some(d));
+            let (in_scattered, _) =
+                atmosphere.march(eye.alt_m, [dir.x, dir.y, dir.z], sun_enu, range_m, 64);
+            for c in 0..3 {
+                let drawn = slab[c] / sky[c];
+                let expected = in_scattered[c] / sky_ref[c];
+                assert!(
+                (drawn / expected - 1.0).abs() < 0.08,
+                "sun at {sun_alt:.1} degrees, slab {d} m away, {pitch:.1} degrees down, channel \
+                 {c}: {drawn:.4} of the sky drawn, {expected:.4} marched"
+            );
+            }
+        }
+    }
+}
+
 #[test]
 fn aerial_perspective_takes_far_objects_toward_the_sky_colour() {
     let db = sea();
