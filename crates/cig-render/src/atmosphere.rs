@@ -7,7 +7,8 @@
 //! [`cig_environment::atmosphere`] and uploaded as half floats. Each frame a 192 × 108 sky-view
 //! table (latitude concentrated at the horizon, longitude from the sun's azimuth, full circle
 //! so the moon-lit sky fits too) is ray marched in 24 steps by a full-screen fragment pass (one
-//! pipeline with the moon's light, one without, so a moonless sky is not charged for it); the
+//! pipeline with the moon's light, one without, so a daylit or moonless sky is not charged for
+//! it); the
 //! sky pass and the horizon fog colour sample it (`shaders/atmosphere.wgsl`). The same pass
 //! writes a second table, each direction's source function `L / (1 − T(ray))`: its radiance
 //! over the share of light the whole ray scatters in, with `T(ray)` the march's own
@@ -45,7 +46,8 @@ pub(crate) fn wgsl_constants() -> String {
          const ATM_MIE_H: f32 = {:.1};\nconst ATM_MIE_G: f32 = {};\n\
          const ATM_OZONE: vec3<f32> = {};\nconst ATM_OZONE_PEAK: f32 = {:.1};\n\
          const ATM_OZONE_HALF: f32 = {:.1};\nconst ATM_SUN_RADIUS: f32 = {:e};\n\
-         const SKY_VIEW_SIZE: vec2<f32> = vec2<f32>({:.1}, {:.1});\n",
+         const SKY_VIEW_SIZE: vec2<f32> = vec2<f32>({:.1}, {:.1});\n\
+         const MOON_SKY_LOWEST_DEG: f32 = {:.1};\n",
         p.bottom_radius_m,
         p.top_radius_m,
         v3(p.rayleigh_scattering_per_m),
@@ -60,6 +62,7 @@ pub(crate) fn wgsl_constants() -> String {
         SUN_ANGULAR_RADIUS_DEG.to_radians(),
         SKY_VIEW_SIZE.0,
         SKY_VIEW_SIZE.1,
+        cig_scene::lighting::MOON_SKY_LOWEST_DEG,
     )
 }
 
@@ -179,8 +182,9 @@ pub(crate) struct AtmosphereGpu {
     sky_source: wgpu::TextureView,
     /// Group 1 for the sky-view pass (placeholders in the sky-view tables' slots).
     lut_bind: wgpu::BindGroup,
-    /// The sky-view pass without and with the moon's light.
-    sky_view_pipelines: [wgpu::RenderPipeline; 2],
+    /// The sky-view pass without and with the moon's light, and the one that reads it from
+    /// the globals.
+    sky_view_pipelines: [wgpu::RenderPipeline; 3],
     globals_bind: wgpu::BindGroup,
 }
 
@@ -287,7 +291,7 @@ impl AtmosphereGpu {
             blend: None,
             write_mask: wgpu::ColorWrites::ALL,
         });
-        let sky_view_pipelines = [0.0, 1.0].map(|moon_sky| {
+        let sky_view_pipelines = [0.0, 1.0, -1.0].map(|moon_sky| {
             crate::gpu::full_screen_pipeline_to(
                 gpu,
                 "sky view",
@@ -308,12 +312,13 @@ impl AtmosphereGpu {
         }
     }
 
-    /// Records the sky-view table's pass (the frame's globals must be written); `moon_lit`:
-    /// whether the moon's light above the atmosphere is not zero.
+    /// Records the sky-view table's pass (the frame's globals must be written); `moon_sky`:
+    /// whether the moon lights the sky (`Lighting::moon_lights_the_sky`), or `None` for the
+    /// pipeline that reads the moon's light from the globals.
     pub fn encode_sky_view(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        moon_lit: bool,
+        moon_sky: Option<bool>,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -333,7 +338,7 @@ impl AtmosphereGpu {
             timestamp_writes,
             ..Default::default()
         });
-        pass.set_pipeline(&self.sky_view_pipelines[usize::from(moon_lit)]);
+        pass.set_pipeline(&self.sky_view_pipelines[moon_sky.map_or(2, usize::from)]);
         pass.set_bind_group(0, &self.globals_bind, &[]);
         pass.set_bind_group(1, &self.lut_bind, &[]);
         pass.draw(0..3, 0..1);

@@ -502,6 +502,8 @@ impl TerrainPipelines {
         wire: bool,
     ) -> &wgpu::RenderPipeline {
         let wire = wire && self.wire_supported;
+        // The wireframe's fragment shader returns before any switch is read: one pipeline.
+        let switches = if wire { None } else { switches };
         self.built.entry((switches, wire)).or_insert_with(|| {
             let buffers = [Some(wgpu::VertexBufferLayout {
                 array_stride: std::mem::size_of::<cig_scene::terrain_mesh::TerrainVertex>() as u64,
@@ -784,8 +786,9 @@ impl Renderer {
     }
 
     /// Whether the terrain is drawn with pipelines built for each frame's fog mode, ground fog
-    /// and sky model (on, the default) or with one pipeline that reads them every frame (the
-    /// same image, more shader work; for diagnosing a shader compiler).
+    /// and sky model, and the sky-view table with or without the moon's light (on, the
+    /// default), or with pipelines that read them every frame (the same image, more shader
+    /// work; for diagnosing a shader compiler).
     pub fn set_shader_specialisation(&mut self, on: bool) {
         self.specialise = on;
     }
@@ -1045,7 +1048,7 @@ impl Renderer {
         if physical_sky {
             self.atmosphere.encode_sky_view(
                 &mut encoder,
-                lighting.moon_toa_colour.iter().sum::<f32>() > 0.0,
+                self.specialise.then(|| lighting.moon_lights_the_sky()),
                 self.timestamps.as_ref().map(|(set, _, _)| begin(set)),
             );
             stats.draw_calls += 1;

@@ -640,7 +640,7 @@ fn a_ground_fog_layer_fills_the_valleys_and_leaves_the_hills_clear() {
 }
 
 #[test]
-fn terrain_pipelines_built_for_the_frames_switches_draw_what_the_unspecialised_one_does() {
+fn pipelines_built_for_the_frames_switches_draw_what_the_unspecialised_ones_do() {
     let db = hills();
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
@@ -669,6 +669,13 @@ fn terrain_pipelines_built_for_the_frames_switches_draw_what_the_unspecialised_o
     let mut flat = frames[1].1.clone();
     flat.sky.model = SkyModel::Flat;
     frames.push(("flat sky, linear fog", flat));
+    // Ten hours on the moon is 33 degrees up and the sun 16 degrees down; six more, the moon
+    // is 35 degrees down: the sky-view table with and without the moon's light.
+    for (name, later_s) in [("moonlit night", 36_000.0), ("moonless night", 57_600.0)] {
+        let mut night = base.clone();
+        night.unix_time_s += later_s;
+        frames.push((name, night));
+    }
     // Mean difference (0..255 per channel) under which two images count as the same.
     const SAME_MEAN: f64 = 0.05;
     let mut images = Vec::new();

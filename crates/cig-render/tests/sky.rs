@@ -208,58 +208,96 @@ fn exposed_radiance(px: [f64; 3]) -> [f64; 3] {
     })
 }
 
-/// A black slab lying on the sea, `size_m` square and 5 m high: what is seen of it is the air's
-/// in-scattered light alone.
-fn black_slab(name: &str, size_m: f32) -> Model {
+/// A black box standing on the sea, `size_m` square and `height_m` high: what is seen of it is
+/// the air's in-scattered light alone.
+fn black_box(name: &str, size_m: f32, height_m: f32) -> Model {
     let mut mesh = ModelMesh::default();
     let h = size_m / 2.0;
-    mesh.add_box(Vec3::new(-h, -h, 0.0), Vec3::new(h, h, 5.0), [0, 0, 0, 255]);
+    mesh.add_box(
+        Vec3::new(-h, -h, 0.0),
+        Vec3::new(h, h, height_m),
+        [0, 0, 0, 255],
+    );
     Model::new(name, vec![mesh.clone(), mesh.clone(), mesh])
 }
 
 #[test]
-fn aerial_perspective_over_descending_rays_matches_a_march_of_the_same_air() {
-    // The slabs' in-scattered light against the sky 15 degrees up, both drawn, and the same
-    // ratio from cig_environment's march to the slab (64 steps) and to space: the sky-view
-    // source function times 1 - T(d) must give the march's light to within 8 %.
+fn aerial_perspective_matches_a_march_of_the_same_air() {
+    // Black boxes' in-scattered light against the sky 15 degrees up, both drawn, and the same
+    // ratio from cig_environment's march to the box (64 steps) and to space. Slabs on the sea end
+    // descending rays near where the table's ray meets the ground: the sky-view source function
+    // times 1 - T(d) must give the march's light to within 8 % (measured: 3 %). Towers end level
+    // rays that would have gone on for hundreds of kilometres, so their share 1 - T(d) is a small
+    // part of the ray's 1 - T(ray), and the source function is the whole ray's mean: within 12 %
+    // (measured: 4 % by day, 8 % in the red with the sun 11 degrees up, the documented limit).
     let db = sea();
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
     let eye = Geodetic::new(36.0, -122.0, 1500.0);
     let at_eye = EnuFrame::new(eye);
     let sea_level = EnuFrame::new(Geodetic::new(36.0, -122.0, 0.0));
-    let distances_m = [3_000.0, 6_000.0, 12_000.0, 25_000.0];
+    struct Target {
+        name: String,
+        north_m: f64,
+        size_m: f64,
+        height_m: f64,
+        /// The aimed point: its distance north and height.
+        aim_north_m: f64,
+        aim_height_m: f64,
+        /// The relative error allowed.
+        allowed: f64,
+    }
+    let slabs = [3_000.0, 6_000.0, 12_000.0, 25_000.0].map(|d| Target {
+        name: format!("slab {d}"),
+        north_m: d,
+        size_m: 0.15 * d,
+        height_m: 5.0,
+        aim_north_m: d,
+        aim_height_m: 5.0,
+        allowed: 0.08,
+    });
+    let towers = [4_000.0, 10_000.0, 20_000.0].map(|d| Target {
+        name: format!("tower {d}"),
+        north_m: d,
+        size_m: 0.04 * d,
+        height_m: 3000.0,
+        aim_north_m: 0.98 * d,
+        aim_height_m: eye.alt_m,
+        allowed: 0.12,
+    });
+    let targets: Vec<Target> = slabs.into_iter().chain(towers).collect();
     renderer.set_models(
-        distances_m
+        targets
             .iter()
-            .map(|d| black_slab(&format!("slab {d}"), (0.15 * d) as f32))
+            .map(|t| black_box(&t.name, t.size_m as f32, t.height_m as f32))
             .collect(),
     );
     // One narrow frame aimed at each target, all at one fixed exposure.
-    let seen = |renderer: &mut cig_render::Renderer, time: f64, pitch: f64, slab: Option<f64>| {
-        let mut snapshot =
-            FrameSnapshot::new(time, vec![view(eye, (0.0, pitch, 0.0), 3.0, (16, 16))]);
-        snapshot.fog = Fog::from_visibility(FogMode::Off, 1e6);
-        snapshot.sky.fixed_exposure_ev = Some(14.0);
-        if let Some(d) = slab {
-            let at = sea_level.enu_to_geodetic(DVec3::new(0.0, d, 0.0));
-            snapshot.entities = vec![EntityInstance {
-                id: 1,
-                model: format!("slab {d}"),
-                position: Geodetic::new(at.lat_deg, at.lon_deg, 0.0),
-                orientation: Hpr::default(),
-            }];
-        }
-        let (image, _) = render(renderer, &cache, &snapshot, false);
-        let mut sum = [0.0; 3];
-        for (x, y) in [(7, 7), (8, 7), (7, 8), (8, 8)] {
-            let p = exposed_radiance(pixel(&image, x, y));
-            for c in 0..3 {
-                sum[c] += p[c] / 4.0;
+    let seen =
+        |renderer: &mut cig_render::Renderer, time: f64, pitch: f64, at: Option<(&str, f64)>| {
+            let mut snapshot =
+                FrameSnapshot::new(time, vec![view(eye, (0.0, pitch, 0.0), 3.0, (16, 16))]);
+            snapshot.fog = Fog::from_visibility(FogMode::Off, 1e6);
+            snapshot.sky.fixed_exposure_ev = Some(14.0);
+            if let Some((model, d)) = at {
+                let at = sea_level.enu_to_geodetic(DVec3::new(0.0, d, 0.0));
+                snapshot.entities = vec![EntityInstance {
+                    id: 1,
+                    model: model.into(),
+                    position: Geodetic::new(at.lat_deg, at.lon_deg, 0.0),
+                    orientation: Hpr::default(),
+                }];
             }
-        }
-        sum
-    };
+            let (image, _) = render(renderer, &cache, &snapshot, false);
+            let mut sum = [0.0; 3];
+            for (x, y) in [(7, 7), (8, 7), (7, 8), (8, 8)] {
+                let p = exposed_radiance(pixel(&image, x, y));
+                for c in 0..3 {
+                    sum[c] += p[c] / 4.0;
+                }
+            }
+            sum
+        };
     let atmosphere = cig_environment::atmosphere::Atmosphere::earth();
     // Mid-morning (the sun 35 degrees up, to the east) and evening (11 degrees, west-north-west).
     for time in [unix(2026, 6, 21, 16.0), unix(2026, 6, 21, 26.4)] {
@@ -270,23 +308,25 @@ fn aerial_perspective_over_descending_rays_matches_a_march_of_the_same_air() {
         let sky = seen(&mut renderer, time, 15.0, None);
         let sky_dir = [0.0, 15f64.to_radians().cos(), 15f64.to_radians().sin()];
         let sky_ref = atmosphere.sky_radiance(eye.alt_m, sky_dir, sun_enu);
-        for d in distances_m {
-            let top = sea_level.enu_to_geodetic(DVec3::new(0.0, d, 0.0));
-            let target = at_eye.geodetic_to_enu(Geodetic::new(top.lat_deg, top.lon_deg, 5.0));
+        for t in &targets {
+            let name = &t.name;
+            let g = sea_level.enu_to_geodetic(DVec3::new(0.0, t.aim_north_m, 0.0));
+            let target =
+                at_eye.geodetic_to_enu(Geodetic::new(g.lat_deg, g.lon_deg, t.aim_height_m));
             let range_m = target.length();
             let dir = target / range_m;
             let pitch = dir.z.asin().to_degrees();
-            let slab = seen(&mut renderer, time, pitch, Some(d));
+            let drawn_light = seen(&mut renderer, time, pitch, Some((name, t.north_m)));
             let (in_scattered, _) =
                 atmosphere.march(eye.alt_m, [dir.x, dir.y, dir.z], sun_enu, range_m, 64);
             for c in 0..3 {
-                let drawn = slab[c] / sky[c];
+                let drawn = drawn_light[c] / sky[c];
                 let expected = in_scattered[c] / sky_ref[c];
                 assert!(
-                (drawn / expected - 1.0).abs() < 0.08,
-                "sun at {sun_alt:.1} degrees, slab {d} m away, {pitch:.1} degrees down, channel \
-                 {c}: {drawn:.4} of the sky drawn, {expected:.4} marched"
-            );
+                    (drawn / expected - 1.0).abs() < t.allowed,
+                    "sun at {sun_alt:.1} degrees, {name} m away, {pitch:.2} degrees, channel \
+                     {c}: {drawn:.4} of the sky drawn, {expected:.4} marched"
+                );
             }
         }
     }

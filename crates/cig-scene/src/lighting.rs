@@ -345,7 +345,7 @@ impl Lighting {
         let pi = std::f64::consts::PI;
         let sky_at = |view: [f64; 3]| -> [f64; 3] {
             let s = atmosphere.sky_radiance(altitude_m, view, sun_enu);
-            let m = if moon_toa > 0.0 && moon_alt > -10.0 {
+            let m = if moon_toa > 0.0 && moon_alt > MOON_SKY_LOWEST_DEG {
                 atmosphere.sky_radiance(altitude_m, view, moon_enu)
             } else {
                 [0.0; 3]
@@ -428,7 +428,21 @@ pub const FLASH_COLOUR: [f32; 3] = [0.86, 0.92, 1.0];
 /// and the rain lit from within).
 const FLASH_SKY_FRACTION: f32 = 0.5;
 
+/// The moon's lowest elevation (degrees) at which its light in the sky is drawn: below it, the
+/// twilight it leaves is under the night sky's own light.
+pub const MOON_SKY_LOWEST_DEG: f64 = -10.0;
+
 impl Lighting {
+    /// Whether the moon's light in the sky is worth drawing: it has light, stands above
+    /// [`MOON_SKY_LOWEST_DEG`] (as the sky colours above assume) and the sun is below the
+    /// horizon. With the sun up, the moon's sky is under 10⁻⁶ of the sun's, far below what a
+    /// half float or a display level resolves.
+    pub fn moon_lights_the_sky(&self) -> bool {
+        self.moon_toa_colour.iter().sum::<f32>() > 0.0
+            && self.moon_elevation_deg > MOON_SKY_LOWEST_DEG
+            && self.sun_elevation_deg < 0.0
+    }
+
     /// The light of the frame with a lightning flash of `flash_lux` (at the eye) added: its
     /// bluish-white light joins the ambient light and lights the sky and the fog (half of it),
     /// so terrain, models and sky brighten together. Non-finite or negative values add nothing.

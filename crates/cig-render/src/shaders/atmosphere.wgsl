@@ -1,5 +1,5 @@
 // The physical atmosphere on the GPU (included after common.wgsl by the sky, sky-view,
-// terrain and model shaders; the ATM_* constants are generated from
+// terrain, model and puff shaders; the ATM_* constants are generated from
 // cig_environment::AtmosphereParams::EARTH by crate::atmosphere). Same maths as
 // cig_environment::atmosphere (Bruneton 2017 mapping, Hillaire 2020 sky-view table).
 
@@ -146,6 +146,9 @@ fn optical_depth_from_eye(dh: f32, d: f32) -> vec3<f32> {
 // L / (1 − T(ray)), tabled by the sky-view pass) times the surface's share 1 − T(d). Then the
 // classic fog and the ground fog layer toward the horizon sky of the ray's azimuth (the sky
 // 0.02 rad above the horizontal, whose table row `g.sky_frame_y.w` is worked out per frame).
+// A surface beyond the end of the table's ray (below the sea-level sphere) gathers more light
+// than the ray's radiance, tending to the source function, as a longer path of the same air
+// would.
 fn apply_atmosphere_exposed(exposed_colour: vec3<f32>, rel: vec3<f32>) -> vec3<f32> {
     let d = length(rel);
     let dir = rel / max(d, 1e-3);

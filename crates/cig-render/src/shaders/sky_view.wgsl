@@ -36,7 +36,7 @@ fn cornette_shanks_phase(nu: f32) -> f32 {
 const STEPS: i32 = 24;
 
 // 1: the moon lights the sky, 0: it does not (a pipeline for each, so a sky without the moon
-// is not charged for it where every branch runs); -1 reads it from the globals.
+// is not charged for it where every branch runs); -1 decides from the globals.
 override MOON_SKY: i32 = -1;
 
 @fragment
@@ -58,7 +58,10 @@ fn fs_main(in: LutOut) -> SkyViewOut {
     let phase_sun_m = cornette_shanks_phase(nu_sun);
     let phase_moon_r = rayleigh_phase(nu_moon);
     let phase_moon_m = cornette_shanks_phase(nu_moon);
-    var with_moon = dot(g.moon_toa.rgb, vec3<f32>(1.0)) > 0.0;
+    // As cig_scene's Lighting::moon_lights_the_sky: the moon has light, stands above
+    // MOON_SKY_LOWEST_DEG and the sun is down.
+    var with_moon = dot(g.moon_toa.rgb, vec3<f32>(1.0)) > 0.0 && g.moon_dir.w > MOON_SKY_LOWEST_DEG
+        && g.sun_dir.w < 0.0;
     if (MOON_SKY >= 0) {
         with_moon = MOON_SKY == 1;
     }

@@ -72,14 +72,14 @@ fn value_noise(p: vec3<f32>) -> f32 {
     let c = 256.0;
     let q0 = fract(wrap(i, c) * HASH_K);
     let q1 = fract(wrap(i + 1.0, c) * HASH_K);
-    let a = hash_of_fractions(vec3<f32>(q0.x, q0.y, q0.z));
+    let a = hash_of_fractions(q0);
     let b = hash_of_fractions(vec3<f32>(q1.x, q0.y, q0.z));
     let cc = hash_of_fractions(vec3<f32>(q0.x, q1.y, q0.z));
     let d = hash_of_fractions(vec3<f32>(q1.x, q1.y, q0.z));
     let e = hash_of_fractions(vec3<f32>(q0.x, q0.y, q1.z));
     let ff = hash_of_fractions(vec3<f32>(q1.x, q0.y, q1.z));
     let gg = hash_of_fractions(vec3<f32>(q0.x, q1.y, q1.z));
-    let h = hash_of_fractions(vec3<f32>(q1.x, q1.y, q1.z));
+    let h = hash_of_fractions(q1);
     return mix(
         mix(mix(a, b, u.x), mix(cc, d, u.x), u.y),
         mix(mix(e, ff, u.x), mix(gg, h, u.x), u.y),
