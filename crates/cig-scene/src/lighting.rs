@@ -480,6 +480,26 @@ mod tests {
     }
 
     #[test]
+    fn the_moon_lights_the_sky_only_at_night_and_while_it_is_up() {
+        let eye = Geodetic::new(36.0159, -121.1854, 0.0);
+        // 2026-06-22 05:00 UTC: the moon 33 degrees up, the sun 16 down; 11:00: the moon 35 down.
+        let moonlit = Lighting::at(unix(2026, 6, 22, 5.0), eye);
+        let moonless = Lighting::at(unix(2026, 6, 22, 11.0), eye);
+        // 2026-06-22 00:00 UTC: the moon up by day.
+        let daylit = Lighting::at(unix(2026, 6, 22, 0.0), eye);
+        assert!(moonlit.moon_elevation_deg > 30.0 && moonlit.sun_elevation_deg < -10.0);
+        assert!(moonlit.moon_lights_the_sky());
+        assert!(moonless.moon_elevation_deg < -30.0 && moonless.sun_elevation_deg < -10.0);
+        assert!(!moonless.moon_lights_the_sky());
+        assert!(daylit.moon_elevation_deg > 10.0 && daylit.sun_elevation_deg > 10.0);
+        assert!(!daylit.moon_lights_the_sky());
+        // The moon's light above the atmosphere is there in all three.
+        for l in [&moonlit, &moonless, &daylit] {
+            assert!(l.moon_toa_colour.iter().all(|c| *c > 0.0));
+        }
+    }
+
+    #[test]
     fn sun_is_high_at_local_noon_in_june_and_down_at_midnight() {
         let site = Geodetic::new(36.0, -121.0, 0.0);
         // Local solar noon near 20:04 UTC at 121 W; declination +23.4 on 21 June.
