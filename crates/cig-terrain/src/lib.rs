@@ -15,6 +15,7 @@ pub mod cache;
 pub mod classify;
 pub mod database;
 pub mod fill;
+pub mod hint;
 pub mod material;
 pub mod pyramid;
 pub mod query;

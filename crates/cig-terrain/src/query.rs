@@ -261,8 +261,8 @@ impl QuerySession {
         if let Some(Some(tile)) = self.tiles.slots.get(slot) {
             let base = cell.i * tile.posts_per_side + cell.j;
             if let Some(row) = tile.elevation_m.get(base..base + tile.posts_per_side + 2) {
-                prefetch(row.as_ptr());
-                prefetch(row[tile.posts_per_side..].as_ptr());
+                crate::hint::prefetch(&row[..2]);
+                crate::hint::prefetch(&row[tile.posts_per_side..]);
             }
         }
     }
@@ -585,19 +585,6 @@ fn resample_from_parent(layout: &PyramidLayout, coarse: &Tile, key: TileKey) -> 
         lod_errors: None,
         degraded_from_level: Some(coarse.key.level),
     }
-}
-
-/// A hint to bring the cache line holding `p` closer; no effect on results.
-#[inline]
-fn prefetch(p: *const f32) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch never dereferences its address and cannot fault; SSE is part of the
-    // x86_64 baseline, so the instruction exists on every x86_64 CPU.
-    unsafe {
-        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(p.cast::<i8>());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
 }
 
 #[inline]
