@@ -46,8 +46,7 @@ pub(crate) fn wgsl_constants() -> String {
          const ATM_MIE_H: f32 = {:.1};\nconst ATM_MIE_G: f32 = {};\n\
          const ATM_OZONE: vec3<f32> = {};\nconst ATM_OZONE_PEAK: f32 = {:.1};\n\
          const ATM_OZONE_HALF: f32 = {:.1};\nconst ATM_SUN_RADIUS: f32 = {:e};\n\
-         const SKY_VIEW_SIZE: vec2<f32> = vec2<f32>({:.1}, {:.1});\n\
-         const MOON_SKY_LOWEST_DEG: f32 = {:.1};\n",
+         const SKY_VIEW_SIZE: vec2<f32> = vec2<f32>({:.1}, {:.1});\n",
         p.bottom_radius_m,
         p.top_radius_m,
         v3(p.rayleigh_scattering_per_m),
@@ -62,7 +61,6 @@ pub(crate) fn wgsl_constants() -> String {
         SUN_ANGULAR_RADIUS_DEG.to_radians(),
         SKY_VIEW_SIZE.0,
         SKY_VIEW_SIZE.1,
-        cig_scene::lighting::MOON_SKY_LOWEST_DEG,
     )
 }
 
@@ -183,8 +181,10 @@ pub(crate) struct AtmosphereGpu {
     /// Group 1 for the sky-view pass (placeholders in the sky-view tables' slots).
     lut_bind: wgpu::BindGroup,
     /// The sky-view pass without and with the moon's light, and the one that reads it from
-    /// the globals.
-    sky_view_pipelines: [wgpu::RenderPipeline; 3],
+    /// the globals, each built when a frame first needs it (the moonless one at start-up).
+    sky_view_pipelines: [std::sync::OnceLock<wgpu::RenderPipeline>; 3],
+    sky_view_module: wgpu::ShaderModule,
+    globals_layout: wgpu::BindGroupLayout,
     globals_bind: wgpu::BindGroup,
 }
 
@@ -286,30 +286,40 @@ impl AtmosphereGpu {
         let scene_bind = bind("atmosphere (scene)", &sky_view, &sky_source);
         let lut_bind = bind("atmosphere (sky-view pass)", &placeholder, &placeholder);
         let module = atmosphere_shader(gpu, "sky view", include_str!("shaders/sky_view.wgsl"));
-        let table_target = Some(wgpu::ColorTargetState {
-            format: HDR_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        });
-        let sky_view_pipelines = [0.0, 1.0, -1.0].map(|moon_sky| {
-            crate::gpu::full_screen_pipeline_to(
-                gpu,
-                "sky view",
-                &module,
-                &[globals_layout, &layout],
-                &[table_target.clone(), table_target.clone()],
-                &[("MOON_SKY", moon_sky)],
-            )
-        });
-        AtmosphereGpu {
+        let atmosphere = AtmosphereGpu {
             layout,
             scene_bind,
             sky_view,
             sky_source,
             lut_bind,
-            sky_view_pipelines,
+            sky_view_pipelines: Default::default(),
+            sky_view_module: module,
+            globals_layout: globals_layout.clone(),
             globals_bind,
-        }
+        };
+        atmosphere.sky_view_pipeline(gpu, Some(false));
+        atmosphere
+    }
+
+    /// The sky-view pass's pipeline for `moon_sky` (see `encode_sky_view`), built on first use.
+    fn sky_view_pipeline(&self, gpu: &Gpu, moon_sky: Option<bool>) -> &wgpu::RenderPipeline {
+        let index = moon_sky.map_or(2, usize::from);
+        self.sky_view_pipelines[index].get_or_init(|| {
+            let table = Some(wgpu::ColorTargetState {
+                format: HDR_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            });
+            let moon_sky = moon_sky.map_or(-1.0, |on| f64::from(u8::from(on)));
+            crate::gpu::full_screen_pipeline_to(
+                gpu,
+                "sky view",
+                &self.sky_view_module,
+                &[&self.globals_layout, &self.layout],
+                &[table.clone(), table],
+                &[("MOON_SKY", moon_sky)],
+            )
+        })
     }
 
     /// Records the sky-view table's pass (the frame's globals must be written); `moon_sky`:
@@ -317,6 +327,7 @@ impl AtmosphereGpu {
     /// pipeline that reads the moon's light from the globals.
     pub fn encode_sky_view(
         &self,
+        gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         moon_sky: Option<bool>,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
@@ -338,7 +349,7 @@ impl AtmosphereGpu {
             timestamp_writes,
             ..Default::default()
         });
-        pass.set_pipeline(&self.sky_view_pipelines[moon_sky.map_or(2, usize::from)]);
+        pass.set_pipeline(self.sky_view_pipeline(gpu, moon_sky));
         pass.set_bind_group(0, &self.globals_bind, &[]);
         pass.set_bind_group(1, &self.lut_bind, &[]);
         pass.draw(0..3, 0..1);

@@ -1047,6 +1047,7 @@ impl Renderer {
         };
         if physical_sky {
             self.atmosphere.encode_sky_view(
+                &self.gpu,
                 &mut encoder,
                 self.specialise.then(|| lighting.moon_lights_the_sky()),
                 self.timestamps.as_ref().map(|(set, _, _)| begin(set)),
@@ -1305,7 +1306,11 @@ impl Renderer {
             moon_dir: v4(lighting.moon_direction, lighting.moon_elevation_deg),
             moon_colour: c4(lighting.moon_colour),
             sun_toa: c4(lighting.sun_toa_colour),
-            moon_toa: c4(lighting.moon_toa_colour),
+            // w: whether the moon lights the sky (the unspecialised sky-view pass reads it).
+            moon_toa: {
+                let [r, g, b] = lighting.moon_toa_colour;
+                [r, g, b, f32::from(u8::from(lighting.moon_lights_the_sky()))]
+            },
             atmos: [
                 (cig_environment::AtmosphereParams::EARTH.bottom_radius_m
                     + camera.view.eye.alt_m.clamp(1.0, 99_000.0)) as f32,

@@ -183,13 +183,7 @@ fn exposure_compensation_and_a_fixed_exposure_act_on_the_frame() {
 }
 
 fn white_block() -> Model {
-    let mut mesh = ModelMesh::default();
-    mesh.add_box(
-        Vec3::new(-150.0, -150.0, 0.0),
-        Vec3::new(150.0, 150.0, 300.0),
-        [180, 180, 180, 255],
-    );
-    Model::new("block", vec![mesh.clone(), mesh.clone(), mesh])
+    box_model("block", 300.0, 300.0, [180, 180, 180, 255])
 }
 
 /// The exposed linear radiance of an 8-bit sRGB pixel of a daylight frame: the tone map's sRGB
@@ -208,16 +202,12 @@ fn exposed_radiance(px: [f64; 3]) -> [f64; 3] {
     })
 }
 
-/// A black box standing on the sea, `size_m` square and `height_m` high: what is seen of it is
-/// the air's in-scattered light alone.
-fn black_box(name: &str, size_m: f32, height_m: f32) -> Model {
+/// A box standing on the ground, `size_m` square and `height_m` high, of one colour, at every
+/// level of detail. A black one shows the air's in-scattered light alone.
+fn box_model(name: &str, size_m: f32, height_m: f32, rgba: [u8; 4]) -> Model {
     let mut mesh = ModelMesh::default();
     let h = size_m / 2.0;
-    mesh.add_box(
-        Vec3::new(-h, -h, 0.0),
-        Vec3::new(h, h, height_m),
-        [0, 0, 0, 255],
-    );
+    mesh.add_box(Vec3::new(-h, -h, 0.0), Vec3::new(h, h, height_m), rgba);
     Model::new(name, vec![mesh.clone(), mesh.clone(), mesh])
 }
 
@@ -269,7 +259,7 @@ fn aerial_perspective_matches_a_march_of_the_same_air() {
     renderer.set_models(
         targets
             .iter()
-            .map(|t| black_box(&t.name, t.size_m as f32, t.height_m as f32))
+            .map(|t| box_model(&t.name, t.size_m as f32, t.height_m as f32, [0, 0, 0, 255]))
             .collect(),
     );
     // One narrow frame aimed at each target, all at one fixed exposure.

@@ -430,7 +430,7 @@ const FLASH_SKY_FRACTION: f32 = 0.5;
 
 /// The moon's lowest elevation (degrees) at which its light in the sky is drawn: below it, the
 /// twilight it leaves is under the night sky's own light.
-pub const MOON_SKY_LOWEST_DEG: f64 = -10.0;
+const MOON_SKY_LOWEST_DEG: f64 = -10.0;
 
 impl Lighting {
     /// Whether the moon's light in the sky is worth drawing: it has light, stands above

@@ -205,14 +205,17 @@ impl NodeLayout {
             | cig_terrain::rtin::Vertex::Side { k, .. } => k,
             cig_terrain::rtin::Vertex::Origin => return 0.0,
         };
-        let cells = k as f64 * f64::from(1u32 << level.min(31));
-        (self.finest_cell_sag_m * cells * cells) as f32
+        self.sag_m(k as f64 * f64::from(1u32 << level.min(31)))
     }
 
     /// The chord sag of the cells of `level` (the triangles of a node drawn with every post of
     /// its level), a floor under a node's error: what refining to that level can reach.
     pub fn node_sag_m(&self, level: u8) -> f32 {
-        let cells = f64::from(1u32 << level.min(31));
+        self.sag_m(f64::from(1u32 << level.min(31)))
+    }
+
+    /// The chord sag of a triangle whose hypotenuse spans `cells` finest cells' diagonals.
+    fn sag_m(&self, cells: f64) -> f32 {
         (self.finest_cell_sag_m * cells * cells) as f32
     }
 

@@ -31,7 +31,8 @@ struct Globals {
     // Towards the moon; w = moon elevation (degrees). Direct moonlight (light units).
     moon_dir: vec4<f32>,
     moon_colour: vec4<f32>,
-    // Sun's and moon's illuminance above the atmosphere (light units).
+    // Sun's and moon's illuminance above the atmosphere (light units); moon_toa.w: 1 where the
+    // moon lights the sky (cig_scene's Lighting::moon_lights_the_sky), else 0.
     sun_toa: vec4<f32>,
     moon_toa: vec4<f32>,
     // x: eye radius from the planet's centre (m), y: sky model (0 physical, 1 flat), z and w:

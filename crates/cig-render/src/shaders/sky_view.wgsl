@@ -58,10 +58,7 @@ fn fs_main(in: LutOut) -> SkyViewOut {
     let phase_sun_m = cornette_shanks_phase(nu_sun);
     let phase_moon_r = rayleigh_phase(nu_moon);
     let phase_moon_m = cornette_shanks_phase(nu_moon);
-    // As cig_scene's Lighting::moon_lights_the_sky: the moon has light, stands above
-    // MOON_SKY_LOWEST_DEG and the sun is down.
-    var with_moon = dot(g.moon_toa.rgb, vec3<f32>(1.0)) > 0.0 && g.moon_dir.w > MOON_SKY_LOWEST_DEG
-        && g.sun_dir.w < 0.0;
+    var with_moon = g.moon_toa.w > 0.5;
     if (MOON_SKY >= 0) {
         with_moon = MOON_SKY == 1;
     }
