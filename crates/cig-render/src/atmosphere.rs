@@ -26,7 +26,7 @@
 //! air); the moon-lit sky uses the sun's spectrum.
 
 use crate::gpu::Gpu;
-use crate::renderer::{sampler_entry, texture_entry};
+use crate::pass::{sampler_entry, texture_entry};
 use cig_environment::atmosphere::{Atmosphere, Lut, SUN_ANGULAR_RADIUS_DEG};
 
 /// Format of the scene target (pre-exposed linear radiance).
@@ -371,18 +371,31 @@ impl ToneMap {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tone map"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
                 },
-                count: None,
-            }],
+                // The eye's adaptation (adaptation.rs): x the log2 factor.
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
         });
-        let module = crate::renderer::shader(gpu, "tone map", include_str!("shaders/tonemap.wgsl"));
+        let module = crate::pass::shader(gpu, "tone map", include_str!("shaders/tonemap.wgsl"));
         let pipeline = crate::gpu::full_screen_pipeline(
             gpu,
             "tone map",
@@ -394,15 +407,27 @@ impl ToneMap {
         ToneMap { layout, pipeline }
     }
 
-    /// The bind group that reads `scene` (the resolved HDR target).
-    pub fn bind(&self, gpu: &Gpu, scene: &wgpu::TextureView) -> wgpu::BindGroup {
+    /// The bind group that reads `scene` (the resolved HDR target) and the eye's adaptation
+    /// factor (`exposure`, a 16-byte uniform).
+    pub fn bind(
+        &self,
+        gpu: &Gpu,
+        scene: &wgpu::TextureView,
+        exposure: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("tone map"),
             layout: &self.layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(scene),
-            }],
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(scene),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: exposure.as_entire_binding(),
+                },
+            ],
         })
     }
 

@@ -19,7 +19,7 @@
 //! sees. No bloom (the glow is the quad's own), no scattering by the cloud.
 
 use crate::gpu::Gpu;
-use crate::renderer::{shader, uniform_entry, DEPTH_FORMAT, MSAA_SAMPLES};
+use crate::pass::{shader, storage_entry, uniform_entry, DEPTH_FORMAT, MSAA_SAMPLES};
 use cig_scene::lighting::{FLASH_COLOUR, LIGHTING_UNITS_PER_LUX};
 use cig_scene::{Camera, FrameSnapshot};
 
@@ -108,19 +108,6 @@ pub(crate) fn overlay_pipeline(
             multiview_mask: None,
             cache: None,
         })
-}
-
-pub(crate) fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
 }
 
 /// The bolt pass: pipeline, line buffer and per-frame uniform.

@@ -280,7 +280,7 @@ impl CelestialPass {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("celestial"),
             entries: &[
-                crate::renderer::uniform_entry(0),
+                crate::pass::uniform_entry(0),
                 storage_entry(1),
                 storage_entry(2),
                 storage_entry(3),

@@ -37,7 +37,7 @@
 //! which cannot sample multisampled depth, clouds are not drawn at all (logged once).
 
 use crate::gpu::{full_screen_pipeline, Gpu};
-use crate::renderer::{sampler_entry, shader, texture_entry, uniform_entry};
+use crate::pass::{sampler_entry, shader, texture_entry, uniform_entry};
 use cig_environment::clouds::{CloudLayer, CloudNoise, CloudShape, MAX_CLOUD_LAYERS, NOISE_SIZE};
 use cig_scene::view::NEAR_PLANE_M;
 use cig_scene::{Camera, FrameSnapshot};

@@ -7,6 +7,7 @@
 //! [`cig_scene::FrameSnapshot`] and the terrain [`cig_terrain::TileCache`]). Any wgpu backend
 //! works (Vulkan, Metal, DX12, GL); with no GPU, Mesa's lavapipe renders the same frames.
 
+pub mod adaptation;
 pub mod atmosphere;
 pub mod bolts;
 pub mod celestial;
@@ -14,17 +15,20 @@ pub mod clouds;
 pub mod gltf_model;
 pub mod gpu;
 pub mod offscreen;
+pub mod pass;
 pub mod precipitation;
 pub mod puffs;
 pub mod renderer;
 pub mod terrain;
 pub mod viewer;
 
+pub use adaptation::Adaptation;
 pub use gltf_model::{load_gltf_model, ModelError};
 pub use gpu::{Gpu, RenderError};
-pub use offscreen::{load_for_view, render_image, render_image_with, Image};
+pub use offscreen::{load_for_view, render_image, render_image_with, Image, OffscreenTarget};
+pub use pass::MSAA_SAMPLES;
 pub use renderer::serde_like::FrameStats;
-pub use renderer::{FrameOptions, Renderer, FRAME_FORMAT, MSAA_SAMPLES};
+pub use renderer::{FrameOptions, Renderer, FRAME_FORMAT};
 pub use viewer::{
     run_viewer, run_viewer_driven, FrameDriver, ObscurantOrder, ViewerError, ViewerOptions,
     ViewerReport, ViewerTick,

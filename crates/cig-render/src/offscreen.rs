@@ -5,6 +5,38 @@ use crate::renderer::{serde_like::FrameStats, FrameOptions, Renderer, FRAME_FORM
 use cig_scene::FrameSnapshot;
 use cig_terrain::TileCache;
 
+/// A colour target of the frame format that frames can be drawn into without reading them
+/// back (benchmarks time the drawing alone).
+pub struct OffscreenTarget {
+    _texture: wgpu::Texture,
+    view: wgpu::TextureView,
+}
+
+impl OffscreenTarget {
+    /// A target of `size` pixels in [`FRAME_FORMAT`].
+    pub fn new(gpu: &crate::Gpu, size: (u32, u32)) -> OffscreenTarget {
+        let texture = crate::gpu::render_target(
+            &gpu.device,
+            "off-screen target",
+            size,
+            FRAME_FORMAT,
+            1,
+            wgpu::TextureUsages::empty(),
+            &[],
+        );
+        let view = texture.create_view(&Default::default());
+        OffscreenTarget {
+            _texture: texture,
+            view,
+        }
+    }
+
+    /// What [`Renderer::render`] draws into.
+    pub fn view(&self) -> &wgpu::TextureView {
+        &self.view
+    }
+}
+
 /// An RGBA8 (sRGB) image, rows from the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -58,6 +90,7 @@ pub fn render_image(
             mesh_budget: usize::MAX,
             key_background: false,
             fade_in_s: 0.0,
+            adaptation: crate::adaptation::Adaptation::Settled,
         },
     )
 }

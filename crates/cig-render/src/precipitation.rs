@@ -23,7 +23,7 @@
 
 use crate::bolts::overlay_pipeline;
 use crate::gpu::Gpu;
-use crate::renderer::uniform_entry;
+use crate::pass::uniform_entry;
 use cig_environment::PrecipitationKind;
 use cig_geo::{EnuFrame, Geodetic};
 use cig_scene::lighting::Lighting;
@@ -100,7 +100,7 @@ impl PrecipitationPass {
             include_str!("shaders/screen_lines.wgsl"),
             include_str!("shaders/precipitation.wgsl")
         );
-        let module = crate::renderer::shader(gpu, "precipitation", &source);
+        let module = crate::pass::shader(gpu, "precipitation", &source);
         let over = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,
             dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,

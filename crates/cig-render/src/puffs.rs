@@ -32,7 +32,7 @@
 //! faded, and terrain in front cuts it with the frame's edge smoothing but no soft contact.
 
 use crate::gpu::Gpu;
-use crate::renderer::{shader, uniform_entry, DEPTH_FORMAT, MSAA_SAMPLES};
+use crate::pass::{shader, uniform_entry, DEPTH_FORMAT, MSAA_SAMPLES};
 use cig_effects::PuffInstance;
 use cig_scene::view::NEAR_PLANE_M;
 use cig_scene::{Camera, FrameSnapshot};

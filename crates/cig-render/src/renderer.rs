@@ -22,10 +22,12 @@
 //! the aerial perspective is the cheap sky-view approximation of [`crate::atmosphere`], not a
 //! froxel volume; exposure follows the natural light instantly (no adaptation time).
 
+use crate::adaptation::{AdaptRequest, Adaptation, AdaptationPass};
 use crate::atmosphere::{atmosphere_shader, AtmosphereGpu, ToneMap, HDR_FORMAT};
 use crate::celestial::CelestialPass;
 use crate::clouds::CloudPass;
 use crate::gpu::{Gpu, RenderError};
+use crate::pass::{sampler_entry, storage_entry, texture_entry, uniform_entry, DEPTH_FORMAT};
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainFrame, TerrainGpu};
 use cig_geo::Geodetic;
@@ -78,8 +80,11 @@ pub mod serde_like {
         /// Natural illuminance of the frame (the exposure's input), lux.
         pub illuminance_lux: f64,
         /// The exposure the frame was drawn at, as an incident-light EV (`log2(lux / 2.5)`,
-        /// compensation included).
+        /// compensation and the eye's adaptation to the view included).
         pub exposure_ev: f64,
+        /// How far the eye's adaptation to the view moved the natural illuminance's exposure,
+        /// EV (positive: the picture was brightened; 0 with adaptation off).
+        pub view_adaptation_ev: f64,
         /// Lightning bolt lines drawn.
         pub bolt_lines_drawn: u32,
         /// Rain drops or snow flakes drawn.
@@ -87,11 +92,10 @@ pub mod serde_like {
     }
 }
 
-/// Sample count of the colour and depth targets.
-pub const MSAA_SAMPLES: u32 = 4;
+/// Sample count of the colour and depth targets (defined in [`crate::pass`]).
+pub use crate::pass::MSAA_SAMPLES;
 /// Format of off-screen frames.
 pub const FRAME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Node meshes the GPU pool holds at most (about 280 MB with the atlases at 16 cells).
 const MAX_NODE_SLOTS: usize = 16384;
 /// Terrain records are kept by slot, so there is room for one per slot.
@@ -250,6 +254,8 @@ pub struct Renderer {
     sky_pipeline: wgpu::RenderPipeline,
     atmosphere: AtmosphereGpu,
     tone_map: ToneMap,
+    /// The eye's adaptation to what each view shows (the tone map's factor).
+    adaptation: AdaptationPass,
     model_vertices: wgpu::Buffer,
     model_indices: wgpu::Buffer,
     models: HashMap<String, GpuModel>,
@@ -267,65 +273,6 @@ pub struct Renderer {
     /// end of the puff passes and of the cloud passes.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: u64,
-}
-
-pub(crate) fn shader(gpu: &Gpu, label: &str, body: &str) -> wgpu::ShaderModule {
-    let source = format!("{}\n{}", include_str!("shaders/common.wgsl"), body);
-    gpu.device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        })
-}
-
-pub(crate) fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// A filtering sampler (both stages may sample).
-pub(crate) fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-        count: None,
-    }
-}
-
-/// A filterable 2-D float texture (both stages may sample).
-pub(crate) fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    }
 }
 
 struct PipelineSpec<'a> {
@@ -446,6 +393,7 @@ struct ShaderSwitches {
     fog_mode: u8,
     ground_fog: bool,
     physical_sky: bool,
+    ground_detail: bool,
 }
 
 impl ShaderSwitches {
@@ -454,14 +402,16 @@ impl ShaderSwitches {
             fog_mode: fog_mode_index(snapshot.fog.mode),
             ground_fog: drawn_ground_fog(snapshot).is_some(),
             physical_sky: snapshot.sky.model == SkyModel::Physical,
+            ground_detail: snapshot.ground_detail,
         }
     }
 
-    fn constants(self) -> [(&'static str, f64); 3] {
+    fn constants(self) -> [(&'static str, f64); 4] {
         [
             ("FOG_MODE", f64::from(self.fog_mode)),
             ("GROUND_FOG", f64::from(u8::from(self.ground_fog))),
             ("PHYSICAL_SKY", f64::from(u8::from(self.physical_sky))),
+            ("GROUND_DETAIL", f64::from(u8::from(self.ground_detail))),
         ]
     }
 }
@@ -556,6 +506,9 @@ pub struct FrameOptions {
     /// Seconds over which a node that newly replaces its parent morphs from the parent's shape
     /// into its own (finer data fades in rather than pops); 0 for one-off frames.
     pub fade_in_s: f32,
+    /// How the eye's adaptation to the view advances (settled at once by default: still
+    /// frames; interactive loops step it by their frame time).
+    pub adaptation: Adaptation,
 }
 
 impl Default for FrameOptions {
@@ -564,6 +517,7 @@ impl Default for FrameOptions {
             mesh_budget: 48,
             key_background: false,
             fade_in_s: 0.5,
+            adaptation: Adaptation::Settled,
         }
     }
 }
@@ -576,7 +530,12 @@ impl Renderer {
         let lod = TerrainLod::new(layout, GeoidLookup::new(&manifest.geoid));
         // No more slots than the database has nodes (a small database needs a small pool).
         let capacity = layout.node_count().min(MAX_NODE_SLOTS as u64) as usize;
-        let terrain = TerrainGpu::new(&gpu, layout.node_cells, capacity);
+        let grid = layout.pyramid.grid;
+        let (m_north, m_east) = cig_geo::metres_per_degree(
+            grid.south_lat_deg + 0.5 * grid.dlat_deg * grid.rows.saturating_sub(1) as f64,
+        );
+        let finest_post_m = ((grid.dlat_deg * m_north) * (grid.dlon_deg * m_east)).sqrt() as f32;
+        let terrain = TerrainGpu::new(&gpu, layout.node_cells, capacity, finest_post_m);
         let device = &gpu.device;
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("globals"),
@@ -672,6 +631,7 @@ impl Renderer {
         });
         let atmosphere = AtmosphereGpu::new(&gpu, &sky_layout, sky_bind.clone());
         let tone_map = ToneMap::new(&gpu, &sky_layout, colour_format);
+        let adaptation = AdaptationPass::new(&gpu);
         let terrain_module =
             atmosphere_shader(&gpu, "terrain", include_str!("shaders/terrain.wgsl"));
         let model_module = atmosphere_shader(&gpu, "model", include_str!("shaders/model.wgsl"));
@@ -766,6 +726,7 @@ impl Renderer {
             sky_pipeline,
             atmosphere,
             tone_map,
+            adaptation,
             models: HashMap::new(),
             node_first_seen: HashMap::new(),
             targets: None,
@@ -877,7 +838,9 @@ impl Renderer {
             let targets = Targets {
                 size,
                 msaa_colour: make("msaa colour", HDR_FORMAT, wgpu::TextureUsages::empty()),
-                tone_map_bind: self.tone_map.bind(&self.gpu, &hdr),
+                tone_map_bind: self
+                    .tone_map
+                    .bind(&self.gpu, &hdr, &self.adaptation.tone_exposure),
                 hdr,
                 // The puff pass may read the depth samples.
                 depth: make(
@@ -886,6 +849,7 @@ impl Renderer {
                     self.puffs.depth_usage() | self.clouds.depth_usage(),
                 ),
             };
+            self.adaptation.bind_scene(&self.gpu, &targets.hdr);
             self.puffs
                 .resize(&self.gpu, size, &targets.depth, &self.globals);
             self.clouds
@@ -1173,6 +1137,25 @@ impl Renderer {
             );
         }
         stats.cloud_layers_drawn = cloud_count as u32;
+        // The eye adapts to what the view shows (not to keyed test frames, not with a fixed
+        // exposure).
+        let adapted = self.adaptation.encode(
+            &self.gpu,
+            &mut encoder,
+            size,
+            AdaptRequest {
+                slot: view_index,
+                log2_key: cig_scene::lighting::shown_grey_log2(
+                    lighting.adapted_illuminance_lux,
+                    snapshot.sky.exposure_compensation_ev,
+                ) as f32,
+                adaptation: if options.key_background || snapshot.sky.fixed_exposure_ev.is_some() {
+                    Adaptation::Off
+                } else {
+                    options.adaptation
+                },
+            },
+        );
         {
             let Some(targets) = self.targets.as_ref() else {
                 return Err(RenderError::Gpu("render targets missing".into()));
@@ -1205,6 +1188,12 @@ impl Renderer {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| RenderError::Gpu(e.to_string()))?;
         let wall_gpu_ms = submit_started.elapsed().as_secs_f64() * 1e3;
+        if adapted {
+            if let Some(factor_log2) = self.adaptation.read_factor_log2(&self.gpu) {
+                stats.view_adaptation_ev = f64::from(factor_log2);
+                stats.exposure_ev -= f64::from(factor_log2);
+            }
+        }
         let spans = PassQueries {
             count: queries,
             puff: puff_queries,
@@ -1269,7 +1258,8 @@ impl Renderer {
             view_proj: camera.view_projection().to_cols_array_2d(),
             // w: vertices of each terrain node's slot (the shader's slot of a vertex).
             cam_forward: v4(camera.forward, f64::from(self.terrain.vertices_per_node)),
-            cam_right: v4(camera.right, 0.0),
+            // w: 1 to draw the ground's detail (the unspecialised terrain pipeline reads it).
+            cam_right: v4(camera.right, f64::from(u8::from(snapshot.ground_detail))),
             cam_up: v4(camera.up, 0.0),
             tangents: [tl as f32, tr as f32, td as f32, tu as f32],
             eye_up: v4(camera.local_up, dip),

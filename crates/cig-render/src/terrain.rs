@@ -54,6 +54,8 @@ pub struct TerrainGpu {
     texels: u32,
     slots_per_row: u32,
     atlas_size: u32,
+    /// Spacing of the database's finest posts, metres.
+    finest_post_m: f32,
     pub vertex_pool: wgpu::Buffer,
     /// The drawn triangles of one view, on the vertex pool (grown as views need).
     pub index_buffer: wgpu::Buffer,
@@ -95,7 +97,9 @@ const SKIRT_FLOOR_M: f32 = 0.5;
 const SKIRT_OVER_ALLOWED_ERROR: f64 = 2.2;
 
 impl TerrainGpu {
-    pub fn new(gpu: &Gpu, node_cells: u32, capacity: usize) -> TerrainGpu {
+    /// `finest_post_m`: the spacing of the database's finest posts, metres (the shader sizes
+    /// its material borders by it).
+    pub fn new(gpu: &Gpu, node_cells: u32, capacity: usize, finest_post_m: f32) -> TerrainGpu {
         let device = &gpu.device;
         let vertices_per_node = terrain_mesh::vertex_count(node_cells) as u32;
         let index_capacity =
@@ -139,6 +143,7 @@ impl TerrainGpu {
             texels,
             slots_per_row,
             atlas_size,
+            finest_post_m,
             vertex_pool,
             index_buffer,
             index_capacity,
@@ -418,8 +423,17 @@ impl TerrainGpu {
         };
         Some(NodeRecord {
             offset: [offset.x, offset.y, offset.z, skirt_per_m],
-            axis_e: axis(slot.axes[0], 0.0),
-            axis_n: axis(slot.axes[1], 0.0),
+            // w: texels per post of the data the colours were sampled from (texels are at
+            // half the node's post spacing; the detail level's posts may be finer or coarser).
+            axis_e: axis(
+                slot.axes[0],
+                2f32.powi(i32::from(slot.detail_level) + 1 - i32::from(slot.key.level)),
+            ),
+            // w: the post spacing of that data, metres.
+            axis_n: axis(
+                slot.axes[1],
+                self.finest_post_m * 2f32.powi(i32::from(slot.detail_level)),
+            ),
             axis_u: axis(slot.axes[2], skirt_most_m),
             morph: [
                 morph_start_m.min(1e30),

@@ -159,6 +159,7 @@ fn no_cracks_while_finer_tiles_are_still_loading() {
                 mesh_budget: usize::MAX,
                 key_background: true,
                 fade_in_s: 0.0,
+                adaptation: cig_render::Adaptation::Settled,
             },
         )
         .expect("render");
@@ -560,6 +561,7 @@ fn ancestors_stand_in_while_finer_meshes_are_still_being_built() {
             mesh_budget: 4,
             key_background: true,
             fade_in_s: 0.5,
+            adaptation: cig_render::Adaptation::Settled,
         },
     )
     .expect("render");

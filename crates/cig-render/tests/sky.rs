@@ -11,22 +11,6 @@ use cig_scene::{EntityInstance, FrameSnapshot, Hpr};
 use common::*;
 use glam::{DVec3, Vec3};
 
-fn unix(y: i32, m: u32, d: u32, h: f64) -> f64 {
-    cig_environment::UtcTime::from_calendar(y, m, d, 0, 0, 0.0)
-        .expect("a date")
-        .unix_seconds()
-        + h * 3600.0
-}
-
-/// The sun's (azimuth, altitude) in degrees at `eye` and `unix_s`.
-fn sun_at(eye: Geodetic, unix_s: f64) -> (f64, f64) {
-    let observer =
-        cig_environment::Observer::new(eye.lat_deg, eye.lon_deg, eye.alt_m).expect("observer");
-    let time = cig_environment::UtcTime::from_unix_seconds(unix_s).expect("time");
-    let e = cig_environment::ephemeris(&observer, time);
-    (e.sun.azimuth_deg, e.sun.altitude_deg)
-}
-
 /// The first minute after `from_unix_s` at which the sun sinks below `altitude_deg`.
 fn sun_sinks_below(eye: Geodetic, from_unix_s: f64, altitude_deg: f64) -> f64 {
     (0..24 * 60)

@@ -1,7 +1,8 @@
 //! The renderer's plain data, computed on the CPU without touching the GPU: views and camera
-//! maths ([`view`]), terrain level-of-detail selection ([`lod`]) and node meshes
-//! ([`terrain_mesh`]), light, sky and fog ([`lighting`]), entity models ([`models`]) and the
-//! per-frame snapshot ([`snapshot`]), lightning bolts ready to draw and their flash ([`bolt`]).
+//! maths ([`view`]), the terrain quadtree's nodes ([`node`]), level-of-detail selection
+//! ([`lod`]) and node meshes ([`terrain_mesh`]), light, sky and fog ([`lighting`]), entity
+//! models ([`models`]) and the per-frame snapshot ([`snapshot`]), lightning bolts ready to draw
+//! and their flash ([`bolt`]).
 //!
 //! This crate is pure: it never opens files, sockets, the GPU or the terminal; `cig-render`
 //! turns what it computes into frames.
@@ -10,13 +11,16 @@ pub mod bolt;
 pub mod lighting;
 pub mod lod;
 pub mod models;
+pub mod node;
 pub mod snapshot;
 pub mod terrain_mesh;
 pub mod view;
 
 pub use lighting::{Fog, FogMode, Lighting};
-pub use lod::{LodSettings, NodeKey, NodeLayout, Selection, TerrainLod};
+pub use lod::{LodSettings, Selection, TerrainLod};
+pub use node::{NodeKey, NodeLayout};
 pub use snapshot::{
-    BoltDraw, BoltLine, EntityInstance, EntitySpec, FogLayer, FrameSnapshot, PrecipitationDraw,
+    lift_eyes_above_terrain, BoltDraw, BoltLine, EntityInstance, EntitySpec, EyeBelowTerrain,
+    FogLayer, FrameSnapshot, PrecipitationDraw,
 };
 pub use view::{Camera, FovDeg, Hpr, View, ViewError};

@@ -21,9 +21,11 @@
 //! a grey card (albedo 0.18) under the natural illuminance `E` is shown at a key value that
 //! falls with `log E` (after the log-compressed key of G. Krawczyk, K. Myszkowski, H.-P.
 //! Seidel, "Lightness Perception in Tone Reproduction for High Dynamic Range Images", 2005):
-//! 0.18 at 10⁵ lux, 0.05 at a full moon's 0.3 lux, 0.012 at a moonless night's 0.002 lux,
+//! 0.18 at 10⁵ lux, 0.05 at a full moon's 0.3 lux, 0.003 at a moonless night's 0.002 lux,
 //! constant beyond (piecewise log-linear). So noon, dusk and a moonlit night each look right,
-//! the night darker than the day but readable. Below 10 lux the tone map shifts toward the
+//! a moonlit night darker than the day but readable, and a moonless night nearly black (the
+//! unaided eye sees little there: that is what goggles are for). The renderer then adapts
+//! this exposure to what the view shows, within bounds (`cig_render`'s eye adaptation). Below 10 lux the tone map shifts toward the
 //! scotopic blue ([`scotopic_fraction`], wholly at 0.01 lux).
 //!
 //! Fog follows the classic fixed-function factors of the NPSNET thesis (source 000, Eq 13-16,
@@ -35,8 +37,8 @@
 //!
 //! Limits: a clear standard atmosphere at three wavelengths; the moon lights the sky as the sun
 //! would at the same altitude (its own spectrum is not modelled); the cloud cover dims direct
-//! and diffuse light alike (no overcast diffusion of the sun); exposure is instantaneous (no
-//! eye-adaptation time constant).
+//! and diffuse light alike (no overcast diffusion of the sun); the exposure here is the natural
+//! illuminance's (the adaptation to the view and its time constants are the renderer's).
 
 use cig_geo::{EnuFrame, Geodetic};
 use glam::DVec3;
@@ -135,7 +137,7 @@ pub const EXPOSURE_GREY_ALBEDO: f64 = 0.18;
 
 /// (natural illuminance lux, key) anchors of the log-linear exposure key: noon, a full moon,
 /// a clear moonless night.
-const KEY_ANCHORS: [(f64, f64); 3] = [(1.0e5, 0.18), (0.3, 0.05), (0.002, 0.012)];
+const KEY_ANCHORS: [(f64, f64); 3] = [(1.0e5, 0.18), (0.3, 0.05), (0.002, 0.003)];
 
 /// Incident-light exposure value of an illuminance: `log2(E / 2.5)` (ISO 2720 incident-meter
 /// calibration C = 250 with ISO 100).
@@ -169,17 +171,31 @@ pub fn exposure_key(illuminance_lux: f64) -> f64 {
 /// The frame's exposure (the factor `exposed()` applies to radiance in light units) for a
 /// natural illuminance and an exposure compensation in EV.
 pub fn exposure_for_illuminance(illuminance_lux: f64, compensation_ev: f64) -> f64 {
-    let e = if illuminance_lux.is_finite() {
+    let e = usable_illuminance(illuminance_lux);
+    exposure_key(e) / (EXPOSURE_GREY_ALBEDO * e * LIGHTING_UNITS_PER_LUX)
+        * 2f64.powf(usable_compensation(compensation_ev))
+}
+
+/// log2 of the pre-exposed value a grey card shows under `illuminance_lux` with the
+/// compensation: what the eye's adaptation brings a view's mean luminance to.
+pub fn shown_grey_log2(illuminance_lux: f64, compensation_ev: f64) -> f64 {
+    exposure_key(usable_illuminance(illuminance_lux)).log2() + usable_compensation(compensation_ev)
+}
+
+fn usable_illuminance(illuminance_lux: f64) -> f64 {
+    if illuminance_lux.is_finite() {
         illuminance_lux.max(1e-6)
     } else {
         KEY_ANCHORS[0].0
-    };
-    let ev = if compensation_ev.is_finite() {
+    }
+}
+
+fn usable_compensation(compensation_ev: f64) -> f64 {
+    if compensation_ev.is_finite() {
         compensation_ev.clamp(-10.0, 10.0)
     } else {
         0.0
-    };
-    exposure_key(e) / (EXPOSURE_GREY_ALBEDO * e * LIGHTING_UNITS_PER_LUX) * 2f64.powf(ev)
+    }
 }
 
 /// How far the tone map shifts toward scotopic (rod) vision: 0 above 10 lux, 1 below 0.01 lux,

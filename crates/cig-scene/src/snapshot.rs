@@ -78,6 +78,60 @@ pub fn place_entity(
     })
 }
 
+/// Height above the terrain an eye found below it is lifted to, metres: above the near plane
+/// (0.5 m) so the surface is seen from above, as from a vehicle's lowest sight.
+pub const EYE_CLEARANCE_M: f64 = 1.0;
+
+/// An eye that was below the terrain and was lifted onto it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EyeBelowTerrain {
+    /// The view's index in the snapshot.
+    pub view: usize,
+    /// The eye as given.
+    pub eye: Geodetic,
+    /// The eye's height above the terrain as given (negative: below it), metres.
+    pub height_above_terrain_m: f64,
+}
+
+impl std::fmt::Display for EyeBelowTerrain {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "view {}'s eye is {:.1} m below the terrain (height above terrain {:.1} m) at {:.6}, {:.6}: drawn from {EYE_CLEARANCE_M} m above the surface",
+            self.view,
+            -self.height_above_terrain_m,
+            self.height_above_terrain_m,
+            self.eye.lat_deg,
+            self.eye.lon_deg,
+        )
+    }
+}
+
+/// Lifts every view whose eye lies below the terrain (or within [`EYE_CLEARANCE_M`] of it from
+/// below) to [`EYE_CLEARANCE_M`] above it, so the picture shows the terrain from its surface
+/// rather than inside out, and returns those views with the height above terrain they had. Views
+/// outside the database, or where the terrain cannot be read, are left as they are.
+pub fn lift_eyes_above_terrain(
+    session: &mut QuerySession,
+    views: &mut [View],
+) -> Vec<EyeBelowTerrain> {
+    let mut lifted = Vec::new();
+    for (index, view) in views.iter_mut().enumerate() {
+        let Ok(hat_m) = session.hat_m(view.eye) else {
+            continue;
+        };
+        if hat_m.is_finite() && hat_m < 0.0 {
+            lifted.push(EyeBelowTerrain {
+                view: index,
+                eye: view.eye,
+                height_above_terrain_m: hat_m,
+            });
+            view.eye.alt_m += EYE_CLEARANCE_M - hat_m;
+        }
+    }
+    lifted
+}
+
 /// A layer of ground fog or haze: below `top_m` the air is as thick as `visibility_m` says,
 /// on top of the global fog, so a valley can be fogged while the hills above are clear.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -106,6 +160,9 @@ pub struct FrameSnapshot {
     pub ground_fog: Option<FogLayer>,
     pub max_pixel_error: f64,
     pub wireframe: bool,
+    /// Draw the materials' detail noise and smooth material borders (on by default; off is
+    /// the flat colour per post, the benchmarks' plain baseline).
+    pub ground_detail: bool,
     pub entities: Vec<EntityInstance>,
     /// Obscurant puffs to draw (smoke, flame, dust), positions relative to
     /// `puff_origin_ecef_m` (fill with `cig_effects::EffectSystem::snapshot(origin, ..)`).
@@ -179,6 +236,7 @@ impl FrameSnapshot {
             ground_fog: None,
             max_pixel_error: 1.0,
             wireframe: false,
+            ground_detail: true,
             entities: Vec::new(),
             puffs: Vec::new(),
             puff_origin_ecef_m: glam::DVec3::ZERO,
@@ -193,5 +251,83 @@ impl FrameSnapshot {
             flash_lux: 0.0,
             precipitation: None,
         }
+    }
+}
+
+#[cfg(test)]
+mod eye_tests {
+    use super::*;
+    use crate::view::FovDeg;
+    use cig_terrain::build::{build_pyramid, BuildError};
+    use cig_terrain::database::{GeoidGrid, Manifest, MemoryTileStore};
+    use cig_terrain::raster::{GeoGrid, Raster};
+    use cig_terrain::{Material, PagingConfig, TerrainDatabase, TileCache};
+    use std::sync::Arc;
+
+    /// A 64 x 64 post slope rising 1 m a post to the east, at 100 m above sea level in the west.
+    fn slope_session() -> QuerySession {
+        let grid = GeoGrid {
+            south_lat_deg: 36.0,
+            west_lon_deg: -121.0,
+            dlat_deg: 0.0003,
+            dlon_deg: 0.0003,
+            rows: 64,
+            cols: 64,
+        };
+        let raster = Raster {
+            grid,
+            elevation_m: (0..64 * 64).map(|i| 100.0 + (i % 64) as f32).collect(),
+            material: Some(vec![Material::Grass; 64 * 64]),
+        };
+        let store = Arc::new(MemoryTileStore::new());
+        let summary = build_pyramid::<BuildError>(&raster, 16, &mut |t| {
+            store.insert(t.key, t.encode());
+            Ok(())
+        })
+        .expect("the slope builds");
+        let manifest = Manifest::from_build(&summary, GeoidGrid::zero(), 0, vec![]);
+        let db = Arc::new(TerrainDatabase::new(manifest, store).expect("the slope opens"));
+        QuerySession::new(Arc::new(
+            TileCache::new(db, PagingConfig::default()).expect("cache"),
+        ))
+    }
+
+    fn view_at(lat_deg: f64, lon_deg: f64, alt_m: f64) -> View {
+        View {
+            eye: Geodetic::new(lat_deg, lon_deg, alt_m),
+            orientation: Hpr::default(),
+            fov: FovDeg::symmetric(60.0, 45.0),
+            width_px: 64,
+            height_px: 48,
+        }
+    }
+
+    #[test]
+    fn an_eye_below_the_terrain_is_lifted_onto_it_and_reported() {
+        let mut session = slope_session();
+        // Post column 20 (120 m there), rows well inside; one eye 30 m under, one 50 m over,
+        // one outside the database.
+        let (lat, lon) = (36.0 + 30.0 * 0.0003, -121.0 + 20.0 * 0.0003);
+        let mut views = vec![
+            view_at(lat, lon, 90.0),
+            view_at(lat, lon, 170.0),
+            view_at(10.0, 10.0, -500.0),
+        ];
+        let before = views.clone();
+        let lifted = lift_eyes_above_terrain(&mut session, &mut views);
+        assert_eq!(lifted.len(), 1, "{lifted:?}");
+        assert_eq!(lifted[0].view, 0);
+        assert!(
+            (lifted[0].height_above_terrain_m + 30.0).abs() < 0.01,
+            "{lifted:?}"
+        );
+        let hat_after = session.hat_m(views[0].eye).expect("inside");
+        assert!((hat_after - EYE_CLEARANCE_M).abs() < 1e-6, "{hat_after}");
+        assert_eq!(views[1], before[1]);
+        assert_eq!(views[2], before[2]);
+        // Once lifted, nothing more is reported.
+        assert!(lift_eyes_above_terrain(&mut session, &mut views).is_empty());
+        let line = lifted[0].to_string();
+        assert!(line.contains("30.0 m below the terrain"), "{line}");
     }
 }

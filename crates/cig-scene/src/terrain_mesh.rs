@@ -33,14 +33,16 @@
 //!
 //! Limits: normals are expressed in the node centre's east-north-up frame, which differs from
 //! the local vertical by up to half the node's angular size (under 0.3 degree for nodes below
-//! 60 km); materials are blended bilinearly in colour, not per class. Nodes drawn from a
+//! 60 km). Colour texels carry their material's index (`material_texel`) so the shader can
+//! draw borders between classes as curves; materials are sampled at the texels (twice the post
+//! density), so features narrower than a post are not resolved. Nodes drawn from a
 //! coarser level's data while their tile loads, and tiles without post errors (format 1),
 //! are drawn as regular grids (their children keep all their posts); a parent drawn from
 //! coarser data is not the cut its children morph to (a pop of up to its error when its own
 //! tile arrives, which the renderer's fade-in covers). A mesh kept past the renderer's build
 //! budget is drawn with its own cut's morph band until it is rebuilt.
 
-use crate::lod::{NodeKey, NodeLayout};
+use crate::node::{NodeKey, NodeLayout};
 use cig_geo::{metres_per_degree, EnuFrame, Geodetic};
 use cig_terrain::database::GeoidLookup;
 use cig_terrain::raster::{triangulated_height, Diagonal};
@@ -357,6 +359,14 @@ pub fn material_colour(m: Material) -> [u8; 4] {
     }
 }
 
+/// A colour texel of a material: its sRGB colour, and in alpha its index (high nibble) and its
+/// specular weight in sixteenths (low nibble), so the shader can draw sharp, smooth borders
+/// between materials (it weighs the texels around a point by material) and still blend them.
+pub fn material_texel(m: Material) -> [u8; 4] {
+    let [r, g, b, specular] = material_colour(m);
+    [r, g, b, ((m as u8) << 4) | (specular >> 4)]
+}
+
 /// Samples one resident tile on the finest grid's fractional indices.
 struct Sampler<'a> {
     key: TileKey,
@@ -432,6 +442,38 @@ impl<'a> Sampler<'a> {
         let (fi, fj) = self.local(row, col);
         self.tile
             .material_at(fi.round() as usize, fj.round() as usize)
+    }
+
+    /// The material that weighs most among the four posts around a point, each post weighing
+    /// its bilinear weight there (ties to the nearest post's): between posts, borders follow
+    /// the 0.5 level of the materials' bilinear fields (marching squares) rather than the
+    /// nearest post's square, so a texel grid finer than the posts cuts the post grid's
+    /// corners.
+    fn majority_material(&self, row: f64, col: f64) -> Material {
+        let (fi, fj) = self.local(row, col);
+        let (i0, j0) = (fi.floor().max(0.0), fj.floor().max(0.0));
+        let (i1, j1) = (
+            (i0 + 1.0).min(self.max_index),
+            (j0 + 1.0).min(self.max_index),
+        );
+        let (v, u) = (fi - i0, fj - j0);
+        let corners = [
+            (i0, j0, (1.0 - v) * (1.0 - u)),
+            (i0, j1, (1.0 - v) * u),
+            (i1, j0, v * (1.0 - u)),
+            (i1, j1, v * u),
+        ];
+        let mut weight = [0.0f64; Material::ALL.len()];
+        for (i, j, w) in corners {
+            weight[self.tile.material_at(i as usize, j as usize) as usize] += w;
+        }
+        let nearest = self.material(row, col);
+        let lead = weight[nearest as usize];
+        Material::ALL
+            .into_iter()
+            .filter(|&m| weight[m as usize] > lead + 1e-9)
+            .max_by(|a, b| weight[*a as usize].total_cmp(&weight[*b as usize]))
+            .unwrap_or(nearest)
     }
 }
 
@@ -804,8 +846,8 @@ pub fn build_node_mesh(
             let normal = DVec3::new(-dzdx, -dzdy, 1.0).normalize();
             let enc = |v: f64| ((v * 0.5 + 0.5) * 255.0).round().clamp(0.0, 255.0) as u8;
             normals.push([enc(normal.x), enc(normal.y), enc(normal.z), 255]);
-            colours.push(material_colour(
-                detail_sampler.material(row.min(max_row), col.min(max_col)),
+            colours.push(material_texel(
+                detail_sampler.majority_material(row.min(max_row), col.min(max_col)),
             ));
         }
     }
@@ -989,5 +1031,27 @@ mod tests {
             prop_assert!(worst <= f64::from(tolerance_m) + 1e-3, "{worst} m against {tolerance_m} m");
             prop_assert!(triangles.len() <= cells);
         }
+    }
+}
+
+#[cfg(test)]
+mod texel_tests {
+    use super::*;
+
+    #[test]
+    fn a_material_texel_carries_its_colour_index_and_specular_weight() {
+        for m in Material::ALL {
+            let [r, g, b, spec] = material_colour(m);
+            let [tr, tg, tb, tag] = material_texel(m);
+            assert_eq!([tr, tg, tb], [r, g, b]);
+            assert_eq!(tag >> 4, m as u8, "{m:?}");
+            assert_eq!(tag & 15, spec >> 4, "{m:?}");
+        }
+        // Distinct materials give distinct tags.
+        let tags: std::collections::BTreeSet<u8> = Material::ALL
+            .iter()
+            .map(|&m| material_texel(m)[3] >> 4)
+            .collect();
+        assert_eq!(tags.len(), Material::ALL.len());
     }
 }

@@ -1,345 +1,99 @@
-//! `cig bench db`: terrain database benchmarks, all figures from one run.
-//!
-//! HAT and LOS rates are taken on one thread over random points inside a window of the database
-//! whose finest tiles are all resident (warm cache). Tile loads are timed through a fresh cache
-//! (cold tile cache; the operating system's page cache is as it is). Build and import times
-//! come from building the 50 km x 50 km, 30 m demo database and importing a generated
-//! 3601 x 3601 SRTM 1-arc-second file in a temporary directory.
+//! `cig bench db|particles|render|net|env`: the arguments mapped onto `cig-bench`'s options,
+//! the reports printed (figures as JSON, or the benchmark's summary).
 
-use crate::cli::BenchDbArgs;
+use crate::cli::{BenchDbArgs, BenchEnvArgs, BenchNetArgs, BenchParticlesArgs, BenchRenderArgs};
 use crate::config::Config;
-use cig_geo::Geodetic;
-use cig_terrain::{QuerySession, TileCache, TileKey};
-use cig_terrain_io::store::open_database;
-use rand::{Rng, SeedableRng};
-use std::hint::black_box;
-use std::sync::Arc;
-use std::time::{Duration, Instant};
+use crate::output::build_progress;
+use crate::render::parse_size;
 
-pub fn db(args: &BenchDbArgs, config: &Config) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 600.0,
-        "--seconds {} must be between 0 and 600",
-        args.seconds
-    );
-    let budget = Duration::from_secs_f64(args.seconds);
-    let db = Arc::new(open_database(&args.db)?);
-    let layout = *db.layout();
-    let g = layout.grid;
-    let cache = Arc::new(TileCache::new(Arc::clone(&db), config.paging.clone())?);
-    // Window: the whole database if its finest tiles fit in half the budget, else a centred square.
-    let (tile_rows, tile_cols) = layout.tiles_at(0);
-    let fit = (config.paging.budget_bytes / 2 / cache.tile_bytes().max(1)).max(1) as f64;
-    let side_tiles = fit.sqrt().floor().max(1.0) as u32;
-    let (r0, c0) = (
-        (tile_rows.saturating_sub(side_tiles)) / 2,
-        (tile_cols.saturating_sub(side_tiles)) / 2,
-    );
-    let (r1, c1) = (
-        (r0 + side_tiles).min(tile_rows),
-        (c0 + side_tiles).min(tile_cols),
-    );
-    let span = f64::from(layout.tile_cells);
-    let lat_lo = g.south_lat_deg + f64::from(r0) * span * g.dlat_deg;
-    let lon_lo = g.west_lon_deg + f64::from(c0) * span * g.dlon_deg;
-    let lat_hi = (g.south_lat_deg + f64::from(r1) * span * g.dlat_deg).min(g.north_lat_deg());
-    let lon_hi = (g.west_lon_deg + f64::from(c1) * span * g.dlon_deg).min(g.east_lon_deg());
+/// The commit this binary was built from, for the reports.
+fn commit() -> String {
+    option_env!("CIG_GIT_COMMIT")
+        .unwrap_or("unknown")
+        .to_string()
+}
 
-    // Cold tile loads, then warm the window.
-    let load_started = Instant::now();
-    let mut loaded = 0u64;
-    for row in r0..r1 {
-        for col in c0..c1 {
-            cache.load_now(TileKey { level: 0, row, col })?;
-            loaded += 1;
-        }
-    }
-    let tile_loads_per_s = loaded as f64 / load_started.elapsed().as_secs_f64();
-
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-    let points: Vec<(f64, f64)> = (0..1 << 20)
-        .map(|_| (rng.gen_range(lat_lo..lat_hi), rng.gen_range(lon_lo..lon_hi)))
-        .collect();
-    let mut q = QuerySession::new(Arc::clone(&cache));
-    // HAT: height above terrain only (CIGI's basic response) one by one and in frames of 256
-    // (how the IG answers a frame of host requests), then the extended answer
-    // (height, normal, material, geoid). Interleaved with a baseline taken in the same run on
-    // the same memory: bilinear reads of random cells of the resident tiles with no query logic
-    // (what the memory system alone allows), so the ratio survives a noisy machine. Medians of
-    // 5 rounds.
-    let round = budget / 5;
-    let mut resident = Vec::new();
-    for row in r0..r1 {
-        for col in c0..c1 {
-            if let Some(t) = cache.resident(TileKey { level: 0, row, col }) {
-                resident.push(t);
-            }
-        }
-    }
-    anyhow::ensure!(
-        !resident.is_empty(),
-        "no tile could be made resident: {}",
-        args.db.display()
-    );
-    let cells = layout.tile_cells as usize;
-    let gather: Vec<(usize, usize, usize, f64, f64)> = (0..points.len())
-        .map(|_| {
-            (
-                rng.gen_range(0..resident.len()),
-                rng.gen_range(0..cells),
-                rng.gen_range(0..cells),
-                rng.gen(),
-                rng.gen(),
-            )
-        })
-        .collect();
-    let (mut base, mut hat, mut hat_ext, mut hat_batch) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let geodetic: Vec<Geodetic> = points
-        .iter()
-        .map(|&(lat, lon)| Geodetic::new(lat, lon, 1000.0))
-        .collect();
-    let mut answers = Vec::new();
-    for _ in 0..5 {
-        base.push(rate(round, gather.len(), || {
-            for &(t, i, j, u, v) in &gather {
-                black_box(cig_terrain::raster::triangulated_height(
-                    resident[t].cell_corners(i, j),
-                    u,
-                    v,
-                    cig_terrain::tile::Tile::cell_diagonal(i, j),
-                ));
-            }
-            Ok(())
-        })?);
-        hat.push(rate(round, points.len(), || {
-            for &(lat, lon) in &points {
-                black_box(q.hat_m(Geodetic::new(lat, lon, 1000.0))?);
-            }
-            Ok(())
-        })?);
-        hat_batch.push(rate(round, geodetic.len(), || {
-            for frame in geodetic.chunks(256) {
-                q.hat_batch_m(frame, &mut answers);
-                black_box(&answers);
-            }
-            Ok(())
-        })?);
-        hat_ext.push(rate(round, points.len(), || {
-            for &(lat, lon) in &points {
-                black_box(q.hat(Geodetic::new(lat, lon, 1000.0))?);
-            }
-            Ok(())
-        })?);
-    }
-    let (baseline_per_s, hat_per_s, hat_extended_per_s, hat_batch_per_s) = (
-        median(base),
-        median(hat),
-        median(hat_ext),
-        median(hat_batch),
-    );
-
-    // LOS over 10 km: ground to ground (2 m above the terrain at both ends: mostly blocked
-    // early), air to ground (500 m above the terrain at one end), and the visible ones of each
-    // (the whole way walked; visible ground-hugging sightlines, where the quadtree can skip
-    // least, are the worst case).
-    let (north_m_per_deg, east_m_per_deg) = cig_geo::metres_per_degree(0.5 * (lat_lo + lat_hi));
-    let mut ground = Vec::new();
-    let mut air = Vec::new();
-    let mut attempts = 0;
-    while ground.len() < 4096 && attempts < 1_000_000 {
-        attempts += 1;
-        let (lat, lon) = (rng.gen_range(lat_lo..lat_hi), rng.gen_range(lon_lo..lon_hi));
-        let azimuth: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
-        let lat2 = lat + 10_000.0 * azimuth.cos() / north_m_per_deg;
-        let lon2 = lon + 10_000.0 * azimuth.sin() / east_m_per_deg;
-        if !(lat_lo..lat_hi).contains(&lat2) || !(lon_lo..lon_hi).contains(&lon2) {
-            continue;
-        }
-        let a = q.hat(Geodetic::new(lat, lon, 0.0))?.1.height_ellipsoid_m();
-        let b = q
-            .hat(Geodetic::new(lat2, lon2, 0.0))?
-            .1
-            .height_ellipsoid_m();
-        ground.push((
-            Geodetic::new(lat, lon, a + 2.0),
-            Geodetic::new(lat2, lon2, b + 2.0),
-        ));
-        air.push((
-            Geodetic::new(lat, lon, a + 500.0),
-            Geodetic::new(lat2, lon2, b + 2.0),
-        ));
-    }
-    anyhow::ensure!(
-        !ground.is_empty(),
-        "the database is too small for 10 km sightlines: {}",
-        args.db.display()
-    );
-    let mut visible_fraction =
-        |segments: &[(Geodetic, Geodetic)]| -> anyhow::Result<(f64, Vec<(Geodetic, Geodetic)>)> {
-            let mut visible = Vec::new();
-            for (a, b) in segments {
-                if q.los(*a, *b)?.visible {
-                    visible.push((*a, *b));
-                }
-            }
-            Ok((visible.len() as f64 / segments.len() as f64, visible))
-        };
-    let (ground_visible, ground_clear) = visible_fraction(&ground)?;
-    let (air_visible, clear) = visible_fraction(&air)?;
-    let mut los_rate = |segments: &[(Geodetic, Geodetic)]| -> anyhow::Result<Option<f64>> {
-        if segments.is_empty() {
-            return Ok(None);
-        }
-        Ok(Some(rate(budget, segments.len(), || {
-            for (a, b) in segments {
-                black_box(q.los(*a, *b)?);
-            }
-            Ok(())
-        })?))
-    };
-    let los_ground_per_s = los_rate(&ground)?;
-    let los_air_per_s = los_rate(&air)?;
-    let los_visible_per_s = los_rate(&clear)?;
-    let los_ground_visible_per_s = los_rate(&ground_clear)?;
-
-    let mut report = serde_json::json!({
-        "machine": machine(),
-        "date_utc": date_utc(),
-        "commit": option_env!("CIG_GIT_COMMIT").unwrap_or("unknown"),
-        "database": args.db.display().to_string(),
-        "baseline_tile_gather_per_s_one_core": baseline_per_s,
-        "hat_per_s_one_core": hat_per_s,
-        "hat_vs_baseline": hat_per_s / baseline_per_s,
-        "hat_batched_per_s_one_core": hat_batch_per_s,
-        "hat_batched_vs_baseline": hat_batch_per_s / baseline_per_s,
-        "hat_extended_per_s_one_core": hat_extended_per_s,
-        "los_10km_ground_to_ground_per_s_one_core": los_ground_per_s,
-        "los_10km_ground_to_ground_visible_fraction": ground_visible,
-        "los_10km_air_to_ground_per_s_one_core": los_air_per_s,
-        "los_10km_air_to_ground_visible_fraction": air_visible,
-        "los_10km_air_to_ground_visible_only_per_s_one_core": los_visible_per_s,
-        "los_10km_ground_to_ground_visible_only_per_s_one_core": los_ground_visible_per_s,
-        "tile_loads_per_s_cold": tile_loads_per_s,
-        "tile_bytes": cache.tile_bytes(),
-    });
-    if !args.no_build {
-        let (synth_s, build_s) = time_demo_build(config)?;
-        report["demo_synth_s"] = synth_s.into();
-        report["demo_build_s"] = build_s.into();
-        report["demo_total_s"] = (synth_s + build_s).into();
-        report["srtm1_import_s"] = time_srtm1_import(config)?.into();
-    }
-    if args.json {
+/// Prints a report as one line with `--json`, else indented.
+fn print_figures(report: &serde_json::Value, json: bool) -> anyhow::Result<()> {
+    if json {
         println!("{report}");
     } else {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        println!("{}", serde_json::to_string_pretty(report)?);
     }
     Ok(())
 }
 
-/// Seconds to synthesize and to build (pyramid + write) the demo database.
-fn time_demo_build(config: &Config) -> anyhow::Result<(f64, f64)> {
-    let dir = tempfile::tempdir()?;
-    let started = Instant::now();
-    let mut raster = cig_synth::synthesize(&crate::demo::demo_params(), &mut |_, _| {})?;
-    let synth_s = started.elapsed().as_secs_f64();
-    let started = Instant::now();
-    crate::db::build(
-        &mut raster,
-        vec!["bench".into()],
-        &dir.path().join("demo"),
-        false,
-        config,
-    )?;
-    Ok((synth_s, started.elapsed().as_secs_f64()))
-}
-
-/// Seconds to import a generated 3601 x 3601 SRTM1 tile (read, fill, classify, build, write).
-fn time_srtm1_import(config: &Config) -> anyhow::Result<f64> {
-    let dir = tempfile::tempdir()?;
-    let hgt = dir.path().join("N35W122.hgt");
-    let n = 3601usize;
-    let mut bytes = Vec::with_capacity(n * n * 2);
-    for r in 0..n {
-        for c in 0..n {
-            let (x, y) = (c as f64 / 300.0, r as f64 / 300.0);
-            let h = 600.0 + 400.0 * x.sin() * y.cos() + 150.0 * (3.1 * x + 1.7 * y).sin();
-            bytes.extend_from_slice(&(h as i16).to_be_bytes());
-        }
+/// Prints a report indented with `--json`, else its summary.
+fn print_report(report: &cig_bench::Report, json: bool) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report.json)?);
+    } else {
+        println!("{}", report.summary);
     }
-    std::fs::write(&hgt, &bytes)?;
-    let started = Instant::now();
-    let mut raster = cig_terrain_io::import::import_files(&[hgt], &mut |_, _| {})?.raster;
-    crate::db::build(
-        &mut raster,
-        vec!["bench".into()],
-        &dir.path().join("db"),
-        false,
-        config,
-    )?;
-    Ok(started.elapsed().as_secs_f64())
+    Ok(())
 }
 
-/// Calls `batch` (which answers `per_batch` queries) until `budget` has passed; answers per second.
-fn rate(
-    budget: Duration,
-    per_batch: usize,
-    mut batch: impl FnMut() -> anyhow::Result<()>,
-) -> anyhow::Result<f64> {
-    let started = Instant::now();
-    let mut count = 0u64;
-    while started.elapsed() < budget {
-        batch()?;
-        count += per_batch as u64;
-    }
-    Ok(count as f64 / started.elapsed().as_secs_f64())
+pub fn db(args: &BenchDbArgs, config: &Config) -> anyhow::Result<()> {
+    let options = cig_bench::db::DbOptions {
+        db: args.db.clone(),
+        seconds: args.seconds,
+        build: !args.no_build,
+        paging: config.paging.clone(),
+        tile_cells: config.database.tile_cells,
+        commit: commit(),
+    };
+    let report = cig_bench::db::run(&options, &mut build_progress())?;
+    print_figures(&report, args.json)
 }
 
-pub(crate) fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+pub fn particles(args: &BenchParticlesArgs) -> anyhow::Result<()> {
+    let report = cig_bench::particles::run(&cig_bench::particles::ParticlesOptions {
+        frames: args.frames,
+        warm_seconds: args.warm_seconds,
+        commit: commit(),
+    })?;
+    print_figures(&report, args.json)
 }
 
-pub(crate) fn machine() -> serde_json::Value {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into());
-    serde_json::json!({
-        "cpu": cpu,
-        "cores": std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
-        "os": std::env::consts::OS,
-        "arch": std::env::consts::ARCH,
-    })
+pub fn render(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
+    let report = cig_bench::render::run(&cig_bench::render::RenderOptions {
+        db: args.db.clone(),
+        size: parse_size(&args.size)?,
+        fov: args.fov,
+        max_pixel_error: args.max_pixel_error,
+        frames: args.frames,
+        compare_frames: args.compare_frames,
+        paging: config.paging.clone(),
+        commit: commit(),
+    })?;
+    print_report(&report, args.json)
 }
 
-pub(crate) fn date_utc() -> String {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0);
-    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
-    let days = (secs / 86_400) as i64;
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    let rem = secs % 86_400;
-    format!(
-        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
-        rem / 3600,
-        rem % 3600 / 60,
-        rem % 60
-    )
+pub fn net(args: &BenchNetArgs, config: &Config) -> anyhow::Result<()> {
+    let options = cig_bench::net::NetOptions {
+        seconds: args.seconds,
+        db: args.db.clone(),
+        flood: args.flood,
+        flood_s: args.flood_s,
+        flood_rate: args.flood_rate,
+        paging: config.paging.clone(),
+        tile_cells: config.database.tile_cells,
+        commit: commit(),
+    };
+    let report = cig_bench::net::run(&options, &mut build_progress())?;
+    print_figures(&report, args.json)
+}
+
+pub fn env(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
+    let options = cig_bench::env::EnvOptions {
+        db: args.db.clone(),
+        size: parse_size(&args.size)?,
+        frames: args.frames,
+        rounds: args.rounds,
+        paging: config.paging.clone(),
+        tile_cells: config.database.tile_cells,
+        commit: commit(),
+    };
+    let report = cig_bench::env::run(&options, &mut build_progress())?;
+    print_report(&report, args.json)
 }

@@ -5,9 +5,7 @@ use crate::config::Config;
 use anyhow::Context;
 use cig_scene::lod::{error_range_m, LevelErrors, NodeLayout};
 use cig_scene::view::FovDeg;
-use cig_terrain::build::prepare_raster;
-use cig_terrain::raster::Raster;
-use cig_terrain_io::store::{check_output, open_database, write_database, BuildInputs};
+use cig_terrain_io::store::{check_output, open_database};
 use std::path::Path;
 use std::time::Instant;
 
@@ -54,55 +52,20 @@ pub fn synth(args: &SynthArgs, config: &Config) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Generates and writes a synthetic database (shared with `demo` and `bench`).
+/// Generates and writes a synthetic database with progress bars (shared with `demo`).
 pub fn synthesize_database(
     params: &cig_synth::SynthParams,
     out: &Path,
     force: bool,
     config: &Config,
 ) -> anyhow::Result<cig_terrain::Manifest> {
-    check_output(out, force)?;
-    let bar = crate::output::bar(100, "synthesize");
-    let mut raster = cig_synth::synthesize(params, &mut |stage, fraction| {
-        bar.set_message(stage.to_string());
-        bar.set_position((fraction * 100.0) as u64);
-    })
-    .context("cannot synthesize terrain")?;
-    bar.finish_and_clear();
-    let source = format!(
-        "cig-synth seed={} origin={},{} size_km={} spacing_m={}",
-        params.seed, params.origin_lat_deg, params.origin_lon_deg, params.size_km, params.spacing_m
-    );
-    build(&mut raster, vec![source], out, force, config)
-}
-
-/// Fills voids, derives materials and writes a raster as a database (shared with `bench`).
-pub fn build(
-    raster: &mut Raster,
-    sources: Vec<String>,
-    out: &Path,
-    force: bool,
-    config: &Config,
-) -> anyhow::Result<cig_terrain::Manifest> {
-    let spinner = crate::output::spinner("fill voids, derive materials");
-    let report = prepare_raster(raster).context("cannot fill voids")?;
-    spinner.finish_and_clear();
-    if report.void_posts_filled > 0 {
-        tracing::warn!("filled {} void posts", report.void_posts_filled);
-    }
-    let inputs = BuildInputs {
-        sources,
-        void_posts_filled: report.void_posts_filled as u64,
-        tile_cells: config.database.tile_cells,
-    };
-    let bar = crate::output::bar(0, "write tiles");
-    let manifest = write_database(out, raster, &inputs, force, &mut |done, total| {
-        bar.set_length(total);
-        bar.set_position(done);
-    })
-    .context("cannot build database")?;
-    bar.finish_and_clear();
-    Ok(manifest)
+    Ok(cig_bench::database::synthesize_database(
+        params,
+        out,
+        force,
+        config.database.tile_cells,
+        &mut crate::output::build_progress(),
+    )?)
 }
 
 pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
@@ -130,7 +93,14 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
             line
         })
         .collect();
-    let manifest = build(&mut raster, sources, &args.out, args.force, config)?;
+    let manifest = cig_bench::database::build_database(
+        &mut raster,
+        sources,
+        &args.out,
+        args.force,
+        config.database.tile_cells,
+        &mut crate::output::build_progress(),
+    )?;
     eprintln!(
         "imported {} file(s) into {} tiles in {:.1} s ({} void posts filled): {}",
         args.inputs.len(),

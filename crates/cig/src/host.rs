@@ -1,268 +1,23 @@
 //! `cig host`: a small scripted CIGI host, for demos and tests.
 //!
-//! Each host frame (at `rate_hz`) it sends one message: IG Control (operate, host frame number,
-//! the last IG frame number it received), the script's entities moved along their paths,
-//! the view attached to its entity, and the requests due (HAT/HOT and LOS every frame or once);
-//! the first frame also sets the time of day and the visibility when the script gives them.
-//! Between frames it reads what the IG sent: Start of Frame counters and every answer, which it
-//! prints (one JSON line each with `--json`) with the latency in host frames (from the 4-bit
-//! host frame number the answers carry).
-//!
-//! Script (TOML):
-//! ```toml
-//! version = "3.3"              # or "4.0"
-//! byte_order = "little"        # or "big"
-//! rate_hz = 60
-//! frames = 120
-//! time = "2026-06-21T10:00:00Z"
-//! visibility_m = 8000
-//! [[entities]]
-//! id = 0
-//! type = 1
-//! clamp = "none"               # none, height, conformal
-//! alt_m = 300                  # MSL, or above the terrain when clamped
-//! speed_mps = 50
-//! path = [[51.0, -1.5], [51.02, -1.5]]
-//! [view]
-//! entity = 0
-//! offset_m = [0, 0, -2]
-//! hpr_deg = [0, -5, 0]
-//! fov_deg = [-30, 30, -20, 20] # left, right, bottom, top
-//! [[hat]]
-//! id = 1
-//! entity = 0                   # below the entity; or lat_deg, lon_deg, alt_m
-//! type = "hot"                 # hat, hot, extended
-//! every_frame = true
-//! [[los]]
-//! id = 2
-//! from = [51.0, -1.5, 400]
-//! to = [51.02, -1.5, 400]
-//! extended = true
-//! alpha_threshold = 0          # least alpha (surface or smoke) that stops the line
-//! ```
+//! The script, each frame's message and the reading of the IG's replies are `cig-tools`'
+//! `host`; here: the socket (`cig-net`), the frame clock, and printing the replies (one JSON
+//! line each with `--json`) and the summary.
 
 use crate::cli::HostArgs;
-use crate::net::{BindTarget, Delivery, EndpointConfig, UdpEndpoint};
-use crate::serve::resolve;
 use anyhow::{bail, Context};
-use cig_cigi::{
-    decode_message, encode_message, AtmosphereControl, ByteOrder, CelestialSphereControl,
-    EntityControl, EntityControl4, EntityPosition, HatHotRequest, IgControl, LosSegmentRequest,
-    Message, Packet, Version, ViewControl, ViewDefinition,
-};
-use cig_environment::UtcTime;
-use cig_geo::{EnuFrame, Geodetic};
-use serde::Deserialize;
+use cig_cigi::encode_message;
+use cig_net::{BindTarget, Delivery, EndpointConfig, UdpEndpoint};
+use cig_tools::host::{HostScript, Replies};
+use std::io::Write;
 use std::time::{Duration, Instant};
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct HostScript {
-    #[serde(default = "v33")]
-    version: String,
-    #[serde(default = "little")]
-    byte_order: String,
-    #[serde(default = "sixty")]
-    rate_hz: f64,
-    #[serde(default = "sixty_frames")]
-    frames: u32,
-    #[serde(default)]
-    time: Option<String>,
-    #[serde(default)]
-    visibility_m: Option<f32>,
-    #[serde(default)]
-    entities: Vec<HostEntity>,
-    #[serde(default)]
-    view: Option<HostView>,
-    #[serde(default)]
-    hat: Vec<HostHat>,
-    #[serde(default)]
-    los: Vec<HostLos>,
-}
-
-fn v33() -> String {
-    "3.3".into()
-}
-fn little() -> String {
-    "little".into()
-}
-fn sixty() -> f64 {
-    60.0
-}
-fn sixty_frames() -> u32 {
-    60
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct HostEntity {
-    id: u16,
-    #[serde(default, rename = "type")]
-    entity_type: u16,
-    #[serde(default = "no_clamp")]
-    clamp: String,
-    #[serde(default)]
-    alt_m: f64,
-    #[serde(default)]
-    speed_mps: f64,
-    path: Vec<[f64; 2]>,
-}
-
-fn no_clamp() -> String {
-    "none".into()
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct HostView {
-    #[serde(default)]
-    entity: u16,
-    #[serde(default)]
-    offset_m: [f32; 3],
-    #[serde(default)]
-    hpr_deg: [f32; 3],
-    #[serde(default)]
-    fov_deg: Option<[f32; 4]>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct HostHat {
-    id: u16,
-    #[serde(default)]
-    entity: Option<u16>,
-    #[serde(default)]
-    lat_deg: f64,
-    #[serde(default)]
-    lon_deg: f64,
-    #[serde(default)]
-    alt_m: f64,
-    #[serde(default = "hot", rename = "type")]
-    kind: String,
-    #[serde(default)]
-    every_frame: bool,
-}
-
-fn hot() -> String {
-    "hot".into()
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct HostLos {
-    id: u16,
-    from: [f64; 3],
-    to: [f64; 3],
-    #[serde(default)]
-    extended: bool,
-    #[serde(default)]
-    every_frame: bool,
-    /// Least alpha of a surface (or obscurant) that stops the line, 0-255.
-    #[serde(default)]
-    alpha_threshold: u8,
-}
-
-fn check(script: &HostScript) -> anyhow::Result<(Version, ByteOrder)> {
-    let version = match script.version.as_str() {
-        "3.3" => Version::V3_3,
-        "4.0" | "4" => Version::V4_0,
-        other => bail!("version {other:?} is not 3.3 or 4.0"),
-    };
-    let order = match script.byte_order.as_str() {
-        "little" => ByteOrder::LittleEndian,
-        "big" => ByteOrder::BigEndian,
-        other => bail!("byte_order {other:?} is not little or big"),
-    };
-    if !(script.rate_hz.is_finite() && (1.0..=1000.0).contains(&script.rate_hz)) {
-        bail!("rate_hz {} must lie between 1 and 1000", script.rate_hz);
-    }
-    for (i, e) in script.entities.iter().enumerate() {
-        if e.path.is_empty() {
-            bail!("entities[{i}].path is empty");
-        }
-        let ok = e
-            .path
-            .iter()
-            .all(|p| p[0].abs() <= 90.0 && p[1].abs() <= 360.0)
-            && e.alt_m.is_finite()
-            && e.speed_mps.is_finite()
-            && e.speed_mps >= 0.0;
-        if !ok {
-            bail!("entities[{i}]: a point, altitude or speed is out of range");
-        }
-        if !["none", "height", "conformal"].contains(&e.clamp.as_str()) {
-            bail!(
-                "entities[{i}].clamp {:?} is not none, height or conformal",
-                e.clamp
-            );
-        }
-    }
-    for (i, h) in script.hat.iter().enumerate() {
-        if !["hat", "hot", "extended"].contains(&h.kind.as_str()) {
-            bail!("hat[{i}].type {:?} is not hat, hot or extended", h.kind);
-        }
-        if h.entity
-            .is_some_and(|id| !script.entities.iter().any(|e| e.id == id))
-        {
-            bail!("hat[{i}].entity is not an entity of the script");
-        }
-    }
-    if let Some(t) = &script.time {
-        UtcTime::parse_iso8601(t).map_err(|e| anyhow::anyhow!("time: {e}"))?;
-    }
-    Ok((version, order))
-}
-
-/// Where an entity is after `t_s` seconds: latitude, longitude, heading.
-fn entity_at(e: &HostEntity, t_s: f64) -> (f64, f64, f64) {
-    let first = e.path[0];
-    let frame = EnuFrame::new(Geodetic::new(first[0], first[1], 0.0));
-    let pts: Vec<glam::DVec3> = e
-        .path
-        .iter()
-        .map(|p| frame.geodetic_to_enu(Geodetic::new(p[0], p[1], 0.0)))
-        .collect();
-    let mut s = e.speed_mps * t_s;
-    let mut last_heading = 0.0;
-    for w in pts.windows(2) {
-        let d = w[1] - w[0];
-        let len = d.truncate().length();
-        // The heading in the segment's own tangent frame (the path's frame turns with longitude).
-        let start = frame.enu_to_geodetic(w[0]);
-        let local = EnuFrame::new(start).geodetic_to_enu(frame.enu_to_geodetic(w[1]));
-        let heading = local.x.atan2(local.y).to_degrees().rem_euclid(360.0);
-        if len > 0.0 {
-            last_heading = heading;
-        }
-        if len == 0.0 {
-            // A repeated point: on to the next segment.
-            continue;
-        }
-        if s <= len {
-            let p = w[0] + d * (s / len).min(1.0);
-            let g = frame.enu_to_geodetic(glam::DVec3::new(p.x, p.y, 0.0));
-            return (g.lat_deg, g.lon_deg, heading);
-        }
-        s -= len;
-    }
-    // Past the end: at the last point, facing along the last segment.
-    let last = e.path[e.path.len() - 1];
-    (last[0], last[1], last_heading)
-}
 
 pub fn run(args: &HostArgs) -> anyhow::Result<()> {
     let text = std::fs::read_to_string(&args.script)
         .with_context(|| format!("cannot read the host script {}", args.script.display()))?;
-    let script: HostScript = toml::from_str(&text).map_err(|e| {
-        anyhow::anyhow!(
-            "host script {}: {}",
-            args.script.display(),
-            e.message().lines().next().unwrap_or("syntax error")
-        )
-    })?;
-    let (version, order) =
-        check(&script).with_context(|| format!("host script {}", args.script.display()))?;
-    let ig = resolve(&args.ig, "--ig")?;
+    let script = HostScript::from_toml(&text)
+        .with_context(|| format!("host script {}", args.script.display()))?;
+    let ig = cig_net::resolve(&args.ig, "--ig")?;
     let bind: BindTarget = args.bind.parse().context("--bind")?;
     let endpoint = UdpEndpoint::open(EndpointConfig {
         label: "CIGI host",
@@ -273,24 +28,19 @@ pub fn run(args: &HostArgs) -> anyhow::Result<()> {
         queue_limit: 1024,
         reuse_port: false,
     })?;
-    let period = Duration::from_secs_f64(1.0 / script.rate_hz);
+    let period = Duration::from_secs_f64(1.0 / script.rate_hz());
     let started = Instant::now();
-    let mut last_ig_frame = 0u32;
-    let mut sof_received = 0u64;
-    let mut answers = 0u64;
-    let mut bad = 0u64;
-    let mut latency_sum = 0u64;
-    let mut latency_max = 0u32;
+    let mut replies = Replies::new();
     let mut inbox = Vec::new();
     let mut out = std::io::stdout().lock();
-    let frames = args.frames.unwrap_or(script.frames);
+    let frames = args.frames.unwrap_or(script.frames());
     for frame in 0..frames.saturating_add(args.drain_frames) {
         let tick = started + period * frame;
         if let Some(wait) = tick.checked_duration_since(Instant::now()) {
             std::thread::sleep(wait);
         }
         if frame < frames {
-            let message = build_frame(&script, version, order, frame, last_ig_frame)?;
+            let message = script.frame(frame, replies.last_ig_frame())?;
             let mut bytes = Vec::new();
             encode_message(&message, &mut bytes).context("encoding the host's message")?;
             endpoint
@@ -301,281 +51,24 @@ pub fn run(args: &HostArgs) -> anyhow::Result<()> {
         inbox.clear();
         endpoint.drain(&mut inbox);
         for d in &inbox {
-            let message = match decode_message(&d.bytes) {
-                Ok(m) => m,
-                Err(e) => {
-                    bad += 1;
-                    tracing::warn!("the IG sent a message this host cannot read: {e}");
-                    continue;
-                }
-            };
-            for p in &message.packets {
-                let lsn_latency = |lsn: u8| (frame.wrapping_sub(u32::from(lsn))) & 0xF;
-                let line = match p {
-                    Packet::StartOfFrame(s) => {
-                        sof_received += 1;
-                        last_ig_frame = s.ig_frame_number;
-                        None
-                    }
-                    Packet::HatHotResponse(r) => Some((
-                        lsn_latency(r.host_frame_lsn),
-                        serde_json::json!({"packet": "hat_hot", "id": r.hat_hot_id, "valid": r.valid,
-                            "hot": r.response_type_hot, "height_m": r.height_m}),
-                    )),
-                    Packet::HatHotExtendedResponse(r) => Some((
-                        lsn_latency(r.host_frame_lsn),
-                        serde_json::json!({"packet": "hat_hot_extended", "id": r.hat_hot_id, "valid": r.valid,
-                            "hat_m": r.hat_m, "hot_m": r.hot_m, "material": r.material_code,
-                            "normal_azimuth_deg": r.normal_azimuth_deg, "normal_elevation_deg": r.normal_elevation_deg}),
-                    )),
-                    Packet::LosResponse(r) => Some((
-                        lsn_latency(r.host_frame_lsn),
-                        serde_json::json!({"packet": "los", "id": r.los_id, "valid": r.valid,
-                            "visible": r.visible, "range_m": r.range_m}),
-                    )),
-                    Packet::LosExtendedResponse(r) => Some((
-                        lsn_latency(r.host_frame_lsn),
-                        serde_json::json!({"packet": "los_extended", "id": r.los_id, "valid": r.valid,
-                            "visible": r.visible, "range_valid": r.range_valid, "range_m": r.range_m, "alpha": r.alpha,
-                            "lat_deg": r.lat_deg_or_x_m, "lon_deg": r.lon_deg_or_y_m, "alt_m": r.alt_m_or_z_m}),
-                    )),
-                    Packet::ImageGeneratorMessage(m) => Some((
-                        0,
-                        serde_json::json!({"packet": "ig_message", "text": m.text}),
-                    )),
-                    other => Some((0, serde_json::json!({"packet": other.name()}))),
-                };
-                if let Some((latency, mut value)) = line {
-                    let is_answer = matches!(
-                        p,
-                        Packet::HatHotResponse(_)
-                            | Packet::HatHotExtendedResponse(_)
-                            | Packet::LosResponse(_)
-                            | Packet::LosExtendedResponse(_)
-                    );
-                    if is_answer {
-                        answers += 1;
-                        latency_sum += u64::from(latency);
-                        latency_max = latency_max.max(latency);
-                    }
-                    if let Some(obj) = value.as_object_mut() {
-                        obj.insert("host_frame".into(), frame.into());
-                        obj.insert("ig_frame".into(), last_ig_frame.into());
-                        obj.insert("latency_frames".into(), latency.into());
-                    }
-                    if args.json {
-                        use std::io::Write;
+            match replies.read(&d.bytes, frame) {
+                Ok(values) if args.json => {
+                    for value in values {
                         writeln!(out, "{value}")?;
                     }
                 }
+                Ok(_) => {}
+                Err(e) => tracing::warn!("{e}"),
             }
         }
     }
-    let summary = serde_json::json!({"summary": {
-        "frames_sent": frames,
-        "start_of_frames": sof_received,
-        "last_ig_frame": last_ig_frame,
-        "answers": answers,
-        "bad_messages": bad,
-        "latency_frames_mean": latency_sum as f64 / answers.max(1) as f64,
-        "latency_frames_max": latency_max,
-    }});
     if args.json {
-        use std::io::Write;
-        writeln!(out, "{summary}")?;
+        writeln!(out, "{}", replies.summary_json(frames))?;
     } else {
-        eprintln!(
-            "sent {frames} frames; {sof_received} Start of Frame, {answers} answers (latency mean {:.2}, max {latency_max} frames)",
-            latency_sum as f64 / answers.max(1) as f64
-        );
+        eprintln!("{}", replies.summary_line(frames));
     }
-    if sof_received == 0 {
+    if replies.start_of_frames() == 0 {
         bail!("the IG at {ig} never answered");
     }
     Ok(())
-}
-
-fn build_frame(
-    script: &HostScript,
-    version: Version,
-    order: ByteOrder,
-    frame: u32,
-    last_ig_frame: u32,
-) -> anyhow::Result<Message> {
-    let t_s = f64::from(frame) / script.rate_hz;
-    let mut packets = vec![Packet::IgControl(IgControl {
-        ig_mode: 1,
-        host_frame_number: frame,
-        last_ig_frame_number: last_ig_frame,
-        ..IgControl::default()
-    })];
-    if frame == 0 {
-        if let Some(t) = &script.time {
-            let c = UtcTime::parse_iso8601(t)
-                .map_err(|e| anyhow::anyhow!("time: {e}"))?
-                .to_calendar();
-            packets.push(Packet::CelestialSphereControl(CelestialSphereControl {
-                hour: c.hour as u8,
-                minute: c.minute as u8,
-                seconds: c.second as f32,
-                date_time_valid: true,
-                ephemeris_enable: true,
-                sun_enable: true,
-                moon_enable: true,
-                date_mmddyyyy: c.month * 1_000_000 + c.day * 10_000 + c.year as u32,
-                ..CelestialSphereControl::default()
-            }));
-        }
-        if let Some(v) = script.visibility_m {
-            packets.push(Packet::AtmosphereControl(AtmosphereControl {
-                atmospheric_model_enable: true,
-                humidity_pct: 50,
-                air_temperature_c: 15.0,
-                visibility_range_m: v,
-                barometric_pressure_mbar: 1013.25,
-                ..AtmosphereControl::default()
-            }));
-        }
-    }
-    for e in &script.entities {
-        let (lat, lon, heading) = entity_at(e, t_s);
-        let clamp = match e.clamp.as_str() {
-            "height" => 1,
-            "conformal" => 2,
-            _ => 0,
-        };
-        if version.major == 3 {
-            packets.push(Packet::EntityControl(EntityControl {
-                entity_id: e.id,
-                entity_state: 1,
-                entity_type: e.entity_type,
-                ground_ocean_clamp: clamp,
-                alpha: 255,
-                yaw_deg: heading as f32,
-                lat_deg_or_x_m: lat,
-                lon_deg_or_y_m: lon,
-                alt_m_or_z_m: e.alt_m,
-                ..EntityControl::default()
-            }));
-        } else {
-            packets.push(Packet::EntityControl4(EntityControl4 {
-                entity_id: e.id,
-                entity_state: 1,
-                alpha: 255,
-                entity_type_or_country: e.entity_type,
-                ..EntityControl4::default()
-            }));
-            packets.push(Packet::EntityPosition(EntityPosition {
-                entity_id: e.id,
-                ground_ocean_clamp: clamp,
-                yaw_deg: heading as f32,
-                lat_deg_or_x_m: lat,
-                lon_deg_or_y_m: lon,
-                alt_m_or_z_m: e.alt_m,
-                ..EntityPosition::default()
-            }));
-        }
-    }
-    if let Some(v) = &script.view {
-        packets.push(Packet::ViewControl(ViewControl {
-            view_id: 0,
-            entity_id: v.entity,
-            x_offset_enable: true,
-            y_offset_enable: true,
-            z_offset_enable: true,
-            roll_enable: true,
-            pitch_enable: true,
-            yaw_enable: true,
-            x_offset_m: v.offset_m[0],
-            y_offset_m: v.offset_m[1],
-            z_offset_m: v.offset_m[2],
-            yaw_deg: v.hpr_deg[0],
-            pitch_deg: v.hpr_deg[1],
-            roll_deg: v.hpr_deg[2],
-            ..ViewControl::default()
-        }));
-        if let (0, Some(f)) = (frame, v.fov_deg) {
-            packets.push(Packet::ViewDefinition(ViewDefinition {
-                view_id: 0,
-                left_enable: true,
-                right_enable: true,
-                bottom_enable: true,
-                top_enable: true,
-                left_deg: f[0],
-                right_deg: f[1],
-                bottom_deg: f[2],
-                top_deg: f[3],
-                ..ViewDefinition::default()
-            }));
-        }
-    }
-    for h in script.hat.iter().filter(|h| h.every_frame || frame == 0) {
-        let request_type = match h.kind.as_str() {
-            "hat" => 0,
-            "hot" => 1,
-            _ => 2,
-        };
-        packets.push(Packet::HatHotRequest(match h.entity {
-            Some(id) => HatHotRequest {
-                hat_hot_id: h.id,
-                request_type,
-                coordinate_system_entity: true,
-                entity_id: id,
-                ..HatHotRequest::default()
-            },
-            None => HatHotRequest {
-                hat_hot_id: h.id,
-                request_type,
-                lat_deg_or_x_m: h.lat_deg,
-                lon_deg_or_y_m: h.lon_deg,
-                alt_m_or_z_m: h.alt_m,
-                ..HatHotRequest::default()
-            },
-        }));
-    }
-    for l in script.los.iter().filter(|l| l.every_frame || frame == 0) {
-        packets.push(Packet::LosSegmentRequest(LosSegmentRequest {
-            los_id: l.id,
-            request_type_extended: l.extended,
-            alpha_threshold: l.alpha_threshold,
-            source_lat_deg_or_x_m: l.from[0],
-            source_lon_deg_or_y_m: l.from[1],
-            source_alt_m_or_z_m: l.from[2],
-            destination_lat_deg_or_x_m: l.to[0],
-            destination_lon_deg_or_y_m: l.to[1],
-            destination_alt_m_or_z_m: l.to[2],
-            ..LosSegmentRequest::default()
-        }));
-    }
-    Ok(Message::new(version, order, packets))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn entities_fly_their_paths_at_their_speed() {
-        let e = HostEntity {
-            id: 0,
-            entity_type: 0,
-            clamp: "none".into(),
-            alt_m: 0.0,
-            speed_mps: 100.0,
-            path: vec![[0.0, 0.0], [0.0, 0.1], [0.1, 0.1]],
-        };
-        let (lat, lon, heading) = entity_at(&e, 10.0);
-        assert!(
-            lat.abs() < 1e-9 && (lon - 1000.0 / 111_319.5).abs() < 1e-5,
-            "{lat} {lon}"
-        );
-        assert!((heading - 90.0).abs() < 1e-6);
-        let (_, _, heading) = entity_at(&e, 200.0);
-        assert!(
-            heading.abs() < 1e-3 || (heading - 360.0).abs() < 1e-3,
-            "{heading}"
-        );
-        let (lat, lon, _) = entity_at(&e, 1.0e6);
-        assert_eq!((lat, lon), (0.1, 0.1));
-    }
 }

@@ -1,20 +1,16 @@
-//! `cig`: the command line of the cig image generator. Thin glue: parses arguments, reads the
-//! configuration, calls the library crates, prints results. See `ARCHITECTURE.md`.
+//! `cig`: the command line of the cig image generator. Thin glue: parses arguments (clap),
+//! reads the configuration, calls the library crates (the network edge is `cig-net`, the
+//! protocol tools `cig-tools`, the benchmarks `cig-bench`), prints results. See
+//! `ARCHITECTURE.md`.
 
 mod bench;
-mod bench_env;
-mod bench_net;
-mod bench_particles;
-mod bench_render;
 mod cli;
 mod config;
 mod db;
 mod demo;
 mod dis;
 mod ephem;
-mod flight;
 mod host;
-mod net;
 mod output;
 mod plume;
 mod query;
@@ -70,10 +66,10 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),
         cli::Command::Render(args) => render::run(&args, &config),
         cli::Command::View(args) => view::run(&args, &config),
-        cli::Command::Bench(cli::BenchCommand::Particles(args)) => bench_particles::run(&args),
-        cli::Command::Bench(cli::BenchCommand::Render(args)) => bench_render::run(&args, &config),
-        cli::Command::Bench(cli::BenchCommand::Net(args)) => bench_net::run(&args, &config),
-        cli::Command::Bench(cli::BenchCommand::Env(args)) => bench_env::run(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Particles(args)) => bench::particles(&args),
+        cli::Command::Bench(cli::BenchCommand::Render(args)) => bench::render(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Net(args)) => bench::net(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Env(args)) => bench::env(&args, &config),
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),

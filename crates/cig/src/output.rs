@@ -1,5 +1,6 @@
 //! Progress bars and spinners for long commands (drawn only on a terminal).
 
+use cig_bench::database::{BuildProgress, BuildStage};
 use indicatif::{ProgressBar, ProgressStyle};
 
 pub fn bar(total: u64, what: &str) -> ProgressBar {
@@ -17,4 +18,37 @@ pub fn spinner(what: &str) -> ProgressBar {
     spinner.set_message(what.to_string());
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
     spinner
+}
+
+/// Draws a database build's progress ([`cig_bench::database::BuildProgress`]): a bar while
+/// terrain is synthesized, a spinner while voids are filled and materials derived, a bar while
+/// tiles are written.
+pub fn build_progress() -> impl FnMut(BuildProgress<'_>) {
+    let mut current: Option<ProgressBar> = None;
+    move |progress| match progress {
+        BuildProgress::Begin(stage) => {
+            current = Some(match stage {
+                BuildStage::Synthesize => bar(100, "synthesize"),
+                BuildStage::Prepare => spinner("fill voids, derive materials"),
+                BuildStage::Write => bar(0, "write tiles"),
+            });
+        }
+        BuildProgress::Synthesize { step, fraction } => {
+            if let Some(bar) = &current {
+                bar.set_message(step.to_string());
+                bar.set_position((fraction * 100.0) as u64);
+            }
+        }
+        BuildProgress::Write { done, total } => {
+            if let Some(bar) = &current {
+                bar.set_length(total);
+                bar.set_position(done);
+            }
+        }
+        BuildProgress::End => {
+            if let Some(bar) = current.take() {
+                bar.finish_and_clear();
+            }
+        }
+    }
 }

@@ -3,6 +3,7 @@
 use crate::cli::RenderArgs;
 use crate::config::Config;
 use anyhow::{bail, Context};
+use cig_bench::scenes::{fire_puffs, lightning_bolt, FireSpec, MAX_BURN_S, MAX_HEAT_MW};
 use cig_geo::Geodetic;
 use cig_render::{FrameStats, Gpu, Image, Renderer};
 use cig_scene::lighting::{Fog, FogMode};
@@ -110,23 +111,6 @@ pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<EntitySpec> {
     })
 }
 
-/// A fire asked for with `--smoke`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FireSpec {
-    pub lat_deg: f64,
-    pub lon_deg: f64,
-    pub heat_w: f64,
-    /// How long it has burnt at the frame's time, s.
-    pub burning_s: f64,
-}
-
-/// Largest heat release `--smoke` takes, MW (a large oil-tank fire).
-const MAX_HEAT_MW: f64 = 10_000.0;
-/// Longest `--smoke` burn simulated, s.
-const MAX_BURN_S: f64 = 3600.0;
-/// Footprint of a `--smoke` fire (a burning vehicle), m.
-const FIRE_SIZE_M: f64 = 3.0;
-
 /// Parses "LAT,LON[,HEAT_MW[,SECONDS]]".
 pub fn parse_smoke(text: &str) -> anyhow::Result<FireSpec> {
     let v = parse_numbers(text, "--smoke", &[2, 3, 4])
@@ -212,62 +196,6 @@ pub fn parse_wind(text: &str) -> anyhow::Result<cig_effects::Wind> {
     })
 }
 
-/// Starts each fire (a smoke plume and its flames, on the terrain) in a new effect system
-/// stepped to the moment the longest has burnt its seconds, in air of Pasquill's class for
-/// the wind and the sun at `unix_time_s`, and returns the puffs relative to `origin_ecef_m`.
-pub fn fire_puffs(
-    session: &mut QuerySession,
-    fires: &[(String, FireSpec)],
-    wind: cig_effects::Wind,
-    unix_time_s: f64,
-    origin_ecef_m: glam::DVec3,
-) -> anyhow::Result<Vec<cig_effects::PuffInstance>> {
-    use cig_effects::{
-        Atmosphere, EffectId, EffectSystem, EffectsConfig, PlumeKind, PlumeSource, PlumeSpec,
-    };
-    let mut puffs = Vec::new();
-    let Some((_, first)) = fires.first() else {
-        return Ok(puffs);
-    };
-    let sun = cig_scene::Lighting::at(
-        unix_time_s,
-        Geodetic::new(first.lat_deg, first.lon_deg, 0.0),
-    );
-    let atmosphere =
-        Atmosphere::from_weather(wind, 288.15, sun.sun_elevation_deg, 0.0, f64::INFINITY)
-            .context("--wind")?;
-    let mut system = EffectSystem::new(EffectsConfig {
-        plume_slots: 2 * fires.len(),
-        dust_slots: 0,
-        ..Default::default()
-    })?;
-    system.set_atmosphere(atmosphere)?;
-    let end_s = fires.iter().map(|(_, f)| f.burning_s).fold(0.0, f64::max);
-    system.advance_to(0.0)?;
-    for (i, (text, fire)) in fires.iter().enumerate() {
-        let ground = session.hot(fire.lat_deg, fire.lon_deg).with_context(|| {
-            format!("--smoke \"{text}\": the fire cannot be placed on the terrain")
-        })?;
-        let position = Geodetic::new(fire.lat_deg, fire.lon_deg, ground.height_ellipsoid_m());
-        for (k, kind) in [PlumeKind::Smoke, PlumeKind::Flame].into_iter().enumerate() {
-            system
-                .start_plume(&PlumeSpec {
-                    id: EffectId((2 * i + k) as u64),
-                    kind,
-                    position,
-                    size_m: FIRE_SIZE_M,
-                    source: PlumeSource::HeatReleaseW(fire.heat_w),
-                    start_time_s: end_s - fire.burning_s,
-                    duration_s: MAX_BURN_S * 2.0,
-                })
-                .with_context(|| format!("--smoke \"{text}\""))?;
-        }
-    }
-    system.advance_to(end_s)?;
-    system.snapshot(origin_ecef_m, &mut puffs);
-    Ok(puffs)
-}
-
 /// Parses a `--rain` or `--snow` rate.
 pub fn parse_precipitation(
     text: &str,
@@ -298,38 +226,6 @@ pub fn parse_lightning(text: &str) -> anyhow::Result<(u64, f64)> {
     Ok((seed, distance_m))
 }
 
-/// The bolt of `--lightning`: `distance_m` ahead of the eye on the terrain (or the ellipsoid
-/// off the database), at its brightest, and its flash at the eye.
-pub fn lightning_bolt(
-    session: &mut QuerySession,
-    view: &View,
-    seed: u64,
-    distance_m: f64,
-) -> (cig_scene::BoltDraw, f64, cig_ig::weather::MadeBolt) {
-    let frame = cig_geo::EnuFrame::new(view.eye);
-    let h = view.orientation.heading_deg.to_radians();
-    let ahead = frame.enu_to_geodetic(glam::DVec3::new(
-        distance_m * h.sin(),
-        distance_m * h.cos(),
-        0.0,
-    ));
-    let ground_m = session
-        .hot(ahead.lat_deg, ahead.lon_deg)
-        .map_or(0.0, |g| g.height_ellipsoid_m());
-    let ground = Geodetic::new(ahead.lat_deg, ahead.lon_deg, ground_m);
-    let bolt = cig_ig::weather::make_bolt(ground, 1500.0, seed);
-    let flash_lux = cig_ig::weather::flash_lux_from(view.eye.to_ecef(), bolt.centre_ecef_m, 1.0);
-    (
-        cig_scene::BoltDraw {
-            origin_ecef_m: bolt.origin_ecef_m,
-            lines: Arc::clone(&bolt.lines),
-            intensity: 1.0,
-        },
-        flash_lux,
-        bolt,
-    )
-}
-
 /// The frame statistics as JSON.
 pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Value {
     serde_json::json!({
@@ -351,6 +247,7 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "puff_gpu_ms": stats.puff_gpu_ms,
         "illuminance_lux": stats.illuminance_lux,
         "exposure_ev": stats.exposure_ev,
+        "view_adaptation_ev": stats.view_adaptation_ev,
         "cloud_layers_drawn": stats.cloud_layers_drawn,
         "cloud_gpu_ms": stats.cloud_gpu_ms,
         "bolt_lines_drawn": stats.bolt_lines_drawn,
@@ -482,6 +379,12 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     let lightning = args.lightning.as_deref().map(parse_lightning).transpose()?;
     let (cache, mut renderer) = open(&args.db, config)?;
     let mut session = QuerySession::new(Arc::clone(&cache));
+    // An eye inside the terrain is drawn from its surface, with a word.
+    let mut views = [view];
+    for lifted in cig_scene::lift_eyes_above_terrain(&mut session, &mut views) {
+        tracing::warn!("{lifted}");
+    }
+    let [view] = views;
     let mut entities = Vec::new();
     let mut loaded = Vec::new();
     for spec in &specs {

@@ -1,14 +1,13 @@
 //! `cig serve`: the image generator driven by a CIGI host and joined to a DIS exercise.
 //!
 //! Glue only: the world (CIGI session, scenario, DIS exercise, clock, effects) is `cig-ig`'s
-//! `IgWorld`; sockets are `net`'s endpoints; frames are `cig-render`'s. Each frame: drain the
+//! `IgWorld`; sockets are `cig-net`'s endpoints; frames are `cig-render`'s. Each frame: drain the
 //! host's and the exercise's datagrams into the world, step it, send the frame's message
 //! (Start of Frame and the answers) and the exercise's PDUs, and draw. Bad datagrams are
 //! counted and logged at a limited rate; the loop keeps going.
 
 use crate::cli::ServeArgs;
 use crate::config::Config;
-use crate::net::{BindTarget, Delivery, EndpointConfig, RateLimitedLog, UdpEndpoint};
 use crate::render::{parse_size, parse_time, write_png};
 use anyhow::{bail, Context};
 use cig_cigi::encode_message;
@@ -16,41 +15,17 @@ use cig_effects::EffectsConfig;
 use cig_environment::UtcTime;
 use cig_geo::Geodetic;
 use cig_ig::{IgWorld, Scenario, SessionConfig, WorldConfig};
+use cig_net::{
+    parse_delivery, resolve, BindTarget, Delivery, EndpointConfig, RateLimitedLog, UdpEndpoint,
+};
 use cig_scene::lighting::FogMode;
 use cig_scene::{FovDeg, Hpr, View};
 use cig_terrain::{QuerySession, TileCache};
 use cig_terrain_io::store::open_database;
-use std::net::{SocketAddr, ToSocketAddrs};
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-
-/// Parses a scenario's DIS delivery: "broadcast", "multicast:GROUP" or "unicast:HOST:PORT".
-pub fn parse_delivery(text: &str, port: u16) -> anyhow::Result<(Delivery, Option<SocketAddr>)> {
-    let text = text.trim();
-    if text == "broadcast" {
-        return Ok((Delivery::Broadcast, None));
-    }
-    if let Some(group) = text.strip_prefix("multicast:") {
-        let group = crate::net::parse_multicast_group(group, "delivery multicast group")?;
-        return Ok((
-            Delivery::Multicast(group),
-            Some(SocketAddr::from((group, port))),
-        ));
-    }
-    if let Some(to) = text.strip_prefix("unicast:") {
-        return Ok((Delivery::Unicast, Some(resolve(to, "delivery")?)));
-    }
-    bail!("delivery {text:?} is not broadcast, multicast:GROUP or unicast:HOST:PORT")
-}
-
-/// Resolves "HOST:PORT".
-pub fn resolve(text: &str, what: &str) -> anyhow::Result<SocketAddr> {
-    text.to_socket_addrs()
-        .with_context(|| format!("{what} {text:?} is not HOST:PORT"))?
-        .next()
-        .with_context(|| format!("{what} {text:?} names no address"))
-}
 
 /// Reads and checks a scenario file.
 pub fn read_scenario(path: &Path) -> anyhow::Result<Scenario> {
@@ -285,7 +260,11 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
                     &cache,
                     &snapshot,
                     index,
-                    cig_render::FrameOptions::default(),
+                    cig_render::FrameOptions {
+                        // The eye adapts over the frame period.
+                        adaptation: cig_render::Adaptation::Step(1.0 / args.rate_hz as f32),
+                        ..cig_render::FrameOptions::default()
+                    },
                 )?;
                 totals.entities_drawn = stats.entities_drawn;
                 totals.puffs_drawn = stats.puffs_drawn;
@@ -320,12 +299,14 @@ struct LoopState {
     started: Instant,
     last: Instant,
     bad_cigi: RateLimitedLog,
-    inbox: Vec<crate::net::Datagram>,
+    inbox: Vec<cig_net::Datagram>,
     reply_to: Option<SocketAddr>,
     overframing: bool,
     period_s: f64,
     /// The frame's encoded message, its allocation kept from frame to frame.
     outgoing: Vec<u8>,
+    /// Views whose eye is below the terrain (warned once until it comes back above).
+    below_terrain: std::collections::BTreeSet<usize>,
 }
 
 impl LoopState {
@@ -340,6 +321,7 @@ impl LoopState {
             overframing: false,
             period_s: 1.0 / rate_hz,
             outgoing: Vec::with_capacity(4096),
+            below_terrain: std::collections::BTreeSet::new(),
         }
     }
 
@@ -413,7 +395,17 @@ impl LoopState {
         }
         totals.problems_noted = self.bad_cigi.count();
         totals.warnings_logged = self.bad_cigi.lines_logged();
-        world.snapshot(width_px, height_px, fallback)
+        let mut snapshot = world.snapshot(width_px, height_px, fallback);
+        // An eye inside the terrain is drawn from its surface, with one warning.
+        let lifted = cig_scene::lift_eyes_above_terrain(query, &mut snapshot.views);
+        for below in &lifted {
+            if self.below_terrain.insert(below.view) {
+                tracing::warn!("{below}");
+            }
+        }
+        self.below_terrain
+            .retain(|view| lifted.iter().any(|b| b.view == *view));
+        snapshot
     }
 }
 

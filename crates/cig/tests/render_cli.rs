@@ -553,3 +553,39 @@ fn bad_weather_values_give_one_line_errors() {
     }
     assert!(!out.exists(), "no frame written after an error");
 }
+
+#[test]
+fn an_eye_below_the_terrain_is_drawn_from_its_surface_with_one_warning() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let render = |name: &str, eye: &str| {
+        let out = dir.path().join(format!("{name}.png"));
+        let mut args = render_args(&db, &out);
+        let at = args.iter().position(|a| a == "--eye").expect("--eye") + 1;
+        args[at] = eye.to_string();
+        let output = cig().args(&args).output().expect("cig runs");
+        assert!(output.status.success(), "{output:?}");
+        (
+            String::from_utf8_lossy(&output.stderr).to_string(),
+            read_rgba(&out),
+        )
+    };
+    // 500 m below the ellipsoid: under the ground anywhere on this database.
+    let (warning, below) = render("below", "35.99,-121.22,-500");
+    let lines: Vec<&str> = warning
+        .lines()
+        .filter(|l| l.contains("below the terrain"))
+        .collect();
+    assert_eq!(lines.len(), 1, "{warning}");
+    assert!(
+        lines[0].contains("height above terrain -") && lines[0].contains("35.99"),
+        "{warning}"
+    );
+    // The frame is the terrain seen from just above it, not the inside of the hill: the same
+    // as an eye placed 1 m above the ground there, and nothing like black.
+    let (quiet, above) = render("above", "35.99,-121.22,900");
+    assert!(!quiet.contains("below the terrain"), "{quiet}");
+    let mean = |px: &[u8]| px.iter().map(|&v| f64::from(v)).sum::<f64>() / px.len() as f64;
+    assert!(mean(&below) > 30.0, "{}", mean(&below));
+    assert_ne!(below, above);
+}

@@ -635,3 +635,48 @@ fn a_hosts_line_of_sight_through_the_scenarios_smoke_is_obscured() {
     // The source far off the database is refused, with a message.
     assert!(stderr.contains("smoke source 2 cannot"), "{stderr}");
 }
+
+#[test]
+fn serve_warns_once_of_an_eye_below_the_terrain_and_draws_from_its_surface() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let scenario = dir.path().join("scenario.toml");
+    // The view hangs 300 m below a tank standing on the ground (body z is down).
+    std::fs::write(
+        &scenario,
+        "start_time = \"2026-06-21T19:00:00Z\"\n\
+         [[entities]]\nid = 1\nmodel = \"tank\"\nlat_deg = 35.995\nlon_deg = -121.215\nclamp = \"height\"\n\
+         [view]\nentity = 1\noffset_m = [0, 0, 300]\nhpr_deg = [0, -10, 0]\nfov_deg = 50\n",
+    )
+    .expect("scenario");
+    let frames = dir.path().join("frames");
+    let out = cig()
+        .args(["serve", "--db"])
+        .arg(&db)
+        .arg("--scenario")
+        .arg(&scenario)
+        .args([
+            "--headless",
+            "--size",
+            "64x48",
+            "--frames",
+            "5",
+            "--cigi-port",
+        ])
+        .arg(free_udp_port().to_string())
+        .arg("--out-dir")
+        .arg(&frames)
+        .timeout(Duration::from_secs(300))
+        .output()
+        .expect("serve");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("below the terrain"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "one warning for five frames: {stderr}");
+    assert!(warnings[0].contains("height above terrain -"), "{stderr}");
+    let png = frames.join("frame_00004.png");
+    assert!(png.exists(), "the frames are drawn");
+}

@@ -149,6 +149,16 @@ fn luminance(c_: vec3<f32>) -> f32 {
     return dot(c_, vec3<f32>(0.2126, 0.7152, 0.0722));
 }
 
+// A uniform value in [0, 1) from a pixel (the PCG hash of M. Jarzynski and M. Olano, "Hash
+// Functions for GPU Rendering", JCGT 2020, on both coordinates).
+fn pixel_hash(p: vec2<u32>) -> f32 {
+    var v = p.x * 1664525u + p.y * 747796405u + 1013904223u;
+    v = v * 747796405u + 2891336453u;
+    var w = ((v >> ((v >> 28u) + 4u)) ^ v) * 277803737u;
+    w = (w >> 22u) ^ w;
+    return f32(w >> 8u) / 16777216.0;
+}
+
 @fragment
 fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
     // This pass runs at half resolution: the scene pixel under the centre of this one.
@@ -178,9 +188,11 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
     let cos_moon = dot(dir, moon);
     let moon_phase = 0.6 * henyey_greenstein(cos_moon, 0.6) + 0.4 * henyey_greenstein(cos_moon, -0.2);
 
-    // Each pixel's samples start at its own fraction of a step (interleaved gradient noise,
-    // Jimenez 2014): the slices of a fixed-step march become fine noise instead of bands.
-    let jitter = fract(52.9829189 * fract(dot(in.clip.xy, vec2<f32>(0.06711056, 0.00583715))));
+    // Each pixel's samples start at its own fraction of a step, from a hash of the pixel (white
+    // noise, so no periodic dot or checker pattern: interleaved gradient noise showed one at
+    // half resolution): the slices of a fixed-step march become fine grain instead of bands,
+    // which the composite's filter smooths.
+    let jitter = pixel_hash(vec2<u32>(in.clip.xy));
     var transmittance = 1.0;
     var radiance = vec3<f32>(0.0);
     var distance_sum = 0.0;

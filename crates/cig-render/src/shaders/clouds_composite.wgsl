@@ -21,9 +21,12 @@ fn vs_main(@builtin(vertex_index) i: u32) -> CompositeOut {
 @fragment
 fn fs_main(in: CompositeOut) -> @location(0) vec4<f32> {
     let uv = vec2<f32>(0.5 + 0.5 * in.ndc.x, 0.5 - 0.5 * in.ndc.y);
-    // Four bilinear taps 0.75 half-frame texels apart: a small tent filter that also evens out
-    // the march's per-pixel sample offsets.
-    let d = 0.75 / vec2<f32>(textureDimensions(half_frame));
+    // Four bilinear taps half a half-frame texel apart diagonally: a smooth kernel (weights
+    // 1/8, 1/2, 3/8 per axis, centred on this pixel) that evens out the march's per-pixel
+    // sample offsets and leaves no trace of the half-resolution grid, since both quarters of a
+    // half-frame texel get the same kernel shape. (Taps 0.75 or 1 texel apart weigh the texels
+    // unevenly by quarter: a 2-pixel checker.)
+    let d = 0.5 / vec2<f32>(textureDimensions(half_frame));
     let sum = textureSampleLevel(half_frame, half_sampler, uv + vec2<f32>(-d.x, -d.y), 0.0)
         + textureSampleLevel(half_frame, half_sampler, uv + vec2<f32>(d.x, -d.y), 0.0)
         + textureSampleLevel(half_frame, half_sampler, uv + vec2<f32>(-d.x, d.y), 0.0)

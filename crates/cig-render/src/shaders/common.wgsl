@@ -2,7 +2,8 @@
 
 struct Globals {
     view_proj: mat4x4<f32>,
-    // Camera basis (ECEF axes): xyz; cam_forward.w: vertices per terrain node slot.
+    // Camera basis (ECEF axes): xyz; cam_forward.w: vertices per terrain node slot;
+    // cam_right.w: 1 to draw the ground's detail.
     cam_forward: vec4<f32>,
     cam_right: vec4<f32>,
     cam_up: vec4<f32>,
@@ -57,6 +58,7 @@ struct Globals {
 override FOG_MODE: i32 = -1;
 override GROUND_FOG: i32 = -1;
 override PHYSICAL_SKY: i32 = -1;
+override GROUND_DETAIL: i32 = -1;
 
 // 0 off, 1 linear, 2 exponential, 3 exponential-squared.
 fn fog_mode() -> i32 {
@@ -71,6 +73,13 @@ fn ground_fog_on() -> bool {
         return GROUND_FOG == 1;
     }
     return g.fog_layer.z > 0.5;
+}
+
+fn ground_detail_on() -> bool {
+    if (GROUND_DETAIL >= 0) {
+        return GROUND_DETAIL == 1;
+    }
+    return g.cam_right.w > 0.5;
 }
 
 fn physical_sky() -> bool {

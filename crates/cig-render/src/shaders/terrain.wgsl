@@ -64,6 +64,37 @@ fn hash_of_fractions(q: vec3<f32>) -> f32 {
     return fract((r.x + r.y) * r.z);
 }
 
+// Two hashes of a lattice point: x is `hash_of_fractions`, y the same hash of the fractions
+// taken in another order (unrelated values from the lattice work already done).
+fn hash2_of_fractions(q: vec3<f32>) -> vec2<f32> {
+    return vec2<f32>(hash_of_fractions(q), hash_of_fractions(q.zxy + 0.37));
+}
+
+// Two value noises on one lattice (x is `value_noise`), for the price of little more than one.
+// `value_noise` is kept beside it, not replaced by this one's x, because a shader pays here
+// for every hash on every pixel (lavapipe runs every path) and most octaves need one value.
+fn value_noise2(p: vec3<f32>) -> vec2<f32> {
+    let i = floor(p);
+    let f = fract(p);
+    let u = f * f * (3.0 - 2.0 * f);
+    let c = 256.0;
+    let q0 = fract(wrap(i, c) * HASH_K);
+    let q1 = fract(wrap(i + 1.0, c) * HASH_K);
+    let a = hash2_of_fractions(q0);
+    let b = hash2_of_fractions(vec3<f32>(q1.x, q0.y, q0.z));
+    let cc = hash2_of_fractions(vec3<f32>(q0.x, q1.y, q0.z));
+    let d = hash2_of_fractions(vec3<f32>(q1.x, q1.y, q0.z));
+    let e = hash2_of_fractions(vec3<f32>(q0.x, q0.y, q1.z));
+    let ff = hash2_of_fractions(vec3<f32>(q1.x, q0.y, q1.z));
+    let gg = hash2_of_fractions(vec3<f32>(q0.x, q1.y, q1.z));
+    let h = hash2_of_fractions(q1);
+    return mix(
+        mix(mix(a, b, u.x), mix(cc, d, u.x), u.y),
+        mix(mix(e, ff, u.x), mix(gg, h, u.x), u.y),
+        u.z,
+    );
+}
+
 // Value noise on a lattice of unit cells, periodic with 256 cells.
 fn value_noise(p: vec3<f32>) -> f32 {
     let i = floor(p);
@@ -87,6 +118,118 @@ fn value_noise(p: vec3<f32>) -> f32 {
     );
 }
 
+// The surface material at an atlas point, with smooth borders between materials. Each colour
+// texel holds its material's colour and, in alpha, the material's index (high nibble) and
+// specular weight (low nibble); the texels of the node's data posts are every `axis_e.w`-th.
+// Near the eye (a post over a few pixels) the four posts around a point each weigh their
+// material by the bilinear weights of every post of the same material, and the heaviest
+// material wins: its border is the 0.5 level of the materials' bilinear fields over the posts
+// (the marching-squares contour, which cuts across a cell where the post grid would step
+// around it, after NPSNET's majority-coloured posts and explicit shorelines, source 003),
+// bent by a domain warp of value noise at 19 m so the border is irregular as land cover is,
+// and softened over about a pixel against aliasing. Far away (posts under a pixel or two) the
+// materials blend bilinearly, the average a pixel covers, so the border does not shimmer.
+// Returns the linear albedo and the specular weight.
+struct Surface {
+    albedo: vec3<f32>,
+    specular: f32,
+    // The heaviest material's index.
+    kind: u32,
+};
+
+fn material_at(node: Node, uv: vec2<f32>, rel: vec3<f32>, n: vec3<f32>, warp_noise: vec2<f32>) -> Surface {
+    let size = vec2<f32>(textureDimensions(colour_atlas));
+    let step = max(node.axis_e.w, 1.0);
+    // Texel indices: continuous, and of the node's first and last texel.
+    let first = node.atlas.xy * size - 0.5;
+    let posts = round(node.atlas.zw * size / step);
+    var local = ((uv * size - 0.5) - first) / step;
+    // A post's size on screen, from its size in metres and the distance (not from screen
+    // derivatives, which change from triangle to triangle of a morphing mesh and would draw
+    // its edges), foreshortened by the slope toward the eye.
+    let distance_m = max(length(rel), 1.0);
+    let facing = abs(dot(n, rel)) / distance_m;
+    let post_px = node.axis_n.w * g.flags.w / distance_m * sqrt(max(facing, 0.01));
+    // 1 when a post spans 4 or more pixels, 0 when it spans 2 or less.
+    let sharpness = clamp(0.5 * (post_px - 2.0), 0.0, 1.0);
+    if (sharpness > 0.0) {
+        let warp = warp_noise - 0.5;
+        // Up to a third of a post each way, fading to none at the node's edges (where the
+        // neighbour, which cannot see past its own edge either, samples the same posts), so
+        // borders run on across nodes without a seam.
+        let edge = min(min(local, posts - local), vec2<f32>(1.0));
+        let fade = clamp(min(edge.x, edge.y), 0.0, 1.0);
+        local += warp * (0.7 * sharpness * fade);
+    }
+    local = clamp(local, vec2<f32>(0.0), posts);
+    let cell = min(floor(local), max(posts - 1.0, vec2<f32>(0.0)));
+    let f = local - cell;
+    let base = first + cell * step;
+    let near = vec2<i32>(round(base));
+    let far = vec2<i32>(round(base + step));
+    // x (0, 1), y (1, 1), z (1, 0), w (0, 0): the corners as textureGather orders them.
+    let c0 = textureLoad(colour_atlas, vec2<i32>(near.x, far.y), 0);
+    let c1 = textureLoad(colour_atlas, far, 0);
+    let c2 = textureLoad(colour_atlas, vec2<i32>(far.x, near.y), 0);
+    let c3 = textureLoad(colour_atlas, near, 0);
+    let w = vec4<f32>((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y));
+    let tags = vec4<u32>(round(vec4<f32>(c0.a, c1.a, c2.a, c3.a) * 255.0));
+    let kind = tags >> vec4<u32>(4u);
+    let specular = vec4<f32>(tags & vec4<u32>(15u)) / 15.0;
+    // Each post's material's total weight.
+    var total = vec4<f32>(0.0);
+    for (var i = 0u; i < 4u; i++) {
+        total[i] = dot(w, vec4<f32>(kind == vec4<u32>(kind[i])));
+    }
+    // A soft argmax over materials: exponent 0 is the bilinear blend, a high one the winner
+    // alone. Across a border a material's total changes by about 2 per post, so this
+    // exponent softens it over about a pixel.
+    let exponent = 2.0 * post_px * sharpness;
+    let lead = max(max(total.x, total.y), max(total.z, total.w));
+    let share = w * exp(exponent * (total - lead));
+    let sum = max(share.x + share.y + share.z + share.w, 1e-6);
+    let albedo = (share.x * c0.rgb + share.y * c1.rgb + share.z * c2.rgb + share.w * c3.rgb) / sum;
+    var kind_lead = kind.w;
+    var best = share.w;
+    for (var i = 0u; i < 3u; i++) {
+        if (share[i] > best) {
+            best = share[i];
+            kind_lead = kind[i];
+        }
+    }
+    return Surface(albedo, dot(share, specular) / sum, kind_lead);
+}
+
+// Each material's detail: the amplitudes of its value-noise octaves at 0.34, 2.7, 19.3 and
+// 151 m (x to w), so grass, forest and rock are mottled at every scale, asphalt and snow are
+// fine-grained and even, water nearly flat (waves are not drawn). Indexed by
+// `cig_terrain::Material` (water, sand, dry clay, grass, forest, rock, snow, paved road, dirt
+// road).
+var<private> DETAIL: array<vec4<f32>, 9> = array<vec4<f32>, 9>(
+    vec4<f32>(0.00, 0.02, 0.05, 0.05),
+    vec4<f32>(0.22, 0.14, 0.12, 0.20),
+    vec4<f32>(0.22, 0.16, 0.18, 0.22),
+    vec4<f32>(0.40, 0.24, 0.22, 0.25),
+    vec4<f32>(0.30, 0.30, 0.25, 0.25),
+    vec4<f32>(0.30, 0.26, 0.25, 0.25),
+    vec4<f32>(0.06, 0.05, 0.08, 0.08),
+    vec4<f32>(0.26, 0.06, 0.08, 0.10),
+    vec4<f32>(0.26, 0.16, 0.15, 0.15),
+);
+// The hue the largest octave shifts vegetation toward (dry grass, sunlit canopy) where its
+// noise is high, and soil and rock toward ochre: land cover is never one flat colour.
+var<private> MACRO_TINT: array<vec3<f32>, 9> = array<vec3<f32>, 9>(
+    vec3<f32>(1.0, 1.0, 1.0),
+    vec3<f32>(1.04, 1.0, 0.92),
+    vec3<f32>(1.06, 1.0, 0.90),
+    vec3<f32>(1.18, 1.08, 0.80),
+    vec3<f32>(1.10, 1.12, 0.85),
+    vec3<f32>(1.06, 1.0, 0.92),
+    vec3<f32>(1.0, 1.0, 1.0),
+    vec3<f32>(1.0, 1.0, 1.0),
+    vec3<f32>(1.06, 1.0, 0.90),
+);
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if (g.flags.x > 0.5) {
@@ -95,39 +238,61 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let node = nodes[in.node];
     let ne = textureSample(normal_atlas, atlas_sampler, in.uv).xyz * 2.0 - 1.0;
     let n = normalize(node.axis_e.xyz * ne.x + node.axis_n.xyz * ne.y + node.axis_u.xyz * ne.z);
-    let base = textureSample(colour_atlas, atlas_sampler, in.uv);
     let distance_m = length(in.rel);
-    // Detail: three octaves of value noise with incommensurate periods (no visible tiling),
-    // faded out with distance before they alias.
-    let p0 = in.rel / g.noise0.w + g.noise0.xyz;
-    let p1 = in.rel / g.noise1.w + g.noise1.xyz;
-    let p2 = in.rel / g.noise2.w + g.noise2.xyz;
-    // Each octave fades out as its cells shrink below 6 pixels on screen (no aliasing, in
-    // narrow and wide views alike).
-    let px_per_m = g.flags.w / max(distance_m, 1.0);
-    let fade0 = clamp((g.noise0.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
-    let fade1 = clamp((g.noise1.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
-    let fade2 = clamp((g.noise2.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
-    // An octave that has faded out is not evaluated on GPUs whose threads skip a branch none of
-    // them takes (the same colour, less work far away); lavapipe runs every branch under a mask,
-    // so there a shader costs the sum of all its paths (measured: an `if` no pixel enters cost
-    // as much as its body).
-    var detail = 1.0;
-    if (fade0 > 0.0) {
-        detail += 0.18 * (value_noise(p0) - 0.5) * fade0;
+    var surface: Surface;
+    var albedo: vec3<f32>;
+    if (ground_detail_on()) {
+        // Detail: four octaves of value noise with incommensurate periods (no visible tiling),
+        // faded out with distance before they alias; the finest is the 2.7 m lattice eight times
+        // finer (0.34 m, so its 256-cell period wraps with the coarser one's).
+        let p0 = in.rel / g.noise0.w + g.noise0.xyz;
+        let p1 = in.rel / g.noise1.w + g.noise1.xyz;
+        let p2 = in.rel / g.noise2.w + g.noise2.xyz;
+        // Each octave fades out as its cells shrink below 6 pixels on screen (no aliasing, in
+        // narrow and wide views alike).
+        let px_per_m = g.flags.w / max(distance_m, 1.0);
+        let fade_micro = clamp((g.noise0.w * 0.125 * px_per_m - 2.0) / 4.0, 0.0, 1.0);
+        let fade0 = clamp((g.noise0.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
+        let fade1 = clamp((g.noise1.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
+        let fade2 = clamp((g.noise2.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
+        // An octave that has faded out is not evaluated on GPUs whose threads skip a branch none of
+        // them takes (the same colour, less work far away); lavapipe runs every branch under a mask,
+        // so there a shader costs the sum of all its paths (measured: an `if` no pixel enters cost
+        // as much as its body).
+        var octaves = vec4<f32>(0.0);
+        if (fade_micro > 0.0) {
+            octaves.x = (value_noise(p0 * 8.0) - 0.5) * fade_micro;
+        }
+        if (fade0 > 0.0) {
+            octaves.y = (value_noise(p0) - 0.5) * fade0;
+        }
+        // The 19.3 m octave also bends material borders (material_at's domain warp).
+        let n1 = value_noise2(p1);
+        octaves.z = (n1.x - 0.5) * fade1;
+        if (fade2 > 0.0) {
+            octaves.w = (value_noise(p2) - 0.5) * fade2;
+        }
+        surface = material_at(node, in.uv, in.rel, n, n1);
+        let detail = 1.0 + dot(DETAIL[surface.kind], octaves);
+        let tint = mix(vec3<f32>(1.0), MACRO_TINT[surface.kind], clamp(octaves.w + 0.5 * fade2, 0.0, 1.0) * fade2);
+        albedo = surface.albedo * detail * tint;
+    } else {
+        // Plain: the colour texels blended bilinearly, with no detail (the baseline).
+        let size = vec2<f32>(textureDimensions(colour_atlas));
+        let nearest = textureLoad(colour_atlas, vec2<i32>(in.uv * size), 0);
+        let tag = u32(round(nearest.a * 255.0));
+        surface = Surface(
+            textureSample(colour_atlas, atlas_sampler, in.uv).rgb,
+            f32(tag & 15u) / 15.0,
+            tag >> 4u,
+        );
+        albedo = surface.albedo;
     }
-    if (fade1 > 0.0) {
-        detail += 0.22 * (value_noise(p1) - 0.5) * fade1;
-    }
-    if (fade2 > 0.0) {
-        detail += 0.25 * (value_noise(p2) - 0.5) * fade2;
-    }
-    let albedo = base.rgb * detail;
     var colour = lit(albedo, n);
     // Water and wet surfaces: a sun glint.
     let view_dir = -in.rel / max(distance_m, 1e-3);
     let h = normalize(view_dir + g.sun_dir.xyz);
-    let spec = pow(max(dot(n, h), 0.0), 80.0) * base.a;
+    let spec = pow(max(dot(n, h), 0.0), 80.0) * surface.specular;
     colour += g.sun_colour.rgb * spec * 0.8;
     return vec4<f32>(apply_atmosphere_exposed(exposed(colour), in.rel), 1.0);
 }

@@ -1,10 +1,13 @@
-// The frame's tone map: pre-exposed linear radiance (the HDR scene target) to display values.
+// The frame's tone map: pre-exposed linear radiance (the HDR scene target), times the eye's
+// adaptation to the view, to display values.
 // Below 10 lux the colour shifts toward the scotopic blue-grey (rods see no colour; the
 // blue-shift of H. W. Jensen et al., "A Night Rendering", 2000); then the ACES filmic curve
 // (K. Narkowicz's fit, 2015) per channel; the sRGB curve is applied here when the target is
 // not an sRGB format (the hardware encodes sRGB targets).
 
 @group(1) @binding(0) var scene: texture_2d<f32>;
+// The eye's adaptation to the view (adaptation.rs): x the log2 factor on the pre-exposed scene.
+@group(1) @binding(1) var<uniform> adaptation: vec4<f32>;
 
 struct ToneOut {
     @builtin(position) clip: vec4<f32>,
@@ -39,6 +42,7 @@ fn fs_main(in: ToneOut) -> @location(0) vec4<f32> {
         // Keyed test frames: linear radiance, clamped.
         out = min(c, vec3<f32>(1.0));
     } else {
+        c *= exp2(adaptation.x);
         let s = g.tonemap.y;
         if (s > 0.0) {
             // Rod response over the sRGB primaries (peak near 507 nm), shown blue-grey.

@@ -393,6 +393,8 @@ struct LastFrame {
     snapshot: FrameSnapshot,
     paint_jobs: Vec<egui::ClippedPrimitive>,
     pixels_per_point: f32,
+    /// Seconds since the previous frame (the eye's adaptation advances by it).
+    dt_s: f64,
 }
 
 struct Running {
@@ -831,6 +833,7 @@ impl App {
             snapshot,
             paint_jobs,
             pixels_per_point: output.pixels_per_point,
+            dt_s,
         };
         let stats = r.draw(&last, &targets)?;
         r.window.pre_present_notify();
@@ -890,6 +893,7 @@ impl Running {
             FrameOptions {
                 mesh_budget: self.mesh_budget,
                 key_background: false,
+                adaptation: crate::adaptation::Adaptation::Step(frame.dt_s as f32),
                 ..FrameOptions::default()
             },
         )?;

@@ -94,12 +94,48 @@ pub fn view(eye: Geodetic, hpr: (f64, f64, f64), fov_deg: f64, size: (u32, u32))
 /// 2026-06-21 19:00 UTC: mid-morning sun over California.
 pub const MORNING_UNIX_S: f64 = 1_782_068_400.0;
 
-/// Renders one complete frame (all tiles it wants loaded first).
+/// Seconds since 1970 of a UTC date plus `h` hours.
+pub fn unix(y: i32, m: u32, d: u32, h: f64) -> f64 {
+    cig_environment::UtcTime::from_calendar(y, m, d, 0, 0, 0.0)
+        .expect("a date")
+        .unix_seconds()
+        + h * 3600.0
+}
+
+/// The sun's (azimuth, altitude) in degrees at `eye` and `unix_s`.
+pub fn sun_at(eye: Geodetic, unix_s: f64) -> (f64, f64) {
+    let observer =
+        cig_environment::Observer::new(eye.lat_deg, eye.lon_deg, eye.alt_m).expect("observer");
+    let time = cig_environment::UtcTime::from_unix_seconds(unix_s).expect("time");
+    let e = cig_environment::ephemeris(&observer, time);
+    (e.sun.azimuth_deg, e.sun.altitude_deg)
+}
+
+/// Renders one complete frame (all tiles it wants loaded first) at the natural illuminance's
+/// exposure, not the view's: frames of one test compare with each other and with their goldens
+/// (tests/picture.rs tests the adaptation).
 pub fn render(
     renderer: &mut Renderer,
     cache: &TileCache,
     snapshot: &FrameSnapshot,
     key_background: bool,
+) -> (Image, cig_render::FrameStats) {
+    render_adapted(
+        renderer,
+        cache,
+        snapshot,
+        key_background,
+        cig_render::Adaptation::Off,
+    )
+}
+
+/// [`render`] with the eye's adaptation as given.
+pub fn render_adapted(
+    renderer: &mut Renderer,
+    cache: &TileCache,
+    snapshot: &FrameSnapshot,
+    key_background: bool,
+    adaptation: cig_render::Adaptation,
 ) -> (Image, cig_render::FrameStats) {
     cache.update(&[snapshot.views[0].eye]);
     cache.wait_idle();
@@ -113,6 +149,7 @@ pub fn render(
             mesh_budget: usize::MAX,
             key_background,
             fade_in_s: 0.0,
+            adaptation,
         },
     )
     .expect("render")

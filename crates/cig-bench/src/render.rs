@@ -3,23 +3,43 @@
 //! smoke-and-flame plumes in view (the scene of `cig bench particles`: 16 fires of a smoke and a
 //! flame plume, 5 columns x 75 puffs each, after 100 s of burning).
 
-use crate::bench::{date_utc, machine};
-use crate::bench_particles::{bench_atmosphere, start_fires};
-use crate::cli::BenchRenderArgs;
-use crate::config::Config;
 use crate::flight::{views_along, Leg};
-use anyhow::Context;
+use crate::particles::{bench_atmosphere, start_fires};
+use crate::report::{date_utc, machine, percentile};
+use crate::{require, BenchError, Report, Step};
 use cig_geo::{EnuFrame, Geodetic};
 use cig_render::{FrameOptions, FrameStats, Renderer};
 use cig_scene::FrameSnapshot;
-use cig_terrain::{QuerySession, TileCache};
+use cig_terrain::{PagingConfig, QuerySession, TileCache};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
+/// What `cig bench render` measures.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    /// The database flown over.
+    pub db: PathBuf,
+    /// Frame size, pixels.
+    pub size: (u32, u32),
+    /// Horizontal field of view, degrees.
+    pub fov: f64,
+    /// Level-of-detail threshold, pixels.
+    pub max_pixel_error: f64,
+    /// Frames of the 60 Hz pass.
+    pub frames: usize,
+    /// Frames of the pass drawn both ways for the comparison.
+    pub compare_frames: usize,
+    /// The tile cache's configuration.
+    pub paging: PagingConfig,
+    /// The commit the report names.
+    pub commit: String,
+}
+
 /// The benchmark's pass: south-west to north-east across the middle of the database.
-pub fn pass_leg(db: &cig_terrain::TerrainDatabase, speed_mps: f64, duration_s: f64) -> Leg {
+pub(crate) fn pass_leg(db: &cig_terrain::TerrainDatabase, speed_mps: f64, duration_s: f64) -> Leg {
     let g = db.layout().grid;
     let lat = g.south_lat_deg + 0.3 * (g.north_lat_deg() - g.south_lat_deg);
     let lon = g.west_lon_deg + 0.3 * (g.east_lon_deg() - g.west_lon_deg);
@@ -36,12 +56,6 @@ pub fn pass_leg(db: &cig_terrain::TerrainDatabase, speed_mps: f64, duration_s: f
 
 /// How long the comparison's fires have burnt (every smoke pool full: smoke lives 90 s), s.
 const PLUMES_BURNING_S: f64 = 100.0;
-
-fn percentile(v: &[f64], p: f64) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    s[((s.len() - 1) as f64 * p).round() as usize]
-}
 
 fn summary(times_ms: &[f64]) -> serde_json::Value {
     serde_json::json!({
@@ -84,7 +98,7 @@ const COMPARISON_ROUNDS: usize = 2;
 /// Fires of the plume comparison: 16 points on the terrain ahead of the pass's start, from a
 /// third of the reach to the reach (4 km, or less where the database ends sooner), within
 /// 0.3 of their distance to either side of the track.
-fn fire_positions(session: &mut QuerySession, leg: &Leg) -> anyhow::Result<Vec<Geodetic>> {
+fn fire_positions(session: &mut QuerySession, leg: &Leg) -> Result<Vec<Geodetic>, BenchError> {
     let frame = EnuFrame::new(leg.start);
     let (sh, ch) = leg.heading_deg.to_radians().sin_cos();
     let forward = DVec3::new(sh, ch, 0.0);
@@ -104,16 +118,17 @@ fn fire_positions(session: &mut QuerySession, leg: &Leg) -> anyhow::Result<Vec<G
         }
         reach_m = ahead;
     }
-    anyhow::ensure!(
-        reach_m >= 600.0,
-        "the database ends {reach_m} m ahead of the pass: too close for the plume comparison"
-    );
+    if reach_m < 600.0 {
+        return Err(BenchError::Scene(format!(
+            "the database ends {reach_m} m ahead of the pass: too close for the plume comparison"
+        )));
+    }
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(16);
     (0..16)
         .map(|_| {
             let d = rng.gen_range(reach_m / 3.0..reach_m);
             let side = rng.gen_range(-0.3..0.3) * d;
-            inside(session, forward * d + right * side).context("a plume of the comparison")
+            inside(session, forward * d + right * side).step("a plume of the comparison")
         })
         .collect()
 }
@@ -122,25 +137,26 @@ fn render_frames(
     renderer: &mut Renderer,
     cache: &TileCache,
     snapshots: &[FrameSnapshot],
-    target: &wgpu::TextureView,
+    target: &cig_render::OffscreenTarget,
     streaming: bool,
-) -> anyhow::Result<Run> {
+) -> Result<Run, BenchError> {
     let mut run = Run::default();
     for snapshot in snapshots {
         let started = Instant::now();
         let stats: FrameStats = if streaming {
             cache.update(&[snapshot.views[0].eye]);
-            renderer.render(cache, snapshot, 0, target, FrameOptions::default())?
+            renderer.render(cache, snapshot, 0, target.view(), FrameOptions::default())?
         } else {
             renderer.render(
                 cache,
                 snapshot,
                 0,
-                target,
+                target.view(),
                 FrameOptions {
                     mesh_budget: usize::MAX,
                     key_background: false,
                     fade_in_s: 0.0,
+                    ..FrameOptions::default()
                 },
             )?
         };
@@ -178,52 +194,49 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
-pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
-    let size = crate::render::parse_size(&args.size)?;
-    anyhow::ensure!(
-        (4..=100_000).contains(&args.frames),
-        "--frames {} must be between 4 and 100000",
-        args.frames
-    );
-    anyhow::ensure!(
-        args.max_pixel_error.is_finite() && args.max_pixel_error > 0.0,
-        "--max-pixel-error {} must be more than 0 (the comparison draws full detail itself)",
-        args.max_pixel_error
-    );
-    anyhow::ensure!(
-        args.fov.is_finite() && args.fov > 0.0 && args.fov < 180.0,
-        "--fov {} must lie between 0 and 180 degrees",
-        args.fov
-    );
-    let database = Arc::new(cig_terrain_io::store::open_database(&args.db)?);
+/// Runs the benchmark.
+///
+/// # Errors
+/// When an option is out of range, there is no GPU, the pass leaves the database or no plume
+/// of the comparison is in view.
+pub fn run(options: &RenderOptions) -> Result<Report, BenchError> {
+    let size = options.size;
+    require((4..=100_000).contains(&options.frames), || {
+        format!("--frames {} must be between 4 and 100000", options.frames)
+    })?;
+    require(
+        options.max_pixel_error.is_finite() && options.max_pixel_error > 0.0,
+        || {
+            format!(
+                "--max-pixel-error {} must be more than 0 (the comparison draws full detail itself)",
+                options.max_pixel_error
+            )
+        },
+    )?;
+    require(
+        options.fov.is_finite() && options.fov > 0.0 && options.fov < 180.0,
+        || format!("--fov {} must lie between 0 and 180 degrees", options.fov),
+    )?;
+    let database = Arc::new(cig_terrain_io::store::open_database(&options.db)?);
     let gpu = cig_render::Gpu::headless()?;
-    let target_texture = cig_render::gpu::render_target(
-        &gpu.device,
-        "bench target",
-        size,
-        cig_render::FRAME_FORMAT,
-        1,
-        wgpu::TextureUsages::empty(),
-        &[],
-    );
-    let target = target_texture.create_view(&Default::default());
+    let target = cig_render::OffscreenTarget::new(&gpu, size);
     let dt_s = 1.0 / 60.0;
-    let leg = pass_leg(&database, 300.0, args.frames as f64 * dt_s);
-    let time = crate::render::parse_time("2026-06-21T19:00:00Z")?;
+    let leg = pass_leg(&database, 300.0, options.frames as f64 * dt_s);
+    let time = cig_environment::UtcTime::parse_iso8601("2026-06-21T19:00:00Z")?.unix_seconds();
 
     // 1. The streaming pass at 300 m/s, 60 Hz: a fresh cache, nothing preloaded.
     let cache = Arc::new(TileCache::new(
         Arc::clone(&database),
-        config.paging.clone(),
+        options.paging.clone(),
     )?);
     let mut session = QuerySession::new(Arc::clone(&cache));
     let views =
-        views_along(&mut session, &leg, dt_s, args.fov, size).context("the benchmark path")?;
+        views_along(&mut session, &leg, dt_s, options.fov, size).step("the benchmark path")?;
     let snapshots: Vec<FrameSnapshot> = views
         .iter()
         .map(|v| {
             let mut s = FrameSnapshot::new(time, vec![*v]);
-            s.max_pixel_error = args.max_pixel_error;
+            s.max_pixel_error = options.max_pixel_error;
             s
         })
         .collect();
@@ -235,7 +248,7 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     let stall_ratio = percentile(settled, 1.0) / percentile(settled, 0.5);
 
     // 2. The same frames (every k-th), everything resident: level of detail against full detail.
-    let every = (snapshots.len() / args.compare_frames.max(1)).max(1);
+    let every = (snapshots.len() / options.compare_frames.max(1)).max(1);
     let sample: Vec<FrameSnapshot> = snapshots.iter().step_by(every).cloned().collect();
     let mut full_sample = sample.clone();
     for s in &mut full_sample {
@@ -275,7 +288,31 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     let time_ratio = percentile(&pair_ratios, 0.5);
     let select_alone_ms = select_alone(&mut renderer, &cache, &sample);
 
-    // 3. The same frames with 32 plumes in view, interleaved with frames without them.
+    // 3. The same frames with the ground's detail (material noise, smooth borders) and plain
+    // (the colour texels alone), interleaved; ratio of the medians.
+    let plain_ground: Vec<FrameSnapshot> = sample
+        .iter()
+        .map(|s| FrameSnapshot {
+            ground_detail: false,
+            ..s.clone()
+        })
+        .collect();
+    render_frames(&mut renderer, &cache, &plain_ground[..1], &target, false)?;
+    let (mut detailed_ground_ms, mut plain_ground_ms) = (Vec::new(), Vec::new());
+    for _ in 0..COMPARISON_ROUNDS {
+        for (detailed, plain) in sample.iter().zip(&plain_ground) {
+            let detailed = std::slice::from_ref(detailed);
+            let plain = std::slice::from_ref(plain);
+            detailed_ground_ms
+                .extend(render_frames(&mut renderer, &cache, detailed, &target, false)?.frame_ms);
+            plain_ground_ms
+                .extend(render_frames(&mut renderer, &cache, plain, &target, false)?.frame_ms);
+        }
+    }
+    let ground_detail_over_plain =
+        percentile(&detailed_ground_ms, 0.5) / percentile(&plain_ground_ms, 0.5).max(1e-6);
+
+    // 4. The same frames with 32 plumes in view, interleaved with frames without them.
     let fires = fire_positions(&mut session, &leg)?;
     let mut effects = cig_effects::EffectSystem::new(cig_effects::EffectsConfig {
         plume_slots: 2 * fires.len(),
@@ -320,21 +357,22 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
     let plain_ms = joined(&plain_runs, |r| &r.frame_ms);
     let smoky_ms = joined(&smoky_runs, |r| &r.frame_ms);
     let puffs_drawn = mean(&joined(&smoky_runs, |r| &r.puffs));
-    anyhow::ensure!(
-        puffs_drawn > 0.0,
-        "none of the plumes of the comparison is in view"
-    );
+    if puffs_drawn <= 0.0 {
+        return Err(BenchError::Scene(
+            "none of the plumes of the comparison is in view".into(),
+        ));
+    }
     let (plain_median, smoky_median) = (percentile(&plain_ms, 0.5), percentile(&smoky_ms, 0.5));
     let puff_share = (smoky_median - plain_median) / smoky_median;
     let report = serde_json::json!({
         "machine": machine(),
         "date_utc": date_utc(),
-        "commit": option_env!("CIG_GIT_COMMIT").unwrap_or("unknown"),
+        "commit": options.commit,
         "adapter": gpu.describe(),
-        "database": args.db.display().to_string(),
+        "database": options.db.display().to_string(),
         "size": [size.0, size.1],
-        "fov_deg": args.fov,
-        "max_pixel_error": args.max_pixel_error,
+        "fov_deg": options.fov,
+        "max_pixel_error": options.max_pixel_error,
         "pass": {
             "speed_mps": 300.0,
             "height_above_terrain_m": 120.0,
@@ -373,6 +411,12 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
             "triangles_full_over_lod": mean(&full.triangles) / mean(&lod.triangles).max(1.0),
             "frame_time_full_over_lod": time_ratio,
             "frame_time_full_over_lod_pairs": summary(&pair_ratios),
+            "ground_detail_over_plain": ground_detail_over_plain,
+        },
+        "ground_detail": {
+            "frames_each_way": detailed_ground_ms.len(),
+            "frame_ms_with": summary(&detailed_ground_ms),
+            "frame_ms_plain": summary(&plain_ground_ms),
         },
         "plumes": {
             "plumes": 2 * fires.len(),
@@ -394,14 +438,13 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
             "frame_time_full_over_lod_at_least": 5.0,
             "cpu_select_ms_at_most": 0.5,
             "max_over_median_at_most": 2.0,
+            "ground_detail_over_plain_at_most": 1.3,
         },
     });
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!(
+    let summary = format!(
             "pass: {} frames at 300 m/s, median {:.1} ms, max/median after warm-up {:.2}, selection median {:.3} ms\n\
              level of detail: {:.0} triangles, {:.1} ms; full detail: {:.0} triangles, {:.1} ms; ratios {:.1}x triangles, {:.1}x time\n\
+             ground detail: {:.1} ms with against {:.1} ms plain, {:.2}x\n\
              plumes: {} plumes, {:.0} puffs drawn, {:.1} ms with against {:.1} ms without: {:.0}% of the frame",
             snapshots.len(),
             percentile(&streaming.frame_ms, 0.5),
@@ -413,12 +456,17 @@ pub fn run(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
             percentile(&full.frame_ms, 0.5),
             mean(&full.triangles) / mean(&lod.triangles).max(1.0),
             time_ratio,
+            percentile(&detailed_ground_ms, 0.5),
+            percentile(&plain_ground_ms, 0.5),
+            ground_detail_over_plain,
             2 * fires.len(),
             puffs_drawn,
             smoky_median,
             plain_median,
             100.0 * puff_share,
-        );
-    }
-    Ok(())
+    );
+    Ok(Report {
+        json: report,
+        summary,
+    })
 }

@@ -9,8 +9,8 @@
 //! same run over the same number of puffs: the least a particle update can do (position +=
 //! velocity * dt on a flat array), so the ratio survives a noisy machine.
 
-use crate::bench::{date_utc, machine, median};
-use crate::cli::BenchParticlesArgs;
+use crate::report::{date_utc, machine, median, percentile};
+use crate::{require, BenchError};
 use cig_effects::{
     Atmosphere, DustTrailSpec, EffectId, EffectSystem, EffectsConfig, PlumeKind, PlumeSource,
     PlumeSpec, StabilityClass, VehicleUpdate, Wind,
@@ -24,8 +24,19 @@ use std::time::Instant;
 
 const TARGET_MS: f64 = 1.0;
 
+/// What `cig bench particles` measures.
+#[derive(Clone, Debug)]
+pub struct ParticlesOptions {
+    /// Frames timed (each one fixed step of 1/60 s).
+    pub frames: u32,
+    /// Simulation seconds run before timing (100 s fills every pool: smoke lives 90 s).
+    pub warm_seconds: u32,
+    /// The commit the report names.
+    pub commit: String,
+}
+
 /// The benchmark's air: 4 m/s from 250 degrees, neutral (class D), 290 K.
-pub fn bench_atmosphere() -> Atmosphere {
+pub(crate) fn bench_atmosphere() -> Atmosphere {
     Atmosphere {
         wind: Wind {
             speed_mps: 4.0,
@@ -39,7 +50,10 @@ pub fn bench_atmosphere() -> Atmosphere {
 
 /// Starts the benchmark's fires at `positions`: each a smoke and a flame plume (3 m across,
 /// 5 MW, burning from time 0 for the whole run), effect ids `2 * fire + kind`.
-pub fn start_fires(sys: &mut EffectSystem, positions: &[Geodetic]) -> anyhow::Result<()> {
+pub(crate) fn start_fires(
+    sys: &mut EffectSystem,
+    positions: &[Geodetic],
+) -> Result<(), BenchError> {
     for (fire, position) in positions.iter().enumerate() {
         for (k, kind) in [PlumeKind::Smoke, PlumeKind::Flame].into_iter().enumerate() {
             sys.start_plume(&PlumeSpec {
@@ -56,18 +70,14 @@ pub fn start_fires(sys: &mut EffectSystem, positions: &[Geodetic]) -> anyhow::Re
     Ok(())
 }
 
-fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let i = ((v.len() as f64 - 1.0) * q).round() as usize;
-    v.get(i).copied().unwrap_or(f64::NAN)
-}
-
-pub fn run(args: &BenchParticlesArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        (10..=1_000_000).contains(&args.frames),
-        "--frames {} must be between 10 and 1000000",
-        args.frames
-    );
+/// Runs the benchmark.
+///
+/// # Errors
+/// When an option is out of range or the effect system refuses the scene.
+pub fn run(options: &ParticlesOptions) -> Result<serde_json::Value, BenchError> {
+    require((10..=1_000_000).contains(&options.frames), || {
+        format!("--frames {} must be between 10 and 1000000", options.frames)
+    })?;
     let origin = Geodetic::new(36.0, -121.0, 50.0);
     let frame = EnuFrame::new(origin);
     let mut sys = EffectSystem::new(EffectsConfig::default())?;
@@ -110,18 +120,21 @@ pub fn run(args: &BenchParticlesArgs) -> anyhow::Result<()> {
             },
         })?;
     }
-    anyhow::ensure!(
-        args.warm_seconds <= 3600,
-        "--warm-seconds {} must be at most 3600",
-        args.warm_seconds
-    );
+    require(options.warm_seconds <= 3600, || {
+        format!(
+            "--warm-seconds {} must be at most 3600",
+            options.warm_seconds
+        )
+    })?;
     // Warm: every pool full (smoke lives 90 s).
-    let warm_frames = args.warm_seconds * 60;
+    let warm_frames = options.warm_seconds * 60;
     for f in 1..=warm_frames {
         sys.advance_to(f64::from(f) / 60.0)?;
     }
     let puffs = sys.stats().active;
-    anyhow::ensure!(puffs > 0, "the benchmark scene has no puffs");
+    if puffs == 0 {
+        return Err(BenchError::Scene("the benchmark scene has no puffs".into()));
+    }
 
     // Baseline data: the same number of puffs as flat position/velocity arrays.
     let mut flat: Vec<[f64; 6]> = (0..puffs)
@@ -139,7 +152,7 @@ pub fn run(args: &BenchParticlesArgs) -> anyhow::Result<()> {
     let eye = origin.to_ecef();
     let mut instances = Vec::with_capacity(puffs);
     let (mut update_ms, mut baseline_ms, mut snapshot_ms) = (Vec::new(), Vec::new(), Vec::new());
-    for f in 1..=args.frames {
+    for f in 1..=options.frames {
         let t = f64::from(warm_frames + f) / 60.0;
         let started = Instant::now();
         sys.advance_to(t)?;
@@ -162,10 +175,11 @@ pub fn run(args: &BenchParticlesArgs) -> anyhow::Result<()> {
         }
     }
     let stats = sys.stats();
-    anyhow::ensure!(
-        stats.allocated_slots == sys.allocated_at_build(),
-        "the puff pools grew during the benchmark"
-    );
+    if stats.allocated_slots != sys.allocated_at_build() {
+        return Err(BenchError::Scene(
+            "the puff pools grew during the benchmark".into(),
+        ));
+    }
 
     // Transmittance: random 2 km sight lines 2 m above the ground across the scene.
     let lines: Vec<(Geodetic, Geodetic)> = (0..2000)
@@ -192,40 +206,35 @@ pub fn run(args: &BenchParticlesArgs) -> anyhow::Result<()> {
         }
         rates.push(lines.len() as f64 / started.elapsed().as_secs_f64());
     }
-    let transmittance_per_s = median(rates);
+    let transmittance_per_s = median(&rates);
 
-    let update_median = median(update_ms.clone());
-    let baseline_median = median(baseline_ms);
+    let update_median = median(&update_ms);
+    let baseline_median = median(&baseline_ms);
     let report = serde_json::json!({
         "machine": machine(),
         "date_utc": date_utc(),
-        "commit": option_env!("CIG_GIT_COMMIT").unwrap_or("unknown"),
+        "commit": options.commit,
         "plumes": 32,
         "puffs_per_plume": 375,
         "dust_trails": 200,
         "puffs_per_dust_trail": 50,
         "puffs_active": puffs,
-        "frames": args.frames,
-        "warm_seconds": args.warm_seconds,
+        "frames": options.frames,
+        "warm_seconds": options.warm_seconds,
         "step_s": cig_effects::STEP_S,
         "update_ms_per_frame_median": update_median,
-        "update_ms_per_frame_p99": percentile(update_ms.clone(), 0.99),
-        "update_ms_per_frame_max": percentile(update_ms, 1.0),
+        "update_ms_per_frame_p99": percentile(&update_ms, 0.99),
+        "update_ms_per_frame_max": percentile(&update_ms, 1.0),
         "update_ns_per_puff_median": update_median * 1e6 / puffs as f64,
         "target_ms_per_frame": TARGET_MS,
         "meets_target": update_median <= TARGET_MS,
         "baseline_flat_update_ms_median": baseline_median,
         "update_vs_baseline": update_median / baseline_median,
-        "snapshot_ms_median": median(snapshot_ms),
+        "snapshot_ms_median": median(&snapshot_ms),
         "snapshot_instances": instances.len(),
         "transmittance_2km_per_s_one_core": transmittance_per_s,
         "transmittance_2km_obscured_fraction": obscured as f64 / lines.len() as f64,
         "pool_starved_spawns": stats.starved_total,
     });
-    if args.json {
-        println!("{report}");
-    } else {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    }
-    Ok(())
+    Ok(report)
 }

@@ -1,39 +1,11 @@
-//! The network edge: the only place in cig where sockets are opened.
-//!
-//! Algorithm: one UDP socket per protocol endpoint (CIGI, DIS), created with `socket2` so the
-//! address-sharing options (SO_REUSEADDR, SO_REUSEPORT: several IGs on one machine share the
-//! DIS port) are set before `bind`. One receive thread per endpoint blocks in `recv_from` with a
-//! 50 ms read timeout (so dropping the endpoint stops it within that time) and pushes each
-//! datagram, stamped with its monotonic receive time, into a bounded FIFO. When the FIFO is full
-//! the OLDEST datagram is dropped and counted: a frame loop that falls behind sees the newest
-//! state, and memory stays bounded (`queue_limit` × 64 KiB at worst). The frame loop takes
-//! everything queued once per frame ([`UdpEndpoint::drain`]), never blocking.
-//!
-//! Where it binds ([`BindTarget`]): the loopback interface by default; an interface by name
-//! (its IPv4 address, read with `getifaddrs(3)`) or an address when told; all interfaces only
-//! with `any`. Delivery ([`Delivery`]) follows IEEE 1278.2 §4 (DIS over UDP/IP: unicast,
-//! broadcast or multicast) and the Linux rules for which socket a datagram reaches (ip(7),
-//! udp(7)): a socket bound to a unicast address receives only datagrams sent to that address,
-//! so
-//! * unicast binds the interface address;
-//! * broadcast binds the interface's broadcast address (127.255.255.255 on the loopback,
-//!   255.255.255.255 with `any`) with SO_BROADCAST, and sends there by default;
-//! * multicast binds the group address, joins the group on the interface address
-//!   (IP_ADD_MEMBERSHIP), sends through that interface (IP_MULTICAST_IF) with loopback on (so
-//!   IGs on one machine see each other) and sends to the group by default.
-//!
-//! Limits: IPv4 for broadcast and multicast (IPv6 addresses work for unicast only); multicast
-//! TTL is the kernel's default (1: one subnet); datagrams bound to a broadcast or multicast
-//! address do not receive unicast sent to the host's own address; with SO_REUSEPORT the kernel
-//! hands each unicast datagram to only one of the sharing sockets (broadcast and multicast reach
-//! all of them). IPv4 cannot carry a UDP payload above 65,507 octets; larger ones (IPv6) are
-//! counted as oversized and dropped.
+//! The UDP endpoint: socket options, bind, the receive thread and its bounded queue.
 
-use anyhow::Context;
+use crate::interface::BindTarget;
+use crate::log::RateLimitedLog;
+use crate::NetError;
 use socket2::{Domain, Protocol, SockAddr, Socket, Type};
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::VecDeque;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr, UdpSocket};
-use std::str::FromStr;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
@@ -46,198 +18,6 @@ const RECEIVE_POLL: Duration = Duration::from_millis(50);
 /// Receive buffer asked of the kernel (best effort: capped by net.core.rmem_max).
 const SOCKET_RECEIVE_BUFFER_OCTETS: usize = 4 << 20;
 
-/// Where an endpoint binds.
-#[derive(Clone, Debug, PartialEq, Eq, Default)]
-pub enum BindTarget {
-    /// 127.0.0.1 (the default: nothing outside this machine can reach it).
-    #[default]
-    Loopback,
-    /// Every interface (0.0.0.0); only when the user asks for it.
-    Any,
-    /// One local address.
-    Address(IpAddr),
-    /// The IPv4 address of a named interface (e.g. `eth0`).
-    Interface(String),
-}
-
-impl FromStr for BindTarget {
-    type Err = anyhow::Error;
-
-    /// "loopback", "any", an IP address, or an interface name.
-    fn from_str(text: &str) -> anyhow::Result<BindTarget> {
-        let text = text.trim();
-        match text {
-            "loopback" | "lo" => return Ok(BindTarget::Loopback),
-            "any" => return Ok(BindTarget::Any),
-            _ => {}
-        }
-        if let Ok(address) = text.parse::<IpAddr>() {
-            return Ok(BindTarget::Address(address));
-        }
-        // Interface names: at most IFNAMSIZ − 1 = 15 octets, no '/', ':' or white space
-        // (netdevice(7)); anything else is a typo of one of the forms above.
-        let plausible = !text.is_empty()
-            && text.len() <= 15
-            && text
-                .chars()
-                .all(|c| c.is_ascii_graphic() && c != '/' && c != ':');
-        anyhow::ensure!(
-            plausible,
-            "bind target {text:?} is not \"loopback\", \"any\", an IP address or an interface name"
-        );
-        Ok(BindTarget::Interface(text.to_string()))
-    }
-}
-
-impl std::fmt::Display for BindTarget {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            BindTarget::Loopback => write!(f, "loopback"),
-            BindTarget::Any => write!(f, "any"),
-            BindTarget::Address(a) => write!(f, "{a}"),
-            BindTarget::Interface(name) => write!(f, "interface {name}"),
-        }
-    }
-}
-
-/// An interface address and, where it has one, its IPv4 broadcast address.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct InterfaceAddress {
-    /// The address to bind for unicast and to join multicast groups on.
-    pub address: IpAddr,
-    /// The subnet's broadcast address, when the interface broadcasts.
-    pub broadcast: Option<Ipv4Addr>,
-}
-
-/// The loopback's directed broadcast address (Linux routes 127.255.255.255 to `lo` as
-/// broadcast in its local table).
-const LOOPBACK_BROADCAST: Ipv4Addr = Ipv4Addr::new(127, 255, 255, 255);
-
-impl BindTarget {
-    /// The local address this target names.
-    ///
-    /// # Errors
-    /// One line naming the interface or address when it does not exist on this machine.
-    pub fn resolve(&self) -> anyhow::Result<InterfaceAddress> {
-        match self {
-            BindTarget::Loopback => Ok(InterfaceAddress {
-                address: IpAddr::V4(Ipv4Addr::LOCALHOST),
-                broadcast: Some(LOOPBACK_BROADCAST),
-            }),
-            BindTarget::Any => Ok(InterfaceAddress {
-                address: IpAddr::V4(Ipv4Addr::UNSPECIFIED),
-                broadcast: Some(Ipv4Addr::BROADCAST),
-            }),
-            BindTarget::Address(address) if address.is_unspecified() => Ok(InterfaceAddress {
-                // 0.0.0.0 or :: typed out: every interface, as `any`.
-                address: *address,
-                broadcast: address.is_ipv4().then_some(Ipv4Addr::BROADCAST),
-            }),
-            BindTarget::Address(address) => {
-                let listed = interface_addresses()?
-                    .into_iter()
-                    .find(|(_, a)| a.address == *address);
-                Ok(match listed {
-                    Some((_, found)) => found,
-                    None if address.is_loopback() => InterfaceAddress {
-                        address: *address,
-                        broadcast: Some(LOOPBACK_BROADCAST),
-                    },
-                    None => {
-                        anyhow::bail!("bind address {address} is not an address of this machine")
-                    }
-                })
-            }
-            BindTarget::Interface(name) => {
-                let all = interface_addresses()?;
-                if let Some((_, found)) = all.iter().find(|(n, a)| n == name && a.address.is_ipv4())
-                {
-                    return Ok(*found);
-                }
-                if all.iter().any(|(n, _)| n == name) {
-                    anyhow::bail!("interface {name:?} has no IPv4 address");
-                }
-                let mut names: Vec<&str> = all.iter().map(|(n, _)| n.as_str()).collect();
-                names.dedup();
-                anyhow::bail!(
-                    "interface {name:?} does not exist (this machine has: {})",
-                    names.join(", ")
-                )
-            }
-        }
-    }
-}
-
-/// Every (interface name, address) pair of this machine, in the kernel's order.
-fn interface_addresses() -> anyhow::Result<Vec<(String, InterfaceAddress)>> {
-    let mut list: *mut libc::ifaddrs = std::ptr::null_mut();
-    // SAFETY: getifaddrs writes a pointer to a list it allocates, released below.
-    let rc = unsafe { libc::getifaddrs(&mut list) };
-    if rc != 0 {
-        return Err(std::io::Error::last_os_error()).context("listing network interfaces");
-    }
-    let mut out = Vec::new();
-    let mut node = list;
-    while !node.is_null() {
-        // SAFETY: `node` is an element of the list getifaddrs returned, not yet freed.
-        let entry = unsafe { &*node };
-        node = entry.ifa_next;
-        if entry.ifa_name.is_null() || entry.ifa_addr.is_null() {
-            continue;
-        }
-        // SAFETY: ifa_name is a NUL-terminated string owned by the list.
-        let name = unsafe { std::ffi::CStr::from_ptr(entry.ifa_name) }
-            .to_string_lossy()
-            .into_owned();
-        // SAFETY: ifa_addr points to a sockaddr whose family says which struct it is.
-        let address = unsafe { socket_address_ip(entry.ifa_addr) };
-        let Some(address) = address else { continue };
-        let broadcasts = entry.ifa_flags & (libc::IFF_BROADCAST as libc::c_uint) != 0;
-        let broadcast = if broadcasts && address.is_ipv4() {
-            // SAFETY: with IFF_BROADCAST the union holds the broadcast address (or null).
-            let raw = entry.ifa_ifu;
-            if raw.is_null() {
-                None
-            } else {
-                match unsafe { socket_address_ip(raw) } {
-                    Some(IpAddr::V4(b)) => Some(b),
-                    _ => None,
-                }
-            }
-        } else if address.is_loopback() {
-            Some(LOOPBACK_BROADCAST)
-        } else {
-            None
-        };
-        out.push((name, InterfaceAddress { address, broadcast }));
-    }
-    // SAFETY: `list` came from getifaddrs and is freed once.
-    unsafe { libc::freeifaddrs(list) };
-    Ok(out)
-}
-
-/// The IP address in a `sockaddr` of family AF_INET or AF_INET6.
-///
-/// # Safety
-/// `raw` must point to a valid `sockaddr` at least as large as its family's struct.
-unsafe fn socket_address_ip(raw: *const libc::sockaddr) -> Option<IpAddr> {
-    // SAFETY: the caller guarantees `raw` is valid; the family field is common to all.
-    let family = i32::from(unsafe { (*raw).sa_family });
-    match family {
-        libc::AF_INET => {
-            // SAFETY: family AF_INET means the struct is a sockaddr_in.
-            let v4 = unsafe { &*raw.cast::<libc::sockaddr_in>() };
-            Some(IpAddr::V4(Ipv4Addr::from(u32::from_be(v4.sin_addr.s_addr))))
-        }
-        libc::AF_INET6 => {
-            // SAFETY: family AF_INET6 means the struct is a sockaddr_in6.
-            let v6 = unsafe { &*raw.cast::<libc::sockaddr_in6>() };
-            Some(IpAddr::V6(std::net::Ipv6Addr::from(v6.sin6_addr.s6_addr)))
-        }
-        _ => None,
-    }
-}
-
 /// How datagrams reach the other nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Delivery {
@@ -248,19 +28,6 @@ pub enum Delivery {
     Broadcast,
     /// To the members of an IPv4 multicast group.
     Multicast(Ipv4Addr),
-}
-
-/// Parses an IPv4 multicast group (224.0.0.0/4); `what` names the value in errors.
-pub fn parse_multicast_group(text: &str, what: &str) -> anyhow::Result<Ipv4Addr> {
-    let group: Ipv4Addr = text
-        .trim()
-        .parse()
-        .map_err(|_| anyhow::anyhow!("{what} {text:?} is not an IPv4 address"))?;
-    anyhow::ensure!(
-        group.is_multicast(),
-        "{what} {group} is not a multicast group (224.0.0.0 to 239.255.255.255)"
-    );
-    Ok(group)
 }
 
 /// What to open.
@@ -373,42 +140,49 @@ impl UdpEndpoint {
     /// # Errors
     /// One line naming the endpoint, the address and the reason (address in use, no such
     /// interface, multicast refused …).
-    pub fn open(config: EndpointConfig) -> anyhow::Result<UdpEndpoint> {
+    pub fn open(config: EndpointConfig) -> Result<UdpEndpoint, NetError> {
         let label = config.label;
-        anyhow::ensure!(
-            config.queue_limit > 0,
-            "{label}: the receive queue limit must be at least 1 datagram"
-        );
+        let fail = |reason: String| NetError::Endpoint { label, reason };
+        // An operating-system refusal: what was refused, then the system's reason.
+        let refused = |what: String| move |e: std::io::Error| fail(format!("{what}: {e}"));
+        if config.queue_limit == 0 {
+            return Err(fail(
+                "the receive queue limit must be at least 1 datagram".into(),
+            ));
+        }
         let interface = config
             .bind
             .resolve()
-            .with_context(|| format!("{label}: cannot bind to {}", config.bind))?;
+            .map_err(|e| fail(format!("cannot bind to {}: {e}", config.bind)))?;
         let bind_ip: IpAddr = match config.delivery {
             Delivery::Unicast => interface.address,
             Delivery::Broadcast => {
-                anyhow::ensure!(
-                    interface.address.is_ipv4(),
-                    "{label}: broadcast needs an IPv4 address, {} is not one",
-                    interface.address
-                );
-                let broadcast = interface.broadcast.with_context(|| {
-                    format!(
-                        "{label}: {} ({}) has no broadcast address",
+                if !interface.address.is_ipv4() {
+                    return Err(fail(format!(
+                        "broadcast needs an IPv4 address, {} is not one",
+                        interface.address
+                    )));
+                }
+                let broadcast = interface.broadcast.ok_or_else(|| {
+                    fail(format!(
+                        "{} ({}) has no broadcast address",
                         config.bind, interface.address
-                    )
+                    ))
                 })?;
                 IpAddr::V4(broadcast)
             }
             Delivery::Multicast(group) => {
-                anyhow::ensure!(
-                    group.is_multicast(),
-                    "{label}: {group} is not a multicast group address (224.0.0.0/4)"
-                );
-                anyhow::ensure!(
-                    interface.address.is_ipv4(),
-                    "{label}: multicast needs an IPv4 interface address, {} is not one",
-                    interface.address
-                );
+                if !group.is_multicast() {
+                    return Err(fail(format!(
+                        "{group} is not a multicast group address (224.0.0.0/4)"
+                    )));
+                }
+                if !interface.address.is_ipv4() {
+                    return Err(fail(format!(
+                        "multicast needs an IPv4 interface address, {} is not one",
+                        interface.address
+                    )));
+                }
                 if cfg!(target_os = "linux") {
                     IpAddr::V4(group)
                 } else {
@@ -422,15 +196,15 @@ impl UdpEndpoint {
             Type::DGRAM,
             Some(Protocol::UDP),
         )
-        .with_context(|| format!("{label}: cannot create a UDP socket"))?;
+        .map_err(refused("cannot create a UDP socket".into()))?;
         if config.reuse_port {
             socket
                 .set_reuse_address(true)
-                .with_context(|| format!("{label}: SO_REUSEADDR refused"))?;
+                .map_err(refused("SO_REUSEADDR refused".into()))?;
             #[cfg(all(unix, not(target_os = "solaris"), not(target_os = "illumos")))]
             socket
                 .set_reuse_port(true)
-                .with_context(|| format!("{label}: SO_REUSEPORT refused"))?;
+                .map_err(refused("SO_REUSEPORT refused".into()))?;
         }
         if let Err(e) = socket.set_recv_buffer_size(SOCKET_RECEIVE_BUFFER_OCTETS) {
             tracing::debug!("{label}: receive buffer size not raised: {e}");
@@ -438,31 +212,33 @@ impl UdpEndpoint {
         if config.delivery == Delivery::Broadcast {
             socket
                 .set_broadcast(true)
-                .with_context(|| format!("{label}: SO_BROADCAST refused"))?;
+                .map_err(refused("SO_BROADCAST refused".into()))?;
         }
         socket
             .bind(&SockAddr::from(bind_addr))
-            .with_context(|| format!("{label}: cannot bind UDP {bind_addr}"))?;
+            .map_err(refused(format!("cannot bind UDP {bind_addr}")))?;
         if let (Delivery::Multicast(group), IpAddr::V4(on)) = (config.delivery, interface.address) {
             socket
                 .join_multicast_v4(&group, &on)
-                .with_context(|| format!("{label}: cannot join multicast group {group} on {on}"))?;
+                .map_err(refused(format!(
+                    "cannot join multicast group {group} on {on}"
+                )))?;
             if !on.is_unspecified() {
                 socket
                     .set_multicast_if_v4(&on)
-                    .with_context(|| format!("{label}: cannot send multicast through {on}"))?;
+                    .map_err(refused(format!("cannot send multicast through {on}")))?;
             }
             socket
                 .set_multicast_loop_v4(true)
-                .with_context(|| format!("{label}: IP_MULTICAST_LOOP refused"))?;
+                .map_err(refused("IP_MULTICAST_LOOP refused".into()))?;
         }
         socket
             .set_read_timeout(Some(RECEIVE_POLL))
-            .with_context(|| format!("{label}: cannot set the read timeout"))?;
+            .map_err(refused("cannot set the read timeout".into()))?;
         let socket: UdpSocket = socket.into();
         let local = socket
             .local_addr()
-            .with_context(|| format!("{label}: no local address after bind"))?;
+            .map_err(refused("no local address after bind".into()))?;
         let destination = config.destination.or(match config.delivery {
             Delivery::Unicast => None,
             Delivery::Broadcast | Delivery::Multicast(_) => Some(local),
@@ -484,7 +260,7 @@ impl UdpEndpoint {
             std::thread::Builder::new()
                 .name(format!("cig-{}-rx", label.to_ascii_lowercase()))
                 .spawn(move || receive_loop(label, &socket, &shared, limit))
-                .with_context(|| format!("{label}: cannot start the receive thread"))?
+                .map_err(refused("cannot start the receive thread".into()))?
         };
         tracing::info!(
             "{label}: listening on UDP {local} ({:?}, queue {} datagrams)",
@@ -693,109 +469,10 @@ fn receive_loop(label: &'static str, socket: &UdpSocket, shared: &Shared, limit:
 /// its previous line. At most 256 sources are tracked; beyond that, sources silent for longer
 /// than the interval are forgotten and the rest share one "other sources" line, so a sender
 /// spoofing many addresses cannot grow memory.
-#[derive(Debug)]
-pub struct RateLimitedLog {
-    label: &'static str,
-    interval: Duration,
-    total: u64,
-    logged: u64,
-    sources: BTreeMap<String, SourceLog>,
-}
-
-#[derive(Debug, Clone, Copy)]
-struct SourceLog {
-    last_logged: Instant,
-    suppressed: u64,
-}
-
-const MAX_TRACKED_SOURCES: usize = 256;
-const OTHER_SOURCES: &str = "(other sources)";
-
-impl RateLimitedLog {
-    /// A log whose lines start with `label` ("CIGI", "DIS").
-    #[must_use]
-    pub fn new(label: &'static str) -> RateLimitedLog {
-        RateLimitedLog::with_interval(label, Duration::from_secs(1))
-    }
-
-    /// The same with another minimum interval between two lines of one source.
-    #[must_use]
-    pub fn with_interval(label: &'static str, interval: Duration) -> RateLimitedLog {
-        RateLimitedLog {
-            label,
-            interval,
-            total: 0,
-            logged: 0,
-            sources: BTreeMap::new(),
-        }
-    }
-
-    /// Counts one bad datagram from `source`; logs it unless that source logged within the
-    /// interval. Returns whether a line went out.
-    pub fn note(&mut self, now: Instant, source: &str, reason: &str) -> bool {
-        self.total += 1;
-        if !self.sources.contains_key(source) && self.sources.len() >= MAX_TRACKED_SOURCES {
-            let interval = self.interval;
-            self.sources
-                .retain(|_, s| now.saturating_duration_since(s.last_logged) < interval);
-        }
-        let key = if self.sources.contains_key(source) || self.sources.len() < MAX_TRACKED_SOURCES {
-            source
-        } else {
-            OTHER_SOURCES
-        };
-        if let Some(entry) = self.sources.get_mut(key) {
-            if now.saturating_duration_since(entry.last_logged) < self.interval {
-                entry.suppressed += 1;
-                return false;
-            }
-            let suppressed = entry.suppressed;
-            *entry = SourceLog {
-                last_logged: now,
-                suppressed: 0,
-            };
-            self.emit(key, reason, suppressed);
-        } else {
-            self.sources.insert(
-                key.to_string(),
-                SourceLog {
-                    last_logged: now,
-                    suppressed: 0,
-                },
-            );
-            self.emit(key, reason, 0);
-        }
-        true
-    }
-
-    fn emit(&mut self, source: &str, reason: &str, suppressed: u64) {
-        self.logged += 1;
-        if suppressed > 0 {
-            tracing::warn!(
-                "{}: dropped a datagram from {source}: {reason} ({suppressed} more from there since the last report)",
-                self.label
-            );
-        } else {
-            tracing::warn!("{}: dropped a datagram from {source}: {reason}", self.label);
-        }
-    }
-
-    /// Bad datagrams noted so far.
-    #[must_use]
-    pub fn count(&self) -> u64 {
-        self.total
-    }
-
-    /// Lines logged so far.
-    #[must_use]
-    pub fn lines_logged(&self) -> u64 {
-        self.logged
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::interface::{interface_addresses, LOOPBACK_BROADCAST};
 
     fn open_loopback(queue_limit: usize) -> UdpEndpoint {
         UdpEndpoint::open(EndpointConfig {
@@ -803,39 +480,6 @@ mod tests {
             ..EndpointConfig::loopback("TEST", 0)
         })
         .expect("loopback endpoint opens")
-    }
-
-    #[test]
-    fn bind_target_parses_every_form() {
-        assert_eq!(
-            "loopback".parse::<BindTarget>().unwrap(),
-            BindTarget::Loopback
-        );
-        assert_eq!("any".parse::<BindTarget>().unwrap(), BindTarget::Any);
-        assert_eq!(
-            "10.1.2.3".parse::<BindTarget>().unwrap(),
-            BindTarget::Address(IpAddr::V4(Ipv4Addr::new(10, 1, 2, 3)))
-        );
-        assert_eq!(
-            "::1".parse::<BindTarget>().unwrap(),
-            BindTarget::Address("::1".parse().unwrap())
-        );
-        assert_eq!(
-            "eth0".parse::<BindTarget>().unwrap(),
-            BindTarget::Interface("eth0".into())
-        );
-        for bad in [
-            "",
-            "a name",
-            "10.1.2.3:80",
-            "eth0/1",
-            "averyveryverylongname",
-        ] {
-            assert!(
-                bad.parse::<BindTarget>().is_err(),
-                "{bad:?} must be refused"
-            );
-        }
     }
 
     #[test]
@@ -1051,39 +695,5 @@ mod tests {
         let started = Instant::now();
         drop(e);
         assert!(started.elapsed() < Duration::from_secs(2));
-    }
-
-    #[test]
-    fn rate_limited_log_counts_everything_and_logs_once_per_interval_per_source() {
-        let mut log = RateLimitedLog::new("DIS");
-        let t0 = Instant::now();
-        assert!(log.note(t0, "10.0.0.1:3000", "garbage"));
-        for k in 1..=50 {
-            assert!(!log.note(
-                t0 + Duration::from_millis(k * 10),
-                "10.0.0.1:3000",
-                "garbage"
-            ));
-        }
-        assert!(
-            log.note(t0, "10.0.0.2:3000", "truncated"),
-            "another source logs"
-        );
-        assert!(log.note(t0 + Duration::from_millis(1001), "10.0.0.1:3000", "garbage"));
-        assert_eq!(log.count(), 53);
-        assert_eq!(log.lines_logged(), 3);
-    }
-
-    #[test]
-    fn rate_limited_log_memory_is_bounded_under_spoofed_sources() {
-        let mut log = RateLimitedLog::new("DIS");
-        let t0 = Instant::now();
-        for k in 0..10_000u32 {
-            log.note(t0, &format!("10.{}.{}.1:1", k / 256, k % 256), "garbage");
-        }
-        assert_eq!(log.count(), 10_000);
-        assert!(log.sources.len() <= MAX_TRACKED_SOURCES + 1);
-        // 256 sources logged once, the rest shared one line.
-        assert_eq!(log.lines_logged(), MAX_TRACKED_SOURCES as u64 + 1);
     }
 }

@@ -12,19 +12,37 @@
 //! (<= 20 %). Limits: the share is a difference of medians of whole frames, so on a shared
 //! machine it carries a few percent of noise (it can even come out negative).
 
-use crate::bench::{date_utc, machine};
-use crate::cli::BenchEnvArgs;
-use crate::config::Config;
-use anyhow::Context;
+use crate::database::{demo_or, BuildProgress};
+use crate::report::{date_utc, machine, median};
+use crate::{require, BenchError, Report, Step};
 use cig_render::{FrameOptions, Renderer};
 use cig_scene::lighting::{Fog, FogMode, SkyModel};
 use cig_scene::FrameSnapshot;
-use cig_terrain::{QuerySession, TileCache};
+use cig_terrain::{PagingConfig, QuerySession, TileCache};
 use serde_json::json;
 use std::hint::black_box;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
+
+/// What `cig bench env` measures.
+#[derive(Clone, Debug)]
+pub struct EnvOptions {
+    /// The database flown over; `None`: the demo database "demo-db", built when missing.
+    pub db: Option<PathBuf>,
+    /// Frame size, pixels.
+    pub size: (u32, u32),
+    /// Frames along the pass, each drawn every way every round.
+    pub frames: usize,
+    /// Interleaved rounds.
+    pub rounds: usize,
+    /// The tile cache's configuration.
+    pub paging: PagingConfig,
+    /// Cells along a tile side of the demo database, when it is built.
+    pub tile_cells: u32,
+    /// The commit the report names.
+    pub commit: String,
+}
 
 /// The measured environment configurations: name, and what it changes in a baseline
 /// (flat sky, no fog) snapshot. `sky_fog_and_clouds` is the budget line.
@@ -65,12 +83,6 @@ fn flat(s: &mut FrameSnapshot) {
     s.fog = Fog::from_visibility(FogMode::Off, 40_000.0);
 }
 
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    s.get(s.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 /// Median microseconds per call of `f` over `rounds` rounds of `per_round` calls.
 fn time_us(rounds: usize, per_round: usize, mut f: impl FnMut(usize)) -> f64 {
     let mut per_call = Vec::with_capacity(rounds);
@@ -84,31 +96,22 @@ fn time_us(rounds: usize, per_round: usize, mut f: impl FnMut(usize)) -> f64 {
     median(&per_call)
 }
 
-fn database(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<PathBuf> {
-    let path = args.db.clone().unwrap_or_else(|| PathBuf::from("demo-db"));
-    if args.db.is_none() && !path.exists() {
-        tracing::warn!(
-            "bench env: building the demo database (50 km x 50 km, 30 m posts) at {}",
-            path.display()
-        );
-        crate::db::synthesize_database(&crate::demo::demo_params(), &path, false, config)?;
-    }
-    Ok(path)
-}
-
-pub fn run(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
-    let size = crate::render::parse_size(&args.size)?;
-    anyhow::ensure!(
-        (2..=1000).contains(&args.frames),
-        "--frames {} must be between 2 and 1000",
-        args.frames
-    );
-    anyhow::ensure!(
-        (1..=100).contains(&args.rounds),
-        "--rounds {} must be between 1 and 100",
-        args.rounds
-    );
-    let time = crate::render::parse_time("2026-06-21T19:00:00Z")?;
+/// Runs the benchmark; `progress` hears the demo database's build, if it is built.
+///
+/// # Errors
+/// When an option is out of range, there is no GPU or the pass leaves the database.
+pub fn run(
+    options: &EnvOptions,
+    progress: &mut dyn FnMut(BuildProgress<'_>),
+) -> Result<Report, BenchError> {
+    let size = options.size;
+    require((2..=1000).contains(&options.frames), || {
+        format!("--frames {} must be between 2 and 1000", options.frames)
+    })?;
+    require((1..=100).contains(&options.rounds), || {
+        format!("--rounds {} must be between 1 and 100", options.rounds)
+    })?;
+    let time = cig_environment::UtcTime::parse_iso8601("2026-06-21T19:00:00Z")?.unix_seconds();
 
     // 1. Ephemeris and natural illuminance per update, over a day of instants.
     let observer = cig_environment::Observer::new(36.0, -121.0, 100.0)?;
@@ -135,29 +138,25 @@ pub fn run(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
     black_box(start);
 
     // 2. The frame share, on the GPU.
-    let path = database(args, config)?;
+    let path = demo_or(
+        options.db.as_deref(),
+        "bench env",
+        options.tile_cells,
+        progress,
+    )?;
     let db = Arc::new(cig_terrain_io::store::open_database(&path)?);
     let gpu = cig_render::Gpu::headless()?;
-    let target_texture = cig_render::gpu::render_target(
-        &gpu.device,
-        "bench target",
-        size,
-        cig_render::FRAME_FORMAT,
-        1,
-        wgpu::TextureUsages::empty(),
-        &[],
-    );
-    let target = target_texture.create_view(&Default::default());
-    let cache = Arc::new(TileCache::new(Arc::clone(&db), config.paging.clone())?);
+    let target = cig_render::OffscreenTarget::new(&gpu, size);
+    let cache = Arc::new(TileCache::new(Arc::clone(&db), options.paging.clone())?);
     let mut session = QuerySession::new(Arc::clone(&cache));
     // The render benchmark's pass, sampled at `frames` points over 10 s.
-    let leg = crate::bench_render::pass_leg(&db, 300.0, 10.0);
-    let dt_s = 10.0 / args.frames as f64;
+    let leg = crate::render::pass_leg(&db, 300.0, 10.0);
+    let dt_s = 10.0 / options.frames as f64;
     let views = crate::flight::views_along(&mut session, &leg, dt_s, 60.0, size)
-        .context("the benchmark path")?;
+        .step("the benchmark path")?;
     let base: Vec<FrameSnapshot> = views
         .iter()
-        .take(args.frames)
+        .take(options.frames)
         .map(|v| {
             let mut s = FrameSnapshot::new(time, vec![*v]);
             flat(&mut s);
@@ -168,20 +167,22 @@ pub fn run(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
     for s in &base {
         cig_render::load_for_view(&mut renderer, &cache, s, 0, 64)?;
     }
-    let options = FrameOptions {
+    let frame_options = FrameOptions {
         mesh_budget: usize::MAX,
         key_background: false,
         fade_in_s: 0.0,
+        ..FrameOptions::default()
     };
-    let draw = |renderer: &mut Renderer, frames: &[FrameSnapshot]| -> anyhow::Result<Vec<f64>> {
-        let mut ms = Vec::with_capacity(frames.len());
-        for s in frames {
-            let started = Instant::now();
-            renderer.render(&cache, s, 0, &target, options)?;
-            ms.push(started.elapsed().as_secs_f64() * 1e3);
-        }
-        Ok(ms)
-    };
+    let draw =
+        |renderer: &mut Renderer, frames: &[FrameSnapshot]| -> Result<Vec<f64>, BenchError> {
+            let mut ms = Vec::with_capacity(frames.len());
+            for s in frames {
+                let started = Instant::now();
+                renderer.render(&cache, s, 0, target.view(), frame_options)?;
+                ms.push(started.elapsed().as_secs_f64() * 1e3);
+            }
+            Ok(ms)
+        };
     let variants: Vec<(&str, Vec<FrameSnapshot>)> = VARIANTS
         .iter()
         .map(|(name, change)| {
@@ -203,7 +204,7 @@ pub fn run(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
     }
     let mut flat_ms = Vec::new();
     let mut variant_ms: Vec<Vec<f64>> = vec![Vec::new(); variants.len()];
-    for _ in 0..args.rounds {
+    for _ in 0..options.rounds {
         flat_ms.extend(draw(&mut renderer, &base)?);
         for (i, (_, frames)) in variants.iter().enumerate() {
             variant_ms[i].extend(draw(&mut renderer, frames)?);
@@ -237,12 +238,12 @@ pub fn run(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
     let report = json!({
         "machine": machine(),
         "date_utc": date_utc(),
-        "commit": option_env!("CIG_GIT_COMMIT").unwrap_or("unknown"),
+        "commit": options.commit,
         "adapter": gpu.describe(),
         "database": path.display().to_string(),
         "size": [size.0, size.1],
         "frames": base.len(),
-        "rounds": args.rounds,
+        "rounds": options.rounds,
         "ephemeris_us_per_update": ephemeris_us,
         "lighting_us_per_view": lighting_us,
         "atmosphere_tables_ms": tables_ms,
@@ -256,16 +257,15 @@ pub fn run(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
             "ephemeris_us_per_update_at_most": 20.0,
         },
     });
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!(
-            "ephemeris + illuminance {:.2} us per update; light of a view {:.1} us; frame {:.2} ms flat, environment {:.0}% of the frame",
-            ephemeris_us,
-            lighting_us,
-            flat_median,
-            100.0 * (environment_ms - flat_median) / environment_ms
-        );
-    }
-    Ok(())
+    let summary = format!(
+        "ephemeris + illuminance {:.2} us per update; light of a view {:.1} us; frame {:.2} ms flat, environment {:.0}% of the frame",
+        ephemeris_us,
+        lighting_us,
+        flat_median,
+        100.0 * (environment_ms - flat_median) / environment_ms
+    );
+    Ok(Report {
+        json: report,
+        summary,
+    })
 }

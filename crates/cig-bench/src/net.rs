@@ -32,11 +32,9 @@
 //! sender on the same machine, so on few cores the sender and receive threads compete with the
 //! frame loop for CPU — which is the point, but the figures depend on the core count.
 
-use crate::bench::{date_utc, machine, median};
-use crate::cli::BenchNetArgs;
-use crate::config::Config;
-use crate::net::{EndpointConfig, UdpEndpoint};
-use anyhow::Context;
+use crate::database::{demo_or, open_session, BuildProgress};
+use crate::report::{date_utc, machine, median, percentile};
+use crate::{require, BenchError, Step};
 use cig_cigi::{ByteOrder, EntityControl, EntityPosition, IgControl, Message, Packet, Version};
 use cig_dis::codec::timestamp_from_seconds_past_hour;
 use cig_dis::{
@@ -45,6 +43,7 @@ use cig_dis::{
     RemoteTableConfig,
 };
 use cig_geo::{EnuFrame, Geodetic};
+use cig_net::{EndpointConfig, UdpEndpoint};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use serde_json::{json, Value};
@@ -67,21 +66,46 @@ const CIGI_APPLY_BUDGET_MS: f64 = 0.2;
 const FLOOD_ENTITIES: u16 = 1000;
 const FLOOD_QUEUE_LIMIT: usize = 4096;
 
-/// What every measure may use.
-pub struct BenchContext<'a> {
-    /// The command's arguments.
-    pub args: &'a BenchNetArgs,
-    /// The configuration (paging for the database).
-    pub config: &'a Config,
-    /// Seconds each rate measurement may take in all.
+/// What `cig bench net` measures.
+#[derive(Clone, Debug)]
+pub struct NetOptions {
+    /// Seconds each measure may take.
     pub seconds: f64,
+    /// The database of the HAT/HOT measures; `None`: the demo database "demo-db", built when
+    /// missing.
+    pub db: Option<PathBuf>,
+    /// Also run the flood.
+    pub flood: bool,
+    /// Seconds of flood.
+    pub flood_s: f64,
+    /// PDUs per second of the flood.
+    pub flood_rate: u64,
+    /// The tile cache's configuration.
+    pub paging: cig_terrain::PagingConfig,
+    /// Cells along a tile side of the demo database, when it is built.
+    pub tile_cells: u32,
+    /// The commit the report names.
+    pub commit: String,
+}
+
+/// What every measure may use.
+struct BenchContext<'a, 'p> {
+    /// The options.
+    options: &'a NetOptions,
+    /// Seconds each rate measurement may take in all.
+    seconds: f64,
+    /// Hears the demo database's build, if it is built.
+    progress: &'a mut (dyn FnMut(BuildProgress<'_>) + 'p),
 }
 
 /// A measure: its name in the report and the function that runs it.
-pub type Measure = (&'static str, fn(&BenchContext) -> anyhow::Result<Value>);
+type Measure = (
+    &'static str,
+    fn(&mut BenchContext) -> Result<Value, BenchError>,
+);
 
 /// The measures, in report order. Append new ones here.
-pub const MEASURES: &[Measure] = &[
+const MEASURES: &[Measure] = &[
     ("dis_decode", measure_dis_decode),
     ("dis_remote_table", measure_remote_table),
     ("hat_hot", measure_hat_hot),
@@ -90,60 +114,49 @@ pub const MEASURES: &[Measure] = &[
     ("hat_hot_ig_frame", measure_hat_hot_ig_frame),
 ];
 
-pub fn run(args: &BenchNetArgs, config: &Config) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 600.0,
-        "--seconds {} must be between 0 and 600",
-        args.seconds
-    );
-    anyhow::ensure!(
-        args.flood_s.is_finite() && args.flood_s > 0.0 && args.flood_s <= 3600.0,
-        "--flood-s {} must be between 0 and 3600",
-        args.flood_s
-    );
-    anyhow::ensure!(
-        (1..=10_000_000).contains(&args.flood_rate),
-        "--flood-rate {} must be between 1 and 10000000 PDUs per second",
-        args.flood_rate
-    );
-    let context = BenchContext {
-        args,
-        config,
-        seconds: args.seconds,
+/// Runs the benchmark; `progress` hears the demo database's build, if it is built.
+///
+/// # Errors
+/// When an option is out of range, a measure's scene cannot be built or the loopback
+/// endpoints cannot open.
+pub fn run(
+    options: &NetOptions,
+    progress: &mut dyn FnMut(BuildProgress<'_>),
+) -> Result<Value, BenchError> {
+    require(
+        options.seconds.is_finite() && options.seconds > 0.0 && options.seconds <= 600.0,
+        || format!("--seconds {} must be between 0 and 600", options.seconds),
+    )?;
+    require(
+        options.flood_s.is_finite() && options.flood_s > 0.0 && options.flood_s <= 3600.0,
+        || format!("--flood-s {} must be between 0 and 3600", options.flood_s),
+    )?;
+    require((1..=10_000_000).contains(&options.flood_rate), || {
+        format!(
+            "--flood-rate {} must be between 1 and 10000000 PDUs per second",
+            options.flood_rate
+        )
+    })?;
+    let mut context = BenchContext {
+        options,
+        seconds: options.seconds,
+        progress,
     };
     let mut report = serde_json::Map::new();
     report.insert("machine".into(), machine());
     report.insert("date_utc".into(), json!(date_utc()));
-    report.insert(
-        "commit".into(),
-        json!(option_env!("CIG_GIT_COMMIT").unwrap_or("unknown")),
-    );
-    report.insert("seconds_per_measure".into(), json!(args.seconds));
+    report.insert("commit".into(), json!(options.commit));
+    report.insert("seconds_per_measure".into(), json!(options.seconds));
     for (name, measure) in MEASURES {
         tracing::info!("bench net: {name}");
-        let value = measure(&context).with_context(|| format!("bench net: {name}"))?;
+        let value = measure(&mut context).step_with(|| format!("bench net: {name}"))?;
         report.insert((*name).to_string(), value);
     }
-    if args.flood {
+    if options.flood {
         tracing::info!("bench net: flood");
         report.insert("flood".into(), measure_flood(&context)?);
     }
-    let report = Value::Object(report);
-    if args.json {
-        println!("{report}");
-    } else {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    }
-    Ok(())
-}
-
-fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let i = ((v.len() as f64 - 1.0) * q).round() as usize;
-    v.get(i).copied().unwrap_or(f64::NAN)
+    Ok(Value::Object(report))
 }
 
 fn ms(d: Duration) -> f64 {
@@ -152,7 +165,7 @@ fn ms(d: Duration) -> f64 {
 
 /// A deterministic scene of `n` entities around (36 N, 121 W): Entity State PDUs (encoded)
 /// with DR algorithms 1-9 in turn, as a DIS 7 exercise 1 would carry them.
-fn entity_state_pdus(n: usize, seed: u64) -> anyhow::Result<Vec<Vec<u8>>> {
+fn entity_state_pdus(n: usize, seed: u64) -> Result<Vec<Vec<u8>>, BenchError> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let centre = Geodetic::new(36.0, -121.0, 0.0);
     let frame = EnuFrame::new(centre);
@@ -234,11 +247,11 @@ fn rate(budget: Duration, per_call: usize, mut round: impl FnMut()) -> f64 {
 }
 
 /// (a) Entity State decoding rate on one core.
-fn measure_dis_decode(context: &BenchContext) -> anyhow::Result<Value> {
+fn measure_dis_decode(context: &mut BenchContext) -> Result<Value, BenchError> {
     let pdus = entity_state_pdus(1024, 11)?;
     // Every PDU must decode, or the rate would count failures.
     for p in &pdus {
-        cig_dis::decode_pdu(p).context("a benchmark PDU does not decode")?;
+        cig_dis::decode_pdu(p).step("a benchmark PDU does not decode")?;
     }
     let budget = Duration::from_secs_f64(context.seconds / (2.0 * ROUNDS as f64));
     let (mut decode, mut copy) = (Vec::new(), Vec::new());
@@ -257,8 +270,8 @@ fn measure_dis_decode(context: &BenchContext) -> anyhow::Result<Value> {
             }
         }));
     }
-    let decode_per_s = median(decode);
-    let copy_per_s = median(copy);
+    let decode_per_s = median(&decode);
+    let copy_per_s = median(&copy);
     Ok(json!({
         "pdu_octets": pdus.first().map_or(0, Vec::len),
         "distinct_pdus": pdus.len(),
@@ -271,9 +284,9 @@ fn measure_dis_decode(context: &BenchContext) -> anyhow::Result<Value> {
     }))
 }
 
-fn decoded(pdus: &[Vec<u8>]) -> anyhow::Result<Vec<DecodedPdu>> {
+fn decoded(pdus: &[Vec<u8>]) -> Result<Vec<DecodedPdu>, BenchError> {
     pdus.iter()
-        .map(|p| cig_dis::decode_pdu(p).context("a benchmark PDU does not decode"))
+        .map(|p| cig_dis::decode_pdu(p).step("a benchmark PDU does not decode"))
         .collect()
 }
 
@@ -286,20 +299,21 @@ fn bench_table_config() -> RemoteTableConfig {
 }
 
 /// (b) One frame of the remote entity table with 10,000 entities.
-fn measure_remote_table(context: &BenchContext) -> anyhow::Result<Value> {
+fn measure_remote_table(context: &mut BenchContext) -> Result<Value, BenchError> {
     let pdus = decoded(&entity_state_pdus(TABLE_ENTITIES, 12)?)?;
     let fresh_per_frame = TABLE_ENTITIES / 100;
     let mut table = RemoteEntityTable::new(bench_table_config());
     for p in &pdus {
         table
             .apply(0.0, p)
-            .map_err(|e| anyhow::anyhow!("the table refused a benchmark PDU: {e:?}"))?;
+            .map_err(|e| BenchError::Scene(format!("the table refused a benchmark PDU: {e:?}")))?;
     }
-    anyhow::ensure!(
-        table.len() == TABLE_ENTITIES,
-        "the table holds {}",
-        table.len()
-    );
+    if table.len() != TABLE_ENTITIES {
+        return Err(BenchError::Scene(format!(
+            "the table holds {}",
+            table.len()
+        )));
+    }
     // Baseline data: the same number of flat positions and velocities.
     let mut flat: Vec<[f64; 6]> = (0..TABLE_ENTITIES)
         .map(|i| [i as f64, 1.0, 2.0, 3.0, 4.0, 5.0])
@@ -338,48 +352,42 @@ fn measure_remote_table(context: &BenchContext) -> anyhow::Result<Value> {
         }
     }
     black_box(checksum);
-    let frame_median = median(frame_ms.clone());
-    let baseline_median = median(baseline_ms);
+    let frame_median = median(&frame_ms);
+    let baseline_median = median(&baseline_ms);
     Ok(json!({
         "entities": TABLE_ENTITIES,
         "fresh_updates_per_frame": fresh_per_frame,
         "frames": frames,
         "frame_ms_median": frame_median,
-        "frame_ms_p99": percentile(frame_ms, 0.99),
+        "frame_ms_p99": percentile(&frame_ms, 0.99),
         "target_ms": TABLE_TARGET_MS,
         "meets_target": frame_median <= TABLE_TARGET_MS,
         "baseline_flat_step_ms_median": baseline_median,
         "frame_vs_baseline": frame_median / baseline_median,
-        "snapshot_ms_median": median(snapshot_ms),
+        "snapshot_ms_median": median(&snapshot_ms),
     }))
 }
 
 /// The database for the HAT/HOT measure: `--db`, or the demo database (built when missing,
 /// as `cig demo` does).
-fn database(context: &BenchContext) -> anyhow::Result<PathBuf> {
-    let path = context
-        .args
-        .db
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("demo-db"));
-    if context.args.db.is_none() && !path.exists() {
-        tracing::warn!(
-            "bench net: building the demo database (50 km x 50 km, 30 m posts) at {}",
-            path.display()
-        );
-        crate::db::synthesize_database(&crate::demo::demo_params(), &path, false, context.config)?;
-    }
-    Ok(path)
+fn database(context: &mut BenchContext) -> Result<PathBuf, BenchError> {
+    let options = context.options;
+    demo_or(
+        options.db.as_deref(),
+        "bench net",
+        options.tile_cells,
+        &mut *context.progress,
+    )
 }
 
 /// (c) 100 HAT/HOT requests a frame.
-fn measure_hat_hot(context: &BenchContext) -> anyhow::Result<Value> {
+fn measure_hat_hot(context: &mut BenchContext) -> Result<Value, BenchError> {
     let path = database(context)?;
-    let mut q = crate::query::session(&path, context.config)?;
+    let mut q = open_session(&path, &context.options.paging)?;
     let grid = q.cache().database().layout().grid;
     let moving = MovingEntities::new(&grid);
     let points_at = |t_s: f64| moving.points_at(t_s);
-    let ask = |q: &mut cig_terrain::QuerySession, points: &[Geodetic]| -> anyhow::Result<()> {
+    let ask = |q: &mut cig_terrain::QuerySession, points: &[Geodetic]| -> Result<(), BenchError> {
         for (i, point) in points.iter().enumerate() {
             if i % 2 == 0 {
                 black_box(q.hot(point.lat_deg, point.lon_deg)?);
@@ -401,8 +409,8 @@ fn measure_hat_hot(context: &BenchContext) -> anyhow::Result<Value> {
         ask(&mut q, &points)?;
         frame_ms.push(ms(started.elapsed()));
     }
-    let frame_median = median(frame_ms.clone());
-    let p99 = percentile(frame_ms, 0.99);
+    let frame_median = median(&frame_ms);
+    let p99 = percentile(&frame_ms, 0.99);
     Ok(json!({
         "database": path.display().to_string(),
         "requests_per_frame": HAT_REQUESTS_PER_FRAME,
@@ -493,7 +501,7 @@ fn fold(x: f64, limit: f64) -> f64 {
 }
 
 /// (d) Decoding a host message of 1,000 entity controls.
-fn measure_cigi_decode(context: &BenchContext) -> anyhow::Result<Value> {
+fn measure_cigi_decode(context: &mut BenchContext) -> Result<Value, BenchError> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(14);
     let mut cases = serde_json::Map::new();
     let variants = [
@@ -507,10 +515,11 @@ fn measure_cigi_decode(context: &BenchContext) -> anyhow::Result<Value> {
         let mut datagram = Vec::new();
         cig_cigi::encode_message(&message, &mut datagram)?;
         let check = cig_cigi::decode_message(&datagram)?;
-        anyhow::ensure!(
-            check.packets.len() == CIGI_ENTITIES + 1 && check.warnings.is_empty(),
-            "the benchmark message does not decode whole"
-        );
+        if !(check.packets.len() == CIGI_ENTITIES + 1 && check.warnings.is_empty()) {
+            return Err(BenchError::Scene(
+                "the benchmark message does not decode whole".into(),
+            ));
+        }
         let (decode, copy) = per_call_against_copy(budget, &datagram, || {
             let _ = black_box(cig_cigi::decode_message(black_box(&datagram)));
         });
@@ -545,7 +554,7 @@ fn per_call_against_copy(budget: Duration, datagram: &[u8], mut work: impl FnMut
             }),
         );
     }
-    (median(work_us), median(copy_us))
+    (median(&work_us), median(&copy_us))
 }
 
 /// A host message of IG Control and [`CIGI_ENTITIES`] entity controls (3.3 Entity Control or
@@ -554,7 +563,7 @@ fn entity_message(
     version: Version,
     order: ByteOrder,
     rng: &mut rand_chacha::ChaCha8Rng,
-) -> anyhow::Result<Message> {
+) -> Result<Message, BenchError> {
     let mut packets = vec![Packet::IgControl(IgControl {
         ig_mode: 1,
         host_frame_number: 1,
@@ -603,7 +612,7 @@ fn entity_message(
 }
 
 /// An IG world with no scenario, for the CIGI measures.
-fn empty_world() -> anyhow::Result<cig_ig::IgWorld> {
+fn empty_world() -> Result<cig_ig::IgWorld, BenchError> {
     Ok(cig_ig::IgWorld::new(
         cig_ig::Scenario::from_toml("")?,
         cig_ig::WorldConfig {
@@ -618,7 +627,7 @@ fn empty_world() -> anyhow::Result<cig_ig::IgWorld> {
 
 /// (e) Applying a host message of 1,000 entity controls: decoded and applied to the IG's
 /// session (entities existing: the steady state), against copying the datagram.
-fn measure_cigi_apply(context: &BenchContext) -> anyhow::Result<Value> {
+fn measure_cigi_apply(context: &mut BenchContext) -> Result<Value, BenchError> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(15);
     let mut cases = serde_json::Map::new();
     let variants = [
@@ -634,10 +643,11 @@ fn measure_cigi_apply(context: &BenchContext) -> anyhow::Result<Value> {
         let started = Instant::now();
         world.receive_cigi(&datagram)?;
         let create_us = started.elapsed().as_secs_f64() * 1e6;
-        anyhow::ensure!(
-            world.session().entities().len() == CIGI_ENTITIES,
-            "the benchmark message does not create every entity"
-        );
+        if world.session().entities().len() != CIGI_ENTITIES {
+            return Err(BenchError::Scene(
+                "the benchmark message does not create every entity".into(),
+            ));
+        }
         let (apply, copy) = per_call_against_copy(budget, &datagram, || {
             let _ = black_box(world.receive_cigi(black_box(&datagram)));
         });
@@ -663,9 +673,9 @@ fn measure_cigi_apply(context: &BenchContext) -> anyhow::Result<Value> {
 /// message decoded and applied,
 /// the world stepped, the answers computed and the IG's message encoded, every 60 Hz frame;
 /// every request is answered in the next frame's message.
-fn measure_hat_hot_ig_frame(context: &BenchContext) -> anyhow::Result<Value> {
+fn measure_hat_hot_ig_frame(context: &mut BenchContext) -> Result<Value, BenchError> {
     let path = database(context)?;
-    let mut q = crate::query::session(&path, context.config)?;
+    let mut q = open_session(&path, &context.options.paging)?;
     let grid = q.cache().database().layout().grid;
     let moving = MovingEntities::new(&grid);
     let mut world = empty_world()?;
@@ -707,8 +717,8 @@ fn measure_hat_hot_ig_frame(context: &BenchContext) -> anyhow::Result<Value> {
             answered.push(message.packets.len() - 1);
         }
     }
-    let median_ms = median(frame_ms.clone());
-    let p99 = percentile(frame_ms, 0.99);
+    let median_ms = median(&frame_ms);
+    let p99 = percentile(&frame_ms, 0.99);
     let all_answered = answered.iter().all(|n| *n == HAT_REQUESTS_PER_FRAME);
     Ok(json!({
         "database": path.display().to_string(),
@@ -804,8 +814,8 @@ fn loop_json(r: &LoopResult) -> Value {
         "seconds": r.elapsed_s,
         "frames_per_s": r.frames as f64 / r.elapsed_s,
         "late_frames": r.late_frames,
-        "frame_work_ms_median": median(if r.frame_ms.is_empty() { vec![f64::NAN] } else { r.frame_ms.clone() }),
-        "frame_work_ms_p99": percentile(r.frame_ms.clone(), 0.99),
+        "frame_work_ms_median": median(&r.frame_ms),
+        "frame_work_ms_p99": percentile(&r.frame_ms, 0.99),
         "datagrams_drained": r.datagrams,
         "pdus_applied": r.pdus_applied,
         "bad_pdus": r.bad_pdus,
@@ -813,8 +823,8 @@ fn loop_json(r: &LoopResult) -> Value {
 }
 
 /// (e) The flood.
-fn measure_flood(context: &BenchContext) -> anyhow::Result<Value> {
-    let args = context.args;
+fn measure_flood(context: &BenchContext) -> Result<Value, BenchError> {
+    let options = context.options;
     let (rss_start_kb, hwm_start_kb) = memory_kb();
     let receiver = UdpEndpoint::open(EndpointConfig {
         queue_limit: FLOOD_QUEUE_LIMIT,
@@ -832,7 +842,7 @@ fn measure_flood(context: &BenchContext) -> anyhow::Result<Value> {
         let _ = table.apply(0.0, &p);
     }
 
-    let unloaded_s = args.flood_s.min(10.0);
+    let unloaded_s = options.flood_s.min(10.0);
     let unloaded = frame_loop(
         &receiver,
         &mut table,
@@ -844,7 +854,7 @@ fn measure_flood(context: &BenchContext) -> anyhow::Result<Value> {
     let stop = Arc::new(AtomicBool::new(false));
     let sent = Arc::new(AtomicU64::new(0));
     let send_failed = Arc::new(AtomicU64::new(0));
-    let flood_rate = args.flood_rate;
+    let flood_rate = options.flood_rate;
     let thread = {
         let (stop, sent, send_failed) = (
             Arc::clone(&stop),
@@ -871,18 +881,18 @@ fn measure_flood(context: &BenchContext) -> anyhow::Result<Value> {
                 }
                 sender
             })
-            .context("cannot start the flood thread")?
+            .step("cannot start the flood thread")?
     };
     let loaded = frame_loop(
         &receiver,
         &mut table,
         epoch,
-        Duration::from_secs_f64(args.flood_s),
+        Duration::from_secs_f64(options.flood_s),
     );
     stop.store(true, Ordering::Relaxed);
     let sender = thread
         .join()
-        .map_err(|_| anyhow::anyhow!("the flood thread panicked"))?;
+        .map_err(|_| BenchError::Scene("the flood thread panicked".into()))?;
     drop(sender);
     let stats = receiver.stats();
     let (rss_end_kb, hwm_end_kb) = memory_kb();
@@ -890,10 +900,10 @@ fn measure_flood(context: &BenchContext) -> anyhow::Result<Value> {
     let unloaded_rate = unloaded.frames as f64 / unloaded.elapsed_s;
     let loaded_rate = loaded.frames as f64 / loaded.elapsed_s;
     let rate_ratio = loaded_rate / unloaded_rate;
-    let work_ratio = median(loaded.frame_ms.clone()) / median(unloaded.frame_ms.clone());
+    let work_ratio = median(&loaded.frame_ms) / median(&unloaded.frame_ms);
     Ok(json!({
         "target_rate_pdus_per_s": flood_rate,
-        "seconds": args.flood_s,
+        "seconds": options.flood_s,
         "entities": FLOOD_ENTITIES,
         "queue_limit": FLOOD_QUEUE_LIMIT,
         "unloaded": loop_json(&unloaded),

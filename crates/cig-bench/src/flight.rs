@@ -1,6 +1,13 @@
 //! Scripted eyepoint paths over a database: straight legs that follow the terrain at a height
-//! above it, looking ahead (the demo's flight and the render benchmark's pass).
+//! above it, looking ahead (the demo's flight and the render and environment benchmarks' pass).
+//!
+//! Algorithm: the eye moves along the leg's heading, straight in the start's local east/north
+//! plane; its height is the highest terrain (HOT) within 300 m ahead, smoothed
+//! (30 % a frame, never more than 20 m below the highest), plus a height above terrain that
+//! changes linearly along the leg. Limits: the leg is straight in the start's tangent plane,
+//! fine for tens of kilometres; it ends with an error where it leaves the database.
 
+use crate::BenchError;
 use cig_geo::{EnuFrame, Geodetic};
 use cig_scene::{FovDeg, Hpr, View};
 use cig_terrain::QuerySession;
@@ -21,13 +28,16 @@ pub struct Leg {
 
 /// Views every `dt_s` along a leg. The height above terrain is kept against the highest
 /// terrain within 300 m ahead, smoothed, so the eye never dips into a ridge.
+///
+/// # Errors
+/// When the leg leaves the database.
 pub fn views_along(
     session: &mut QuerySession,
     leg: &Leg,
     dt_s: f64,
     fov_deg: f64,
     size: (u32, u32),
-) -> anyhow::Result<Vec<View>> {
+) -> Result<Vec<View>, BenchError> {
     let frame = EnuFrame::new(leg.start);
     let (sh, ch) = leg.heading_deg.to_radians().sin_cos();
     let frames = (leg.duration_s / dt_s).round().max(1.0) as usize;
@@ -36,7 +46,7 @@ pub fn views_along(
     for i in 0..frames {
         let t = i as f64 * dt_s;
         let along = leg.speed_mps * t;
-        let mut ground = |ahead: f64| -> anyhow::Result<f64> {
+        let mut ground = |ahead: f64| -> Result<f64, BenchError> {
             let p =
                 frame.enu_to_geodetic(DVec3::new(sh * (along + ahead), ch * (along + ahead), 0.0));
             Ok(session.hot(p.lat_deg, p.lon_deg)?.height_ellipsoid_m())
@@ -49,7 +59,9 @@ pub fn views_along(
             }
         }
         if !highest.is_finite() {
-            anyhow::bail!("the flight leaves the database after {t:.1} s");
+            return Err(BenchError::Scene(format!(
+                "the flight leaves the database after {t:.1} s"
+            )));
         }
         let s = smoothed.map_or(highest, |prev| prev + (highest - prev) * 0.3);
         smoothed = Some(s.max(highest - 20.0));

@@ -1,0 +1,135 @@
+//! Databases for the demo and the benchmarks: the demo database's parameters, and building a
+//! database from a raster (or from synthesis) with its progress reported to a callback, so a
+//! caller can draw progress bars (`cig db synth|import`, `cig demo`, `cig bench`).
+
+use crate::{BenchError, Step};
+use cig_terrain::build::prepare_raster;
+use cig_terrain::raster::Raster;
+use cig_terrain::{PagingConfig, QuerySession, TileCache};
+use cig_terrain_io::store::{check_output, open_database, write_database, BuildInputs};
+use std::path::Path;
+use std::sync::Arc;
+
+/// The demo database: 50 km x 50 km at 30 m posts from near Fort Hunter Liggett, California.
+#[must_use]
+pub fn demo_params() -> cig_synth::SynthParams {
+    cig_synth::SynthParams {
+        origin_lat_deg: 35.98,
+        origin_lon_deg: -121.23,
+        size_km: 50.0,
+        spacing_m: 30.0,
+        seed: 1,
+    }
+}
+
+/// The stages of a build, in order (synthesis only when synthesizing).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BuildStage {
+    /// Generating the terrain: a known fraction.
+    Synthesize,
+    /// Filling voids and deriving materials: no fraction known.
+    Prepare,
+    /// Writing the pyramid's tiles: tiles written of tiles in all.
+    Write,
+}
+
+/// What a build reports as it goes.
+#[derive(Clone, Copy, Debug)]
+pub enum BuildProgress<'a> {
+    /// A stage begins.
+    Begin(BuildStage),
+    /// Synthesis: the step under way (`"landform"`, `"hydrology"` …) and the fraction done.
+    Synthesize { step: &'a str, fraction: f32 },
+    /// Tiles written so far, of `total`.
+    Write { done: u64, total: u64 },
+    /// The stage that began last is over.
+    End,
+}
+
+/// Generates the terrain of `params` and writes it as a database at `out` (replaced only with
+/// `force`), tiles of `tile_cells` cells.
+///
+/// # Errors
+/// When `out` exists (without `force`), the parameters are refused, or writing fails.
+pub fn synthesize_database(
+    params: &cig_synth::SynthParams,
+    out: &Path,
+    force: bool,
+    tile_cells: u32,
+    progress: &mut dyn FnMut(BuildProgress<'_>),
+) -> Result<cig_terrain::Manifest, BenchError> {
+    check_output(out, force)?;
+    progress(BuildProgress::Begin(BuildStage::Synthesize));
+    let mut raster = cig_synth::synthesize(params, &mut |step, fraction| {
+        progress(BuildProgress::Synthesize { step, fraction });
+    })
+    .step("cannot synthesize terrain")?;
+    progress(BuildProgress::End);
+    let source = format!(
+        "cig-synth seed={} origin={},{} size_km={} spacing_m={}",
+        params.seed, params.origin_lat_deg, params.origin_lon_deg, params.size_km, params.spacing_m
+    );
+    build_database(&mut raster, vec![source], out, force, tile_cells, progress)
+}
+
+/// Fills voids, derives materials and writes a raster as a database at `out` (replaced only
+/// with `force`), naming its `sources` in the manifest.
+///
+/// # Errors
+/// When the raster has only voids, `out` exists (without `force`) or writing fails.
+pub fn build_database(
+    raster: &mut Raster,
+    sources: Vec<String>,
+    out: &Path,
+    force: bool,
+    tile_cells: u32,
+    progress: &mut dyn FnMut(BuildProgress<'_>),
+) -> Result<cig_terrain::Manifest, BenchError> {
+    progress(BuildProgress::Begin(BuildStage::Prepare));
+    let report = prepare_raster(raster).step("cannot fill voids")?;
+    progress(BuildProgress::End);
+    if report.void_posts_filled > 0 {
+        tracing::warn!("filled {} void posts", report.void_posts_filled);
+    }
+    let inputs = BuildInputs {
+        sources,
+        void_posts_filled: report.void_posts_filled as u64,
+        tile_cells,
+    };
+    progress(BuildProgress::Begin(BuildStage::Write));
+    let manifest = write_database(out, raster, &inputs, force, &mut |done, total| {
+        progress(BuildProgress::Write { done, total });
+    })
+    .step("cannot build database")?;
+    progress(BuildProgress::End);
+    Ok(manifest)
+}
+
+/// Opens a database with a paging cache and a query session.
+///
+/// # Errors
+/// When the database cannot be opened or the paging configuration is refused.
+pub fn open_session(db: &Path, paging: &PagingConfig) -> Result<QuerySession, BenchError> {
+    let db = Arc::new(open_database(db)?);
+    let cache = TileCache::new(db, paging.clone())?;
+    Ok(QuerySession::new(Arc::new(cache)))
+}
+
+/// `db`, or when none is given the demo database "demo-db" (built there first when missing,
+/// logged with `label`).
+pub(crate) fn demo_or(
+    db: Option<&Path>,
+    label: &str,
+    tile_cells: u32,
+    progress: &mut dyn FnMut(BuildProgress<'_>),
+) -> Result<std::path::PathBuf, BenchError> {
+    let path = db.map_or_else(|| Path::new("demo-db").to_path_buf(), Path::to_path_buf);
+    if db.is_none() && !path.exists() {
+        tracing::warn!(
+            "{label}: building the demo database (50 km x 50 km, 30 m posts) at {}",
+            path.display()
+        );
+        synthesize_database(&demo_params(), &path, false, tile_cells, progress)?;
+    }
+    Ok(path)
+}

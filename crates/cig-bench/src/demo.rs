@@ -1,0 +1,329 @@
+//! The demo's scenes: a hilltop for the line-of-sight show, the scripted flight (a low pass
+//! along a valley, a climb, views at dusk) and the environment after it (the full moon,
+//! cumulus from below and above, a thunderstorm), and a contact sheet of the frames.
+//!
+//! Algorithm: the valley is the heading from the database's centre whose first 10 km are
+//! lowest on average (24 headings, 20 samples each); the hilltop is the highest post within
+//! 4 km of the centre (100 m steps), then climbed post by post; the legs follow the terrain
+//! ([`crate::flight`]). Limits: fixed times (June 2026) and frame size (480 x 270); a database
+//! smaller than the legs (about 10 km from the centre) ends the flight with an error.
+
+use crate::flight::{views_along, Leg};
+use crate::BenchError;
+use cig_geo::Geodetic;
+use cig_scene::{FrameSnapshot, View};
+use cig_terrain::{GeoGrid, QuerySession};
+
+/// Seconds since 1970 of an ISO 8601 instant.
+fn unix_time(text: &str) -> Result<f64, BenchError> {
+    Ok(cig_environment::UtcTime::parse_iso8601(text)?.unix_seconds())
+}
+
+/// The highest point within 4 km of the database's centre, climbed post by post to the summit
+/// itself: an overwatch position. Latitude and longitude, degrees.
+///
+/// # Errors
+/// When a point of the 4 km square is off the database.
+pub fn overwatch(q: &mut QuerySession, g: &GeoGrid) -> Result<(f64, f64), BenchError> {
+    let (clat, clon) = (
+        0.5 * (g.south_lat_deg + g.north_lat_deg()),
+        0.5 * (g.west_lon_deg + g.east_lon_deg()),
+    );
+    let (north_m_per_deg, east_m_per_deg) = cig_geo::metres_per_degree(clat);
+    let (mut olat, mut olon, mut best) = (clat, clon, f64::NEG_INFINITY);
+    for i in -40..=40 {
+        for j in -40..=40 {
+            let lat = clat + f64::from(i) * 100.0 / north_m_per_deg;
+            let lon = clon + f64::from(j) * 100.0 / east_m_per_deg;
+            let h = q.height_msl_m(lat, lon)?;
+            if h > best {
+                (olat, olon, best) = (lat, lon, h);
+            }
+        }
+    }
+    // Climb post by post to the summit itself.
+    loop {
+        let mut next = (olat, olon, best);
+        for (di, dj) in [
+            (-1, -1),
+            (-1, 0),
+            (-1, 1),
+            (0, -1),
+            (0, 1),
+            (1, -1),
+            (1, 0),
+            (1, 1),
+        ] {
+            let lat = olat + f64::from(di) * g.dlat_deg;
+            let lon = olon + f64::from(dj) * g.dlon_deg;
+            if let Ok(h) = q.height_msl_m(lat, lon) {
+                if h > next.2 {
+                    next = (lat, lon, h);
+                }
+            }
+        }
+        if next.2 <= best {
+            break;
+        }
+        (olat, olon, best) = next;
+    }
+    Ok((olat, olon))
+}
+
+/// The heading from the centre whose first 10 km are lowest on average: along a valley.
+fn valley_heading(q: &mut QuerySession, centre: Geodetic) -> f64 {
+    let frame = cig_geo::EnuFrame::new(centre);
+    let mut best = (0.0, f64::INFINITY);
+    for k in 0..24 {
+        let heading = f64::from(k) * 15.0;
+        let (s, c) = heading.to_radians().sin_cos();
+        let mut sum = 0.0;
+        for step in 1..=20 {
+            let d = f64::from(step) * 500.0;
+            let p = frame.enu_to_geodetic(glam::DVec3::new(s * d, c * d, 0.0));
+            sum += q.height_msl_m(p.lat_deg, p.lon_deg).unwrap_or(1e9);
+        }
+        if sum < best.1 {
+            best = (heading, sum);
+        }
+    }
+    best.0
+}
+
+/// The scripted flight: the low pass's heading, the frame size and the shots (UTC seconds
+/// since 1970, and the view): 10 of the low pass, 8 of the climb, 6 at dusk.
+#[derive(Clone, Debug)]
+pub struct Flight {
+    /// Heading of the low pass, along the valley, degrees.
+    pub heading_deg: f64,
+    /// Frame size of every shot, pixels.
+    pub size: (u32, u32),
+    /// The shots, in flying order.
+    pub shots: Vec<(f64, View)>,
+}
+
+/// The demo's flight over the database of `g`, from its centre.
+///
+/// # Errors
+/// When a leg leaves the database.
+pub fn flight(q: &mut QuerySession, g: &GeoGrid) -> Result<Flight, BenchError> {
+    let centre = Geodetic::new(
+        0.5 * (g.south_lat_deg + g.north_lat_deg()),
+        0.5 * (g.west_lon_deg + g.east_lon_deg()),
+        0.0,
+    );
+    let heading = valley_heading(q, centre);
+    let size = (480, 270);
+    let noon = unix_time("2026-06-21T19:30:00Z")?;
+    let dusk = unix_time("2026-06-22T03:00:00Z")?;
+    let low = Leg {
+        start: centre,
+        heading_deg: heading,
+        speed_mps: 120.0,
+        duration_s: 40.0,
+        agl_start_m: 40.0,
+        agl_end_m: 40.0,
+        pitch_deg: -2.0,
+    };
+    let mut shots: Vec<(f64, cig_scene::View)> = Vec::new();
+    for v in views_along(q, &low, 40.0 / 10.0, 60.0, size)? {
+        shots.push((noon, v));
+    }
+    let end = shots.last().map(|s| s.1.eye).unwrap_or(centre);
+    let climb = Leg {
+        start: Geodetic::new(end.lat_deg, end.lon_deg, 0.0),
+        heading_deg: heading + 30.0,
+        speed_mps: 80.0,
+        duration_s: 60.0,
+        agl_start_m: 60.0,
+        agl_end_m: 1800.0,
+        pitch_deg: -12.0,
+    };
+    let climb_views = views_along(q, &climb, 60.0 / 8.0, 60.0, size)?;
+    for v in &climb_views {
+        shots.push((noon, *v));
+    }
+    let mut last = *climb_views.last().unwrap_or(&shots[0].1);
+    for k in 0..6 {
+        last.orientation.heading_deg = heading + 180.0 + f64::from(k) * 30.0;
+        last.orientation.pitch_deg = -10.0;
+        shots.push((dusk + f64::from(k) * 240.0, last));
+    }
+    Ok(Flight {
+        heading_deg: heading,
+        size,
+        shots,
+    })
+}
+
+/// The flight as the window's script, faster than real time: a second per low-pass shot,
+/// 1.5 s per climb shot, 2 s per dusk view.
+#[must_use]
+pub fn window_script(shots: &[(f64, View)]) -> Vec<cig_render::viewer::Shot> {
+    let mut script = Vec::with_capacity(shots.len());
+    let mut at_s = 0.0;
+    for (i, (time, view)) in shots.iter().enumerate() {
+        script.push(cig_render::viewer::Shot {
+            at_s,
+            eye: view.eye,
+            orientation: view.orientation,
+            unix_time_s: *time,
+        });
+        at_s += if i < 10 {
+            1.0
+        } else if i < 18 {
+            1.5
+        } else {
+            2.0
+        };
+    }
+    script
+}
+
+/// The flight's frames off-screen: the haze of the low pass; clearer air for the long views of
+/// the climb and dusk (the classic fog is as thick aloft as at the ground).
+#[must_use]
+pub fn clear_skies(shots: &[(f64, View)]) -> Vec<FrameSnapshot> {
+    shots
+        .iter()
+        .enumerate()
+        .map(|(i, (time, view))| {
+            let mut snapshot = FrameSnapshot::new(*time, vec![*view]);
+            let visibility_m = if i < 10 { 30_000.0 } else { 80_000.0 };
+            snapshot.fog =
+                cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, visibility_m);
+            snapshot
+        })
+        .collect()
+}
+
+/// The environment's shots after the flight (off-screen only): the full moon over the valley
+/// at night, cumulus seen from under its base and from above it, and a thunderstorm with rain.
+/// `shots` are the flight's ([`flight`]); none without them.
+///
+/// # Errors
+/// When the moon's place or the rain cannot be computed.
+pub fn environment_shots(
+    q: &mut QuerySession,
+    shots: &[(f64, cig_scene::View)],
+    size: (u32, u32),
+) -> Result<Vec<cig_scene::FrameSnapshot>, BenchError> {
+    use cig_environment::clouds::{CloudKind, CloudLayer};
+    let (Some(low), Some(high)) = (shots.first().map(|s| s.1), shots.get(17).map(|s| s.1)) else {
+        return Ok(Vec::new());
+    };
+    let ground_m = q
+        .hot(low.eye.lat_deg, low.eye.lon_deg)
+        .map_or(0.0, |g| g.height_ellipsoid_m());
+    let origin = cig_environment::CloudOrigin {
+        lat_deg: low.eye.lat_deg.round(),
+        lon_deg: low.eye.lon_deg.round(),
+    };
+    let fog = |visibility_m: f64| {
+        cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, visibility_m)
+    };
+    let with_clouds = |snapshot: &mut cig_scene::FrameSnapshot, layers: Vec<CloudLayer>| {
+        snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&layers);
+        snapshot.cloud_layers = layers;
+        snapshot.cloud_origin = origin;
+    };
+    let mut out = Vec::new();
+    // Night: the full moon of 29 June 2026, high over the valley in the small hours.
+    let night = unix_time("2026-06-30T08:30:00Z")?;
+    let moon = cig_environment::ephemeris(
+        &cig_environment::Observer::new(low.eye.lat_deg, low.eye.lon_deg, low.eye.alt_m)?,
+        cig_environment::UtcTime::from_unix_seconds(night)?,
+    )
+    .moon;
+    let mut view = high;
+    view.orientation.heading_deg = moon.azimuth_deg;
+    view.orientation.pitch_deg = (moon.apparent_altitude_deg - 12.0).clamp(-10.0, 60.0);
+    let mut snapshot = cig_scene::FrameSnapshot::new(night, vec![view]);
+    snapshot.fog = fog(30_000.0);
+    out.push(snapshot);
+    // Cumulus 1200 m above the valley floor drifting in a 10 m/s westerly: from under it,
+    // and from above it at the climb's end.
+    let cumulus = CloudLayer {
+        wind_speed_mps: 10.0,
+        wind_from_deg: 270.0,
+        ..CloudLayer::new(ground_m + 1200.0, 700.0, 0.45, CloudKind::Cumulus)
+    };
+    let day = shots[0].0;
+    let mut view = low;
+    view.orientation.pitch_deg = 12.0;
+    let mut snapshot = cig_scene::FrameSnapshot::new(day, vec![view]);
+    snapshot.fog = fog(30_000.0);
+    with_clouds(&mut snapshot, vec![cumulus]);
+    out.push(snapshot);
+    let mut view = high;
+    view.eye.alt_m = view.eye.alt_m.max(ground_m + 2600.0);
+    view.orientation.pitch_deg = -20.0;
+    let mut snapshot = cig_scene::FrameSnapshot::new(day + 60.0, vec![view]);
+    snapshot.fog = fog(30_000.0);
+    with_clouds(&mut snapshot, vec![cumulus]);
+    out.push(snapshot);
+    // A thunderstorm late in the afternoon: overcast stratus, 8 mm/h of rain, a bolt 1.2 km ahead.
+    let storm_time = unix_time("2026-06-22T01:30:00Z")?;
+    let rain = cig_environment::Precipitation::new(cig_environment::PrecipitationKind::Rain, 8.0)?;
+    let mut storm_view = low;
+    storm_view.orientation.pitch_deg = 6.0;
+    let mut snapshot = cig_scene::FrameSnapshot::new(storm_time, vec![storm_view]);
+    snapshot.fog = fog(rain.combined_visibility_m(20_000.0));
+    snapshot.precipitation = Some(cig_scene::PrecipitationDraw {
+        precipitation: rain,
+        wind_en_mps: [4.0, 0.0],
+        seed: 1,
+    });
+    with_clouds(
+        &mut snapshot,
+        vec![CloudLayer::new(
+            ground_m + 900.0,
+            1200.0,
+            1.0,
+            CloudKind::Stratus,
+        )],
+    );
+    let (bolt, flash_lux, _) = crate::scenes::lightning_bolt(q, &storm_view, 7, 1200.0);
+    snapshot.bolts = vec![bolt];
+    snapshot.flash_lux = flash_lux;
+    out.push(snapshot);
+    for snapshot in &mut out {
+        for view in &mut snapshot.views {
+            view.width_px = size.0;
+            view.height_px = size.1;
+        }
+    }
+    Ok(out)
+}
+
+/// Frames side by side, `columns` to a row, each halved.
+#[must_use]
+pub fn contact_sheet(frames: &[cig_render::Image], columns: usize) -> cig_render::Image {
+    let (fw, fh) = frames
+        .first()
+        .map_or((1, 1), |f| ((f.width / 2).max(1), (f.height / 2).max(1)));
+    let rows = frames.len().div_ceil(columns).max(1);
+    let (w, h) = (fw * columns as u32, fh * rows as u32);
+    let mut rgba = vec![0u8; (w * h * 4) as usize];
+    for (k, frame) in frames.iter().enumerate() {
+        let (ox, oy) = ((k % columns) as u32 * fw, (k / columns) as u32 * fh);
+        for y in 0..fh {
+            for x in 0..fw {
+                let src = (((2 * y).min(frame.height - 1) * frame.width
+                    + (2 * x).min(frame.width - 1))
+                    * 4) as usize;
+                let dst = (((oy + y) * w + ox + x) * 4) as usize;
+                if let (Some(s), Some(d)) =
+                    (frame.rgba.get(src..src + 4), rgba.get_mut(dst..dst + 4))
+                {
+                    d.copy_from_slice(s);
+                }
+            }
+        }
+    }
+    cig_render::Image {
+        width: w,
+        height: h,
+        rgba,
+    }
+}

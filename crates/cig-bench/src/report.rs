@@ -1,0 +1,68 @@
+//! What every report carries (the machine and the date) and the statistics of the figures.
+
+/// The machine: CPU model, cores, OS and architecture.
+pub(crate) fn machine() -> serde_json::Value {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into());
+    serde_json::json!({
+        "cpu": cpu,
+        "cores": std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        "os": std::env::consts::OS,
+        "arch": std::env::consts::ARCH,
+    })
+}
+
+/// The UTC date and time now, "YYYY-MM-DDTHH:MM:SSZ" (1970-01-01T00:00:00Z for a clock
+/// outside 1900..2100).
+pub(crate) fn date_utc() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    cig_environment::UtcTime::from_unix_seconds(secs as f64).map_or_else(
+        |_| "1970-01-01T00:00:00Z".into(),
+        |t| t.to_iso8601_seconds(),
+    )
+}
+
+/// The element at half the length of the sorted values (the upper median); NaN when empty.
+pub(crate) fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// The sorted values' element at `q` (0..1) of the way, rounded to the nearest; NaN when empty.
+pub(crate) fn percentile(v: &[f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let i = ((s.len() as f64 - 1.0) * q).round() as usize;
+    s.get(i).copied().unwrap_or(f64::NAN)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn statistics_of_a_few_values() {
+        let v = [5.0, 1.0, 4.0, 2.0, 3.0, 6.0];
+        assert_eq!(median(&v), 4.0);
+        assert_eq!(percentile(&v, 0.5), 4.0);
+        assert_eq!(percentile(&v, 1.0), 6.0);
+        assert_eq!(percentile(&v, 0.0), 1.0);
+        assert!(median(&[]).is_nan() && percentile(&[], 0.9).is_nan());
+        let date = date_utc();
+        assert_eq!((date.len(), &date[10..11]), (20, "T"));
+    }
+}
