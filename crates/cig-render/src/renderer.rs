@@ -136,6 +136,8 @@ struct Globals {
     tonemap: [f32; 4],
     sky_frame_x: [f32; 4],
     sky_frame_y: [f32; 4],
+    detail_east: [f32; 4],
+    detail_north: [f32; 4],
 }
 
 /// The sky-view table's frame for the frame's up and sun (single precision, as the shaders
@@ -247,6 +249,9 @@ pub struct Renderer {
     model_bind: wgpu::BindGroup,
     sky_bind: wgpu::BindGroup,
     terrain_pipelines: TerrainPipelines,
+    /// East and north (ECEF unit vectors) of the database centre's tangent plane, the plane the
+    /// ground's detail noise lies in.
+    detail_axes: [glam::DVec3; 2],
     /// Draw the terrain with pipelines built for the frame's switches (see
     /// `set_shader_specialisation`).
     specialise: bool,
@@ -535,6 +540,15 @@ impl Renderer {
             grid.south_lat_deg + 0.5 * grid.dlat_deg * grid.rows.saturating_sub(1) as f64,
         );
         let finest_post_m = ((grid.dlat_deg * m_north) * (grid.dlon_deg * m_east)).sqrt() as f32;
+        let centre = cig_geo::EnuFrame::new(Geodetic::new(
+            grid.south_lat_deg + 0.5 * grid.dlat_deg * grid.rows.saturating_sub(1) as f64,
+            grid.west_lon_deg + 0.5 * grid.dlon_deg * grid.cols.saturating_sub(1) as f64,
+            0.0,
+        ));
+        let detail_axes = [
+            centre.enu_vector_to_ecef(glam::DVec3::X),
+            centre.enu_vector_to_ecef(glam::DVec3::Y),
+        ];
         let terrain = TerrainGpu::new(&gpu, layout.node_cells, capacity, finest_post_m);
         let device = &gpu.device;
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
@@ -727,6 +741,7 @@ impl Renderer {
             atmosphere,
             tone_map,
             adaptation,
+            detail_axes,
             models: HashMap::new(),
             node_first_seen: HashMap::new(),
             targets: None,
@@ -1249,10 +1264,17 @@ impl Renderer {
         let dip = (2.0 * alt / cig_geo::WGS84_A_M).sqrt();
         let fog = snapshot.fog;
         let mode = f32::from(fog_mode_index(fog.mode));
+        // The detail noise lies in the database centre's tangent plane (world-fixed, the same
+        // for every node): the eye's place there, in cells, modulo the noise's period.
+        let [east, north] = self.detail_axes;
         let noise = |cell: f64| {
-            let p = camera.eye_ecef / cell;
-            let m = |x: f64| x.rem_euclid(256.0);
-            [m(p.x) as f32, m(p.y) as f32, m(p.z) as f32, cell as f32]
+            let m = |x: f64| (x / cell).rem_euclid(256.0) as f32;
+            [
+                m(camera.eye_ecef.dot(east)),
+                m(camera.eye_ecef.dot(north)),
+                0.0,
+                cell as f32,
+            ]
         };
         let mut globals = Globals {
             view_proj: camera.view_projection().to_cols_array_2d(),
@@ -1324,6 +1346,8 @@ impl Renderer {
             ],
             sky_frame_x: [0.0; 4],
             sky_frame_y: [0.0; 4],
+            detail_east: v4(east, 0.0),
+            detail_north: v4(north, 0.0),
         };
         (globals.sky_frame_x, globals.sky_frame_y) =
             sky_frame(globals.eye_up, globals.sun_dir, globals.atmos[0]);

@@ -20,7 +20,8 @@ struct Globals {
     fog_colour: vec4<f32>,
     // mode (0 off, 1 linear, 2 exp, 3 exp2), density, start, end.
     fog: vec4<f32>,
-    // Eye position modulo each detail-noise period, in noise cells.
+    // The eye's place in the detail plane (east, north) modulo each noise's period, in its
+    // cells; w the cell size (m).
     noise0: vec4<f32>,
     noise1: vec4<f32>,
     noise2: vec4<f32>,
@@ -48,6 +49,9 @@ struct Globals {
     // row of the fog's horizon sky in w.
     sky_frame_x: vec4<f32>,
     sky_frame_y: vec4<f32>,
+    // East and north (ECEF) of the database centre's tangent plane: the ground detail's plane.
+    detail_east: vec4<f32>,
+    detail_north: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;

@@ -51,71 +51,55 @@ fn vs_main(
 }
 
 // Euclidean modulo (WGSL's % truncates towards zero, which breaks the wrap for negative cells).
-fn wrap(i: vec3<f32>, c: f32) -> vec3<f32> {
+fn wrap(i: vec2<f32>, c: f32) -> vec2<f32> {
     return i - c * floor(i / c);
 }
 
 // The hash of a lattice point from its per-axis fractions q = fract(p * K): each axis's
-// fraction depends on that axis alone, so a cell's eight corners share two per axis.
-const HASH_K: vec3<f32> = vec3<f32>(0.1031, 0.1030, 0.0973);
+// fraction depends on that axis alone, so a cell's four corners share two per axis.
+const HASH_K: vec2<f32> = vec2<f32>(0.1031, 0.1030);
 
-fn hash_of_fractions(q: vec3<f32>) -> f32 {
-    let r = q + dot(q, q.yxz + 33.33);
+fn hash_of_fractions(q: vec2<f32>) -> f32 {
+    let r = vec3<f32>(q, 0.0973) + dot(vec3<f32>(q, 0.0973), vec3<f32>(q.y, q.x, 0.0973) + 33.33);
     return fract((r.x + r.y) * r.z);
 }
 
 // Two hashes of a lattice point: x is `hash_of_fractions`, y the same hash of the fractions
-// taken in another order (unrelated values from the lattice work already done).
-fn hash2_of_fractions(q: vec3<f32>) -> vec2<f32> {
-    return vec2<f32>(hash_of_fractions(q), hash_of_fractions(q.zxy + 0.37));
+// taken the other way round (unrelated values from the lattice work already done).
+fn hash2_of_fractions(q: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(hash_of_fractions(q), hash_of_fractions(q.yx + 0.37));
 }
 
-// Two value noises on one lattice (x is `value_noise`), for the price of little more than one.
+// Value noise on a lattice of unit cells in the detail plane (the database centre's tangent
+// plane: world-fixed and the same for every node, so patterns run on across nodes and tiles;
+// two dimensions, half the corners of a 3-D noise), periodic with 256 cells.
+fn value_noise(p: vec2<f32>) -> f32 {
+    let i = floor(p);
+    let f = fract(p);
+    let u = f * f * (3.0 - 2.0 * f);
+    let q0 = fract(wrap(i, 256.0) * HASH_K);
+    let q1 = fract(wrap(i + 1.0, 256.0) * HASH_K);
+    let a = hash_of_fractions(q0);
+    let b = hash_of_fractions(vec2<f32>(q1.x, q0.y));
+    let c = hash_of_fractions(vec2<f32>(q0.x, q1.y));
+    let d = hash_of_fractions(q1);
+    return mix(mix(a, b, u.x), mix(c, d, u.x), u.y);
+}
+
+// Two value noises on one lattice (x is `value_noise`), for little more than the price of one.
 // `value_noise` is kept beside it, not replaced by this one's x, because a shader pays here
 // for every hash on every pixel (lavapipe runs every path) and most octaves need one value.
-fn value_noise2(p: vec3<f32>) -> vec2<f32> {
+fn value_noise2(p: vec2<f32>) -> vec2<f32> {
     let i = floor(p);
     let f = fract(p);
     let u = f * f * (3.0 - 2.0 * f);
-    let c = 256.0;
-    let q0 = fract(wrap(i, c) * HASH_K);
-    let q1 = fract(wrap(i + 1.0, c) * HASH_K);
+    let q0 = fract(wrap(i, 256.0) * HASH_K);
+    let q1 = fract(wrap(i + 1.0, 256.0) * HASH_K);
     let a = hash2_of_fractions(q0);
-    let b = hash2_of_fractions(vec3<f32>(q1.x, q0.y, q0.z));
-    let cc = hash2_of_fractions(vec3<f32>(q0.x, q1.y, q0.z));
-    let d = hash2_of_fractions(vec3<f32>(q1.x, q1.y, q0.z));
-    let e = hash2_of_fractions(vec3<f32>(q0.x, q0.y, q1.z));
-    let ff = hash2_of_fractions(vec3<f32>(q1.x, q0.y, q1.z));
-    let gg = hash2_of_fractions(vec3<f32>(q0.x, q1.y, q1.z));
-    let h = hash2_of_fractions(q1);
-    return mix(
-        mix(mix(a, b, u.x), mix(cc, d, u.x), u.y),
-        mix(mix(e, ff, u.x), mix(gg, h, u.x), u.y),
-        u.z,
-    );
-}
-
-// Value noise on a lattice of unit cells, periodic with 256 cells.
-fn value_noise(p: vec3<f32>) -> f32 {
-    let i = floor(p);
-    let f = fract(p);
-    let u = f * f * (3.0 - 2.0 * f);
-    let c = 256.0;
-    let q0 = fract(wrap(i, c) * HASH_K);
-    let q1 = fract(wrap(i + 1.0, c) * HASH_K);
-    let a = hash_of_fractions(q0);
-    let b = hash_of_fractions(vec3<f32>(q1.x, q0.y, q0.z));
-    let cc = hash_of_fractions(vec3<f32>(q0.x, q1.y, q0.z));
-    let d = hash_of_fractions(vec3<f32>(q1.x, q1.y, q0.z));
-    let e = hash_of_fractions(vec3<f32>(q0.x, q0.y, q1.z));
-    let ff = hash_of_fractions(vec3<f32>(q1.x, q0.y, q1.z));
-    let gg = hash_of_fractions(vec3<f32>(q0.x, q1.y, q1.z));
-    let h = hash_of_fractions(q1);
-    return mix(
-        mix(mix(a, b, u.x), mix(cc, d, u.x), u.y),
-        mix(mix(e, ff, u.x), mix(gg, h, u.x), u.y),
-        u.z,
-    );
+    let b = hash2_of_fractions(vec2<f32>(q1.x, q0.y));
+    let c = hash2_of_fractions(vec2<f32>(q0.x, q1.y));
+    let d = hash2_of_fractions(q1);
+    return mix(mix(a, b, u.x), mix(c, d, u.x), u.y);
 }
 
 // The surface material at an atlas point, with smooth borders between materials. Each colour
@@ -176,27 +160,26 @@ fn material_at(node: Node, uv: vec2<f32>, rel: vec3<f32>, n: vec3<f32>, warp_noi
     let tags = vec4<u32>(round(vec4<f32>(c0.a, c1.a, c2.a, c3.a) * 255.0));
     let kind = tags >> vec4<u32>(4u);
     let specular = vec4<f32>(tags & vec4<u32>(15u)) / 15.0;
-    // Each post's material's total weight.
-    var total = vec4<f32>(0.0);
-    for (var i = 0u; i < 4u; i++) {
-        total[i] = dot(w, vec4<f32>(kind == vec4<u32>(kind[i])));
-    }
-    // A soft argmax over materials: exponent 0 is the bilinear blend, a high one the winner
-    // alone. Across a border a material's total changes by about 2 per post, so this
-    // exponent softens it over about a pixel.
-    let exponent = 2.0 * post_px * sharpness;
+    // Each post's material's total weight (written out: a vector indexed in a loop costs a
+    // trip through memory on some compilers).
+    let total = vec4<f32>(
+        dot(w, vec4<f32>(kind == vec4<u32>(kind.x))),
+        dot(w, vec4<f32>(kind == vec4<u32>(kind.y))),
+        dot(w, vec4<f32>(kind == vec4<u32>(kind.z))),
+        dot(w, vec4<f32>(kind == vec4<u32>(kind.w))),
+    );
+    // A soft argmax over materials: each post's weight times a ramp of how far its material
+    // trails the heaviest; slope 0 is the bilinear blend, a steep one the winner alone. Across
+    // a border a material's total changes by about 2 per post, so this slope softens it over
+    // about a pixel.
+    let exponent = 1.0 * post_px * sharpness;
     let lead = max(max(total.x, total.y), max(total.z, total.w));
-    let share = w * exp(exponent * (total - lead));
+    let share = w * clamp(1.0 + exponent * (total - lead), vec4<f32>(0.0), vec4<f32>(1.0));
     let sum = max(share.x + share.y + share.z + share.w, 1e-6);
     let albedo = (share.x * c0.rgb + share.y * c1.rgb + share.z * c2.rgb + share.w * c3.rgb) / sum;
-    var kind_lead = kind.w;
-    var best = share.w;
-    for (var i = 0u; i < 3u; i++) {
-        if (share[i] > best) {
-            best = share[i];
-            kind_lead = kind[i];
-        }
-    }
+    let lead_xy = select(kind.y, kind.x, share.x >= share.y);
+    let lead_zw = select(kind.w, kind.z, share.z >= share.w);
+    let kind_lead = select(lead_zw, lead_xy, max(share.x, share.y) >= max(share.z, share.w));
     return Surface(albedo, dot(share, specular) / sum, kind_lead);
 }
 
@@ -242,12 +225,14 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     var surface: Surface;
     var albedo: vec3<f32>;
     if (ground_detail_on()) {
-        // Detail: four octaves of value noise with incommensurate periods (no visible tiling),
-        // faded out with distance before they alias; the finest is the 2.7 m lattice eight times
-        // finer (0.34 m, so its 256-cell period wraps with the coarser one's).
-        let p0 = in.rel / g.noise0.w + g.noise0.xyz;
-        let p1 = in.rel / g.noise1.w + g.noise1.xyz;
-        let p2 = in.rel / g.noise2.w + g.noise2.xyz;
+        // Detail: four octaves of value noise in the detail plane with incommensurate periods
+        // (no visible tiling), faded out with distance before they alias; the finest is the
+        // 2.7 m lattice eight times finer (0.34 m, so its 256-cell period wraps with the
+        // coarser one's).
+        let plane = vec2<f32>(dot(in.rel, g.detail_east.xyz), dot(in.rel, g.detail_north.xyz));
+        let p0 = plane / g.noise0.w + g.noise0.xy;
+        let p1 = plane / g.noise1.w + g.noise1.xy;
+        let p2 = plane / g.noise2.w + g.noise2.xy;
         // Each octave fades out as its cells shrink below 6 pixels on screen (no aliasing, in
         // narrow and wide views alike).
         let px_per_m = g.flags.w / max(distance_m, 1.0);
