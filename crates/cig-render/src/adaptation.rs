@@ -9,7 +9,7 @@
 //! factor brings the mean to the natural illuminance's key, unless that would push the bright
 //! share past the tone curve's knee (so looking into a low sun the sky keeps its gradations
 //! and the terrain its contrast), and is bounded to [`DARKEST_EV`, `BRIGHTEST_EV`] around the
-//! natural illuminance's exposure: a dark view by day brightens by at most one stop and a
+//! natural illuminance's exposure: a dark view by day brightens by at most half a stop and a
 //! night stays night. The adapted factor approaches the target exponentially, with the time
 //! constants of light and dark adaptation ([`TAU_LIGHT_S`], [`TAU_DARK_S`]: the photopic
 //! range of S. N. Pattanaik et al., "Time-Dependent Visual Adaptation for Fast Realistic Image
@@ -31,8 +31,9 @@ pub const ADAPTATION_SLOTS: usize = 16;
 /// The most the view can darken the natural illuminance's exposure, EV (looking into a low
 /// sun at dusk).
 pub const DARKEST_EV: f32 = -5.0;
-/// The most the view can brighten it, EV (a dark forest by day; no more, so night stays night).
-pub const BRIGHTEST_EV: f32 = 1.0;
+/// The most the view can brighten it, EV (a dark forest or a slope facing away from the sun;
+/// no more, so noon stays noon and night stays night: a view with sky in it needs none).
+pub const BRIGHTEST_EV: f32 = 0.5;
 /// Time constant toward a brighter view, seconds.
 pub const TAU_LIGHT_S: f32 = 0.8;
 /// Time constant toward a darker view, seconds.

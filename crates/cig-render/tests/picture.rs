@@ -86,7 +86,12 @@ fn a_moonless_night_is_dark_and_a_full_moon_night_dim_against_noon() {
     let v = view(hills_eye(), (40.0, -4.0, 0.0), 60.0, (128, 96));
     let shot = |renderer: &mut Renderer, unix_s: f64| {
         let snapshot = FrameSnapshot::new(unix_s, vec![v]);
-        frame(renderer, &cache, &snapshot, Adaptation::Settled).0
+        let (image, stats) = frame(renderer, &cache, &snapshot, Adaptation::Settled);
+        eprintln!(
+            "{unix_s}: adapted {:+.2} EV, exposure {:.2} EV",
+            stats.view_adaptation_ev, stats.exposure_ev
+        );
+        image
     };
     let noon = shot(&mut renderer, unix(2024, 6, 21, 20.0));
     // Full moon 2024-06-22 01:08 UTC, high at local midnight; new moon 2024-07-05 22:57 UTC.
