@@ -10,8 +10,8 @@
 //!
 //! - [`db`]: HAT, batched HAT and LOS rates on one core, cold tile loads, build and import times.
 //! - [`particles`]: one fixed step of the obscurant engine with about 22,000 puffs.
-//! - [`render`]: a 300 m/s low pass streamed, level of detail against full detail, plumes in
-//!   view.
+//! - [`render`]: a 300 m/s low pass streamed, level of detail against full detail, the ground's
+//!   detail against plain colour texels, plumes in view.
 //! - [`net`]: DIS decoding, 10,000 dead-reckoned remote entities, HAT/HOT requests, CIGI
 //!   decoding and applying, and a flood of a loopback endpoint.
 //! - [`env`]: the ephemeris and light per update, and the physical sky, fog and clouds' share

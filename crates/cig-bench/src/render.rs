@@ -1,6 +1,6 @@
 //! `cig bench render`: a fixed low-level pass over a database, drawn with the level-of-detail
-//! renderer and at full detail in the same run, and the same frames with and without 32
-//! smoke-and-flame plumes in view (the scene of `cig bench particles`: 16 fires of a smoke and a
+//! renderer and at full detail in the same run, the same frames with the ground's detail and
+//! plain (`ground_detail_over_plain`), and with and without 32 smoke-and-flame plumes in view (the scene of `cig bench particles`: 16 fires of a smoke and a
 //! flame plume, 5 columns x 75 puffs each, after 100 s of burning).
 
 use crate::flight::{views_along, Leg};

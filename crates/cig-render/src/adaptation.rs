@@ -16,7 +16,8 @@
 //! Display", SIGGRAPH 2000: light adaptation within a second or two, dark adaptation several
 //! times slower). A still frame settles at once (as if the eye had been looking for a while).
 //! The tone map multiplies the scene by the adapted factor; nothing is read back to the CPU
-//! to draw (the factor is read back only for the frame's statistics).
+//! to draw (the factor is read back only for the frame's statistics). During a transient (a
+//! lightning flash) the eye holds its state, so the flash brightens the frame as it should.
 //!
 //! Limits: one state per view slot (16 slots; views beyond share them by index modulo 16);
 //! the rods' slow dark adaptation over tens of minutes is not modelled (the natural
@@ -72,6 +73,9 @@ pub(crate) struct AdaptRequest {
     /// log2 of the grey card's key in pre-exposed units (with the exposure compensation).
     pub log2_key: f32,
     pub adaptation: Adaptation,
+    /// A transient (a lightning flash) lights this frame: the eye keeps the state it had (or
+    /// the natural exposure, with none yet), so the flash brightens the frame.
+    pub hold: bool,
 }
 
 /// The histogram and adaptation passes, and the factor the tone map reads.
@@ -176,6 +180,17 @@ impl AdaptationPass {
         let Some(bind) = &c.bind else {
             return false;
         };
+        let offset = (slot * 16) as u64;
+        if request.hold {
+            if self.valid[slot] {
+                encoder.copy_buffer_to_buffer(&c.state, offset, &self.tone_exposure, 0, 16);
+                encoder.copy_buffer_to_buffer(&c.state, offset, &self.readback, 0, 16);
+                return true;
+            }
+            gpu.queue
+                .write_buffer(&self.tone_exposure, 0, bytemuck::bytes_of(&[0f32; 4]));
+            return false;
+        }
         let dt_s = match request.adaptation {
             Adaptation::Step(dt) if dt.is_finite() && dt >= 0.0 => dt,
             _ => -1.0,
@@ -205,7 +220,6 @@ impl AdaptationPass {
             pass.set_pipeline(&c.adapt);
             pass.dispatch_workgroups(1, 1, 1);
         }
-        let offset = (slot * 16) as u64;
         encoder.copy_buffer_to_buffer(&c.state, offset, &self.tone_exposure, 0, 16);
         encoder.copy_buffer_to_buffer(&c.state, offset, &self.readback, 0, 16);
         self.valid[slot] = true;

@@ -261,16 +261,11 @@ pub(crate) struct CelestialPass {
     star_epoch_years: f64,
 }
 
+/// A read-only storage buffer the sky's fragment shader reads.
 fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
-        binding,
         visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
+        ..crate::pass::storage_entry(binding)
     }
 }
 

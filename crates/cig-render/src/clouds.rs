@@ -11,16 +11,19 @@
 //! depth, as the puff pass reads it) and, per pixel, finds the nearest part
 //! of the view ray inside each slab (heights along the ray with the earth's curvature, the
 //! `height_above_eye` parabola of common.wgsl), cut at the scene and at `FAR_M`, and marches it
-//! with 3 to 8 samples (one per half thickness of path), offset per pixel by interleaved gradient noise (Jimenez, "Next generation
-//! post processing in Call of Duty: Advanced Warfare", SIGGRAPH 2014) so the slices of a
-//! fixed-step march show as fine noise rather than bands: extinction from the same cover strength and vertical profile as the
+//! with 3 to 8 samples (one per half thickness of path), offset per pixel by a hash of the pixel
+//! (the PCG hash of Jarzynski and Olano, JCGT 2020: white noise, so no periodic dot or checker
+//! pattern; interleaved gradient noise showed one at half resolution) so the slices of a
+//! fixed-step march show as fine grain rather than bands: extinction from the same cover strength and vertical profile as the
 //! CPU model, single scattering of the sun (a two-lobe Henyey-Greenstein phase, forward peak
 //! g = 0.6) dimmed by the depth into the layer toward the sun with a floor for multiple
 //! scattering, plus the sky's ambient light; accumulated front to back (Beer-Lambert). Clouds
 //! take the frame's fog at their mean distance, as the terrain does. For terrain pixels the same pass dims the
 //! sun's share of the light (sun against ambient luminance) by the transmittance of the slant
 //! column through each layer above at the layer's mid-height. A second full-screen pass
-//! upsamples the half-resolution result with a four-tap tent filter and blends it onto the
+//! upsamples the half-resolution result with four bilinear taps half a texel apart (a kernel of
+//! 1/8, 1/2, 3/8 per axis, the same for both quarters of a texel, so the half-resolution grid
+//! leaves no 2 x 2 blocks) and blends it onto the
 //! frame as `clouds + scene * (transmittance * shade)`, pre-exposed. With the eye inside a slab the
 //! segment starts at the eye, so flying into a cloud fogs the view and flying out clears it.
 //!
@@ -32,7 +35,7 @@
 //!
 //! Limits: at most 8 samples per layer leave fine noise on thick clouds seen edge-on; the field is 2-D
 //! (no overhangs); self-shadowing is by height only; the shade ignores the terrain's normal and
-//! uses one column per layer; the half resolution and the tent filter soften cloud edges
+//! uses one column per layer; the half resolution and the upsampling kernel soften cloud edges
 //! against terrain silhouettes (a halo of up to two pixels) and the shade's edges; clouds beyond `FAR_M` (80 km) are not drawn; on wgpu's GL backend,
 //! which cannot sample multisampled depth, clouds are not drawn at all (logged once).
 

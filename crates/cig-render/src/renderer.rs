@@ -11,8 +11,11 @@
 //! models, terrain and models with the aerial perspective, the classic fog and the ground fog
 //! layer, then the sky as a full-screen triangle where nothing was drawn (the sky-view table,
 //! the limb-darkened sun disc through the atmosphere's transmittance); the obscurant puffs
-//! ([`crate::puffs`]) composited onto the resolved scene; and the tone map (scotopic shift at
-//! night, ACES filmic curve, sRGB) into the caller's target. Every pass writes pre-exposed
+//! ([`crate::puffs`]) composited onto the resolved scene; the eye's adaptation to what the view
+//! shows ([`crate::adaptation`]: a histogram of the resolved scene, within bounds of the natural
+//! exposure); and the tone map (the adapted factor, scotopic shift at night, ACES filmic curve,
+//! sRGB) into the caller's target. The terrain shader draws the materials with smooth borders
+//! and detail noise in the database centre's tangent plane (`ground_detail`). Every pass writes pre-exposed
 //! linear radiance (`exposed()` in common.wgsl) into Rgba16Float, so a moonless night and noon
 //! keep their precision alike. Depth is reversed (1 at the near plane, 0 at infinity) in a
 //! 32-bit float buffer with a `Greater` test; colour is rendered with 4x multisampling and
@@ -20,7 +23,8 @@
 //!
 //! Limits: one scene pass per view, no shadows (mountains do not shade the air or each other);
 //! the aerial perspective is the cheap sky-view approximation of [`crate::atmosphere`], not a
-//! froxel volume; exposure follows the natural light instantly (no adaptation time).
+//! froxel volume; the ground's detail noise lies in one tangent plane, so on steep slopes it
+//! stretches into streaks along the fall line.
 
 use crate::adaptation::{AdaptRequest, Adaptation, AdaptationPass};
 use crate::atmosphere::{atmosphere_shader, AtmosphereGpu, ToneMap, HDR_FORMAT};
@@ -1169,6 +1173,7 @@ impl Renderer {
                 } else {
                     options.adaptation
                 },
+                hold: snapshot.flash_lux > 0.0,
             },
         );
         {

@@ -7,7 +7,8 @@
 //! triangles, nearest first, into one index list of pool vertices and draws them all in one
 //! call (a software rasterizer pays for every draw). The shader finds a vertex's slot from its
 //! index, and the slot's record (eye-relative centre, frame, morph distances, skirt depth,
-//! atlas rectangle) in a storage buffer written once per view. Slots are recycled least
+//! atlas rectangle, texels per data post and that post spacing, which the shader's material
+//! borders and detail need) in a storage buffer written once per view. Slots are recycled least
 //! recently used. Meshes are rebuilt when finer data becomes resident or a node's cut changes.
 //!
 //! Limits: the pool holds `capacity` nodes (the database's node count, at most 16384 of 16
@@ -427,7 +428,7 @@ impl TerrainGpu {
             // half the node's post spacing; the detail level's posts may be finer or coarser).
             axis_e: axis(
                 slot.axes[0],
-                2f32.powi(i32::from(slot.detail_level) + 1 - i32::from(slot.key.level)),
+                texels_per_post(slot.detail_level, slot.key.level, self.texels),
             ),
             // w: the post spacing of that data, metres.
             axis_n: axis(
@@ -529,4 +530,39 @@ fn band_of(cut: NodeCut, parent_range_m: f32, allowed_error_per_m: f64) -> (f32,
         parent_range_m
     };
     (range_m(cut.tolerance_m).min(end_m), end_m)
+}
+
+/// Texels of a node's colour atlas per post of the data its colours were sampled from: texels
+/// lie at half the node's post spacing (`texels_per_side = 2n + 1`), so a post of level
+/// `detail_level` spans `2^(detail_level + 1 - node_level)` texels; a node drawn from data so
+/// much coarser that a post would span the whole node counts its whole side as one post, so
+/// the shader never reads outside the node's texels.
+pub(crate) fn texels_per_post(detail_level: u8, node_level: u8, texels_per_side: u32) -> f32 {
+    let exponent = (i32::from(detail_level) + 1 - i32::from(node_level)).clamp(0, 30);
+    let side = texels_per_side.saturating_sub(1).max(1);
+    (1u32 << exponent).min(side) as f32
+}
+
+#[cfg(test)]
+mod texel_tests {
+    use super::texels_per_post;
+
+    #[test]
+    fn texels_per_post_follow_the_data_level_and_stay_inside_the_node() {
+        // 16-cell nodes: 33 texels a side.
+        assert_eq!(texels_per_post(0, 1, 33), 1.0, "finer data: a texel a post");
+        assert_eq!(
+            texels_per_post(3, 3, 33),
+            2.0,
+            "the node's own data: two texels a post"
+        );
+        assert_eq!(texels_per_post(5, 3, 33), 8.0, "coarser data");
+        assert_eq!(
+            texels_per_post(9, 3, 33),
+            32.0,
+            "far coarser: the whole side"
+        );
+        assert_eq!(texels_per_post(20, 0, 33), 32.0);
+        assert_eq!(texels_per_post(0, 3, 33), 1.0, "never under a texel");
+    }
 }

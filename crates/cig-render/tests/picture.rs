@@ -652,3 +652,43 @@ fn a_material_border_runs_on_across_node_edges_without_a_seam() {
         "a step of {at_edge} px where the border crosses a node edge: {at_edges:?}"
     );
 }
+
+#[test]
+fn a_lightning_flash_brightens_the_adapted_frame_and_the_eye_keeps_its_state() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let v = view(hills_eye(), (40.0, -4.0, 0.0), 60.0, (96, 64));
+    // A moonless night, then a strike 20,000 lux bright.
+    let night = FrameSnapshot::new(unix(2024, 7, 6, 8.0), vec![v]);
+    let mut flash = night.clone();
+    flash.flash_lux = 20_000.0;
+    let brightness = |image: &Image| mean_brightness(image);
+    for adaptation in [Adaptation::Settled, Adaptation::Step(1.0 / 60.0)] {
+        let (dark, before) = frame(&mut renderer, &cache, &night, adaptation);
+        let (lit, during) = frame(&mut renderer, &cache, &flash, adaptation);
+        let (_, after) = frame(&mut renderer, &cache, &night, adaptation);
+        assert!(
+            brightness(&lit) > 3.0 * brightness(&dark).max(1.0),
+            "{adaptation:?}: the flash brightens the frame ({:.1} against {:.1})",
+            brightness(&lit),
+            brightness(&dark)
+        );
+        // The eye held its night state through the flash.
+        assert!(
+            (during.view_adaptation_ev - before.view_adaptation_ev).abs() < 1e-4
+                && (after.view_adaptation_ev - before.view_adaptation_ev).abs() < 0.05,
+            "{adaptation:?}: {before:?} / {during:?} / {after:?}"
+        );
+    }
+}
+
+#[test]
+fn a_keyed_frame_is_not_adapted() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let (snapshot, _) = dusk_toward_the_sun();
+    let (_, stats) = render_adapted(&mut renderer, &cache, &snapshot, true, Adaptation::Settled);
+    assert_eq!(stats.view_adaptation_ev, 0.0);
+}

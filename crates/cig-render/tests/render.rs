@@ -671,6 +671,18 @@ fn pipelines_built_for_the_frames_switches_draw_what_the_unspecialised_ones_do()
     let mut flat = frames[1].1.clone();
     flat.sky.model = SkyModel::Flat;
     frames.push(("flat sky, linear fog", flat));
+    // Near the ground, with the ground's detail and plain (the GROUND_DETAIL switch).
+    let mut near = frames[2].1.clone();
+    near.views[0] = view(
+        hills_eye(-1500.0, -1500.0, 25.0),
+        (45.0, -35.0, 0.0),
+        60.0,
+        (96, 72),
+    );
+    let mut plain = near.clone();
+    plain.ground_detail = false;
+    frames.push(("near ground", near));
+    frames.push(("near plain ground", plain));
     // Ten hours on the moon is 33 degrees up and the sun 16 degrees down; six more, the moon
     // is 35 degrees down: the sky-view table with and without the moon's light.
     for (name, later_s) in [("moonlit night", 36_000.0), ("moonless night", 57_600.0)] {

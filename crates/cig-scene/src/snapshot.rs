@@ -5,6 +5,10 @@
 //! the ground are clamped with the database's HOT query on the finest triangulated surface —
 //! the surface the renderer draws at full detail — and may be pitched and rolled to its normal.
 //!
+//! An eye found below the terrain is lifted onto it ([`lift_eyes_above_terrain`]): the host or
+//! the user placed it there by mistake, and a picture from inside the hill tells a trainee
+//! nothing; the binary warns.
+//!
 //! Limits: clamping uses the finest surface; where a far entity's terrain is drawn coarser,
 //! it may float or sink by at most the terrain's allowed screen error (under a pixel).
 
@@ -107,10 +111,12 @@ impl std::fmt::Display for EyeBelowTerrain {
     }
 }
 
-/// Lifts every view whose eye lies below the terrain (or within [`EYE_CLEARANCE_M`] of it from
-/// below) to [`EYE_CLEARANCE_M`] above it, so the picture shows the terrain from its surface
-/// rather than inside out, and returns those views with the height above terrain they had. Views
-/// outside the database, or where the terrain cannot be read, are left as they are.
+/// Lifts every view whose eye lies below the terrain's finest surface (the one HAT answers on)
+/// to [`EYE_CLEARANCE_M`] above it, so the picture shows the terrain from its surface rather
+/// than inside out, and returns those views with the height above terrain they had. Views
+/// outside the database, or where the terrain cannot be read, are left as they are. Limits: an
+/// eye less than the near plane (0.5 m) above the ground is left where it is, and may clip the
+/// ground in front of it; the query may load the eye's finest tile in the calling thread.
 pub fn lift_eyes_above_terrain(
     session: &mut QuerySession,
     views: &mut [View],

@@ -236,7 +236,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
             out_dir: args.out_dir.clone(),
         }
     };
-    let mut loop_state = LoopState::new(args.rate_hz);
+    let mut loop_state = LoopState::new(args.rate_hz, !args.no_render);
     let mut totals = Totals::default();
     loop {
         if args.frames.is_some_and(|n| totals.frames >= n) {
@@ -307,10 +307,12 @@ struct LoopState {
     outgoing: Vec<u8>,
     /// Views whose eye is below the terrain (warned once until it comes back above).
     below_terrain: std::collections::BTreeSet<usize>,
+    /// Whether the snapshots are drawn (eyes inside the terrain are lifted only for drawing).
+    drawn: bool,
 }
 
 impl LoopState {
-    fn new(rate_hz: f64) -> LoopState {
+    fn new(rate_hz: f64, drawn: bool) -> LoopState {
         let now = Instant::now();
         LoopState {
             started: now,
@@ -322,6 +324,7 @@ impl LoopState {
             period_s: 1.0 / rate_hz,
             outgoing: Vec::with_capacity(4096),
             below_terrain: std::collections::BTreeSet::new(),
+            drawn,
         }
     }
 
@@ -396,6 +399,9 @@ impl LoopState {
         totals.problems_noted = self.bad_cigi.count();
         totals.warnings_logged = self.bad_cigi.lines_logged();
         let mut snapshot = world.snapshot(width_px, height_px, fallback);
+        if !self.drawn {
+            return snapshot;
+        }
         // An eye inside the terrain is drawn from its surface, with one warning.
         let lifted = cig_scene::lift_eyes_above_terrain(query, &mut snapshot.views);
         for below in &lifted {
@@ -486,7 +492,7 @@ fn run_windowed(
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         let snapshot = loop_state
-            .get_or_insert_with(|| LoopState::new(rate_hz))
+            .get_or_insert_with(|| LoopState::new(rate_hz, true))
             .tick(
                 &mut world,
                 &mut query,

@@ -1,7 +1,9 @@
 //! README's "Using it" block against the real command line: every `cig` line shown there must
 //! name subcommands that exist, flags each subcommand's `--help` lists, and arguments clap
-//! accepts; the lines that need no database, network or GPU are run for real. A renamed flag
-//! fails this suite instead of the reader.
+//! parses (unknown flags, extra positional arguments and values of the wrong type fail; with
+//! `--help` last, clap does not check required arguments or conflicts between flags); the lines
+//! that need no database, network or GPU are run for real. A renamed flag fails this suite
+//! instead of the reader.
 //!
 //! How a README line becomes commands: continuation lines (ending in `\`, or indented under a
 //! `cig` line) are joined; `# comments` and `> FILE` redirections are dropped; an optional part

@@ -2,7 +2,9 @@ struct Node {
     // Node centre relative to the eye (metres, ECEF axes); w: skirt depth per metre of
     // distance (twice the error the view allows there, and a margin).
     offset: vec4<f32>,
+    // w: colour texels per post of the data the colours came from (terrain.rs texels_per_post).
     axis_e: vec4<f32>,
+    // w: that data's post spacing, metres.
     axis_n: vec4<f32>,
     // w: the skirt's greatest depth (m).
     axis_u: vec4<f32>,
@@ -126,7 +128,7 @@ fn material_at(node: Node, uv: vec2<f32>, rel: vec3<f32>, n: vec3<f32>, warp_noi
     let step = max(node.axis_e.w, 1.0);
     // Texel indices: continuous, and of the node's first and last texel.
     let first = node.atlas.xy * size - 0.5;
-    let posts = round(node.atlas.zw * size / step);
+    let posts = max(round(node.atlas.zw * size / step), vec2<f32>(1.0));
     var local = ((uv * size - 0.5) - first) / step;
     // A post's size on screen, from its size in metres and the distance (not from screen
     // derivatives, which change from triangle to triangle of a morphing mesh and would draw
@@ -177,9 +179,10 @@ fn material_at(node: Node, uv: vec2<f32>, rel: vec3<f32>, n: vec3<f32>, warp_noi
     let share = w * clamp(1.0 + exponent * (total - lead), vec4<f32>(0.0), vec4<f32>(1.0));
     let sum = max(share.x + share.y + share.z + share.w, 1e-6);
     let albedo = (share.x * c0.rgb + share.y * c1.rgb + share.z * c2.rgb + share.w * c3.rgb) / sum;
-    let lead_xy = select(kind.y, kind.x, share.x >= share.y);
-    let lead_zw = select(kind.w, kind.z, share.z >= share.w);
-    let kind_lead = select(lead_zw, lead_xy, max(share.x, share.y) >= max(share.z, share.w));
+    // The heaviest material (by its total weight, not by one post's share).
+    let lead_xy = select(kind.y, kind.x, total.x >= total.y);
+    let lead_zw = select(kind.w, kind.z, total.z >= total.w);
+    let kind_lead = select(lead_zw, lead_xy, max(total.x, total.y) >= max(total.z, total.w));
     return Surface(albedo, dot(share, specular) / sum, kind_lead);
 }
 
