@@ -229,7 +229,10 @@ impl AdaptationPass {
     /// The adapted log2 factor the last encoded frame was drawn with (after its submission).
     pub fn read_factor_log2(&self, gpu: &Gpu) -> Option<f32> {
         let slice = self.readback.slice(..);
-        crate::gpu::map_for_reading(gpu, &slice).ok()?;
+        if let Err(e) = crate::gpu::map_for_reading(gpu, &slice) {
+            tracing::debug!("the adapted exposure was not read back: {e}");
+            return None;
+        }
         let value = slice.get_mapped_range().ok().and_then(|data| {
             let words: &[f32] = bytemuck::cast_slice(&data);
             words.first().copied()

@@ -692,3 +692,55 @@ fn a_keyed_frame_is_not_adapted() {
     let (_, stats) = render_adapted(&mut renderer, &cache, &snapshot, true, Adaptation::Settled);
     assert_eq!(stats.view_adaptation_ev, 0.0);
 }
+
+#[test]
+fn each_view_of_a_snapshot_adapts_on_its_own() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let (dusk, azimuth) = dusk_toward_the_sun();
+    let eye = dusk.views[0].eye;
+    // View 0 into the low sun, view 1 down at the ground on the other side.
+    let mut snapshot = dusk.clone();
+    snapshot.views = vec![
+        view(eye, (azimuth, -2.0, 0.0), 60.0, (64, 48)),
+        view(eye, (azimuth + 180.0, -60.0, 0.0), 60.0, (64, 48)),
+    ];
+    cache.update(&[eye]);
+    cache.wait_idle();
+    let mut draw = |index: usize, adaptation: Adaptation| {
+        cig_render::load_for_view(&mut renderer, &cache, &snapshot, index, 64).expect("load");
+        cig_render::render_image_with(
+            &mut renderer,
+            &cache,
+            &snapshot,
+            index,
+            cig_render::FrameOptions {
+                mesh_budget: usize::MAX,
+                key_background: false,
+                fade_in_s: 0.0,
+                adaptation,
+            },
+        )
+        .expect("render")
+        .1
+        .view_adaptation_ev
+    };
+    let sun = draw(0, Adaptation::Settled);
+    let ground = draw(1, Adaptation::Settled);
+    assert!(
+        sun < ground - 1.0,
+        "into the sun {sun:.2} EV, the ground {ground:.2} EV"
+    );
+    // Drawn in turn, frame after frame, neither pulls the other's state.
+    for _ in 0..5 {
+        let (a, b) = (
+            draw(0, Adaptation::Step(0.5)),
+            draw(1, Adaptation::Step(0.5)),
+        );
+        assert!(
+            (a - sun).abs() < 0.05 && (b - ground).abs() < 0.05,
+            "{a:.2} and {b:.2} against {sun:.2} and {ground:.2}"
+        );
+    }
+}

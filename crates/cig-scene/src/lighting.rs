@@ -607,6 +607,24 @@ mod tests {
     }
 
     #[test]
+    fn the_view_key_is_where_a_grey_card_shows() {
+        for lux in [1.0e5, 3.4, 0.3, 0.002] {
+            for compensation_ev in [0.0, 1.5, -2.0] {
+                let shown = EXPOSURE_GREY_ALBEDO
+                    * lux
+                    * LIGHTING_UNITS_PER_LUX
+                    * exposure_for_illuminance(lux, compensation_ev);
+                let key = shown_grey_log2(lux, compensation_ev);
+                assert!(
+                    (shown.log2() - key).abs() < 1e-9,
+                    "{lux} lux: {shown} against 2^{key}"
+                );
+            }
+        }
+        assert!(shown_grey_log2(f64::NAN, f64::INFINITY).is_finite());
+    }
+
+    #[test]
     fn a_fixed_exposure_ignores_the_natural_light() {
         let site = Geodetic::new(36.0, -121.0, 0.0);
         let sky = SkySettings {

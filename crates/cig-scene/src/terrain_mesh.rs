@@ -363,6 +363,10 @@ pub fn material_colour(m: Material) -> [u8; 4] {
 /// specular weight in sixteenths (low nibble), so the shader can draw sharp, smooth borders
 /// between materials (it weighs the texels around a point by material) and still blend them.
 pub fn material_texel(m: Material) -> [u8; 4] {
+    const _: () = assert!(
+        Material::ALL.len() <= 16,
+        "a material index must fit a nibble"
+    );
     let [r, g, b, specular] = material_colour(m);
     [r, g, b, ((m as u8) << 4) | (specular >> 4)]
 }
