@@ -283,7 +283,7 @@ pub fn environment_shots(
             CloudKind::Stratus,
         )],
     );
-    let (bolt, flash_lux, _) = crate::scenes::lightning_bolt(q, &storm_view, 7, 1200.0);
+    let (bolt, flash_lux, _) = cig_ig::scenes::lightning_bolt(q, &storm_view, 7, 1200.0);
     snapshot.bolts = vec![bolt];
     snapshot.flash_lux = flash_lux;
     out.push(snapshot);

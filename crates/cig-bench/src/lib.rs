@@ -20,7 +20,7 @@
 //! Shared with `cig demo`, `cig db` and `cig render`: [`database`] (the demo database's
 //! parameters, building a database with a progress callback), [`flight`] (views along a leg
 //! that follows the terrain), [`demo`] (the demo's hilltop, flight, environment shots and
-//! contact sheet) and [`scenes`] (the fires of `--smoke`, the lightning bolt).
+//! contact sheet).
 //!
 //! Limits: benchmarks are commands, never timed tests; figures depend on the machine (see
 //! each module). The GPU benchmarks need a device (lavapipe does). Nothing here prints: the
@@ -35,7 +35,6 @@ pub mod net;
 pub mod particles;
 pub mod render;
 mod report;
-pub mod scenes;
 
 /// A report with a human summary: `cig bench` prints the JSON with `--json`, else the summary.
 #[derive(Clone, Debug)]

@@ -15,6 +15,8 @@
 //!   the renderer's snapshot.
 //! - [`weather`]: lightning storms (a Poisson strike schedule that is a function of seed and
 //!   world time), the bolts lit now and their flash.
+//! - [`scenes`]: the fires and the lightning bolt a single frame asks for (`cig render --smoke`,
+//!   `--lightning`, the demo's storm).
 //!
 //! Limits: see each module.
 
@@ -22,6 +24,7 @@ pub mod exercise;
 pub mod model_table;
 pub mod pose;
 pub mod scenario;
+pub mod scenes;
 pub mod session;
 pub mod weather;
 pub mod world;

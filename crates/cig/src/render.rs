@@ -3,8 +3,8 @@
 use crate::cli::RenderArgs;
 use crate::config::Config;
 use anyhow::{bail, Context};
-use cig_bench::scenes::{fire_puffs, lightning_bolt, FireSpec, MAX_BURN_S, MAX_HEAT_MW};
 use cig_geo::Geodetic;
+use cig_ig::scenes::{fire_puffs, lightning_bolt, FireSpec, MAX_BURN_S, MAX_HEAT_MW};
 use cig_render::{FrameStats, Gpu, Image, Renderer};
 use cig_scene::lighting::{Fog, FogMode};
 use cig_scene::snapshot::{place_entity, Clamp, EntitySpec};

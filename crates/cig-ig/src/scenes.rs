@@ -9,11 +9,37 @@
 //! brightest, with its flash at the eye. Limits: the air is 15 °C at the ground with no cloud
 //! ceiling; at most 2 x the fires' count of plume slots.
 
-use crate::{BenchError, Step};
+use crate::weather::{flash_lux_from, make_bolt, MadeBolt};
+
 use cig_geo::Geodetic;
 use cig_scene::View;
 use cig_terrain::QuerySession;
 use std::sync::Arc;
+
+/// Why a scene could not be made: what was being done, then why (with its causes). One line.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{what}: {reason}")]
+    Step { what: String, reason: String },
+    #[error(transparent)]
+    Effects(#[from] cig_effects::EffectsError),
+}
+
+impl SceneError {
+    fn new(what: &str, error: &dyn std::error::Error) -> SceneError {
+        let mut reason = error.to_string();
+        let mut cause = error.source();
+        while let Some(c) = cause {
+            reason.push_str(": ");
+            reason.push_str(&c.to_string());
+            cause = c.source();
+        }
+        SceneError::Step {
+            what: what.to_string(),
+            reason,
+        }
+    }
+}
 
 /// A fire asked for with `--smoke`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,7 +71,7 @@ pub fn fire_puffs(
     wind: cig_effects::Wind,
     unix_time_s: f64,
     origin_ecef_m: glam::DVec3,
-) -> Result<Vec<cig_effects::PuffInstance>, BenchError> {
+) -> Result<Vec<cig_effects::PuffInstance>, SceneError> {
     use cig_effects::{
         Atmosphere, EffectId, EffectSystem, EffectsConfig, PlumeKind, PlumeSource, PlumeSpec,
     };
@@ -59,7 +85,7 @@ pub fn fire_puffs(
     );
     let atmosphere =
         Atmosphere::from_weather(wind, 288.15, sun.sun_elevation_deg, 0.0, f64::INFINITY)
-            .step("--wind")?;
+            .map_err(|e| SceneError::new("--wind", &e))?;
     let mut system = EffectSystem::new(EffectsConfig {
         plume_slots: 2 * fires.len(),
         dust_slots: 0,
@@ -69,8 +95,11 @@ pub fn fire_puffs(
     let end_s = fires.iter().map(|(_, f)| f.burning_s).fold(0.0, f64::max);
     system.advance_to(0.0)?;
     for (i, (text, fire)) in fires.iter().enumerate() {
-        let ground = session.hot(fire.lat_deg, fire.lon_deg).step_with(|| {
-            format!("--smoke \"{text}\": the fire cannot be placed on the terrain")
+        let ground = session.hot(fire.lat_deg, fire.lon_deg).map_err(|e| {
+            SceneError::new(
+                &format!("--smoke \"{text}\": the fire cannot be placed on the terrain"),
+                &e,
+            )
         })?;
         let position = Geodetic::new(fire.lat_deg, fire.lon_deg, ground.height_ellipsoid_m());
         for (k, kind) in [PlumeKind::Smoke, PlumeKind::Flame].into_iter().enumerate() {
@@ -84,7 +113,7 @@ pub fn fire_puffs(
                     start_time_s: end_s - fire.burning_s,
                     duration_s: MAX_BURN_S * 2.0,
                 })
-                .step_with(|| format!("--smoke \"{text}\""))?;
+                .map_err(|e| SceneError::new(&format!("--smoke \"{text}\""), &e))?;
         }
     }
     system.advance_to(end_s)?;
@@ -99,7 +128,7 @@ pub fn lightning_bolt(
     view: &View,
     seed: u64,
     distance_m: f64,
-) -> (cig_scene::BoltDraw, f64, cig_ig::weather::MadeBolt) {
+) -> (cig_scene::BoltDraw, f64, MadeBolt) {
     let frame = cig_geo::EnuFrame::new(view.eye);
     let h = view.orientation.heading_deg.to_radians();
     let ahead = frame.enu_to_geodetic(glam::DVec3::new(
@@ -111,8 +140,8 @@ pub fn lightning_bolt(
         .hot(ahead.lat_deg, ahead.lon_deg)
         .map_or(0.0, |g| g.height_ellipsoid_m());
     let ground = Geodetic::new(ahead.lat_deg, ahead.lon_deg, ground_m);
-    let bolt = cig_ig::weather::make_bolt(ground, 1500.0, seed);
-    let flash_lux = cig_ig::weather::flash_lux_from(view.eye.to_ecef(), bolt.centre_ecef_m, 1.0);
+    let bolt = make_bolt(ground, 1500.0, seed);
+    let flash_lux = flash_lux_from(view.eye.to_ecef(), bolt.centre_ecef_m, 1.0);
     (
         cig_scene::BoltDraw {
             origin_ecef_m: bolt.origin_ecef_m,
