@@ -439,23 +439,24 @@ fn cumulus_seen_from_above_and_below_shows_no_sampling_pattern_or_blocks() {
     }
 }
 
-/// A flat database of 129 x 129 posts 30 m apart at 100 m, centred on 36 N 121 W, with each
-/// post's material from its (row, column) relative to the centre.
+/// A flat database of 257 x 257 posts 30 m apart at 100 m, centred on 36 N 121 W (where its
+/// four finest tiles of 128 cells meet), with each post's material from its (row, column)
+/// relative to the centre.
 fn flat_database(
     material_at: impl Fn(f64, f64) -> cig_terrain::Material,
 ) -> std::sync::Arc<cig_terrain::TerrainDatabase> {
     let (n, e) = cig_geo::metres_per_degree(36.0);
-    let posts = 129;
+    let posts = 257;
     let grid = cig_terrain::GeoGrid {
-        south_lat_deg: 36.0 - 64.0 * 30.0 / n,
-        west_lon_deg: -121.0 - 64.0 * 30.0 / e,
+        south_lat_deg: 36.0 - 128.0 * 30.0 / n,
+        west_lon_deg: -121.0 - 128.0 * 30.0 / e,
         dlat_deg: 30.0 / n,
         dlon_deg: 30.0 / e,
         rows: posts,
         cols: posts,
     };
     let material = (0..posts * posts)
-        .map(|i| material_at((i / posts) as f64 - 64.0, (i % posts) as f64 - 64.0))
+        .map(|i| material_at((i / posts) as f64 - 128.0, (i % posts) as f64 - 128.0))
         .collect();
     let raster = cig_terrain::Raster {
         grid,
@@ -591,12 +592,12 @@ fn the_ground_ten_metres_below_shows_detail_that_flows_past_and_fades_without_sh
 }
 
 #[test]
-fn a_material_border_runs_on_across_node_edges_without_a_seam() {
+fn a_material_border_runs_on_across_node_and_tile_edges_without_a_seam() {
     let db = diagonal_border_database(37.0);
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
-    // Nadir from 700 m over the database's middle, where four nodes meet: about 800 m of
-    // ground.
+    // Nadir from 700 m over the database's middle, where four nodes and four finest tiles
+    // meet: about 800 m of ground.
     let eye = Geodetic::new(36.0, -121.0, 800.0);
     let snapshot = FrameSnapshot::new(
         unix(2024, 6, 21, 20.0),
@@ -604,7 +605,10 @@ fn a_material_border_runs_on_across_node_edges_without_a_seam() {
     );
     let (image, stats) = frame(&mut renderer, &cache, &snapshot, Adaptation::Settled);
     write_png(&image, &out_dir().join("picture_border_seams.png"));
-    assert!(stats.terrain_nodes >= 4, "{stats:?}");
+    assert!(
+        stats.terrain_nodes >= 4 && stats.tiles_resident >= 4,
+        "{stats:?}"
+    );
     // Grass is greener than rock: in each column, the border lies as many rows from the top
     // (north) as the column has grass pixels (robust to the warp's small overhangs).
     let (w, h) = (image.width as usize, image.height as usize);
@@ -646,10 +650,12 @@ fn a_material_border_runs_on_across_node_edges_without_a_seam() {
         "the border crosses the node edges: {steps:?}"
     );
     let at_edge = at_edges.iter().map(|s| s.2).max().unwrap_or(0);
-    eprintln!("border steps: {at_edge} px at the node edges, {largest} px at most anywhere");
+    eprintln!(
+        "border steps: {at_edge} px at the node and tile edges, {largest} px at most anywhere"
+    );
     assert!(
         at_edge <= 4,
-        "a step of {at_edge} px where the border crosses a node edge: {at_edges:?}"
+        "a step of {at_edge} px where the border crosses a node or tile edge: {at_edges:?}"
     );
 }
 
