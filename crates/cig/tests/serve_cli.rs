@@ -75,6 +75,33 @@ fn start_serve(args: &[String]) -> Serving {
     Serving { child, stderr: log }
 }
 
+/// Runs `cig serve --headless` on a scenario for `frames` frames of `size`, writing them to
+/// `out_dir`.
+fn serve_headless(
+    db: &Path,
+    scenario: &Path,
+    out_dir: &Path,
+    size: &str,
+    frames: u32,
+    extra: &[&str],
+) -> std::process::Output {
+    cig()
+        .args(["serve", "--db"])
+        .arg(db)
+        .arg("--scenario")
+        .arg(scenario)
+        .args(["--headless", "--size", size, "--frames"])
+        .arg(frames.to_string())
+        .args(extra)
+        .arg("--cigi-port")
+        .arg(free_udp_port().to_string())
+        .arg("--out-dir")
+        .arg(out_dir)
+        .timeout(Duration::from_secs(300))
+        .output()
+        .expect("serve")
+}
+
 /// Runs `cig host --json` with a script against the IG's port, listening on `host_port`.
 fn run_host(script: &Path, ig_port: u16, host_port: u16) -> std::process::Output {
     cig()
@@ -292,26 +319,7 @@ fn serve_draws_off_screen_frames_of_the_scenario() {
     )
     .expect("scenario");
     let frames = dir.path().join("frames");
-    let out = cig()
-        .args(["serve", "--db"])
-        .arg(&db)
-        .arg("--scenario")
-        .arg(&scenario)
-        .args([
-            "--headless",
-            "--size",
-            "96x64",
-            "--frames",
-            "150",
-            "--json",
-            "--cigi-port",
-        ])
-        .arg(free_udp_port().to_string())
-        .arg("--out-dir")
-        .arg(&frames)
-        .timeout(Duration::from_secs(300))
-        .output()
-        .expect("serve");
+    let out = serve_headless(&db, &scenario, &frames, "96x64", 150, &["--json"]);
     assert!(
         out.status.success(),
         "{}",
@@ -650,25 +658,7 @@ fn serve_warns_once_of_an_eye_below_the_terrain_and_draws_from_its_surface() {
     )
     .expect("scenario");
     let frames = dir.path().join("frames");
-    let out = cig()
-        .args(["serve", "--db"])
-        .arg(&db)
-        .arg("--scenario")
-        .arg(&scenario)
-        .args([
-            "--headless",
-            "--size",
-            "64x48",
-            "--frames",
-            "5",
-            "--cigi-port",
-        ])
-        .arg(free_udp_port().to_string())
-        .arg("--out-dir")
-        .arg(&frames)
-        .timeout(Duration::from_secs(300))
-        .output()
-        .expect("serve");
+    let out = serve_headless(&db, &scenario, &frames, "64x48", 5, &[]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     let warnings: Vec<&str> = stderr
