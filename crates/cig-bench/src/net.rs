@@ -511,9 +511,7 @@ fn measure_cigi_decode(context: &mut BenchContext) -> Result<Value, BenchError> 
     ];
     let budget = Duration::from_secs_f64(context.seconds / (2.0 * variants.len() as f64));
     for (name, version, order) in variants {
-        let message = entity_message(version, order, &mut rng)?;
-        let mut datagram = Vec::new();
-        cig_cigi::encode_message(&message, &mut datagram)?;
+        let datagram = entity_datagram(version, order, &mut rng)?;
         let check = cig_cigi::decode_message(&datagram)?;
         if !(check.packets.len() == CIGI_ENTITIES + 1 && check.warnings.is_empty()) {
             return Err(BenchError::Scene(
@@ -558,12 +556,12 @@ fn per_call_against_copy(budget: Duration, datagram: &[u8], mut work: impl FnMut
 }
 
 /// A host message of IG Control and [`CIGI_ENTITIES`] entity controls (3.3 Entity Control or
-/// 4.0 Entity Position) at random places near 36 N 121 W.
-fn entity_message(
+/// 4.0 Entity Position) at random places near 36 N 121 W, encoded.
+fn entity_datagram(
     version: Version,
     order: ByteOrder,
     rng: &mut rand_chacha::ChaCha8Rng,
-) -> Result<Message, BenchError> {
+) -> Result<Vec<u8>, BenchError> {
     let mut packets = vec![Packet::IgControl(IgControl {
         ig_mode: 1,
         host_frame_number: 1,
@@ -608,7 +606,9 @@ fn entity_message(
             })
         });
     }
-    Ok(Message::new(version, order, packets))
+    let mut datagram = Vec::new();
+    cig_cigi::encode_message(&Message::new(version, order, packets), &mut datagram)?;
+    Ok(datagram)
 }
 
 /// An IG world with no scenario, for the CIGI measures.
@@ -636,9 +636,7 @@ fn measure_cigi_apply(context: &mut BenchContext) -> Result<Value, BenchError> {
     ];
     let budget = Duration::from_secs_f64(context.seconds / (2.0 * variants.len() as f64));
     for (name, version, order) in variants {
-        let message = entity_message(version, order, &mut rng)?;
-        let mut datagram = Vec::new();
-        cig_cigi::encode_message(&message, &mut datagram)?;
+        let datagram = entity_datagram(version, order, &mut rng)?;
         let mut world = empty_world()?;
         let started = Instant::now();
         world.receive_cigi(&datagram)?;

@@ -586,8 +586,8 @@ mod tests {
         assert!(format!("{e:#}").contains("192.0.2.77"));
     }
 
-    #[test]
-    fn reuse_port_lets_two_endpoints_share_a_port() {
+    /// Two broadcast endpoints sharing one loopback port, and their configuration.
+    fn sharing_pair() -> (EndpointConfig, UdpEndpoint, UdpEndpoint) {
         let config = EndpointConfig {
             reuse_port: true,
             delivery: Delivery::Broadcast,
@@ -599,6 +599,12 @@ mod tests {
             ..config.clone()
         })
         .unwrap();
+        (config, a, b)
+    }
+
+    #[test]
+    fn reuse_port_lets_two_endpoints_share_a_port() {
+        let (config, a, b) = sharing_pair();
         assert_eq!(a.local_addr(), b.local_addr());
         // Without sharing, the same port is refused with a one-line error.
         let refused = UdpEndpoint::open(EndpointConfig {
@@ -615,17 +621,7 @@ mod tests {
     /// endpoint sharing the port.
     #[test]
     fn broadcast_sets_the_flag_and_reaches_every_sharer() {
-        let config = EndpointConfig {
-            reuse_port: true,
-            delivery: Delivery::Broadcast,
-            ..EndpointConfig::loopback("DIS", 0)
-        };
-        let a = UdpEndpoint::open(config.clone()).unwrap();
-        let b = UdpEndpoint::open(EndpointConfig {
-            port: a.local_addr().port(),
-            ..config
-        })
-        .unwrap();
+        let (_, a, b) = sharing_pair();
         let flag = socket2::SockRef::from(a.socket.as_ref())
             .broadcast()
             .unwrap();

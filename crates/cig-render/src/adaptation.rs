@@ -181,10 +181,14 @@ impl AdaptationPass {
             return false;
         };
         let offset = (slot * 16) as u64;
+        // The slot's state to the tone map and to the statistics' readback.
+        let publish = |encoder: &mut wgpu::CommandEncoder| {
+            encoder.copy_buffer_to_buffer(&c.state, offset, &self.tone_exposure, 0, 16);
+            encoder.copy_buffer_to_buffer(&c.state, offset, &self.readback, 0, 16);
+        };
         if request.hold {
             if self.valid[slot] {
-                encoder.copy_buffer_to_buffer(&c.state, offset, &self.tone_exposure, 0, 16);
-                encoder.copy_buffer_to_buffer(&c.state, offset, &self.readback, 0, 16);
+                publish(encoder);
                 return true;
             }
             gpu.queue
@@ -220,8 +224,7 @@ impl AdaptationPass {
             pass.set_pipeline(&c.adapt);
             pass.dispatch_workgroups(1, 1, 1);
         }
-        encoder.copy_buffer_to_buffer(&c.state, offset, &self.tone_exposure, 0, 16);
-        encoder.copy_buffer_to_buffer(&c.state, offset, &self.readback, 0, 16);
+        publish(encoder);
         self.valid[slot] = true;
         true
     }

@@ -539,14 +539,12 @@ impl Renderer {
         let lod = TerrainLod::new(layout, GeoidLookup::new(&manifest.geoid));
         // No more slots than the database has nodes (a small database needs a small pool).
         let capacity = layout.node_count().min(MAX_NODE_SLOTS as u64) as usize;
+        let [north_m, east_m] = manifest.spacing_m;
+        let finest_post_m = (north_m * east_m).sqrt() as f32;
         let grid = layout.pyramid.grid;
-        let (m_north, m_east) = cig_geo::metres_per_degree(
-            grid.south_lat_deg + 0.5 * grid.dlat_deg * grid.rows.saturating_sub(1) as f64,
-        );
-        let finest_post_m = ((grid.dlat_deg * m_north) * (grid.dlon_deg * m_east)).sqrt() as f32;
         let centre = cig_geo::EnuFrame::new(Geodetic::new(
-            grid.south_lat_deg + 0.5 * grid.dlat_deg * grid.rows.saturating_sub(1) as f64,
-            grid.west_lon_deg + 0.5 * grid.dlon_deg * grid.cols.saturating_sub(1) as f64,
+            0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
+            0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
             0.0,
         ));
         let detail_axes = [
