@@ -12,7 +12,7 @@ use cig_terrain::database::{
 };
 use cig_terrain::raster::Raster;
 use cig_terrain::tile::Tile;
-use cig_terrain::TileKey;
+use cig_terrain::{ImageryKey, TileKey};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -84,6 +84,31 @@ impl TileStore for FsTileStore {
     fn location(&self, key: TileKey) -> String {
         self.tile_path(key).display().to_string()
     }
+
+    fn read_imagery_tile(&self, key: ImageryKey) -> Result<Vec<u8>, StoreError> {
+        let path = imagery_tile_path(&self.root, key);
+        std::fs::read(&path).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::NotFound {
+                StoreError::Missing(path.display().to_string())
+            } else {
+                StoreError::Io {
+                    reason: e.to_string(),
+                    location: path.display().to_string(),
+                }
+            }
+        })
+    }
+
+    fn imagery_location(&self, key: ImageryKey) -> String {
+        imagery_tile_path(&self.root, key).display().to_string()
+    }
+}
+
+/// Path of an imagery tile's file under a database root (`imagery/L<level>/<row>_<col>.img`).
+pub fn imagery_tile_path(root: &Path, key: ImageryKey) -> PathBuf {
+    root.join("imagery")
+        .join(format!("L{}", key.level))
+        .join(format!("{}_{}.img", key.row, key.col))
 }
 
 /// Opens a database directory: reads and validates its manifest.

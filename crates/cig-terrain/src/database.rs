@@ -7,6 +7,7 @@
 //! manifest turns them into heights above the WGS84 ellipsoid where geodetic altitudes are
 //! compared (line of sight, height above terrain).
 
+use crate::imagery::{ImageryDecodeError, ImageryKey, ImageryTile};
 use crate::pyramid::{PyramidLayout, TileKey};
 use crate::tile::{Tile, TileDecodeError};
 use serde::{Deserialize, Serialize};
@@ -159,6 +160,9 @@ pub struct Manifest {
     pub sources: Vec<String>,
     /// Total number of tiles over all levels.
     pub tile_count: u64,
+    /// Draped imagery, when the database has any (`crate::imagery`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub imagery: Option<crate::imagery::ImageryManifest>,
 }
 
 /// Why a manifest is not usable.
@@ -217,6 +221,12 @@ impl Manifest {
         if !self.geoid.is_consistent() {
             return bad("geoid grid");
         }
+        if let Some(imagery) = &self.imagery {
+            imagery
+                .layout
+                .validate(g)
+                .map_err(ManifestError::Inconsistent)?;
+        }
         Ok(())
     }
 }
@@ -236,12 +246,21 @@ pub trait TileStore: Send + Sync {
     fn read_tile(&self, key: TileKey) -> Result<Vec<u8>, StoreError>;
     /// Where a tile lives, for messages (a path, or "memory").
     fn location(&self, key: TileKey) -> String;
+    /// The bytes of one imagery tile (`crate::imagery`); `Missing` where none is stored.
+    fn read_imagery_tile(&self, key: ImageryKey) -> Result<Vec<u8>, StoreError> {
+        Err(StoreError::Missing(self.imagery_location(key)))
+    }
+    /// Where an imagery tile lives, for messages.
+    fn imagery_location(&self, key: ImageryKey) -> String {
+        format!("{key}")
+    }
 }
 
 /// Tiles held in memory (for tests and for databases built on the fly).
 #[derive(Default)]
 pub struct MemoryTileStore {
     tiles: parking_lot::RwLock<std::collections::HashMap<TileKey, Vec<u8>>>,
+    imagery: parking_lot::RwLock<std::collections::HashMap<ImageryKey, Vec<u8>>>,
 }
 
 impl MemoryTileStore {
@@ -252,6 +271,11 @@ impl MemoryTileStore {
     /// Stores (or replaces) a tile's bytes.
     pub fn insert(&self, key: TileKey, bytes: Vec<u8>) {
         self.tiles.write().insert(key, bytes);
+    }
+
+    /// Stores (or replaces) an imagery tile's bytes.
+    pub fn insert_imagery(&self, key: ImageryKey, bytes: Vec<u8>) {
+        self.imagery.write().insert(key, bytes);
     }
 }
 
@@ -267,6 +291,18 @@ impl TileStore for MemoryTileStore {
     fn location(&self, key: TileKey) -> String {
         format!("memory tile {key}")
     }
+
+    fn read_imagery_tile(&self, key: ImageryKey) -> Result<Vec<u8>, StoreError> {
+        self.imagery
+            .read()
+            .get(&key)
+            .cloned()
+            .ok_or_else(|| StoreError::Missing(self.imagery_location(key)))
+    }
+
+    fn imagery_location(&self, key: ImageryKey) -> String {
+        format!("memory {key}")
+    }
 }
 
 /// Why a tile could not be loaded.
@@ -277,6 +313,11 @@ pub enum LoadError {
     #[error("{error}: {location}")]
     Decode {
         error: TileDecodeError,
+        location: String,
+    },
+    #[error("{error}: {location}")]
+    ImageryDecode {
+        error: ImageryDecodeError,
         location: String,
     },
 }
@@ -328,6 +369,28 @@ impl TerrainDatabase {
         }
         Ok(tile)
     }
+
+    /// Reads and decodes one imagery tile (checksum and key checked); `Ok(None)` where the
+    /// database has no imagery there. Blocks on the store.
+    pub fn load_imagery_tile(&self, key: ImageryKey) -> Result<Option<ImageryTile>, LoadError> {
+        let Some(imagery) = &self.manifest.imagery else {
+            return Ok(None);
+        };
+        if !imagery.layout.contains_key(key) {
+            return Ok(None);
+        }
+        let bytes = match self.store.read_imagery_tile(key) {
+            Ok(bytes) => bytes,
+            Err(StoreError::Missing(_)) => return Ok(None),
+            Err(e) => return Err(e.into()),
+        };
+        ImageryTile::decode(&bytes, Some(key))
+            .map(Some)
+            .map_err(|error| LoadError::ImageryDecode {
+                error,
+                location: self.store.imagery_location(key),
+            })
+    }
 }
 
 impl Manifest {
@@ -362,6 +425,7 @@ impl Manifest {
                 .collect(),
             sources,
             tile_count: summary.tiles,
+            imagery: None,
         }
     }
 }

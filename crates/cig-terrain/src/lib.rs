@@ -16,6 +16,7 @@ pub mod classify;
 pub mod database;
 pub mod fill;
 pub mod hint;
+pub mod imagery;
 pub mod material;
 pub mod pyramid;
 pub mod query;
@@ -25,6 +26,7 @@ pub mod tile;
 
 pub use cache::{PagingConfig, TileCache};
 pub use database::{Manifest, TerrainDatabase, TileStore};
+pub use imagery::{ImageryKey, ImageryLayout, ImageryManifest, ImageryTile};
 pub use material::Material;
 pub use pyramid::{PyramidLayout, TileKey};
 pub use query::{LosResult, QueryError, QuerySession, SurfacePoint};
