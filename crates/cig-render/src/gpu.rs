@@ -103,6 +103,13 @@ impl Gpu {
         {
             required_features |= wgpu::Features::POLYGON_MODE_LINE;
         }
+        // Draped imagery is BC1 on disk; sampled as it is where the adapter can.
+        if adapter
+            .features()
+            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC)
+        {
+            required_features |= wgpu::Features::TEXTURE_COMPRESSION_BC;
+        }
         // Ask for what the adapter has (a GL or older adapter may have less than WebGPU's
         // defaults), capped where more would only cost memory.
         let adapter_limits = adapter.limits();

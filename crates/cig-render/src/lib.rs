@@ -14,6 +14,7 @@ pub mod celestial;
 pub mod clouds;
 pub mod gltf_model;
 pub mod gpu;
+pub mod imagery;
 pub mod offscreen;
 pub mod pass;
 pub mod precipitation;

@@ -31,7 +31,10 @@ use crate::atmosphere::{atmosphere_shader, AtmosphereGpu, ToneMap, HDR_FORMAT};
 use crate::celestial::CelestialPass;
 use crate::clouds::CloudPass;
 use crate::gpu::{Gpu, RenderError};
-use crate::pass::{sampler_entry, storage_entry, texture_entry, uniform_entry, DEPTH_FORMAT};
+use crate::imagery::ImageryClipmap;
+use crate::pass::{
+    sampler_entry, storage_entry, texture_array_entry, texture_entry, uniform_entry, DEPTH_FORMAT,
+};
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainFrame, TerrainGpu};
 use cig_geo::Geodetic;
@@ -66,6 +69,9 @@ pub mod serde_like {
         pub puffs_drawn: u32,
         pub tiles_resident: u32,
         pub tiles_wanted: u32,
+        /// Draped imagery tiles written to the GPU this frame, and still loading.
+        pub imagery_tiles_uploaded: u32,
+        pub imagery_tiles_pending: u32,
         /// CPU time of level-of-detail selection and culling, milliseconds.
         pub cpu_select_ms: f64,
         /// CPU time of the whole frame (selection, meshes, encoding, submission).
@@ -243,6 +249,8 @@ pub struct Renderer {
     gpu: Arc<Gpu>,
     pub lod: TerrainLod,
     terrain: TerrainGpu,
+    /// The draped imagery's clipmap (a stand-in when the database has none).
+    imagery: ImageryClipmap,
     /// The last view's terrain draw (its buffers are reused).
     terrain_frame: TerrainFrame,
     colour_format: wgpu::TextureFormat,
@@ -577,6 +585,16 @@ impl Renderer {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
+        let imagery = ImageryClipmap::new(&gpu, Arc::clone(cache.database()));
+        let imagery_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("imagery"),
+            // The clipmap's windows are toroidal: texture coordinates wrap.
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
         let terrain_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("terrain"),
             entries: &[
@@ -585,6 +603,10 @@ impl Renderer {
                 texture_entry(2),
                 texture_entry(3),
                 sampler_entry(4),
+                uniform_entry(5),
+                texture_array_entry(6),
+                texture_array_entry(7),
+                sampler_entry(8),
             ],
         });
         let model_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -620,6 +642,22 @@ impl Renderer {
                 wgpu::BindGroupEntry {
                     binding: 4,
                     resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: imagery.params_buffer().as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(&imagery.texture_view()),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: wgpu::BindingResource::TextureView(&imagery.pages_view()),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 8,
+                    resource: wgpu::BindingResource::Sampler(&imagery_sampler),
                 },
             ],
         });
@@ -728,6 +766,7 @@ impl Renderer {
             gpu,
             lod,
             terrain,
+            imagery,
             terrain_frame: TerrainFrame::default(),
             colour_format,
             globals,
@@ -933,6 +972,16 @@ impl Renderer {
         let min_morph = self.fade_in(view_index, nodes, options.fade_in_s);
         // The view's terrain, in buffers kept from frame to frame.
         let mut terrain_frame = std::mem::take(&mut self.terrain_frame);
+        // The imagery's windows follow the eye; one-off frames load every window tile first.
+        let imagery_stats = self.imagery.update(
+            &self.gpu,
+            view.eye.lat_deg,
+            view.eye.lon_deg,
+            options.mesh_budget == usize::MAX,
+        );
+        self.imagery
+            .prepare_view(&self.gpu, view.eye.lat_deg, view.eye.lon_deg);
+        self.terrain.imagery_frame = self.imagery.frame();
         let mesh_stats: MeshStats = self.terrain.prepare(
             &self.gpu,
             &self.lod,
@@ -1013,6 +1062,8 @@ impl Renderer {
             nodes_dropped: (mesh_stats.dropped + selection.nodes.len() - nodes.len()) as u32,
             tiles_resident: cache.stats().resident_tiles as u32,
             tiles_wanted: selection.wanted_tiles.len() as u32,
+            imagery_tiles_uploaded: imagery_stats.tiles_uploaded as u32,
+            imagery_tiles_pending: imagery_stats.tiles_pending as u32,
             cpu_select_ms,
             illuminance_lux: lighting.natural_illuminance_lux,
             exposure_ev: cig_scene::lighting::exposure_value(lighting.adapted_illuminance_lux)

@@ -32,6 +32,7 @@ pub struct NodeRecord {
     pub axis_u: [f32; 4],
     pub morph: [f32; 4],
     pub atlas: [f32; 4],
+    pub imagery: [f32; 4],
 }
 
 struct Slot {
@@ -65,6 +66,8 @@ pub struct TerrainGpu {
     pub colour_atlas: wgpu::Texture,
     slots: Vec<Option<Slot>>,
     by_key: HashMap<NodeKey, usize>,
+    /// Where this view's records place nodes in the draped imagery (none without imagery).
+    pub imagery_frame: Option<crate::imagery::ImageryFrame>,
     free: Vec<usize>,
 }
 
@@ -152,6 +155,7 @@ impl TerrainGpu {
             colour_atlas: atlas("terrain colours", wgpu::TextureFormat::Rgba8UnormSrgb),
             slots: (0..capacity).map(|_| None).collect(),
             by_key: HashMap::new(),
+            imagery_frame: None,
             free: (0..capacity).rev().collect(),
         }
     }
@@ -449,6 +453,16 @@ impl TerrainGpu {
                 (self.texels - 1) as f32 * texel,
                 (self.texels - 1) as f32 * texel,
             ],
+            imagery: self.imagery_frame.map_or([0.0; 4], |frame| {
+                let span = u64::from(self.node_cells) << slot.key.level;
+                frame.node_rect(
+                    (
+                        u64::from(slot.key.row) * span,
+                        u64::from(slot.key.col) * span,
+                    ),
+                    span,
+                )
+            }),
         })
     }
 

@@ -12,18 +12,42 @@ struct Node {
     morph: vec4<f32>,
     // Atlas rectangle of the node's texels: u0, v0, du, dv.
     atlas: vec4<f32>,
+    // Imagery rectangle: level-0 imagery texel coordinates (column, row) of the node's
+    // south-west post relative to the view's anchor, and the node's extent in those texels.
+    imagery: vec4<f32>,
+};
+
+// One imagery clipmap level (imagery.rs LevelParams).
+struct ImageryLevel {
+    // xy: the toroidal phase (the anchor modulo the clip size, level texels); zw: the
+    // window's south-west corner relative to the anchor, level texels.
+    phase_lo: vec4<f32>,
+    // xy: the window's north-east corner; z: the level's texel size, metres.
+    hi: vec4<f32>,
+};
+
+struct Imagery {
+    // Levels (0: no imagery), clip size, tile texels, window tiles.
+    info: vec4<f32>,
+    levels: array<ImageryLevel, 24>,
 };
 
 @group(0) @binding(1) var<storage, read> nodes: array<Node>;
 @group(0) @binding(2) var normal_atlas: texture_2d<f32>;
 @group(0) @binding(3) var colour_atlas: texture_2d<f32>;
 @group(0) @binding(4) var atlas_sampler: sampler;
+@group(0) @binding(5) var<uniform> imagery: Imagery;
+@group(0) @binding(6) var imagery_clip: texture_2d_array<f32>;
+@group(0) @binding(7) var imagery_pages: texture_2d_array<f32>;
+@group(0) @binding(8) var imagery_sampler: sampler;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) rel: vec3<f32>,
     @location(1) uv: vec2<f32>,
     @location(2) @interpolate(flat) node: u32,
+    // Level-0 imagery texel coordinates (column, row) relative to the view's anchor.
+    @location(3) img: vec2<f32>,
 };
 
 @vertex
@@ -48,6 +72,7 @@ fn vs_main(
     out.clip = g.view_proj * vec4<f32>(rel, 1.0);
     out.rel = rel;
     out.uv = node.atlas.xy + uv * node.atlas.zw;
+    out.img = node.imagery.xy + uv * node.imagery.zw;
     out.node = slot;
     return out;
 }
@@ -186,6 +211,60 @@ fn material_at(node: Node, uv: vec2<f32>, rel: vec3<f32>, n: vec3<f32>, warp_noi
     return Surface(albedo, dot(share, specular) / sum, kind_lead);
 }
 
+// Whether clipmap level `k` holds imagery around level-0 texel point `p`: inside the level's
+// window (with a texel to spare for the bilinear footprint) and its slot's tile loaded.
+fn imagery_level_holds(k: u32, p: vec2<f32>) -> bool {
+    let level = imagery.levels[k];
+    let q = p * exp2(-f32(k));
+    let inside = all(q >= level.phase_lo.zw + 1.0) && all(q <= level.hi.xy - 1.0);
+    let slot = wrap(floor((q + level.phase_lo.xy) / imagery.info.z), imagery.info.w);
+    let page = textureLoad(imagery_pages, vec2<i32>(slot), i32(k), 0).r;
+    return inside && page > 0.5;
+}
+
+fn imagery_sample(k: u32, p: vec2<f32>) -> vec4<f32> {
+    let level = imagery.levels[k];
+    let uv = (p * exp2(-f32(k)) + level.phase_lo.xy) / imagery.info.y;
+    return textureSampleLevel(imagery_clip, imagery_sampler, uv, i32(k), 0.0);
+}
+
+// The draped imagery at level-0 texel point `p` whose footprint on screen is `lambda`
+// (log2 of level-0 texels per pixel): the level that matches it, or the next coarser one that
+// holds the point, blended with the level above so level borders do not show. Returns the
+// linear colour and coverage (alpha 0 where no imagery is), and in `texel_m` the size of the
+// texels drawn, metres.
+struct Drape {
+    colour: vec4<f32>,
+    texel_m: f32,
+};
+
+fn imagery_at(p: vec2<f32>, lambda: f32) -> Drape {
+    let levels = u32(imagery.info.x);
+    if (levels == 0u) {
+        return Drape(vec4<f32>(0.0), 1e9);
+    }
+    var k = u32(clamp(floor(lambda), 0.0, f32(levels - 1u)));
+    var held = imagery_level_holds(k, p);
+    loop {
+        if (held || k + 1u >= levels) {
+            break;
+        }
+        k += 1u;
+        held = imagery_level_holds(k, p);
+    }
+    if (!held) {
+        return Drape(vec4<f32>(0.0), 1e9);
+    }
+    var colour = imagery_sample(k, p);
+    let t = clamp(lambda - f32(k), 0.0, 1.0);
+    if (t > 0.0 && k + 1u < levels) {
+        if (imagery_level_holds(k + 1u, p)) {
+            colour = mix(colour, imagery_sample(k + 1u, p), t);
+        }
+    }
+    return Drape(colour, imagery.levels[k].hi.z);
+}
+
 // Each material's detail: the amplitudes of its value-noise octaves at 0.34, 2.7, 19.3 and
 // 151 m (x to w), so grass, forest and rock are mottled at every scale, asphalt and snow are
 // fine-grained and even, water nearly flat (waves are not drawn). Indexed by
@@ -222,6 +301,11 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         return vec4<f32>(0.9, 0.9, 0.9, 1.0);
     }
     let node = nodes[in.node];
+    // The imagery's footprint: level-0 texels per pixel along the longer screen axis, allowing
+    // two of anisotropy (sharper at grazing angles; the bilinear taps average the rest).
+    let img_dx = length(dpdx(in.img));
+    let img_dy = length(dpdy(in.img));
+    let img_lambda = log2(max(max(min(img_dx, img_dy), 0.5 * max(img_dx, img_dy)), 1e-6));
     let ne = textureSample(normal_atlas, atlas_sampler, in.uv).xyz * 2.0 - 1.0;
     let n = normalize(node.axis_e.xyz * ne.x + node.axis_n.xyz * ne.y + node.axis_u.xyz * ne.z);
     let distance_m = length(in.rel);
@@ -264,6 +348,12 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         let detail = 1.0 + dot(DETAIL[surface.kind], octaves);
         let tint = mix(vec3<f32>(1.0), MACRO_TINT[surface.kind], clamp(octaves.w + 0.5 * fade2, 0.0, 1.0) * fade2);
         albedo = surface.albedo * detail * tint;
+        // Draped imagery over the materials where it covers, with the detail octaves finer
+        // than its texels (so coarse imagery still shows texture flowing past up close).
+        let drape = imagery_at(in.img, img_lambda);
+        let under = clamp(0.5 + 0.5 * log2(drape.texel_m / vec2<f32>(g.noise0.w * 0.125, g.noise0.w)), vec2<f32>(0.0), vec2<f32>(1.0));
+        let fine = 1.0 + DETAIL[surface.kind].x * octaves.x * under.x + DETAIL[surface.kind].y * octaves.y * under.y;
+        albedo = mix(albedo, drape.colour.rgb * fine, drape.colour.a);
     } else {
         // Plain: the colour texels blended bilinearly, with no detail (the baseline).
         let size = vec2<f32>(textureDimensions(colour_atlas));
