@@ -157,6 +157,20 @@ pub fn write_database(
     replace: bool,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<Manifest, DbError> {
+    write_database_with::<DbError>(out, raster, inputs, replace, progress, &mut |_, _| Ok(()))
+}
+
+/// [`write_database`], with `finish(staging, manifest)` called once the tiles are written and
+/// before the database is moved into place: it may add files to the staging directory and
+/// change the manifest (written again after it). An error from it leaves `out` untouched.
+pub fn write_database_with<E: From<DbError>>(
+    out: &Path,
+    raster: &Raster,
+    inputs: &BuildInputs,
+    replace: bool,
+    progress: &mut dyn FnMut(u64, u64),
+    finish: &mut dyn FnMut(&Path, &mut Manifest) -> Result<(), E>,
+) -> Result<Manifest, E> {
     check_output(out, replace)?;
     let parent = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -174,7 +188,13 @@ pub fn write_database(
     if staging.exists() {
         std::fs::remove_dir_all(&staging).map_err(|e| io_err(&staging, e))?;
     }
-    let result = write_into(&staging, raster, inputs, progress);
+    let result = write_into(&staging, raster, inputs, progress)
+        .map_err(E::from)
+        .and_then(|mut manifest| {
+            finish(&staging, &mut manifest)?;
+            write_manifest(&staging, &manifest)?;
+            Ok(manifest)
+        });
     let manifest = match result {
         Ok(m) => m,
         Err(e) => {
@@ -182,19 +202,44 @@ pub fn write_database(
             return Err(e);
         }
     };
+    swap_into_place(&staging, out)?;
+    Ok(manifest)
+}
+
+/// Moves a finished `staging` directory to `out`, replacing an existing `out` by rename (the
+/// old one is put back if the second rename fails).
+pub(crate) fn swap_into_place(staging: &Path, out: &Path) -> Result<(), DbError> {
     if out.exists() {
+        let parent = match out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let name = out
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let old = parent.join(format!(".{name}.old-{}", std::process::id()));
         std::fs::rename(out, &old).map_err(|e| io_err(out, e))?;
-        if let Err(e) = std::fs::rename(&staging, out) {
+        if let Err(e) = std::fs::rename(staging, out) {
             // Put the old database back; the new one stays in the staging directory.
             let _ = std::fs::rename(&old, out);
             return Err(io_err(out, e));
         }
         std::fs::remove_dir_all(&old).map_err(|e| io_err(&old, e))?;
     } else {
-        std::fs::rename(&staging, out).map_err(|e| io_err(out, e))?;
+        std::fs::rename(staging, out).map_err(|e| io_err(out, e))?;
     }
-    Ok(manifest)
+    Ok(())
+}
+
+/// Writes `manifest.json` into a database directory.
+pub(crate) fn write_manifest(dir: &Path, manifest: &Manifest) -> Result<(), DbError> {
+    let manifest_path = dir.join(MANIFEST_FILE);
+    let text = serde_json::to_string_pretty(manifest).map_err(|e| DbError::Manifest {
+        reason: e.to_string(),
+        path: manifest_path.clone(),
+    })?;
+    std::fs::write(&manifest_path, text).map_err(|e| io_err(&manifest_path, e))
 }
 
 /// Whether a database may be written at `out`: it does not exist, or it is a database (even a
@@ -252,11 +297,6 @@ fn write_into(
         inputs.void_posts_filled,
         inputs.sources.clone(),
     );
-    let manifest_path = staging.join(MANIFEST_FILE);
-    let text = serde_json::to_string_pretty(&manifest).map_err(|e| DbError::Manifest {
-        reason: e.to_string(),
-        path: manifest_path.clone(),
-    })?;
-    std::fs::write(&manifest_path, text).map_err(|e| io_err(&manifest_path, e))?;
+    write_manifest(staging, &manifest)?;
     Ok(manifest)
 }

@@ -111,7 +111,8 @@ fn read_geotiff<R: Read + Seek>(
     })
 }
 
-fn describe(error: TiffError) -> String {
+/// A `tiff` error as a one-line reason.
+pub(crate) fn describe(error: TiffError) -> String {
     match error {
         TiffError::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
             "the file ends inside the data it declares".to_string()
@@ -124,7 +125,8 @@ fn describe(error: TiffError) -> String {
 }
 
 /// Where the coordinate system puts the posts.
-enum Crs {
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Crs {
     Geographic,
     Utm { zone: UtmZone, epsg: u32 },
 }
@@ -143,11 +145,53 @@ struct GeoKeys {
 /// Model coordinates of post `(col, row)` (TIFF order, row 0 first in the file):
 /// `x = x0 + col * dx`, `y = y0 + row * dy`.
 #[derive(Clone, Copy, Debug)]
-struct Affine {
-    x0: f64,
-    dx: f64,
-    y0: f64,
-    dy: f64,
+pub(crate) struct Affine {
+    pub x0: f64,
+    pub dx: f64,
+    pub y0: f64,
+    pub dy: f64,
+}
+
+/// A GeoTIFF's georeference: its coordinate system and where its pixels are in it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Georeference {
+    pub crs: Crs,
+    /// Model coordinates of the sample point of pixel `(col, row)`: the pixel's centre for
+    /// PixelIsArea (the default), the tie point itself for PixelIsPoint.
+    pub affine: Affine,
+}
+
+/// Reads the GeoKeys (coordinate system, raster type) and the pixel-to-model transformation of
+/// the decoder's image; shared by the DEM and the imagery readers.
+pub(crate) fn read_georeference<R: Read + Seek>(
+    decoder: &mut Decoder<R>,
+    path: &Path,
+) -> Result<Georeference, ImportError> {
+    let tiff_err = |e: TiffError| ImportError::Tiff {
+        reason: describe(e),
+        path: path.to_path_buf(),
+    };
+    let invalid = |reason: String| ImportError::InvalidHeader {
+        format: SourceFormat::GeoTiff,
+        reason,
+        path: path.to_path_buf(),
+    };
+    let directory = decoder
+        .find_tag(Tag::GeoKeyDirectoryTag)
+        .map_err(tiff_err)?
+        .map(|v| v.into_u16_vec())
+        .transpose()
+        .map_err(tiff_err)?
+        .ok_or_else(|| invalid("no GeoKeyDirectoryTag (34735): not a GeoTIFF".to_string()))?;
+    let keys = parse_geokeys(&directory).map_err(invalid)?;
+    let crs = coordinate_system(&keys, path)?;
+    let pixel_is_point = match keys.raster_type {
+        None | Some(geokey::RASTER_PIXEL_IS_AREA) => false,
+        Some(geokey::RASTER_PIXEL_IS_POINT) => true,
+        Some(other) => return Err(invalid(format!("GTRasterTypeGeoKey {other} is unknown"))),
+    };
+    let affine = georeferencing(decoder, pixel_is_point, path)?;
+    Ok(Georeference { crs, affine })
 }
 
 fn decode<R: Read + Seek>(
@@ -191,21 +235,7 @@ fn decode<R: Read + Seek>(
         }
     }
 
-    let directory = decoder
-        .find_tag(Tag::GeoKeyDirectoryTag)
-        .map_err(tiff_err)?
-        .map(|v| v.into_u16_vec())
-        .transpose()
-        .map_err(tiff_err)?
-        .ok_or_else(|| invalid("no GeoKeyDirectoryTag (34735): not a GeoTIFF".to_string()))?;
-    let keys = parse_geokeys(&directory).map_err(invalid)?;
-    let crs = coordinate_system(&keys, path)?;
-    let pixel_is_point = match keys.raster_type {
-        None | Some(geokey::RASTER_PIXEL_IS_AREA) => false,
-        Some(geokey::RASTER_PIXEL_IS_POINT) => true,
-        Some(other) => return Err(invalid(format!("GTRasterTypeGeoKey {other} is unknown"))),
-    };
-    let affine = georeferencing(&mut decoder, pixel_is_point, path)?;
+    let Georeference { crs, affine } = read_georeference(&mut decoder, path)?;
     let nodata =
         match decoder.find_tag(Tag::GdalNodata).map_err(tiff_err)? {
             None => None,
