@@ -67,6 +67,8 @@ pub(crate) struct Hydrology {
     pub flood: Flood,
     pub acc: Vec<u32>,
     pub lakes: Vec<Lake>,
+    /// Heights before depression filling (the lakes' beds), for tracing the shores.
+    pub bed: Vec<f32>,
     pub river_centre_posts: usize,
     pub river_water_posts: usize,
 }
@@ -89,6 +91,7 @@ pub(crate) fn run(
     let flood = priority_flood(h, dims, &outlets, spacing_m, spacing_m, None, 8);
     progress("hydrology", 0.5);
     let lakes = find_lakes(h, &flood.filled, flags, dims, spacing_m);
+    let bed = h.to_vec();
     h.copy_from_slice(&flood.filled);
     mark_shores(flags, dims);
     let acc = accumulate(&flood, n);
@@ -100,6 +103,7 @@ pub(crate) fn run(
         flood,
         acc,
         lakes,
+        bed,
         river_centre_posts,
         river_water_posts,
     }

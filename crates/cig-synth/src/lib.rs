@@ -14,6 +14,10 @@
 //!    coarse grid, grade- and side-slope-penalised) and dirt tracks branching off, graded and
 //!    rasterised without cross slope.
 //! 4. `materials`: a rule cascade (water, roads, snow, rock, sand, dry clay, forest, grass).
+//! 5. `features`: the roads, rivers and lakes as shapes ([`Feature`]: road centre lines, river
+//!    polylines along the D8 receivers, lake shores traced between the posts where the ground
+//!    meets the water level), for draped imagery and `cig_terrain::features::level_terrain`.
+//!    They do not change the raster.
 //!
 //! Everything is in metres, so the landscape does not depend on the post spacing: a 90 m and a
 //! 30 m database of the same seed, origin and size show the same hills.
@@ -32,6 +36,7 @@
 //! coarse landform's outlets and the road network depend on the area's extent. The local metric
 //! frame is a flat square of `size_km` on a side about the area's centre latitude.
 
+mod features;
 mod flood;
 mod hydro;
 mod landform;
@@ -48,6 +53,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
+pub use cig_terrain::features::Feature;
+pub use features::{DIRT_ROAD_WIDTH_M, PAVED_ROAD_WIDTH_M};
 pub use hydro::Lake;
 pub use roads::RoadKind;
 
@@ -315,6 +322,8 @@ fn plan(p: &SynthParams) -> Result<Plan, SynthError> {
 pub(crate) struct Generated {
     pub raster: Raster,
     pub report: SynthReport,
+    /// Lakes, rivers and roads as shapes.
+    pub features: Vec<Feature>,
     #[cfg_attr(not(test), allow(dead_code, reason = "only the tests read it"))]
     pub flags: Vec<u16>,
     #[cfg_attr(not(test), allow(dead_code, reason = "only the tests read it"))]
@@ -330,6 +339,16 @@ pub fn synthesize(
     progress: &mut dyn FnMut(&str, f32),
 ) -> Result<Raster, SynthError> {
     Ok(generate(params, progress)?.raster)
+}
+
+/// [`synthesize_with_report`], also returning the roads, rivers and lakes as shapes: lakes
+/// (outline and level), then rivers, then roads, in a deterministic order.
+pub fn synthesize_with_features(
+    params: &SynthParams,
+    progress: &mut dyn FnMut(&str, f32),
+) -> Result<(Raster, SynthReport, Vec<Feature>), SynthError> {
+    let g = generate(params, progress)?;
+    Ok((g.raster, g.report, g.features))
 }
 
 /// [`synthesize`], also returning a [`SynthReport`].
@@ -443,7 +462,19 @@ pub(crate) fn generate(
             .map(|&m| (m, counts[m.to_byte() as usize] as f64 / n as f64))
             .collect(),
     };
+    let features = features::build(&features::Sources {
+        grid,
+        dims,
+        spacing_m: s,
+        h: &h,
+        bed: &hydrology.bed,
+        flags: &flags,
+        receiver: &hydrology.flood.receiver,
+        acc: &hydrology.acc,
+        roads: &report.roads,
+    });
     Ok(Generated {
+        features,
         raster: Raster {
             grid,
             elevation_m: h,

@@ -705,3 +705,101 @@ mod properties {
         }
     }
 }
+
+// ---------------------------------------------------------------- features
+
+fn inside_ring(ring: &[(f64, f64)], (lat, lon): (f64, f64)) -> bool {
+    let n = ring.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (ring[i], ring[(i + 1) % n]);
+        if (a.0 <= lat) != (b.0 <= lat) && lon < a.1 + (lat - a.0) * (b.1 - a.1) / (b.0 - a.0) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+#[test]
+fn features_are_deterministic_and_valid() {
+    let p = params(6.0, 30.0, 11);
+    let a = run(&p);
+    let b = run(&p);
+    assert_eq!(a.features, b.features);
+    assert!(!a.features.is_empty());
+    cig_terrain::features::validate_features(&a.features).expect("valid features");
+    let roads = a
+        .features
+        .iter()
+        .filter(|f| {
+            matches!(
+                f,
+                crate::Feature::Line {
+                    kind: cig_terrain::features::LineKind::PavedRoad
+                        | cig_terrain::features::LineKind::DirtRoad,
+                    ..
+                }
+            )
+        })
+        .count();
+    assert_eq!(roads, a.report.roads.len());
+    let (_, _, public) = crate::synthesize_with_features(&p, &mut |_, _| {}).expect("valid");
+    assert_eq!(public, a.features);
+}
+
+/// Every lake post lies inside its traced shore and every other post outside it; the lakes
+/// carry the hydrology's level; rivers are there, as wide as their catchments make them.
+#[test]
+fn lake_shores_enclose_exactly_the_lake_posts_and_rivers_are_lines() {
+    use cig_terrain::features::{Feature, LineKind};
+    let g = hydro_case();
+    let grid = g.raster.grid;
+    type LakeRef<'a> = (&'a Vec<(f64, f64)>, &'a Vec<Vec<(f64, f64)>>, f64);
+    let lakes: Vec<LakeRef> = g
+        .features
+        .iter()
+        .filter_map(|f| match f {
+            Feature::Lake {
+                outer_deg,
+                holes_deg,
+                level_m,
+            } => Some((outer_deg, holes_deg, level_m.expect("level"))),
+            _ => None,
+        })
+        .collect();
+    assert!(lakes.len() >= g.report.lakes.len() && !lakes.is_empty());
+    for r in 0..grid.rows {
+        for c in 0..grid.cols {
+            let k = r * grid.cols + c;
+            let p = grid.post_lat_lon_deg(r, c);
+            let holder = lakes
+                .iter()
+                .find(|(o, h, _)| inside_ring(o, p) && !h.iter().any(|hole| inside_ring(hole, p)));
+            if g.flags[k] & LAKE != 0 {
+                let (_, _, level) = holder.unwrap_or_else(|| panic!("lake post {r},{c} outside"));
+                assert_eq!(*level, f64::from(g.raster.elevation_m[k]));
+            } else {
+                assert!(holder.is_none(), "land post {r},{c} inside a lake");
+            }
+        }
+    }
+    let rivers: Vec<f64> = g
+        .features
+        .iter()
+        .filter_map(|f| match f {
+            Feature::Line {
+                kind: LineKind::River,
+                width_m,
+                ..
+            } => Some(*width_m),
+            _ => None,
+        })
+        .collect();
+    assert!(rivers.len() >= 3, "{} rivers", rivers.len());
+    assert!(
+        rivers.iter().all(|&w| (6.0..=150.0).contains(&w)),
+        "{rivers:?}"
+    );
+    let layer = cig_terrain::features::FeatureLayer::new(&g.features).expect("valid features");
+    assert!(!layer.is_empty());
+}

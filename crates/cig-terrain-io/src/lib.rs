@@ -1,7 +1,7 @@
 //! The terrain database's edge: reading DEM files of the user ([`import`]), road, river and lake
 //! feature files ([`features`]) and the database directory on disk ([`store`]).
 
-pub mod imagery;
 pub mod features;
+pub mod imagery;
 pub mod import;
 pub mod store;

@@ -14,6 +14,7 @@ pub mod build;
 pub mod cache;
 pub mod classify;
 pub mod database;
+pub mod features;
 pub mod fill;
 pub mod hint;
 pub mod imagery;
