@@ -12,7 +12,7 @@
 //! falls back to the next coarser level where a slot is empty (a tile not loaded yet, or no
 //! imagery there), and blends two levels so no level border shows. Tiles are loaded by worker
 //! threads and written at most `UPLOADS_PER_FRAME` a frame; one-off frames load every window
-//! tile first. BC1 tiles go to the GPU as they are where the device samples BC formats;
+//! tile first. BC3 tiles go to the GPU as they are where the device samples BC formats;
 //! elsewhere they are decoded to RGBA8 on the loading thread.
 //!
 //! Limits: one clipmap centre per renderer (the first view's eye); another view far from it
@@ -26,7 +26,7 @@ use std::sync::Arc;
 
 /// Tiles along a side of each level's window.
 pub const WINDOW_TILES: u32 = 8;
-/// Tile uploads per interactive frame (a BC1 tile is 32 KiB).
+/// Tile uploads per interactive frame (a BC3 tile is 64 KiB).
 const UPLOADS_PER_FRAME: usize = 24;
 /// Tile loads in flight at most.
 const LOADS_IN_FLIGHT: usize = 48;
@@ -80,7 +80,7 @@ struct Level {
 /// A loaded tile, as the GPU takes it.
 struct Loaded {
     key: ImageryKey,
-    /// BC1 blocks or RGBA8 texels; `None` where the tile is absent or failed.
+    /// BC3 blocks or RGBA8 texels; `None` where the tile is absent or failed.
     bytes: Option<Vec<u8>>,
 }
 
@@ -102,7 +102,7 @@ pub struct ClipmapStats {
 pub struct ImageryClipmap {
     layout: Option<ImageryLayout>,
     database: Arc<TerrainDatabase>,
-    /// Whether the texture holds BC1 blocks (else RGBA8).
+    /// Whether the texture holds BC3 blocks (else RGBA8).
     compressed: bool,
     clip_texels: u32,
     texture: wgpu::Texture,
@@ -118,7 +118,7 @@ pub struct ImageryClipmap {
 
 fn decode_for_gpu(tile: ImageryTile, compressed: bool) -> Vec<u8> {
     if compressed {
-        tile.bc1
+        tile.blocks
     } else {
         tile.to_rgba()
     }
@@ -136,7 +136,7 @@ impl ImageryClipmap {
         let clip_texels = layout.map_or(4, |l| l.tile_texels * WINDOW_TILES);
         let window = if layout.is_some() { WINDOW_TILES } else { 1 };
         let format = if compressed {
-            wgpu::TextureFormat::Bc1RgbaUnormSrgb
+            wgpu::TextureFormat::Bc3RgbaUnormSrgb
         } else {
             wgpu::TextureFormat::Rgba8UnormSrgb
         };
@@ -246,7 +246,7 @@ impl ImageryClipmap {
         let layers = self.levels.len() as u64;
         let texels = u64::from(self.clip_texels).pow(2) * layers;
         if self.compressed {
-            texels / 2
+            texels
         } else {
             texels * 4
         }
@@ -438,8 +438,8 @@ impl ImageryClipmap {
         }
         let t = self.layout.map_or(4, |l| l.tile_texels) as usize;
         let bytes = if self.compressed {
-            // BC1 blocks in three-colour mode (colour0 <= colour1), every index 3: transparent.
-            [0u8, 0, 0, 0, 0xff, 0xff, 0xff, 0xff].repeat(t * t / 16)
+            // BC3 blocks of zeros: alpha 0, black.
+            vec![0u8; t * t]
         } else {
             vec![0u8; t * t * 4]
         };
@@ -450,7 +450,7 @@ impl ImageryClipmap {
         let t = self.layout.map_or(4, |l| l.tile_texels);
         let w = WINDOW_TILES;
         let (bytes_per_row, rows_per_image) = if self.compressed {
-            (t / 4 * 8, t / 4)
+            (t / 4 * 16, t / 4)
         } else {
             (t * 4, t)
         };

@@ -11,9 +11,13 @@
 //! (where a coarser level has no tile either, the ground keeps its material colours).
 //!
 //! Tile format (memory image, little-endian): a 32-byte header (`CIGIMG` magic and format
-//! version, level, row, column, texels per side, pixel format, CRC-32 of the payload), then the payload: BC1 blocks (4x4 texels, 8 bytes, sRGB colour with 1-bit alpha,
-//! alpha 0 where no image covers the texel), block rows from the south. BC1 is what GPUs sample
-//! directly (6:1 against 8-bit RGBA); renderers without BC support decode it once on upload.
+//! version, level, row, column, texels per side, pixel format, CRC-32 of the payload), then the
+//! payload: BC3 blocks (4x4 texels in 16 bytes: BC1 colour and an 8-bit interpolated alpha),
+//! block rows from the south. Colour is sRGB premultiplied by alpha (alpha 0 and black where
+//! no image covers a texel), so a bilinear tap across a coverage edge blends without a dark
+//! fringe. BC3 is what GPUs sample directly (4:1 against 8-bit RGBA, with smooth alpha for the
+//! anti-aliased edges of painted roads and rivers); renderers without BC support decode it once
+//! on upload.
 //!
 //! Sources: the clip-texture of SGI's IG work (Tanner, Migdal and Jones, "The Clipmap", 1998)
 //! for the pyramid that the renderer windows around the eye; NPSNET's tile pyramid (source 003)
@@ -33,8 +37,8 @@ pub const MAX_FINE_SHIFT: u8 = 10;
 
 const MAGIC: [u8; 8] = *b"CIGIMG\0\x01";
 const HEADER_BYTES: usize = 32;
-/// Pixel format code of BC1 (sRGB, 1-bit alpha) payloads.
-const FORMAT_BC1_SRGB: u32 = 1;
+/// Pixel format code of BC3 (sRGB premultiplied colour, 8-bit alpha) payloads.
+const FORMAT_BC3_SRGB: u32 = 2;
 
 /// Identifies one imagery tile: its imagery level (0 = finest texels) and tile row (south
 /// first) and column. Imagery levels are not terrain levels: see [`ImageryLayout`].
@@ -221,58 +225,70 @@ pub enum ImageryDecodeError {
     Checksum,
 }
 
-/// One imagery tile: `texels` x `texels` texels of BC1 blocks, block rows from the south.
+/// One imagery tile: `texels` x `texels` texels of BC3 blocks, block rows from the south.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImageryTile {
     pub key: ImageryKey,
     pub texels: u32,
-    /// BC1 blocks, `(texels / 4)^2` of 8 bytes.
-    pub bc1: Vec<u8>,
+    /// BC3 blocks, `(texels / 4)^2` of 16 bytes.
+    pub blocks: Vec<u8>,
 }
 
-/// BC1 bytes of a square of `texels` texels.
-pub fn bc1_bytes(texels: u32) -> usize {
+/// Block bytes of a square of `texels` texels.
+pub fn block_bytes(texels: u32) -> usize {
     let blocks = (texels as usize).div_ceil(4);
-    blocks * blocks * 8
+    blocks * blocks * 16
 }
 
 impl ImageryTile {
-    /// Compresses `texels` x `texels` sRGB RGBA texels (rows from the south; alpha below 128
-    /// becomes transparent).
+    /// Compresses `texels` x `texels` sRGB RGBA texels (straight alpha, rows from the south);
+    /// colour is stored premultiplied by alpha.
     pub fn from_rgba(key: ImageryKey, texels: u32, rgba: &[u8]) -> ImageryTile {
         let n = texels as usize;
         assert_eq!(rgba.len(), n * n * 4, "imagery tile texels");
-        let mut bc1 = vec![0u8; bc1_bytes(texels)];
+        let premultiplied: Vec<u8> = rgba
+            .chunks_exact(4)
+            .flat_map(|px| {
+                let a = u16::from(px[3]);
+                let scale = |c: u8| ((u16::from(c) * a + 127) / 255) as u8;
+                [scale(px[0]), scale(px[1]), scale(px[2]), px[3]]
+            })
+            .collect();
+        let mut blocks = vec![0u8; block_bytes(texels)];
         let params = texpresso::Params {
             algorithm: texpresso::Algorithm::RangeFit,
             weights: texpresso::COLOUR_WEIGHTS_PERCEPTUAL,
             weigh_colour_by_alpha: false,
         };
-        texpresso::Format::Bc1.compress(rgba, n, n, params, &mut bc1);
-        ImageryTile { key, texels, bc1 }
+        texpresso::Format::Bc3.compress(&premultiplied, n, n, params, &mut blocks);
+        ImageryTile {
+            key,
+            texels,
+            blocks,
+        }
     }
 
-    /// The texels as sRGB RGBA bytes (rows from the south; alpha 0 or 255).
+    /// The texels as sRGB RGBA bytes, colour premultiplied by alpha (rows from the south).
     pub fn to_rgba(&self) -> Vec<u8> {
         let n = self.texels as usize;
         let mut rgba = vec![0u8; n * n * 4];
-        texpresso::Format::Bc1.decompress(&self.bc1, n, n, &mut rgba);
+        texpresso::Format::Bc3.decompress(&self.blocks, n, n, &mut rgba);
         rgba
     }
 
     /// The tile's file bytes.
     pub fn encode(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(HEADER_BYTES + self.bc1.len());
+        let mut out = Vec::with_capacity(HEADER_BYTES + self.blocks.len());
         out.extend_from_slice(&MAGIC);
         out.push(self.key.level);
         out.extend_from_slice(&[0u8; 3]);
         out.extend_from_slice(&self.key.row.to_le_bytes());
         out.extend_from_slice(&self.key.col.to_le_bytes());
         out.extend_from_slice(&self.texels.to_le_bytes());
-        out.extend_from_slice(&FORMAT_BC1_SRGB.to_le_bytes());
-        out.extend_from_slice(&crc32fast::hash(&self.bc1).to_le_bytes());
+        out.extend_from_slice(&FORMAT_BC3_SRGB.to_le_bytes());
+        out.extend_from_slice(&crc32fast::hash(&self.blocks).to_le_bytes());
         debug_assert_eq!(out.len(), HEADER_BYTES);
-        out.extend_from_slice(&self.bc1);
+        out.extend_from_slice(&self.blocks);
         out
     }
 
@@ -309,24 +325,24 @@ impl ImageryTile {
                 "{texels} texels per side (this build reads {IMAGERY_TILE_TEXELS})"
             )));
         }
-        if word(24) != FORMAT_BC1_SRGB {
+        if word(24) != FORMAT_BC3_SRGB {
             return Err(ImageryDecodeError::Header(format!(
                 "pixel format {}",
                 word(24)
             )));
         }
-        let payload = bc1_bytes(texels);
+        let payload = block_bytes(texels);
         if bytes.len() != HEADER_BYTES + payload {
             return Err(ImageryDecodeError::Truncated(bytes.len()));
         }
-        let bc1 = &bytes[HEADER_BYTES..];
-        if crc32fast::hash(bc1) != word(28) {
+        let blocks = &bytes[HEADER_BYTES..];
+        if crc32fast::hash(blocks) != word(28) {
             return Err(ImageryDecodeError::Checksum);
         }
         Ok(ImageryTile {
             key,
             texels,
-            bc1: bc1.to_vec(),
+            blocks: blocks.to_vec(),
         })
     }
 }

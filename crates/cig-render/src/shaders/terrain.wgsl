@@ -231,7 +231,7 @@ fn imagery_sample(k: u32, p: vec2<f32>) -> vec4<f32> {
 // The draped imagery at level-0 texel point `p` whose footprint on screen is `lambda`
 // (log2 of level-0 texels per pixel): the level that matches it, or the next coarser one that
 // holds the point, blended with the level above so level borders do not show. Returns the
-// linear colour and coverage (alpha 0 where no imagery is), and in `texel_m` the size of the
+// linear colour, premultiplied by its coverage, and the coverage (0 where no imagery is), and in `texel_m` the size of the
 // texels drawn, metres.
 struct Drape {
     colour: vec4<f32>,
@@ -353,7 +353,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         let drape = imagery_at(in.img, img_lambda);
         let under = clamp(0.5 + 0.5 * log2(drape.texel_m / vec2<f32>(g.noise0.w * 0.125, g.noise0.w)), vec2<f32>(0.0), vec2<f32>(1.0));
         let fine = 1.0 + DETAIL[surface.kind].x * octaves.x * under.x + DETAIL[surface.kind].y * octaves.y * under.y;
-        albedo = mix(albedo, drape.colour.rgb * fine, drape.colour.a);
+        // Premultiplied: the colour already carries its coverage.
+        albedo = albedo * (1.0 - drape.colour.a) + drape.colour.rgb * fine;
     } else {
         // Plain: the colour texels blended bilinearly, with no detail (the baseline).
         let size = vec2<f32>(textureDimensions(colour_atlas));

@@ -11,7 +11,8 @@
 //! aircraft flying a straight line does). Mouse look changes heading and pitch directly; pitch
 //! stays within +-89.9 degrees so heading stays defined.
 //!
-//! Limits: no collision with the terrain (the camera may fly through hills) and no inertia; the
+//! Limits: no inertia; the camera itself knows nothing of the terrain (the viewer keeps a free
+//! camera on or above the terrain's surface, `EYE_CLEARANCE_M` up); the
 //! altitude is held at or above [`cig_scene::view::MIN_EYE_ALTITUDE_M`] so the view stays valid.
 
 use cig_geo::{EnuFrame, Geodetic};

@@ -650,6 +650,17 @@ impl App {
             fast: held(&[KeyCode::ShiftLeft, KeyCode::ShiftRight]),
         };
         self.camera.fly(input, dt_s);
+        if self.driver.is_none() {
+            // The free camera does not fly into the ground: an eye that would go below the
+            // terrain stays on its surface (a query may load one finest tile here).
+            let mut session = cig_terrain::QuerySession::new(Arc::clone(&r.cache));
+            if let Ok(hat_m) = session.hat_m(self.camera.eye) {
+                let clearance_m = cig_scene::snapshot::EYE_CLEARANCE_M;
+                if hat_m.is_finite() && hat_m < clearance_m {
+                    self.camera.eye.alt_m += clearance_m - hat_m;
+                }
+            }
+        }
         self.panel.advance(dt_s);
         let script_t_s = self.first_frame.map_or(0.0, |f| (now - f).as_secs_f64());
         if let Some(shot) = scripted_pose(&self.options.script, script_t_s) {
