@@ -6,8 +6,9 @@ use crate::{BenchError, Step};
 use cig_terrain::build::prepare_raster;
 use cig_terrain::raster::Raster;
 use cig_terrain::{PagingConfig, QuerySession, TileCache};
-use cig_terrain_io::store::{check_output, open_database, write_database, BuildInputs};
-use std::path::Path;
+use cig_terrain_io::imagery::{write_imagery, ImageryError, ImageryProgress};
+use cig_terrain_io::store::{check_output, open_database, write_database_with, BuildInputs};
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// The demo database: 50 km x 50 km at 30 m posts from near Fort Hunter Liggett, California.
@@ -31,6 +32,8 @@ pub enum BuildStage {
     Prepare,
     /// Writing the pyramid's tiles: tiles written of tiles in all.
     Write,
+    /// Building the imagery pyramid (`BuildProgress::Imagery`).
+    Imagery,
 }
 
 /// What a build reports as it goes.
@@ -42,6 +45,8 @@ pub enum BuildProgress<'a> {
     Synthesize { step: &'a str, fraction: f32 },
     /// Tiles written so far, of `total`.
     Write { done: u64, total: u64 },
+    /// Images opened, then bands of imagery tiles built.
+    Imagery(ImageryProgress),
     /// The stage that began last is over.
     End,
 }
@@ -85,6 +90,23 @@ pub fn build_database(
     tile_cells: u32,
     progress: &mut dyn FnMut(BuildProgress<'_>),
 ) -> Result<cig_terrain::Manifest, BenchError> {
+    build_database_with_imagery(raster, sources, &[], out, force, tile_cells, progress)
+}
+
+/// [`build_database`], then the imagery pyramid of `images` (when any) built into the same
+/// staging directory before the database is moved into place: a failure writes nothing.
+///
+/// # Errors
+/// As [`build_database`], and when an image is refused.
+pub fn build_database_with_imagery(
+    raster: &mut Raster,
+    sources: Vec<String>,
+    images: &[PathBuf],
+    out: &Path,
+    force: bool,
+    tile_cells: u32,
+    progress: &mut dyn FnMut(BuildProgress<'_>),
+) -> Result<cig_terrain::Manifest, BenchError> {
     progress(BuildProgress::Begin(BuildStage::Prepare));
     let report = prepare_raster(raster).step("cannot fill voids")?;
     progress(BuildProgress::End);
@@ -97,11 +119,29 @@ pub fn build_database(
         tile_cells,
     };
     progress(BuildProgress::Begin(BuildStage::Write));
-    let manifest = write_database(out, raster, &inputs, force, &mut |done, total| {
-        progress(BuildProgress::Write { done, total });
-    })
+    // Both callbacks report progress: share it through a cell.
+    let progress = std::cell::RefCell::new(progress);
+    let manifest = write_database_with::<ImageryError>(
+        out,
+        raster,
+        &inputs,
+        force,
+        &mut |done, total| (progress.borrow_mut())(BuildProgress::Write { done, total }),
+        &mut |staging, manifest| {
+            (progress.borrow_mut())(BuildProgress::End);
+            if images.is_empty() {
+                return Ok(());
+            }
+            (progress.borrow_mut())(BuildProgress::Begin(BuildStage::Imagery));
+            let imagery = write_imagery(staging, manifest, images, &[], &mut |p| {
+                (progress.borrow_mut())(BuildProgress::Imagery(p));
+            })?;
+            manifest.imagery = Some(imagery);
+            (progress.borrow_mut())(BuildProgress::End);
+            Ok(())
+        },
+    )
     .step("cannot build database")?;
-    progress(BuildProgress::End);
     Ok(manifest)
 }
 

@@ -9,6 +9,7 @@
 //! date and the commit (given by the caller).
 //!
 //! - [`db`]: HAT, batched HAT and LOS rates on one core, cold tile loads, build and import times.
+//! - [`imagery`]: importing a synthetic 20,000 x 20,000 RGB orthoimage: time, peak memory.
 //! - [`particles`]: one fixed step of the obscurant engine with about 22,000 puffs.
 //! - [`render`]: a 300 m/s low pass streamed, level of detail against full detail, the ground's
 //!   detail against plain colour texels, plumes in view.
@@ -31,6 +32,7 @@ pub mod db;
 pub mod demo;
 pub mod env;
 pub mod flight;
+pub mod imagery;
 pub mod net;
 pub mod particles;
 pub mod render;
@@ -61,6 +63,8 @@ pub enum BenchError {
     Database(#[from] cig_terrain_io::store::DbError),
     #[error(transparent)]
     Import(#[from] cig_terrain_io::import::ImportError),
+    #[error(transparent)]
+    Imagery(#[from] cig_terrain_io::imagery::ImageryError),
     #[error(transparent)]
     Synth(#[from] cig_synth::SynthError),
     #[error(transparent)]

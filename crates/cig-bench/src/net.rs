@@ -33,7 +33,7 @@
 //! frame loop for CPU — which is the point, but the figures depend on the core count.
 
 use crate::database::{demo_or, open_session, BuildProgress};
-use crate::report::{date_utc, machine, median, percentile};
+use crate::report::{date_utc, machine, median, memory_kb, percentile};
 use crate::{require, BenchError, Step};
 use cig_cigi::{ByteOrder, EntityControl, EntityPosition, IgControl, Message, Packet, Version};
 use cig_dis::codec::timestamp_from_seconds_past_hour;
@@ -727,21 +727,6 @@ fn measure_hat_hot_ig_frame(context: &mut BenchContext) -> Result<Value, BenchEr
         "fraction_of_60hz_frame_p99": p99 / (FRAME_S * 1e3),
         "every_request_answered_next_frame": all_answered,
     }))
-}
-
-/// VmRSS and VmHWM of this process, kB (Linux; `None` elsewhere).
-fn memory_kb() -> (Option<u64>, Option<u64>) {
-    let Ok(status) = std::fs::read_to_string("/proc/self/status") else {
-        return (None, None);
-    };
-    let field = |name: &str| {
-        status
-            .lines()
-            .find(|l| l.starts_with(name))
-            .and_then(|l| l.split_whitespace().nth(1))
-            .and_then(|v| v.parse::<u64>().ok())
-    };
-    (field("VmRSS:"), field("VmHWM:"))
 }
 
 #[derive(Default)]

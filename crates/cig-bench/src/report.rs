@@ -50,6 +50,21 @@ pub(crate) fn percentile(v: &[f64], q: f64) -> f64 {
     s.get(i).copied().unwrap_or(f64::NAN)
 }
 
+/// VmRSS and VmHWM of this process, kB (Linux; `None` elsewhere).
+pub(crate) fn memory_kb() -> (Option<u64>, Option<u64>) {
+    let Ok(status) = std::fs::read_to_string("/proc/self/status") else {
+        return (None, None);
+    };
+    let field = |name: &str| {
+        status
+            .lines()
+            .find(|l| l.starts_with(name))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|v| v.parse::<u64>().ok())
+    };
+    (field("VmRSS:"), field("VmHWM:"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

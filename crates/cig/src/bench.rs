@@ -1,7 +1,9 @@
-//! `cig bench db|particles|render|net|env`: the arguments mapped onto `cig-bench`'s options,
+//! `cig bench db|imagery|particles|render|net|env`: the arguments mapped onto `cig-bench`'s options,
 //! the reports printed (figures as JSON, or the benchmark's summary).
 
-use crate::cli::{BenchDbArgs, BenchEnvArgs, BenchNetArgs, BenchParticlesArgs, BenchRenderArgs};
+use crate::cli::{
+    BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs, BenchParticlesArgs, BenchRenderArgs,
+};
 use crate::config::Config;
 use crate::output::build_progress;
 use crate::render::parse_size;
@@ -43,6 +45,17 @@ pub fn db(args: &BenchDbArgs, config: &Config) -> anyhow::Result<()> {
         commit: commit(),
     };
     let report = cig_bench::db::run(&options, &mut build_progress())?;
+    print_figures(&report, args.json)
+}
+
+pub fn imagery(args: &BenchImageryArgs, config: &Config) -> anyhow::Result<()> {
+    let options = cig_bench::imagery::ImageryOptions {
+        size: args.size,
+        scratch: args.scratch.clone(),
+        tile_cells: config.database.tile_cells,
+        commit: commit(),
+    };
+    let report = cig_bench::imagery::run(&options, &mut build_progress())?;
     print_figures(&report, args.json)
 }
 

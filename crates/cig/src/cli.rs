@@ -140,8 +140,12 @@ pub struct HostArgs {
 pub enum DbCommand {
     /// Generate a deterministic synthetic database.
     Synth(SynthArgs),
-    /// Import DEM files (GeoTIFF, SRTM .hgt, DTED .dt0/.dt1/.dt2, ESRI .asc) into one database.
+    /// Import DEM files (GeoTIFF, SRTM .hgt, DTED .dt0/.dt1/.dt2, ESRI .asc) into one database,
+    /// optionally with orthoimagery (--imagery).
     Import(ImportArgs),
+    /// Add orthoimagery (GeoTIFF, EPSG:4326 or UTM) to a database, replacing its imagery; the
+    /// database is unchanged if anything fails.
+    Imagery(ImageryArgs),
     /// Describe a database.
     Info(InfoArgs),
 }
@@ -179,6 +183,20 @@ pub struct ImportArgs {
     /// DEM files; several are mosaicked into one database.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
+    /// Orthoimages (GeoTIFF, 8- or 16-bit grey/RGB/RGBA, EPSG:4326 or WGS84 UTM) draped over
+    /// the database; finer images are drawn over coarser ones.
+    #[arg(long, num_args = 1.., value_name = "IMAGE")]
+    pub imagery: Vec<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct ImageryArgs {
+    /// Database directory.
+    pub db: PathBuf,
+    /// Orthoimages (GeoTIFF, 8- or 16-bit grey/RGB/RGBA, EPSG:4326 or WGS84 UTM); finer images
+    /// are drawn over coarser ones.
+    #[arg(required = true)]
+    pub images: Vec<PathBuf>,
 }
 
 #[derive(Args)]
@@ -236,6 +254,9 @@ pub struct LosArgs {
 pub enum BenchCommand {
     /// Terrain database benchmarks: HAT and LOS rates, tile loads, build and import times.
     Db(BenchDbArgs),
+    /// Orthoimagery import: a synthetic SIZE x SIZE RGB GeoTIFF imported into a scratch
+    /// database (time, MB/s, peak memory).
+    Imagery(BenchImageryArgs),
     /// Obscurant particle update cost: 32 plumes of 5 x 75 puffs and 200 dust trails of 50.
     Particles(BenchParticlesArgs),
     /// Renderer: a 300 m/s low-level pass, level of detail against full detail in one run.
@@ -369,6 +390,19 @@ pub struct PlumeArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(Args)]
+pub struct BenchImageryArgs {
+    /// Print JSON on one line.
+    #[arg(long)]
+    pub json: bool,
+    /// Pixels along the square image's side.
+    #[arg(long, default_value_t = 20_000)]
+    pub size: u32,
+    /// Directory for the scratch image and database (default: the system's temporary one).
+    #[arg(long)]
+    pub scratch: Option<PathBuf>,
 }
 
 #[derive(Args)]

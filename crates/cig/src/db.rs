@@ -1,6 +1,6 @@
-//! `cig db synth|import|info`.
+//! `cig db synth|import|imagery|info`.
 
-use crate::cli::{ImportArgs, InfoArgs, SynthArgs};
+use crate::cli::{ImageryArgs, ImportArgs, InfoArgs, SynthArgs};
 use crate::config::Config;
 use anyhow::Context;
 use cig_scene::lod::{error_range_m, LevelErrors, NodeLayout};
@@ -93,9 +93,10 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
             line
         })
         .collect();
-    let manifest = cig_bench::database::build_database(
+    let manifest = cig_bench::database::build_database_with_imagery(
         &mut raster,
         sources,
+        &args.imagery,
         &args.out,
         args.force,
         config.database.tile_cells,
@@ -109,7 +110,41 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
         manifest.void_posts_filled,
         args.out.display()
     );
+    if let Some(imagery) = &manifest.imagery {
+        eprintln!(
+            "draped {} image(s) as {} imagery tiles",
+            args.imagery.len(),
+            imagery.tile_count
+        );
+    }
     Ok(())
+}
+
+pub fn imagery(args: &ImageryArgs) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let mut progress = crate::output::build_progress();
+    progress(cig_bench::database::BuildProgress::Begin(
+        cig_bench::database::BuildStage::Imagery,
+    ));
+    let manifest = cig_terrain_io::imagery::add_imagery(&args.db, &args.images, &[], &mut |p| {
+        progress(cig_bench::database::BuildProgress::Imagery(p));
+    })
+    .context("cannot add imagery")?;
+    progress(cig_bench::database::BuildProgress::End);
+    let tiles = manifest.imagery.as_ref().map_or(0, |i| i.tile_count);
+    eprintln!(
+        "draped {} image(s) as {tiles} imagery tiles in {:.1} s: {}",
+        args.images.len(),
+        started.elapsed().as_secs_f64(),
+        args.db.display()
+    );
+    Ok(())
+}
+
+/// Level-0 texel size of the imagery, metres (north-south, east-west).
+fn imagery_texel_m(manifest: &cig_terrain::Manifest, fine_shift: u8) -> [f64; 2] {
+    let s = f64::from(1u32 << fine_shift);
+    [manifest.spacing_m[0] / s, manifest.spacing_m[1] / s]
 }
 
 /// `db info` as JSON.
@@ -136,6 +171,14 @@ pub fn info_json(manifest: &cig_terrain::Manifest) -> serde_json::Value {
         "materials": manifest.material_posts,
         "sources": manifest.sources,
         "format_version": manifest.format_version,
+        "imagery": manifest.imagery.as_ref().map(|i| serde_json::json!({
+            "levels": i.layout.levels,
+            "fine_shift": i.layout.fine_shift,
+            "texel_m_north_east": imagery_texel_m(manifest, i.layout.fine_shift),
+            "texels": {"rows": i.layout.rows, "cols": i.layout.cols},
+            "tiles": i.tile_count,
+            "sources": i.sources,
+        })),
     })
 }
 
@@ -260,6 +303,23 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<()> {
     }
     for s in &m.sources {
         println!("source        {s}");
+    }
+    if let Some(imagery) = &m.imagery {
+        let [north_m, east_m] = imagery_texel_m(m, imagery.layout.fine_shift);
+        println!(
+            "imagery       {} levels, {} tiles of {} texels, finest texels {:.3} m x {:.3} m \
+             ({} x {})",
+            imagery.layout.levels,
+            imagery.tile_count,
+            imagery.layout.tile_texels,
+            north_m,
+            east_m,
+            imagery.layout.rows,
+            imagery.layout.cols
+        );
+        for s in &imagery.sources {
+            println!("image         {s}");
+        }
     }
     if let Some(report) = levels {
         let (width_px, height_px) = LOD_REFERENCE_SIZE;

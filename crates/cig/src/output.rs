@@ -1,6 +1,7 @@
 //! Progress bars and spinners for long commands (drawn only on a terminal).
 
 use cig_bench::database::{BuildProgress, BuildStage};
+use cig_terrain_io::imagery::ImageryProgress;
 use indicatif::{ProgressBar, ProgressStyle};
 
 pub fn bar(total: u64, what: &str) -> ProgressBar {
@@ -22,7 +23,7 @@ pub fn spinner(what: &str) -> ProgressBar {
 
 /// Draws a database build's progress ([`cig_bench::database::BuildProgress`]): a bar while
 /// terrain is synthesized, a spinner while voids are filled and materials derived, a bar while
-/// tiles are written.
+/// tiles are written, a bar while images are opened and the imagery pyramid is built.
 pub fn build_progress() -> impl FnMut(BuildProgress<'_>) {
     let mut current: Option<ProgressBar> = None;
     move |progress| match progress {
@@ -31,6 +32,7 @@ pub fn build_progress() -> impl FnMut(BuildProgress<'_>) {
                 BuildStage::Synthesize => bar(100, "synthesize"),
                 BuildStage::Prepare => spinner("fill voids, derive materials"),
                 BuildStage::Write => bar(0, "write tiles"),
+                BuildStage::Imagery => bar(0, "open images"),
             });
         }
         BuildProgress::Synthesize { step, fraction } => {
@@ -44,6 +46,17 @@ pub fn build_progress() -> impl FnMut(BuildProgress<'_>) {
                 bar.set_length(total);
                 bar.set_position(done);
             }
+        }
+        BuildProgress::Imagery(step) => {
+            // `cig bench imagery` reports the imagery alone, without a Begin.
+            let bar = current.get_or_insert_with(|| bar(0, "open images"));
+            let (what, done, total) = match step {
+                ImageryProgress::Open { done, total } => ("open images", done, total),
+                ImageryProgress::Build { done, total } => ("imagery", done, total),
+            };
+            bar.set_message(what);
+            bar.set_length(total);
+            bar.set_position(done);
         }
         BuildProgress::End => {
             if let Some(bar) = current.take() {

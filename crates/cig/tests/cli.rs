@@ -423,3 +423,143 @@ fn a_closed_pipe_ends_the_command_quietly() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// An RGB GeoTIFF (EPSG:4326, PixelIsArea) of `w` x `h` pixels of `pixel_deg`, its north-west
+/// corner at (`north`, `west`), all `rgb`.
+fn write_orthoimage(path: &Path, w: u32, h: u32, north: f64, west: f64, pixel_deg: f64) {
+    use tiff::encoder::{colortype, TiffEncoder};
+    use tiff::tags::Tag;
+    let file = std::fs::File::create(path).expect("create");
+    let mut encoder = TiffEncoder::new(std::io::BufWriter::new(file)).expect("encoder");
+    let mut image = encoder.new_image::<colortype::RGB8>(w, h).expect("image");
+    let keys: [u16; 20] = [
+        1, 1, 0, 4, 1024, 0, 1, 2, 1025, 0, 1, 1, 2048, 0, 1, 4326, 2054, 0, 1, 9102,
+    ];
+    let dir = image.encoder();
+    dir.write_tag(Tag::GeoKeyDirectoryTag, &keys[..])
+        .expect("keys");
+    dir.write_tag(Tag::ModelPixelScaleTag, &[pixel_deg, pixel_deg, 0.0][..])
+        .expect("scale");
+    dir.write_tag(
+        Tag::ModelTiepointTag,
+        &[0.0, 0.0, 0.0, west, north, 0.0][..],
+    )
+    .expect("tiepoint");
+    let data: Vec<u8> = (0..w * h)
+        .flat_map(|i| [40, 120 + (i % 7) as u8, 60])
+        .collect();
+    image.write_data(&data).expect("data");
+}
+
+#[test]
+fn imagery_is_draped_reported_and_refused_without_damage() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = synth(dir.path(), "db", 3, "2", "60");
+    let info = json(
+        &cig()
+            .args(["db", "info"])
+            .arg(&db)
+            .arg("--json")
+            .assert()
+            .success()
+            .get_output()
+            .stdout,
+    );
+    let (south, west) = (
+        info["extent_deg"]["south"].as_f64().expect("south"),
+        info["extent_deg"]["west"].as_f64().expect("west"),
+    );
+    // 7.5 m pixels over the south-west kilometre.
+    let pixel = 7.5 / 111_000.0;
+    let image = dir.path().join("ortho.tif");
+    write_orthoimage(&image, 130, 120, south + 120.0 * pixel, west, pixel);
+    cig()
+        .args(["db", "imagery"])
+        .arg(&db)
+        .arg(&image)
+        .assert()
+        .success();
+    let info = json(
+        &cig()
+            .args(["db", "info"])
+            .arg(&db)
+            .arg("--json")
+            .assert()
+            .success()
+            .get_output()
+            .stdout,
+    );
+    let imagery = &info["imagery"];
+    assert!(imagery["tiles"].as_u64().expect("tiles") >= 1, "{info}");
+    assert!(imagery["texel_m_north_east"][0].as_f64().expect("texel") <= 7.5 * 1.01);
+    assert!(imagery["sources"][0]
+        .as_str()
+        .expect("source")
+        .contains("ortho.tif"));
+    let text = cig().args(["db", "info"]).arg(&db).assert().success();
+    let text = String::from_utf8_lossy(&text.get_output().stdout).to_string();
+    assert!(text.contains("imagery       "), "{text}");
+
+    // A bad image: one line naming it, the database unchanged.
+    let before = files(&db);
+    let bad = dir.path().join("bad.tif");
+    std::fs::write(&bad, b"II*\0nonsense").expect("write");
+    let line = error_line(argv!["db", "imagery", db, image, bad]);
+    assert!(line.contains("bad.tif"), "{line}");
+    assert_eq!(files(&db), before, "database changed");
+    let line = error_line(argv!["db", "imagery", dir.path().join("none"), image]);
+    assert!(line.contains("none"), "{line}");
+
+    // Import with imagery: all of it, or nothing.
+    let asc = dir.path().join("area.asc");
+    let cell = 1.0 / 1200.0;
+    let mut grid = format!(
+        "ncols 20\nnrows 20\nxllcenter {west}\nyllcenter {south}\ncellsize {cell}\nNODATA_value -9999\n"
+    );
+    for _ in 0..20 {
+        grid.push_str(&vec!["100"; 20].join(" "));
+        grid.push('\n');
+    }
+    std::fs::write(&asc, grid).expect("write");
+    let out = dir.path().join("imported");
+    let line = error_line(argv!["db", "import", "--out", out, asc, "--imagery", bad]);
+    assert!(line.contains("bad.tif"), "{line}");
+    assert!(!out.exists());
+    cig()
+        .args(["db", "import", "--out"])
+        .arg(&out)
+        .arg(&asc)
+        .arg("--imagery")
+        .arg(&image)
+        .assert()
+        .success();
+    let info = json(
+        &cig()
+            .args(["db", "info"])
+            .arg(&out)
+            .arg("--json")
+            .assert()
+            .success()
+            .get_output()
+            .stdout,
+    );
+    assert!(
+        info["imagery"]["tiles"].as_u64().expect("tiles") >= 1,
+        "{info}"
+    );
+}
+
+#[test]
+fn bench_imagery_reports_time_and_memory() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = cig()
+        .args(["bench", "imagery", "--json", "--size", "300", "--scratch"])
+        .arg(dir.path())
+        .assert()
+        .success();
+    let report = json(&out.get_output().stdout);
+    assert!(report["import_s"].as_f64().expect("import_s") > 0.0);
+    assert!(report["import_mb_per_s"].as_f64().expect("rate") > 0.0);
+    assert!(report["imagery"]["tiles"].as_u64().expect("tiles") >= 4);
+    assert!(report["peak_rss_mb"].as_f64().is_some() || !cfg!(target_os = "linux"));
+}

@@ -395,16 +395,51 @@ fn sample_image(
         |i: usize, j: usize| layout.texel_centre_deg(key.level, row0 + i as u64, col0 + j as u64);
     let mut any = false;
     if image.is_geographic() {
-        // Pixel coordinates are linear in latitude and longitude.
+        // Pixel coordinates are linear in latitude and longitude: the columns' taps once per
+        // tile, each row's two image rows once per texel row.
         let (lat0, lon0) = centre(0, 0);
         let (c00, r00) = image.pixel_of(lat0, lon0);
         let (c01, _) = image.pixel_of(lat0, lon0 + tlon);
         let (_, r10) = image.pixel_of(lat0 + tlat, lon0);
         let (dc, dr) = (c01 - c00, r10 - r00);
+        let (w, h) = window.image_size();
+        let taps = |f: f64, size: u32| -> Option<(usize, usize, f32)> {
+            let last = f64::from(size) - 1.0;
+            if !(f >= -0.5 && f <= last + 0.5) {
+                return None;
+            }
+            let f = f.clamp(0.0, last);
+            let i0 = (f.floor() as u32).min(size.saturating_sub(2));
+            let i1 = (i0 + 1).min(size - 1);
+            Some((
+                i0 as usize,
+                i1 as usize,
+                (f - f64::from(i0)).clamp(0.0, 1.0) as f32,
+            ))
+        };
+        let columns: Vec<Option<(usize, usize, f32)>> =
+            (0..n).map(|j| taps(c00 + j as f64 * dc, w)).collect();
         for i in 0..n {
-            let row = r00 + i as f64 * dr;
-            for j in 0..n {
-                let s = window.sample(c00 + j as f64 * dc, row);
+            let Some((r0, r1, fy)) = taps(r00 + i as f64 * dr, h) else {
+                continue;
+            };
+            let (Some(row0), Some(row1)) = (window.row(r0 as u32), window.row(r1 as u32)) else {
+                continue;
+            };
+            for (j, column) in columns.iter().enumerate() {
+                let Some((c0, c1, fx)) = *column else {
+                    continue;
+                };
+                let s = bilinear(
+                    [
+                        &row0[c0 * 4..c0 * 4 + 4],
+                        &row0[c1 * 4..c1 * 4 + 4],
+                        &row1[c0 * 4..c0 * 4 + 4],
+                        &row1[c1 * 4..c1 * 4 + 4],
+                    ],
+                    fx,
+                    fy,
+                );
                 if s[3] > 0.0 {
                     over(&mut acc[i * n + j], s);
                     any = true;
@@ -446,6 +481,35 @@ fn sample_image(
         }
     }
     any
+}
+
+/// Alpha-weighted bilinear blend of four RGBA8 texels (top-left, top-right, bottom-left,
+/// bottom-right); colour 0-255, alpha 0-1.
+#[inline]
+fn bilinear(p: [&[u8]; 4], fx: f32, fy: f32) -> [f32; 4] {
+    let weights = [
+        (1.0 - fx) * (1.0 - fy),
+        fx * (1.0 - fy),
+        (1.0 - fx) * fy,
+        fx * fy,
+    ];
+    let mut acc = [0.0f32; 4];
+    for (px, w) in p.iter().zip(weights) {
+        let wa = w * f32::from(px[3]);
+        acc[0] += wa * f32::from(px[0]);
+        acc[1] += wa * f32::from(px[1]);
+        acc[2] += wa * f32::from(px[2]);
+        acc[3] += wa;
+    }
+    if acc[3] <= 0.0 {
+        return [0.0; 4];
+    }
+    [
+        acc[0] / acc[3],
+        acc[1] / acc[3],
+        acc[2] / acc[3],
+        acc[3] / 255.0,
+    ]
 }
 
 /// Alpha-weighted 2x2 box downsample of `n` x `n` RGBA texels.

@@ -178,6 +178,24 @@ pub struct Window {
 }
 
 impl Window {
+    /// (width, height) of the image, pixels.
+    pub fn image_size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The RGBA8 bytes of image row `row`, when the window holds it.
+    #[inline]
+    pub fn row(&self, row: u32) -> Option<&[u8]> {
+        let rel = row.checked_sub(self.first_row)?;
+        if row >= self.height {
+            return None;
+        }
+        let chunk = self.chunks.get((rel / self.chunk_h) as usize)?;
+        let w = self.width as usize * 4;
+        let at = (rel % self.chunk_h) as usize * w;
+        chunk.get(at..at + w)
+    }
+
     #[inline]
     fn pixel(&self, col: u32, row: u32) -> [u8; 4] {
         if row < self.first_row || row >= self.height || col >= self.width {
