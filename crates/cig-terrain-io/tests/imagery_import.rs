@@ -460,3 +460,82 @@ fn import_with_bad_imagery_writes_nothing() {
         "only bad.tif"
     );
 }
+
+/// Yellow boxes (level-0 texel rows and columns, half-open) painted at level 0 and above.
+struct Boxes(Vec<(u64, u64, u64, u64)>);
+
+const YELLOW: [u8; 3] = [230, 230, 20];
+
+impl cig_terrain_io::imagery::OverlayLayer for Boxes {
+    fn native_level(&self, _: &cig_terrain::ImageryLayout) -> u8 {
+        0
+    }
+    fn touches(&self, (s, w, n, e): (f64, f64, f64, f64)) -> bool {
+        self.0.iter().any(|&(r0, r1, c0, c1)| {
+            let (bs, bn) = (SOUTH + r0 as f64 * T, SOUTH + r1 as f64 * T);
+            let (bw, be) = (WEST + c0 as f64 * T, WEST + c1 as f64 * T);
+            bs < n && s < bn && bw < e && w < be
+        })
+    }
+    fn paint(
+        &self,
+        layout: &cig_terrain::ImageryLayout,
+        key: cig_terrain::ImageryKey,
+        rgba: &mut [u8],
+    ) {
+        let n = layout.tile_texels as u64;
+        let s = 1u64 << key.level;
+        for i in 0..n {
+            for j in 0..n {
+                // The level-0 texel under this texel's centre.
+                let r = (u64::from(key.row) * n + i) * s + s / 2;
+                let c = (u64::from(key.col) * n + j) * s + s / 2;
+                if self
+                    .0
+                    .iter()
+                    .any(|&(r0, r1, c0, c1)| (r0..r1).contains(&r) && (c0..c1).contains(&c))
+                {
+                    let at = ((i * n + j) * 4) as usize;
+                    rgba[at..at + 4].copy_from_slice(&[YELLOW[0], YELLOW[1], YELLOW[2], 255]);
+                }
+            }
+        }
+    }
+    fn describe(&self) -> String {
+        "test boxes".into()
+    }
+}
+
+#[test]
+fn overlays_paint_over_imagery_and_make_their_own_tiles() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_database(dir.path(), "db", SOUTH, WEST, 64);
+    let spec = ImageSpec::geographic(100, 100, SOUTH + 400.0 * T, WEST + 50.0 * T, T);
+    let fine = write_file(
+        dir.path(),
+        "fine.tif",
+        &write_image(&spec, &rgb8(100, 100, |_, _| BLUE)),
+    );
+    let boxes = Boxes(vec![(100, 120, 300, 320), (350, 360, 60, 70)]);
+    let manifest = add_imagery(&db, &[fine], &[&boxes], &mut |_| {}).expect("imagery");
+    assert!(manifest.imagery.expect("imagery").sources[1].contains("test boxes"));
+    let (manifest, tiles) = read_tiles(&db);
+    let keys: Vec<_> = tiles.keys().map(|k| (k.level, k.row, k.col)).collect();
+    assert_eq!(keys, vec![(0, 0, 1), (0, 1, 0), (1, 0, 0)]);
+    close(texel(&manifest, &tiles, 0, 110, 310), YELLOW, "box alone");
+    close(
+        texel(&manifest, &tiles, 0, 355, 65),
+        YELLOW,
+        "box over the image",
+    );
+    close(
+        texel(&manifest, &tiles, 0, 380, 100),
+        BLUE,
+        "image beside the box",
+    );
+    close(
+        texel(&manifest, &tiles, 1, 55, 155),
+        YELLOW,
+        "box at level 1",
+    );
+}

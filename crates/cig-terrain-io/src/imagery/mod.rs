@@ -60,7 +60,7 @@ pub enum ImageryError {
         database: (f64, f64, f64, f64),
         path: PathBuf,
     },
-    #[error("no image files given")]
+    #[error("no image files or overlays given")]
     NoInput,
     #[error(transparent)]
     Database(#[from] DbError),
@@ -81,9 +81,6 @@ pub fn open_images(
     images: &[PathBuf],
     progress: &mut dyn FnMut(ImageryProgress),
 ) -> Result<Vec<ImageSource>, ImageryError> {
-    if images.is_empty() {
-        return Err(ImageryError::NoInput);
-    }
     let g = manifest.layout.grid;
     let database = (
         g.south_lat_deg,
@@ -126,8 +123,16 @@ pub fn write_imagery(
     overlays: &[&dyn OverlayLayer],
     progress: &mut dyn FnMut(ImageryProgress),
 ) -> Result<ImageryManifest, ImageryError> {
+    if images.is_empty() && overlays.is_empty() {
+        return Err(ImageryError::NoInput);
+    }
     let sources = open_images(manifest, images, progress)?;
-    let layout = imagery_layout(&manifest.layout.grid, manifest.spacing_m, &sources);
+    let layout = imagery_layout(
+        &manifest.layout.grid,
+        manifest.spacing_m,
+        &sources,
+        overlays,
+    );
     let mut made_dirs = vec![false; usize::from(layout.levels)];
     let summary = build_pyramid(
         &layout,

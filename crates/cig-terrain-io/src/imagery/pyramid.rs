@@ -21,8 +21,8 @@ use super::ImageryError;
 /// A layer painted over the imagery of each tile at the levels at and above its native level
 /// (roads, rivers and lake shores as shapes; another crate provides them).
 pub trait OverlayLayer: Send + Sync {
-    /// The finest imagery level the layer paints at.
-    fn native_level(&self) -> u8;
+    /// The finest imagery level the layer paints at, in `layout`.
+    fn native_level(&self, layout: &ImageryLayout) -> u8;
     /// Whether the layer paints anything inside `bounds_deg` (south, west, north, east).
     fn touches(&self, bounds_deg: (f64, f64, f64, f64)) -> bool;
     /// Paints the tile `key`'s texels: `rgba` is `tile_texels^2` sRGB RGBA bytes, rows from
@@ -31,6 +31,27 @@ pub trait OverlayLayer: Send + Sync {
     /// One line for the manifest's sources.
     fn describe(&self) -> String {
         "overlay".to_string()
+    }
+    /// The level-0 texel size the layer would like, metres, when it is to decide the
+    /// pyramid's finest level (with or without images: the finer wins).
+    fn finest_texel_m(&self) -> Option<f64> {
+        None
+    }
+}
+
+/// Roads, rivers and lake shores (`cig_terrain::features`) painted over the imagery.
+impl OverlayLayer for cig_terrain::features::FeatureLayer {
+    fn native_level(&self, layout: &ImageryLayout) -> u8 {
+        cig_terrain::features::FeatureLayer::native_level(self, layout)
+    }
+    fn touches(&self, bounds_deg: (f64, f64, f64, f64)) -> bool {
+        cig_terrain::features::FeatureLayer::touches(self, bounds_deg)
+    }
+    fn paint(&self, layout: &ImageryLayout, key: ImageryKey, rgba: &mut [u8]) {
+        cig_terrain::features::FeatureLayer::paint(self, layout, key, rgba);
+    }
+    fn describe(&self) -> String {
+        "features (roads, rivers, lake shores)".to_string()
     }
 }
 
@@ -44,19 +65,27 @@ pub struct PyramidSummary {
 }
 
 /// The pyramid over a database's grid (`spacing_m`: finest post spacing, north-south and
-/// east-west) whose level-0 texels are no larger than the finest image's pixels.
+/// east-west) whose level-0 texels are no larger than the finest image's pixels (or an
+/// overlay's wish, [`OverlayLayer::finest_texel_m`], when finer).
 pub fn imagery_layout(
     grid: &GeoGrid,
     spacing_m: [f64; 2],
     images: &[ImageSource],
+    overlays: &[&dyn OverlayLayer],
 ) -> ImageryLayout {
+    let shift_for = |(north_m, east_m): (f64, f64)| {
+        ImageryLayout::fine_shift_for(spacing_m[0], north_m)
+            .max(ImageryLayout::fine_shift_for(spacing_m[1], east_m))
+    };
     let shift = images
         .iter()
-        .map(|image| {
-            let (north_m, east_m) = image.pixel_m();
-            ImageryLayout::fine_shift_for(spacing_m[0], north_m)
-                .max(ImageryLayout::fine_shift_for(spacing_m[1], east_m))
-        })
+        .map(|image| shift_for(image.pixel_m()))
+        .chain(
+            overlays
+                .iter()
+                .filter_map(|o| o.finest_texel_m())
+                .map(|m| shift_for((m, m))),
+        )
         .max()
         .unwrap_or(0);
     ImageryLayout::new(grid, shift)
@@ -194,7 +223,7 @@ impl Builder<'_, '_> {
             }
         }
         for overlay in self.overlays {
-            if overlay.native_level().min(layout.levels - 1) == k {
+            if overlay.native_level(&layout).min(layout.levels - 1) == k {
                 for c in 0..tile_cols {
                     let key = ImageryKey {
                         level: k,
@@ -349,7 +378,7 @@ fn render_tile(
         }
     }
     for overlay in overlays {
-        if overlay.native_level() <= key.level && overlay.touches(bounds) {
+        if overlay.native_level(layout) <= key.level && overlay.touches(bounds) {
             overlay.paint(layout, key, &mut rgba);
             any = true;
         }
