@@ -32,6 +32,8 @@ const UPLOADS_PER_FRAME: usize = 24;
 const LOADS_IN_FLIGHT: usize = 48;
 /// Loading threads.
 const LOADERS: usize = 2;
+/// A page table entry where no level holds imagery.
+const NO_LEVEL: u8 = 255;
 
 /// One level's parameters in the shader (`ImageryLevel` in terrain.wgsl).
 #[repr(C)]
@@ -70,7 +72,7 @@ struct Level {
     /// The window's south-west tile (row, column); `None` before the first update.
     origin: Option<(u32, u32)>,
     slots: Vec<Slot>,
-    /// One byte per slot: 255 where the slot holds its tile.
+    /// One byte per slot: the level the shader samples there (see `write_pages`).
     pages: Vec<u8>,
     /// Slots whose texels are all transparent (never written, or cleared).
     blank: Vec<bool>,
@@ -128,10 +130,11 @@ impl ImageryClipmap {
     /// The clipmap of `database`'s imagery (a 1-texel stand-in when it has none).
     pub fn new(gpu: &Gpu, database: Arc<TerrainDatabase>) -> ImageryClipmap {
         let layout = database.manifest().imagery.as_ref().map(|i| i.layout);
-        let compressed = gpu
-            .device
-            .features()
-            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
+        let compressed = false
+            && gpu
+                .device
+                .features()
+                .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
         let level_count = layout.map_or(1, |l| u32::from(l.levels));
         let clip_texels = layout.map_or(4, |l| l.tile_texels * WINDOW_TILES);
         let window = if layout.is_some() { WINDOW_TILES } else { 1 };
@@ -165,7 +168,7 @@ impl ImageryClipmap {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R8Unorm,
+            format: wgpu::TextureFormat::R8Uint,
             usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         });
@@ -180,7 +183,7 @@ impl ImageryClipmap {
             .map(|_| Level {
                 origin: None,
                 slots: vec![Slot::Empty; slots],
-                pages: vec![0; slots],
+                pages: vec![NO_LEVEL; slots],
                 blank: vec![true; slots],
                 pages_dirty: true,
             })
@@ -321,10 +324,7 @@ impl ImageryClipmap {
                         clear_later.push(key);
                         Slot::Absent(key)
                     };
-                    if level.pages[slot] != 0 {
-                        level.pages[slot] = 0;
-                        level.pages_dirty = true;
-                    }
+                    level.pages_dirty = true;
                 }
             }
         }
@@ -421,7 +421,6 @@ impl ImageryClipmap {
         let level = &mut self.levels[usize::from(key.level)];
         level.blank[slot] = false;
         level.slots[slot] = Slot::Loaded(key);
-        level.pages[slot] = 255;
         level.pages_dirty = true;
         true
     }
@@ -518,13 +517,42 @@ impl ImageryClipmap {
         }
     }
 
+    /// Resolves and writes the page tables when a slot changed (or with `all`): each slot's
+    /// byte is the finest level at or above its own whose tile there is loaded with every
+    /// coarser tile above it (so the shader's blend with the next level up always finds it
+    /// loaded), 255 where none is.
     fn write_pages(&mut self, gpu: &Gpu, all: bool) {
+        if !(all || self.levels.iter().any(|l| l.pages_dirty)) {
+            return;
+        }
         let w = (self.levels[0].pages.len() as f64).sqrt() as u32;
+        let count = self.levels.len();
+        for k in (0..count).rev() {
+            for slot in 0..self.levels[k].slots.len() {
+                let key = self.wanted_key(k, slot);
+                let loaded = key.is_some_and(|key| self.levels[k].slots[slot] == Slot::Loaded(key));
+                let above = match key {
+                    Some(key) if k + 1 < count => {
+                        let parent = key.parent();
+                        let parent_slot = slot_index(parent);
+                        if self.wanted_key(k + 1, parent_slot) == Some(parent) {
+                            self.levels[k + 1].pages[parent_slot]
+                        } else {
+                            NO_LEVEL
+                        }
+                    }
+                    _ => NO_LEVEL,
+                };
+                let coarser_ready = k + 1 == count || usize::from(above) == k + 1;
+                self.levels[k].pages[slot] = if loaded && coarser_ready {
+                    k as u8
+                } else {
+                    above
+                };
+            }
+        }
         let texture = &self.pages;
         for (k, level) in self.levels.iter_mut().enumerate() {
-            if !(all || level.pages_dirty) {
-                continue;
-            }
             level.pages_dirty = false;
             gpu.queue.write_texture(
                 wgpu::TexelCopyTextureInfo {

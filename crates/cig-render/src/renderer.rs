@@ -33,7 +33,8 @@ use crate::clouds::CloudPass;
 use crate::gpu::{Gpu, RenderError};
 use crate::imagery::ImageryClipmap;
 use crate::pass::{
-    sampler_entry, storage_entry, texture_array_entry, texture_entry, uniform_entry, DEPTH_FORMAT,
+    sampler_entry, storage_entry, texture_array_entry, texture_entry, uint_texture_array_entry,
+    uniform_entry, DEPTH_FORMAT,
 };
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainFrame, TerrainGpu};
@@ -605,7 +606,7 @@ impl Renderer {
                 sampler_entry(4),
                 uniform_entry(5),
                 texture_array_entry(6),
-                texture_array_entry(7),
+                uint_texture_array_entry(7),
                 sampler_entry(8),
             ],
         });

@@ -10,10 +10,11 @@
 //! with no imagery is not stored, and the renderer falls back to the next coarser level there
 //! (where a coarser level has no tile either, the ground keeps its material colours).
 //!
-//! Tile format (memory image, little-endian): a 32-byte header (`CIGIMG` magic and format
-//! version, level, row, column, texels per side, pixel format, CRC-32 of the payload), then the
+//! Tile format (little-endian): a 32-byte header (`CIGIMG` magic and format version, level,
+//! the payload's length in 24 bits, row, column, texels per side, pixel format, CRC-32 of the payload), then the
 //! payload: BC3 blocks (4x4 texels in 16 bytes: BC1 colour and an 8-bit interpolated alpha),
-//! block rows from the south. Colour is sRGB premultiplied by alpha (alpha 0 and black where
+//! block rows from the south, deflated (a tile of a road over transparent ground, or of one
+//! lake colour, shrinks tens of times; an aerial photograph a little). Colour is sRGB premultiplied by alpha (alpha 0 and black where
 //! no image covers a texel), so a bilinear tap across a coverage edge blends without a dark
 //! fringe. BC3 is what GPUs sample directly (4:1 against 8-bit RGBA, with smooth alpha for the
 //! anti-aliased edges of painted roads and rivers); renderers without BC support decode it once
@@ -37,8 +38,8 @@ pub const MAX_FINE_SHIFT: u8 = 10;
 
 const MAGIC: [u8; 8] = *b"CIGIMG\0\x01";
 const HEADER_BYTES: usize = 32;
-/// Pixel format code of BC3 (sRGB premultiplied colour, 8-bit alpha) payloads.
-const FORMAT_BC3_SRGB: u32 = 2;
+/// Pixel format code of deflated BC3 (sRGB premultiplied colour, 8-bit alpha) payloads.
+const FORMAT_BC3_SRGB_DEFLATED: u32 = 3;
 
 /// Identifies one imagery tile: its imagery level (0 = finest texels) and tile row (south
 /// first) and column. Imagery levels are not terrain levels: see [`ImageryLayout`].
@@ -278,17 +279,19 @@ impl ImageryTile {
 
     /// The tile's file bytes.
     pub fn encode(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(HEADER_BYTES + self.blocks.len());
+        let payload = miniz_oxide::deflate::compress_to_vec(&self.blocks, 3);
+        let mut out = Vec::with_capacity(HEADER_BYTES + payload.len());
         out.extend_from_slice(&MAGIC);
         out.push(self.key.level);
-        out.extend_from_slice(&[0u8; 3]);
+        // The deflated payload's length, 24 bits (a tile's blocks are 64 KiB at most).
+        out.extend_from_slice(&(payload.len() as u32).to_le_bytes()[..3]);
         out.extend_from_slice(&self.key.row.to_le_bytes());
         out.extend_from_slice(&self.key.col.to_le_bytes());
         out.extend_from_slice(&self.texels.to_le_bytes());
-        out.extend_from_slice(&FORMAT_BC3_SRGB.to_le_bytes());
-        out.extend_from_slice(&crc32fast::hash(&self.blocks).to_le_bytes());
+        out.extend_from_slice(&FORMAT_BC3_SRGB_DEFLATED.to_le_bytes());
+        out.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
         debug_assert_eq!(out.len(), HEADER_BYTES);
-        out.extend_from_slice(&self.blocks);
+        out.extend_from_slice(&payload);
         out
     }
 
@@ -325,24 +328,30 @@ impl ImageryTile {
                 "{texels} texels per side (this build reads {IMAGERY_TILE_TEXELS})"
             )));
         }
-        if word(24) != FORMAT_BC3_SRGB {
+        if word(24) != FORMAT_BC3_SRGB_DEFLATED {
             return Err(ImageryDecodeError::Header(format!(
                 "pixel format {}",
                 word(24)
             )));
         }
-        let payload = block_bytes(texels);
-        if bytes.len() != HEADER_BYTES + payload {
+        let payload = &bytes[HEADER_BYTES..];
+        let stored = u32::from_le_bytes([bytes[9], bytes[10], bytes[11], 0]) as usize;
+        if payload.len() != stored {
             return Err(ImageryDecodeError::Truncated(bytes.len()));
         }
-        let blocks = &bytes[HEADER_BYTES..];
-        if crc32fast::hash(blocks) != word(28) {
+        if crc32fast::hash(payload) != word(28) {
             return Err(ImageryDecodeError::Checksum);
+        }
+        let expected = block_bytes(texels);
+        let blocks = miniz_oxide::inflate::decompress_to_vec_with_limit(payload, expected)
+            .map_err(|_| ImageryDecodeError::Truncated(bytes.len()))?;
+        if blocks.len() != expected {
+            return Err(ImageryDecodeError::Truncated(bytes.len()));
         }
         Ok(ImageryTile {
             key,
             texels,
-            blocks: blocks.to_vec(),
+            blocks,
         })
     }
 }

@@ -38,7 +38,8 @@ struct Imagery {
 @group(0) @binding(4) var atlas_sampler: sampler;
 @group(0) @binding(5) var<uniform> imagery: Imagery;
 @group(0) @binding(6) var imagery_clip: texture_2d_array<f32>;
-@group(0) @binding(7) var imagery_pages: texture_2d_array<f32>;
+@group(0) @binding(7) var imagery_pages: texture_2d_array<u32>;
+// Repeating: the clipmap's windows are toroidal.
 @group(0) @binding(8) var imagery_sampler: sampler;
 
 struct VertexOut {
@@ -211,58 +212,41 @@ fn material_at(node: Node, uv: vec2<f32>, rel: vec3<f32>, n: vec3<f32>, warp_noi
     return Surface(albedo, dot(share, specular) / sum, kind_lead);
 }
 
-// Whether clipmap level `k` holds imagery around level-0 texel point `p`: inside the level's
-// window (with a texel to spare for the bilinear footprint) and its slot's tile loaded.
-fn imagery_level_holds(k: u32, p: vec2<f32>) -> bool {
-    let level = imagery.levels[k];
-    let q = p * exp2(-f32(k));
-    let inside = all(q >= level.phase_lo.zw + 1.0) && all(q <= level.hi.xy - 1.0);
-    let slot = wrap(floor((q + level.phase_lo.xy) / imagery.info.z), imagery.info.w);
-    let page = textureLoad(imagery_pages, vec2<i32>(slot), i32(k), 0).r;
-    return inside && page > 0.5;
-}
-
 fn imagery_sample(k: u32, p: vec2<f32>) -> vec4<f32> {
     let level = imagery.levels[k];
     let uv = (p * exp2(-f32(k)) + level.phase_lo.xy) / imagery.info.y;
     return textureSampleLevel(imagery_clip, imagery_sampler, uv, i32(k), 0.0);
 }
 
-// The draped imagery at level-0 texel point `p` whose footprint on screen is `lambda`
-// (log2 of level-0 texels per pixel): the level that matches it, or the next coarser one that
-// holds the point, blended with the level above so level borders do not show. Returns the
-// linear colour, premultiplied by its coverage, and the coverage (0 where no imagery is), and in `texel_m` the size of the
-// texels drawn, metres.
+// The draped imagery at level-0 texel point `p` (relative to the anchor at the eye) whose
+// footprint on screen is `lambda` (log2 of level-0 texels per pixel): the level that matches
+// the footprint, or the coarser one the point's distance from the eye needs (every level's
+// window reaches at least `info.w / 2 - 1` tiles from the eye), then the level the page table
+// resolves there (the finest loaded one with its coarser levels loaded), blended with the next
+// level up so level borders do not show. No loop and one page read: on a CPU rasterizer every
+// iteration and branch costs on every pixel. Returns the linear colour, premultiplied by its
+// coverage, and the coverage (0 where no imagery is); `texel_m`, the drawn texels' size.
 struct Drape {
     colour: vec4<f32>,
     texel_m: f32,
 };
 
 fn imagery_at(p: vec2<f32>, lambda: f32) -> Drape {
-    let levels = u32(imagery.info.x);
-    if (levels == 0u) {
-        return Drape(vec4<f32>(0.0), 1e9);
-    }
-    var k = u32(clamp(floor(lambda), 0.0, f32(levels - 1u)));
-    var held = imagery_level_holds(k, p);
-    loop {
-        if (held || k + 1u >= levels) {
-            break;
-        }
-        k += 1u;
-        held = imagery_level_holds(k, p);
-    }
-    if (!held) {
-        return Drape(vec4<f32>(0.0), 1e9);
-    }
-    var colour = imagery_sample(k, p);
-    let t = clamp(lambda - f32(k), 0.0, 1.0);
-    if (t > 0.0 && k + 1u < levels) {
-        if (imagery_level_holds(k + 1u, p)) {
-            colour = mix(colour, imagery_sample(k + 1u, p), t);
-        }
-    }
-    return Drape(colour, imagery.levels[k].hi.z);
+    let levels = max(u32(imagery.info.x), 1u);
+    let reach = (0.5 * imagery.info.w - 1.0) * imagery.info.z;
+    let far = log2(max(max(abs(p.x), abs(p.y)), 1.0) / reach);
+    let k0 = u32(clamp(max(floor(lambda), ceil(far)), 0.0, f32(levels - 1u)));
+    let level = imagery.levels[k0];
+    let slot = wrap(floor((p * exp2(-f32(k0)) + level.phase_lo.xy) / imagery.info.z), imagery.info.w);
+    let resolved = textureLoad(imagery_pages, vec2<i32>(slot), i32(k0), 0).r;
+    let k = min(resolved, levels - 1u);
+    let up = min(k + 1u, levels - 1u);
+    // Blend toward the next level as the footprint grows, only where the level drawn is the
+    // one the footprint asked for (a fallback level is drawn alone).
+    let t = select(0.0, clamp(lambda - f32(k), 0.0, 1.0), k == k0 && up > k);
+    let colour = mix(imagery_sample(k, p), imagery_sample(up, p), t);
+    let none = resolved == 255u || u32(imagery.info.x) == 0u;
+    return Drape(select(colour, vec4<f32>(0.0), none), imagery.levels[k].hi.z);
 }
 
 // Each material's detail: the amplitudes of its value-noise octaves at 0.34, 2.7, 19.3 and
