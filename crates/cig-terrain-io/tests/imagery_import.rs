@@ -281,6 +281,24 @@ fn sixteen_bit_images_scale_their_999th_percentile_to_255() {
     );
 }
 
+/// Halves the last strip's byte count: its compressed stream ends early.
+fn shorten_last_strip(bytes: &mut [u8]) {
+    let u16_at = |b: &[u8], at: usize| u16::from_le_bytes([b[at], b[at + 1]]);
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
+    let ifd = u32_at(bytes, 4) as usize;
+    for e in 0..usize::from(u16_at(bytes, ifd)) {
+        let at = ifd + 2 + 12 * e;
+        if u16_at(bytes, at) == 279 {
+            let count = u32_at(bytes, at + 4) as usize;
+            let last = u32_at(bytes, at + 8) as usize + 4 * (count - 1);
+            let half = u32_at(bytes, last) / 2;
+            bytes[last..last + 4].copy_from_slice(&half.to_le_bytes());
+            return;
+        }
+    }
+    panic!("no StripByteCounts");
+}
+
 /// Sets the last strip's offset so its data runs past the end of the file.
 fn truncate_last_strip(bytes: &mut [u8]) {
     let u16_at = |b: &[u8], at: usize| u16::from_le_bytes([b[at], b[at + 1]]);
@@ -327,6 +345,14 @@ fn bad_images_are_refused_and_the_database_is_unchanged() {
     truncate_last_strip(&mut bytes);
     cases.push((
         write_file(dir.path(), "strip.tif", &bytes),
+        "corrupt or truncated",
+    ));
+    let mut lzw_spec = good_spec.clone();
+    lzw_spec.comp = Comp::Lzw;
+    let mut lzw = write_image(&lzw_spec, &rgb8(100, 100, |c, r| [c as u8, r as u8, 7]));
+    shorten_last_strip(&mut lzw);
+    cases.push((
+        write_file(dir.path(), "strip-lzw.tif", &lzw),
         "corrupt or truncated",
     ));
     let mut float = good_spec.clone();

@@ -619,8 +619,9 @@ impl ImageSource {
             reason,
             path: self.path.clone(),
         };
-        let samples = decoder
-            .read_chunk(index)
+        // A decoder bug on hostile data must not bring the import down.
+        let samples = catch_unwind(AssertUnwindSafe(|| decoder.read_chunk(index)))
+            .map_err(|_| corrupt(format!("chunk {index}: the TIFF decoder failed")))?
             .map_err(|e| corrupt(format!("chunk {index}: {}", describe(e))))?;
         let (cw, ch) = self.chunk_data_dims(index);
         let len = match &samples {
