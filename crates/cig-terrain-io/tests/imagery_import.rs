@@ -281,6 +281,19 @@ fn sixteen_bit_images_scale_their_999th_percentile_to_255() {
     );
 }
 
+/// Sets inline LONG tags of the first IFD (width, length, rows per strip…).
+fn set_long_tags(bytes: &mut [u8], tags: &[(u16, u32)]) {
+    let u16_at = |b: &[u8], at: usize| u16::from_le_bytes([b[at], b[at + 1]]);
+    let ifd = u32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]) as usize;
+    for e in 0..usize::from(u16_at(bytes, ifd)) {
+        let at = ifd + 2 + 12 * e;
+        if let Some(&(_, value)) = tags.iter().find(|(t, _)| *t == u16_at(bytes, at)) {
+            assert_eq!(u16_at(bytes, at + 2), 4, "a LONG tag");
+            bytes[at + 8..at + 12].copy_from_slice(&value.to_le_bytes());
+        }
+    }
+}
+
 /// Halves the last strip's byte count: its compressed stream ends early.
 fn shorten_last_strip(bytes: &mut [u8]) {
     let u16_at = |b: &[u8], at: usize| u16::from_le_bytes([b[at], b[at + 1]]);
@@ -355,6 +368,12 @@ fn bad_images_are_refused_and_the_database_is_unchanged() {
         write_file(dir.path(), "strip-lzw.tif", &lzw),
         "corrupt or truncated",
     ));
+    // One strip of 30,000 x 30,000 pixels declared: refused before anything is decoded.
+    let mut one_strip = good_spec.clone();
+    one_strip.chunks = Chunks::Strips(100);
+    let mut huge = write_image(&one_strip, &rgb8(100, 100, |_, _| BLUE));
+    set_long_tags(&mut huge, &[(256, 30_000), (257, 30_000), (278, 30_000)]);
+    cases.push((write_file(dir.path(), "huge.tif", &huge), "image too large"));
     let mut float = good_spec.clone();
     float.chunks = Chunks::Strips(100);
     cases.push((

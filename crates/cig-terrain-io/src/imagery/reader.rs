@@ -385,8 +385,8 @@ impl ImageSource {
         if row_bytes > MAX_CHUNK_ROW_BYTES {
             return Err(ImageryError::TooLarge {
                 reason: format!(
-                    "a {} of {chunk_h} rows decodes to {} MB, over the {} MB limit (re-tile the \
-                     image, e.g. gdal_translate -co TILED=YES)",
+                    "a {} of {chunk_h} rows decodes to {} MB, over the {} MB limit; re-tile the \
+                     image, e.g. gdal_translate -co TILED=YES",
                     if tiled { "row of tiles" } else { "strip" },
                     row_bytes >> 20,
                     MAX_CHUNK_ROW_BYTES >> 20
