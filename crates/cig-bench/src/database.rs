@@ -4,9 +4,10 @@
 
 use crate::{BenchError, Step};
 use cig_terrain::build::prepare_raster;
+use cig_terrain::features::{level_terrain, Feature, FeatureLayer};
 use cig_terrain::raster::Raster;
 use cig_terrain::{PagingConfig, QuerySession, TileCache};
-use cig_terrain_io::imagery::{write_imagery, ImageryError, ImageryProgress};
+use cig_terrain_io::imagery::{write_imagery, ImageryError, ImageryProgress, OverlayLayer};
 use cig_terrain_io::store::{check_output, open_database, write_database_with, BuildInputs};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -52,7 +53,8 @@ pub enum BuildProgress<'a> {
 }
 
 /// Generates the terrain of `params` and writes it as a database at `out` (replaced only with
-/// `force`), tiles of `tile_cells` cells.
+/// `force`), tiles of `tile_cells` cells, with its roads, rivers and lakes as shapes (the
+/// ground levelled under them, painted into the imagery).
 ///
 /// # Errors
 /// When `out` exists (without `force`), the parameters are refused, or writing fails.
@@ -65,16 +67,29 @@ pub fn synthesize_database(
 ) -> Result<cig_terrain::Manifest, BenchError> {
     check_output(out, force)?;
     progress(BuildProgress::Begin(BuildStage::Synthesize));
-    let mut raster = cig_synth::synthesize(params, &mut |step, fraction| {
-        progress(BuildProgress::Synthesize { step, fraction });
-    })
-    .step("cannot synthesize terrain")?;
+    let (mut raster, _, features) =
+        cig_synth::synthesize_with_features(params, &mut |step, fraction| {
+            progress(BuildProgress::Synthesize { step, fraction });
+        })
+        .step("cannot synthesize terrain")?;
     progress(BuildProgress::End);
     let source = format!(
         "cig-synth seed={} origin={},{} size_km={} spacing_m={}",
         params.seed, params.origin_lat_deg, params.origin_lon_deg, params.size_km, params.spacing_m
     );
-    build_database(&mut raster, vec![source], out, force, tile_cells, progress)
+    // Its roads, rivers and lakes as shapes, painted into the imagery.
+    build_database_with_imagery(
+        &mut raster,
+        vec![source],
+        Drape {
+            images: &[],
+            features: &features,
+        },
+        out,
+        force,
+        tile_cells,
+        progress,
+    )
 }
 
 /// Fills voids, derives materials and writes a raster as a database at `out` (replaced only
@@ -90,18 +105,36 @@ pub fn build_database(
     tile_cells: u32,
     progress: &mut dyn FnMut(BuildProgress<'_>),
 ) -> Result<cig_terrain::Manifest, BenchError> {
-    build_database_with_imagery(raster, sources, &[], out, force, tile_cells, progress)
+    build_database_with_imagery(
+        raster,
+        sources,
+        Drape::default(),
+        out,
+        force,
+        tile_cells,
+        progress,
+    )
 }
 
-/// [`build_database`], then the imagery pyramid of `images` (when any) built into the same
-/// staging directory before the database is moved into place: a failure writes nothing.
+/// What is draped over a database as it is built: orthoimages, and roads, rivers and lakes as
+/// shapes.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Drape<'a> {
+    pub images: &'a [PathBuf],
+    pub features: &'a [Feature],
+}
+
+/// [`build_database`] with the ground under `drape`'s features levelled (roads without cross
+/// slope, lakes flat at their level: part of the database's one surface), then the imagery
+/// pyramid of its images and features (when any) built into the same staging directory
+/// before the database is moved into place: a failure writes nothing.
 ///
 /// # Errors
 /// As [`build_database`], and when an image is refused.
 pub fn build_database_with_imagery(
     raster: &mut Raster,
     sources: Vec<String>,
-    images: &[PathBuf],
+    drape: Drape<'_>,
     out: &Path,
     force: bool,
     tile_cells: u32,
@@ -113,6 +146,19 @@ pub fn build_database_with_imagery(
     if report.void_posts_filled > 0 {
         tracing::warn!("filled {} void posts", report.void_posts_filled);
     }
+    let layer = if drape.features.is_empty() {
+        None
+    } else {
+        let levelled = level_terrain(raster, drape.features).step("cannot lay the features")?;
+        tracing::info!(
+            "features: {} road posts levelled, {} lake posts set to their level",
+            levelled.road_posts,
+            levelled.lake_posts
+        );
+        Some(FeatureLayer::new(drape.features).step("cannot lay the features")?)
+    };
+    let overlays: Vec<&dyn OverlayLayer> = layer.iter().map(|l| l as &dyn OverlayLayer).collect();
+    let images = drape.images;
     let inputs = BuildInputs {
         sources,
         void_posts_filled: report.void_posts_filled as u64,
@@ -129,11 +175,11 @@ pub fn build_database_with_imagery(
         &mut |done, total| (progress.borrow_mut())(BuildProgress::Write { done, total }),
         &mut |staging, manifest| {
             (progress.borrow_mut())(BuildProgress::End);
-            if images.is_empty() {
+            if images.is_empty() && overlays.is_empty() {
                 return Ok(());
             }
             (progress.borrow_mut())(BuildProgress::Begin(BuildStage::Imagery));
-            let imagery = write_imagery(staging, manifest, images, &[], &mut |p| {
+            let imagery = write_imagery(staging, manifest, images, &overlays, &mut |p| {
                 (progress.borrow_mut())(BuildProgress::Imagery(p));
             })?;
             manifest.imagery = Some(imagery);

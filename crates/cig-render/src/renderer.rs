@@ -544,7 +544,9 @@ impl Renderer {
     /// A renderer for the database behind `cache`, drawing into `colour_format` targets.
     pub fn new(gpu: Arc<Gpu>, cache: &TileCache, colour_format: wgpu::TextureFormat) -> Renderer {
         let manifest = cache.database().manifest();
-        let layout = NodeLayout::new(manifest.layout);
+        // Roads are shapes where the database drapes imagery (painted, or in the photograph).
+        let layout =
+            NodeLayout::new(manifest.layout).with_roads_as_shapes(manifest.imagery.is_some());
         let lod = TerrainLod::new(layout, GeoidLookup::new(&manifest.geoid));
         // No more slots than the database has nodes (a small database needs a small pool).
         let capacity = layout.node_count().min(MAX_NODE_SLOTS as u64) as usize;

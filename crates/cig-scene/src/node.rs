@@ -66,6 +66,10 @@ pub struct NodeLayout {
     /// The chord sag of a triangle whose hypotenuse is one finest cell's diagonal
     /// ([`finest_cell_sag_m`]); a triangle `n` finest cells across sags `n^2` times as much.
     finest_cell_sag_m: f64,
+    /// Roads are drawn as shapes in the draped imagery, so the node colours give road posts
+    /// the colour of the land beside them (a road one post wide would otherwise smear a band
+    /// of asphalt several times the road's width around the painted ribbon).
+    pub roads_as_shapes: bool,
 }
 
 impl NodeLayout {
@@ -75,6 +79,15 @@ impl NodeLayout {
             // A node's four children must lie in one tile of the finer level.
             node_cells: DEFAULT_NODE_CELLS.min(pyramid.tile_cells / 2).max(1),
             finest_cell_sag_m: finest_cell_sag_m(&pyramid.grid),
+            roads_as_shapes: false,
+        }
+    }
+
+    /// The layout with roads drawn as shapes (see [`NodeLayout::roads_as_shapes`]).
+    pub fn with_roads_as_shapes(self, roads_as_shapes: bool) -> NodeLayout {
+        NodeLayout {
+            roads_as_shapes,
+            ..self
         }
     }
 

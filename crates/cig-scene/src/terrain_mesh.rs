@@ -375,6 +375,8 @@ pub fn material_texel(m: Material) -> [u8; 4] {
 struct Sampler<'a> {
     key: TileKey,
     tile: &'a Tile,
+    /// Road posts take their neighbours' land colour ([`NodeLayout::roads_as_shapes`]).
+    roads_as_shapes: bool,
     tile_span: f64,
     scale: f64,
     max_index: f64,
@@ -385,6 +387,7 @@ impl<'a> Sampler<'a> {
         Sampler {
             key,
             tile,
+            roads_as_shapes: layout.roads_as_shapes,
             tile_span: layout.pyramid.finest_cells_per_tile(key.level) as f64,
             scale: (1u64 << key.level) as f64,
             max_index: tile.cells() as f64,
@@ -467,12 +470,36 @@ impl<'a> Sampler<'a> {
             (i1, j0, v * (1.0 - u)),
             (i1, j1, v * u),
         ];
+        let hidden = |m: Material| {
+            self.roads_as_shapes && matches!(m, Material::PavedRoad | Material::DirtRoad)
+        };
         let mut weight = [0.0f64; Material::ALL.len()];
         for (i, j, w) in corners {
-            weight[self.tile.material_at(i as usize, j as usize) as usize] += w;
+            let m = self.tile.material_at(i as usize, j as usize);
+            if !hidden(m) {
+                weight[m as usize] += w;
+            }
+        }
+        if weight.iter().all(|&w| w == 0.0) && self.roads_as_shapes {
+            // Four road posts: the land of the ring of posts around them.
+            let last = self.max_index as i64;
+            for i in (i0 as i64 - 1)..=(i0 as i64 + 2) {
+                for j in (j0 as i64 - 1)..=(j0 as i64 + 2) {
+                    let m = self
+                        .tile
+                        .material_at(i.clamp(0, last) as usize, j.clamp(0, last) as usize);
+                    if !hidden(m) {
+                        weight[m as usize] += 1.0;
+                    }
+                }
+            }
         }
         let nearest = self.material(row, col);
-        let lead = weight[nearest as usize];
+        let lead = if hidden(nearest) {
+            0.0
+        } else {
+            weight[nearest as usize]
+        };
         Material::ALL
             .into_iter()
             .filter(|&m| weight[m as usize] > lead + 1e-9)

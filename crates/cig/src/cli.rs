@@ -187,6 +187,12 @@ pub struct ImportArgs {
     /// the database; finer images are drawn over coarser ones.
     #[arg(long, num_args = 1.., value_name = "IMAGE")]
     pub imagery: Vec<PathBuf>,
+    /// Roads, rivers and lakes as shapes: a GeoJSON file of LineStrings (property "type":
+    /// paved_road, dirt_road or river, and "width_m") and Polygons ("type": lake, optional
+    /// "level_m"), WGS84 [lon, lat]. Roads are painted at their width with markings and the
+    /// ground levelled across them; lakes are flat at their level.
+    #[arg(long, value_name = "FILE")]
+    pub features: Option<PathBuf>,
 }
 
 #[derive(Args)]

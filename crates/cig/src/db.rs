@@ -70,6 +70,11 @@ pub fn synthesize_database(
 
 pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
     check_output(&args.out, args.force)?;
+    // The feature file is read before the DEMs, so a broken one costs no import.
+    let features = match &args.features {
+        Some(path) => cig_terrain_io::features::read_features(path)?,
+        None => Vec::new(),
+    };
     let started = Instant::now();
     let bar = crate::output::bar(args.inputs.len() as u64, "read DEMs");
     let area = cig_terrain_io::import::import_files(&args.inputs, &mut |done, total| {
@@ -96,7 +101,10 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
     let manifest = cig_bench::database::build_database_with_imagery(
         &mut raster,
         sources,
-        &args.imagery,
+        cig_bench::database::Drape {
+            images: &args.imagery,
+            features: &features,
+        },
         &args.out,
         args.force,
         config.database.tile_cells,

@@ -53,6 +53,9 @@ impl OverlayLayer for cig_terrain::features::FeatureLayer {
     fn describe(&self) -> String {
         "features (roads, rivers, lake shores)".to_string()
     }
+    fn finest_texel_m(&self) -> Option<f64> {
+        (!self.is_empty()).then(|| cig_terrain::features::FeatureLayer::finest_texel_m(self))
+    }
 }
 
 /// What a pyramid build made.
