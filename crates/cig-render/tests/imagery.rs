@@ -9,18 +9,18 @@ mod common;
 use cig_geo::Geodetic;
 use cig_render::{Adaptation, Image};
 use cig_scene::FrameSnapshot;
-use cig_terrain::database::{GeoidGrid, Manifest, MemoryTileStore, TerrainDatabase};
-use cig_terrain::imagery::{ImageryKey, ImageryLayout, ImageryManifest, ImageryTile};
+use cig_terrain::database::TerrainDatabase;
+use cig_terrain::imagery::ImageryKey;
 use cig_terrain::raster::{GeoGrid, Raster};
-use cig_terrain::{Material, TileStore};
+use cig_terrain::Material;
 use common::*;
 use std::sync::Arc;
 
 const CENTRE: (f64, f64) = (36.0, -121.0);
 
-/// A flat database of 257 x 257 posts 30 m apart at 100 m around [`CENTRE`], grass, with
-/// imagery of level-0 texels `30 / 2^fine_shift` m whose colour at a texel centre is
-/// `colour(lat, lon)`; `skip(key)` leaves tiles out.
+/// A flat database of 257 x 257 posts 30 m apart at 100 m around [`CENTRE`], of one
+/// material, with imagery of level-0 texels `30 / 2^fine_shift` m whose colour at a texel
+/// centre is `colour(lat, lon)`; `skip(key)` leaves tiles out.
 fn imagery_database(
     material: Material,
     fine_shift: u8,
@@ -42,51 +42,7 @@ fn imagery_database(
         elevation_m: vec![100.0; posts * posts],
         material: Some(vec![material; posts * posts]),
     };
-    let store = Arc::new(MemoryTileStore::new());
-    let summary = cig_terrain::build::build_pyramid::<cig_terrain::build::BuildError>(
-        &raster,
-        128,
-        &mut |t| {
-            store.insert(t.key, t.encode());
-            Ok(())
-        },
-    )
-    .expect("build");
-    let layout = ImageryLayout::new(&grid, fine_shift);
-    let mut tiles = 0;
-    for level in 0..layout.levels {
-        let (rows, cols) = layout.tiles_at(level);
-        for row in 0..rows {
-            for col in 0..cols {
-                let key = ImageryKey { level, row, col };
-                if skip(key) {
-                    continue;
-                }
-                let t = layout.tile_texels as u64;
-                let mut rgba = Vec::with_capacity((t * t * 4) as usize);
-                for r in 0..t {
-                    for c in 0..t {
-                        let (lat, lon) = layout.texel_centre_deg(
-                            level,
-                            u64::from(row) * t + r,
-                            u64::from(col) * t + c,
-                        );
-                        rgba.extend_from_slice(&colour(lat, lon));
-                    }
-                }
-                let tile = ImageryTile::from_rgba(key, layout.tile_texels, &rgba);
-                store.insert_imagery(key, tile.encode());
-                tiles += 1;
-            }
-        }
-    }
-    let mut manifest = Manifest::from_build(&summary, GeoidGrid::zero(), 0, vec!["test".into()]);
-    manifest.imagery = Some(ImageryManifest {
-        layout,
-        tile_count: tiles,
-        sources: vec!["test pattern".into()],
-    });
-    Arc::new(TerrainDatabase::new(manifest, store as Arc<dyn TileStore>).expect("db"))
+    database_with_imagery(&raster, fine_shift, colour, skip)
 }
 
 /// The marks: (north, east) metres from the centre.

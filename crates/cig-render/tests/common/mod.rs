@@ -31,6 +31,59 @@ pub fn database_from(raster: &Raster, geoid_m: f32) -> Arc<TerrainDatabase> {
     Arc::new(TerrainDatabase::new(manifest, store as Arc<dyn cig_terrain::TileStore>).expect("db"))
 }
 
+/// A database of `raster` (no geoid) with imagery of level-0 texels the post spacing over
+/// `2^fine_shift`, whose colour at a texel centre is `colour(lat, lon)` (straight alpha);
+/// `skip(key)` leaves tiles out.
+pub fn database_with_imagery(
+    raster: &Raster,
+    fine_shift: u8,
+    colour: impl Fn(f64, f64) -> [u8; 4] + Sync,
+    skip: impl Fn(cig_terrain::ImageryKey) -> bool,
+) -> Arc<TerrainDatabase> {
+    use cig_terrain::imagery::{ImageryKey, ImageryLayout, ImageryManifest, ImageryTile};
+    let store = Arc::new(MemoryTileStore::new());
+    let summary = build_pyramid::<cig_terrain::build::BuildError>(raster, 128, &mut |t| {
+        store.insert(t.key, t.encode());
+        Ok(())
+    })
+    .expect("build");
+    let layout = ImageryLayout::new(&raster.grid, fine_shift);
+    let mut tiles = 0;
+    for level in 0..layout.levels {
+        let (rows, cols) = layout.tiles_at(level);
+        for row in 0..rows {
+            for col in 0..cols {
+                let key = ImageryKey { level, row, col };
+                if skip(key) {
+                    continue;
+                }
+                let t = u64::from(layout.tile_texels);
+                let mut rgba = Vec::with_capacity((t * t * 4) as usize);
+                for r in 0..t {
+                    for c in 0..t {
+                        let (lat, lon) = layout.texel_centre_deg(
+                            level,
+                            u64::from(row) * t + r,
+                            u64::from(col) * t + c,
+                        );
+                        rgba.extend_from_slice(&colour(lat, lon));
+                    }
+                }
+                let tile = ImageryTile::from_rgba(key, layout.tile_texels, &rgba);
+                store.insert_imagery(key, tile.encode());
+                tiles += 1;
+            }
+        }
+    }
+    let mut manifest = Manifest::from_build(&summary, GeoidGrid::zero(), 0, vec!["test".into()]);
+    manifest.imagery = Some(ImageryManifest {
+        layout,
+        tile_count: tiles,
+        sources: vec!["test pattern".into()],
+    });
+    Arc::new(TerrainDatabase::new(manifest, store as Arc<dyn cig_terrain::TileStore>).expect("db"))
+}
+
 /// A synthetic 8 km hilly database at 30 m posts, south-west corner 35.98 N 121.23 W.
 pub fn hills() -> Arc<TerrainDatabase> {
     static DB: OnceLock<Arc<TerrainDatabase>> = OnceLock::new();
