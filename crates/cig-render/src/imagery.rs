@@ -545,7 +545,14 @@ impl ImageryClipmap {
                     }
                     _ => NO_LEVEL,
                 };
-                let coarser_ready = k + 1 == count || usize::from(above) == k + 1;
+                // The next level up is loaded, or known to hold nothing there (the shader's
+                // blend toward it then fades toward the material, as the imagery does).
+                let parent_absent = key.is_some_and(|key| {
+                    k + 1 < count
+                        && self.levels[k + 1].slots[slot_index(key.parent())]
+                            == Slot::Absent(key.parent())
+                });
+                let coarser_ready = k + 1 == count || usize::from(above) == k + 1 || parent_absent;
                 self.levels[k].pages[slot] = if loaded && coarser_ready {
                     k as u8
                 } else {

@@ -481,15 +481,19 @@ impl<'a> Sampler<'a> {
             }
         }
         if weight.iter().all(|&w| w == 0.0) && self.roads_as_shapes {
-            // Four road posts: the land of the ring of posts around them.
+            // Four road posts (a wide road, a junction, a settlement's streets): the land of
+            // the posts around them within four posts, the nearest weighing most.
             let last = self.max_index as i64;
-            for i in (i0 as i64 - 1)..=(i0 as i64 + 2) {
-                for j in (j0 as i64 - 1)..=(j0 as i64 + 2) {
-                    let m = self
-                        .tile
-                        .material_at(i.clamp(0, last) as usize, j.clamp(0, last) as usize);
+            for di in -4i64..=4 {
+                for dj in -4i64..=4 {
+                    let (i, j) = (
+                        (fi.round() as i64 + di).clamp(0, last),
+                        (fj.round() as i64 + dj).clamp(0, last),
+                    );
+                    let m = self.tile.material_at(i as usize, j as usize);
                     if !hidden(m) {
-                        weight[m as usize] += 1.0;
+                        let (dr, dc) = (i as f64 - fi, j as f64 - fj);
+                        weight[m as usize] += 1.0 / (1.0 + dr * dr + dc * dc);
                     }
                 }
             }

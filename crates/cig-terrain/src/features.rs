@@ -1010,24 +1010,20 @@ impl FeatureLayer {
                 continue;
             }
             let px = &mut rgba[4 * k..4 * k + 4];
-            let colour = if px[3] >= 128 {
-                rgb[k]
-            } else if cov > 0.5 {
-                // Over a transparent texel the features' own colour, the original un-blended.
-                let base = [f64::from(px[0]), f64::from(px[1]), f64::from(px[2])];
-                let t = trans[k];
-                [
-                    (rgb[k][0] - base[0] * t) / cov,
-                    (rgb[k][1] - base[1] * t) / cov,
-                    (rgb[k][2] - base[2] * t) / cov,
-                ]
-            } else {
-                continue;
-            };
+            // "Over" with straight alpha: the features' own colour (the blend un-done) covers
+            // `cov` of the texel, what was there the rest; over a transparent texel the
+            // coverage becomes the alpha, so a road narrower than a coarse texel fades rather
+            // than vanishing or filling the texel.
+            let base = [f64::from(px[0]), f64::from(px[1]), f64::from(px[2])];
+            let below = f64::from(px[3]) / 255.0;
+            let t = trans[k];
+            let alpha = cov + below * t;
             for c in 0..3 {
-                px[c] = colour[c].round().clamp(0.0, 255.0) as u8;
+                let own = (rgb[k][c] - base[c] * t) / cov;
+                let colour = (own * cov + base[c] * below * t) / alpha;
+                px[c] = colour.round().clamp(0.0, 255.0) as u8;
             }
-            px[3] = 255;
+            px[3] = (alpha * 255.0).round().clamp(0.0, 255.0) as u8;
         }
     }
 
@@ -1551,7 +1547,8 @@ mod tests {
             let n = 256;
             let want = width / (t * f64::from(1u32 << level));
             for j in 5..n - 5 {
-                let painted = (0..n).filter(|&i| rgba[4 * (i * n + j) + 3] == 255).count();
+                // Texels more than half covered (the coverage is their alpha).
+                let painted = (0..n).filter(|&i| rgba[4 * (i * n + j) + 3] > 127).count();
                 assert!(
                     (painted as f64 - want).abs() <= 1.0,
                     "width {width} level {level} column {j}: {painted} texels, want {want:.2}"
@@ -1797,16 +1794,28 @@ mod tests {
             vec![at(&l, 1.0, 1.0), at(&l, 9.0, 9.0)],
         )])
         .expect("valid");
-        assert_eq!(layer.native_level(&l), 0, "0.47 m texels for 0.5 m");
+        assert_eq!(
+            layer.native_level(&l),
+            1,
+            "0.94 m texels for 1 m (an eighth of 8 m)"
+        );
         let fine = ImageryLayout::new(&grid(65), 8);
-        assert_eq!(layer.native_level(&fine), 2, "0.12 m texels: two levels up");
+        assert_eq!(
+            layer.native_level(&fine),
+            3,
+            "0.12 m texels: three levels up"
+        );
         let wide = FeatureLayer::new(&[road(
             LineKind::River,
             150.0,
             vec![at(&l, 1.0, 1.0), at(&l, 9.0, 9.0)],
         )])
         .expect("valid");
-        assert_eq!(wide.native_level(&l), 4, "9.4 m wanted, 7.5 m texels");
+        assert_eq!(
+            wide.native_level(&l),
+            l.levels - 1,
+            "18.8 m wanted: the coarsest level"
+        );
         assert!(wide.native_level(&l) < l.levels);
     }
 

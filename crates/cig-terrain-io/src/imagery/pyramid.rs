@@ -6,8 +6,8 @@
 //! they exist, over the images whose native level is at least `k`, sampled bilinearly at the
 //! tile's texel centres (finer images over coarser ones), with the overlay layers whose native
 //! level is at most `k` painted on top. A tile exists where a child exists, or an image or
-//! overlay of native level `k` touches it, and is written only when some texel is opaque
-//! (alpha >= 128): the pyramid is sparse.
+//! overlay of native level `k` touches it, and is written only when some texel is not fully
+//! transparent: the pyramid is sparse.
 
 use std::collections::{BTreeSet, HashMap};
 
@@ -26,7 +26,7 @@ pub trait OverlayLayer: Send + Sync {
     /// Whether the layer paints anything inside `bounds_deg` (south, west, north, east).
     fn touches(&self, bounds_deg: (f64, f64, f64, f64)) -> bool;
     /// Paints the tile `key`'s texels: `rgba` is `tile_texels^2` sRGB RGBA bytes, rows from
-    /// the south (alpha below 128 is transparent).
+    /// the south, straight alpha (a feature's coverage of a texel is its alpha).
     fn paint(&self, layout: &ImageryLayout, key: ImageryKey, rgba: &mut [u8]);
     /// One line for the manifest's sources.
     fn describe(&self) -> String {
@@ -386,7 +386,7 @@ fn render_tile(
             any = true;
         }
     }
-    if !any || rgba.chunks_exact(4).all(|p| p[3] < 128) {
+    if !any || rgba.chunks_exact(4).all(|p| p[3] == 0) {
         return None;
     }
     Some(rgba)
