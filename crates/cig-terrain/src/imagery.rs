@@ -261,7 +261,27 @@ impl ImageryTile {
             weights: texpresso::COLOUR_WEIGHTS_PERCEPTUAL,
             weigh_colour_by_alpha: false,
         };
-        texpresso::Format::Bc3.compress(&premultiplied, n, n, params, &mut blocks);
+        // Block by block; a block with no coverage stays zeros (alpha 0, black), which is
+        // most of a tile of roads or rivers over bare ground.
+        let per_row = n.div_ceil(4);
+        for (b, block) in blocks.chunks_exact_mut(16).enumerate() {
+            let (by, bx) = (b / per_row, b % per_row);
+            let mut texels_rgba = [[0u8; 4]; 16];
+            let mut mask = 0u32;
+            let mut covered = false;
+            for (i, px) in texels_rgba.iter_mut().enumerate() {
+                let (x, y) = (4 * bx + i % 4, 4 * by + i / 4);
+                if x < n && y < n {
+                    let at = 4 * (y * n + x);
+                    px.copy_from_slice(&premultiplied[at..at + 4]);
+                    covered |= px[3] != 0;
+                    mask |= 1 << i;
+                }
+            }
+            if covered {
+                texpresso::Format::Bc3.compress_block_masked(texels_rgba, mask, params, block);
+            }
+        }
         ImageryTile {
             key,
             texels,
