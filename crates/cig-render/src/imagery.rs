@@ -13,15 +13,18 @@
 //! imagery there), and blends two levels so no level border shows. Tiles are loaded by worker
 //! threads and written at most `UPLOADS_PER_FRAME` a frame; one-off frames load every window
 //! tile first. BC3 tiles go to the GPU as they are where the device samples BC formats;
-//! elsewhere they are decoded to RGBA8 on the loading thread.
+//! elsewhere they are decoded to RGBA8 on the loading thread. The clipmap's texels (a byte
+//! each in BC3, four in RGBA8) are held from the tile cache's paging budget
+//! (`TileCache::reserve`), so one budget covers the terrain's tiles and its imagery.
 //!
 //! Limits: one clipmap centre per renderer (the first view's eye); another view far from it
 //! samples coarser levels. Imagery coordinates are relative to an anchor texel at the eye, so
 //! single precision holds texel accuracy over any database the layout allows.
 
 use crate::gpu::Gpu;
+use cig_terrain::cache::BudgetReservation;
 use cig_terrain::imagery::{ImageryKey, ImageryLayout, ImageryTile, MAX_IMAGERY_LEVELS};
-use cig_terrain::TerrainDatabase;
+use cig_terrain::{TerrainDatabase, TileCache};
 use std::sync::Arc;
 
 /// Tiles along a side of each level's window.
@@ -102,6 +105,8 @@ pub struct ClipmapStats {
 
 /// The clipmap's GPU resources and window state.
 pub struct ImageryClipmap {
+    /// The clipmap's share of the paging budget (given back when the clipmap is dropped).
+    _reservation: BudgetReservation,
     layout: Option<ImageryLayout>,
     database: Arc<TerrainDatabase>,
     /// Whether the texture holds BC3 blocks (else RGBA8).
@@ -127,8 +132,10 @@ fn decode_for_gpu(tile: ImageryTile, compressed: bool) -> Vec<u8> {
 }
 
 impl ImageryClipmap {
-    /// The clipmap of `database`'s imagery (a 1-texel stand-in when it has none).
-    pub fn new(gpu: &Gpu, database: Arc<TerrainDatabase>) -> ImageryClipmap {
+    /// The clipmap of the imagery of `cache`'s database (a 1-texel stand-in when it has none),
+    /// its memory held from the cache's paging budget while it lives.
+    pub fn new(gpu: &Gpu, cache: &TileCache) -> ImageryClipmap {
+        let database = Arc::clone(cache.database());
         let layout = database.manifest().imagery.as_ref().map(|i| i.layout);
         // A CPU device (lavapipe) decodes BC blocks on every sample, at about twice the cost of
         // the whole terrain shading: there the tiles are decoded once on loading instead.
@@ -196,7 +203,18 @@ impl ImageryClipmap {
             (l.texel_lat_deg * north_m * l.texel_lon_deg * east_m).sqrt()
         });
         let loader = layout.map(|_| Self::start_loader(&database, compressed));
+        let texel_bytes = if compressed { 1 } else { 4 };
+        let wanted = u64::from(clip_texels).pow(2) * u64::from(level_count) * texel_bytes;
+        let reservation = cache.reserve(if layout.is_some() { wanted } else { 0 });
+        if reservation.bytes() < wanted && layout.is_some() {
+            tracing::warn!(
+                "the imagery clipmap takes {} MB, more than the paging budget leaves beside the tiles' minimum ({} MB of it held); raise paging.budget_bytes",
+                wanted >> 20,
+                reservation.bytes() >> 20
+            );
+        }
         let mut clipmap = ImageryClipmap {
+            _reservation: reservation,
             layout,
             database,
             compressed,
@@ -244,17 +262,6 @@ impl ImageryClipmap {
     /// Whether the database has imagery.
     pub fn has_imagery(&self) -> bool {
         self.layout.is_some()
-    }
-
-    /// GPU bytes the clipmap holds (texture and page table).
-    pub fn gpu_bytes(&self) -> u64 {
-        let layers = self.levels.len() as u64;
-        let texels = u64::from(self.clip_texels).pow(2) * layers;
-        if self.compressed {
-            texels
-        } else {
-            texels * 4
-        }
     }
 
     pub fn texture_view(&self) -> wgpu::TextureView {

@@ -588,7 +588,7 @@ impl Renderer {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let imagery = ImageryClipmap::new(&gpu, Arc::clone(cache.database()));
+        let imagery = ImageryClipmap::new(&gpu, cache);
         let imagery_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("imagery"),
             // The clipmap's windows are toroidal: texture coordinates wrap.

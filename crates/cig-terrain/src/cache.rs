@@ -14,7 +14,9 @@
 //! again only when an active area moves, so a frame's update is a walk over it.
 //!
 //! Memory accounting: resident tiles plus tiles being loaded never exceed `budget_bytes`
-//! (a load reserves its bytes before it is issued). A tile that fails to load (missing,
+//! less what other terrain data paged around the same eyes holds ([`TileCache::reserve`]: the
+//! renderer's imagery clipmap), so one budget covers both (a load reserves its bytes before
+//! it is issued). A tile that fails to load (missing,
 //! unreadable, checksum mismatch) is logged once and never retried; lookups fall back to its
 //! parent level.
 //!
@@ -168,6 +170,27 @@ impl State {
     }
 }
 
+/// Part of a cache's paging budget held for other data ([`TileCache::reserve`]); given back
+/// when dropped.
+#[derive(Debug)]
+pub struct BudgetReservation {
+    counter: Arc<AtomicU64>,
+    bytes: u64,
+}
+
+impl BudgetReservation {
+    /// The bytes granted.
+    pub fn bytes(&self) -> u64 {
+        self.bytes
+    }
+}
+
+impl Drop for BudgetReservation {
+    fn drop(&mut self) {
+        self.counter.fetch_sub(self.bytes, Ordering::AcqRel);
+    }
+}
+
 /// The paging tile cache over one database.
 pub struct TileCache {
     db: Arc<TerrainDatabase>,
@@ -177,6 +200,8 @@ pub struct TileCache {
     completions: Receiver<(TileKey, Result<Tile, LoadError>)>,
     workers: Vec<std::thread::JoinHandle<()>>,
     tile_bytes: u64,
+    /// Bytes of the budget held by [`BudgetReservation`]s.
+    reserved: Arc<AtomicU64>,
     eviction_epoch: AtomicU64,
     /// Metres per degree (north, east) at the database centre: the paging frame.
     metres_per_deg: (f64, f64),
@@ -228,6 +253,7 @@ impl TileCache {
             completions: done_rx,
             workers,
             tile_bytes,
+            reserved: Arc::new(AtomicU64::new(0)),
             eviction_epoch: AtomicU64::new(0),
             metres_per_deg: cig_geo::metres_per_degree(centre_lat),
         })
@@ -235,6 +261,33 @@ impl TileCache {
 
     pub fn database(&self) -> &Arc<TerrainDatabase> {
         &self.db
+    }
+
+    /// Holds up to `bytes` of the paging budget for other data paged around the same eyes
+    /// (the renderer's imagery clipmap), for as long as the returned reservation lives; the
+    /// tiles get the rest. At most what leaves room for the minimum of tiles is granted
+    /// ([`BudgetReservation::bytes`] says how much).
+    pub fn reserve(&self, bytes: u64) -> BudgetReservation {
+        let floor = MIN_BUDGET_TILES * self.tile_bytes;
+        let mut granted = 0;
+        let _ = self
+            .reserved
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |held| {
+                let room = self.config.budget_bytes.saturating_sub(floor + held);
+                granted = bytes.min(room);
+                Some(held + granted)
+            });
+        BudgetReservation {
+            counter: Arc::clone(&self.reserved),
+            bytes: granted,
+        }
+    }
+
+    /// The part of the budget the tiles may use: the budget less the reservations.
+    pub fn tile_budget_bytes(&self) -> u64 {
+        self.config
+            .budget_bytes
+            .saturating_sub(self.reserved.load(Ordering::Acquire))
     }
 
     pub fn config(&self) -> &PagingConfig {
@@ -335,7 +388,7 @@ impl TileCache {
         // units of each level's ring size, so that every ring keeps its nearest tiles and a
         // tight budget trims the rings' outer parts; cut at the budget.
         wanted.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.2.cmp(&b.2)));
-        let capacity = (self.config.budget_bytes / self.tile_bytes.max(1)) as usize;
+        let capacity = (self.tile_budget_bytes() / self.tile_bytes.max(1)) as usize;
         s.wanted.clear();
         s.wanted_order.clear();
         for (_, _, key) in wanted {
@@ -508,7 +561,7 @@ impl TileCache {
 
     /// [`TileCache::make_room`], also sparing tiles used at or after paging step `used_since`.
     fn make_room_sparing(&self, s: &mut State, bytes: u64, used_since: u64) -> bool {
-        let budget = self.config.budget_bytes;
+        let budget = self.tile_budget_bytes();
         let in_flight = s.in_flight.len() as u64 * self.tile_bytes;
         while s.resident_bytes + in_flight + bytes > budget {
             let victim = s

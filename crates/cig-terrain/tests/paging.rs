@@ -279,3 +279,43 @@ fn prefetch_loads_tiles_beyond_the_area_without_evicting_what_is_in_use() {
     let s = c.stats();
     assert!(s.resident_bytes <= tile_bytes * 120);
 }
+
+/// A reservation of the budget (the renderer's imagery clipmap) leaves the tiles the rest, and
+/// gives it back when dropped; no more is granted than leaves room for the minimum of tiles.
+#[test]
+fn a_reservation_of_the_budget_shrinks_what_the_tiles_may_hold() {
+    let g = grid(1001, 1001, 60.0);
+    let (db, _) = database(&raster(g, plain), 32, 0.0);
+    let probe = cache(&db, PagingConfig::default());
+    let tile_bytes = probe.tile_bytes();
+    drop(probe);
+    let budget_tiles = 120;
+    let c = cache(
+        &db,
+        PagingConfig {
+            budget_bytes: tile_bytes * budget_tiles,
+            ..PagingConfig::default()
+        },
+    );
+    let eye = Geodetic::new(g.south_lat_deg + 0.2, g.west_lon_deg + 0.2, 500.0);
+    let reservation = c.reserve(tile_bytes * 80);
+    assert_eq!(reservation.bytes(), tile_bytes * 80);
+    assert_eq!(c.tile_budget_bytes(), tile_bytes * 40);
+    // Asking for more than leaves the minimum of tiles is granted only up to it.
+    let greedy = c.reserve(tile_bytes * 1000);
+    assert_eq!(
+        greedy.bytes(),
+        tile_bytes * (40 - cig_terrain::cache::MIN_BUDGET_TILES)
+    );
+    drop(greedy);
+    for _ in 0..20 {
+        let stats = c.update(&[eye]);
+        assert!(
+            stats.resident_bytes + stats.in_flight as u64 * tile_bytes <= tile_bytes * 40,
+            "{stats:?}"
+        );
+        c.wait_idle();
+    }
+    drop(reservation);
+    assert_eq!(c.tile_budget_bytes(), tile_bytes * budget_tiles);
+}
