@@ -13,17 +13,8 @@ use common::*;
 fn ground_shading_cost() {
     // The hills under imagery (a pattern of 1.9 m texels) where `CIG_COST_IMAGERY` is set.
     let db = if std::env::var_os("CIG_COST_IMAGERY").is_some() {
-        let params = cig_synth::SynthParams {
-            origin_lat_deg: 35.98,
-            origin_lon_deg: -121.23,
-            size_km: 8.0,
-            spacing_m: 30.0,
-            seed: 7,
-        };
-        let mut raster = cig_synth::synthesize(&params, &mut |_, _| {}).expect("synth");
-        cig_terrain::build::prepare_raster(&mut raster).expect("prepare");
         database_with_imagery(
-            &raster,
+            &hills_raster(),
             4,
             |lat, lon| {
                 let v = ((lat * 3e4).sin() * (lon * 2e4).cos() * 60.0 + 120.0) as u8;

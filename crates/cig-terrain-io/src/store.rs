@@ -68,17 +68,7 @@ pub fn tile_path(root: &Path, key: TileKey) -> PathBuf {
 
 impl TileStore for FsTileStore {
     fn read_tile(&self, key: TileKey) -> Result<Vec<u8>, StoreError> {
-        let path = self.tile_path(key);
-        std::fs::read(&path).map_err(|e| {
-            if e.kind() == std::io::ErrorKind::NotFound {
-                StoreError::Missing(path.display().to_string())
-            } else {
-                StoreError::Io {
-                    reason: e.to_string(),
-                    location: path.display().to_string(),
-                }
-            }
-        })
+        read_store_file(&self.tile_path(key))
     }
 
     fn location(&self, key: TileKey) -> String {
@@ -86,22 +76,26 @@ impl TileStore for FsTileStore {
     }
 
     fn read_imagery_tile(&self, key: ImageryKey) -> Result<Vec<u8>, StoreError> {
-        let path = imagery_tile_path(&self.root, key);
-        std::fs::read(&path).map_err(|e| {
-            if e.kind() == std::io::ErrorKind::NotFound {
-                StoreError::Missing(path.display().to_string())
-            } else {
-                StoreError::Io {
-                    reason: e.to_string(),
-                    location: path.display().to_string(),
-                }
-            }
-        })
+        read_store_file(&imagery_tile_path(&self.root, key))
     }
 
     fn imagery_location(&self, key: ImageryKey) -> String {
         imagery_tile_path(&self.root, key).display().to_string()
     }
+}
+
+/// A tile file's bytes; `Missing` when there is no such file.
+fn read_store_file(path: &Path) -> Result<Vec<u8>, StoreError> {
+    std::fs::read(path).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            StoreError::Missing(path.display().to_string())
+        } else {
+            StoreError::Io {
+                reason: e.to_string(),
+                location: path.display().to_string(),
+            }
+        }
+    })
 }
 
 /// Path of an imagery tile's file under a database root (`imagery/L<level>/<row>_<col>.img`).

@@ -87,19 +87,22 @@ pub fn database_with_imagery(
 /// A synthetic 8 km hilly database at 30 m posts, south-west corner 35.98 N 121.23 W.
 pub fn hills() -> Arc<TerrainDatabase> {
     static DB: OnceLock<Arc<TerrainDatabase>> = OnceLock::new();
-    DB.get_or_init(|| {
-        let params = cig_synth::SynthParams {
-            origin_lat_deg: 35.98,
-            origin_lon_deg: -121.23,
-            size_km: 8.0,
-            spacing_m: 30.0,
-            seed: 7,
-        };
-        let mut raster = cig_synth::synthesize(&params, &mut |_, _| {}).expect("synth");
-        cig_terrain::build::prepare_raster(&mut raster).expect("prepare");
-        database_from(&raster, -33.0)
-    })
-    .clone()
+    DB.get_or_init(|| database_from(&hills_raster(), -33.0))
+        .clone()
+}
+
+/// The raster of [`hills`], voids filled and materials set.
+pub fn hills_raster() -> Raster {
+    let params = cig_synth::SynthParams {
+        origin_lat_deg: 35.98,
+        origin_lon_deg: -121.23,
+        size_km: 8.0,
+        spacing_m: 30.0,
+        seed: 7,
+    };
+    let mut raster = cig_synth::synthesize(&params, &mut |_, _| {}).expect("synth");
+    cig_terrain::build::prepare_raster(&mut raster).expect("prepare");
+    raster
 }
 
 /// A flat sea at mean sea level, 80 km x 80 km at 500 m posts, centred on 36 N 122 W.

@@ -15,7 +15,7 @@ use cig_terrain::raster::GeoGrid;
 use cig_terrain::{ImageryKey, ImageryLayout, ImageryTile};
 use rayon::prelude::*;
 
-use super::reader::{ImageSource, Window};
+use super::reader::{alpha_weighted_bilinear, ImageSource, Window};
 use super::ImageryError;
 
 /// A layer painted over the imagery of each tile at the levels at and above its native level
@@ -462,7 +462,7 @@ fn sample_image(
                 let Some((c0, c1, fx)) = *column else {
                     continue;
                 };
-                let s = bilinear(
+                let s = alpha_weighted_bilinear(
                     [
                         &row0[c0 * 4..c0 * 4 + 4],
                         &row0[c1 * 4..c1 * 4 + 4],
@@ -513,35 +513,6 @@ fn sample_image(
         }
     }
     any
-}
-
-/// Alpha-weighted bilinear blend of four RGBA8 texels (top-left, top-right, bottom-left,
-/// bottom-right); colour 0-255, alpha 0-1.
-#[inline]
-fn bilinear(p: [&[u8]; 4], fx: f32, fy: f32) -> [f32; 4] {
-    let weights = [
-        (1.0 - fx) * (1.0 - fy),
-        fx * (1.0 - fy),
-        (1.0 - fx) * fy,
-        fx * fy,
-    ];
-    let mut acc = [0.0f32; 4];
-    for (px, w) in p.iter().zip(weights) {
-        let wa = w * f32::from(px[3]);
-        acc[0] += wa * f32::from(px[0]);
-        acc[1] += wa * f32::from(px[1]);
-        acc[2] += wa * f32::from(px[2]);
-        acc[3] += wa;
-    }
-    if acc[3] <= 0.0 {
-        return [0.0; 4];
-    }
-    [
-        acc[0] / acc[3],
-        acc[1] / acc[3],
-        acc[2] / acc[3],
-        acc[3] / 255.0,
-    ]
 }
 
 /// Alpha-weighted 2x2 box downsample of `n` x `n` RGBA texels.

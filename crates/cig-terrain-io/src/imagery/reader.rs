@@ -228,29 +228,16 @@ impl Window {
         let fy = (row - f64::from(r0)).clamp(0.0, 1.0) as f32;
         let c1 = (c0 + 1).min(self.width - 1);
         let r1 = (r0 + 1).min(self.height - 1);
-        let taps = [
-            (self.pixel(c0, r0), (1.0 - fx) * (1.0 - fy)),
-            (self.pixel(c1, r0), fx * (1.0 - fy)),
-            (self.pixel(c0, r1), (1.0 - fx) * fy),
-            (self.pixel(c1, r1), fx * fy),
-        ];
-        let mut acc = [0.0f32; 4];
-        for (p, w) in taps {
-            let wa = w * f32::from(p[3]);
-            acc[0] += wa * f32::from(p[0]);
-            acc[1] += wa * f32::from(p[1]);
-            acc[2] += wa * f32::from(p[2]);
-            acc[3] += wa;
-        }
-        if acc[3] <= 0.0 {
-            return [0.0; 4];
-        }
-        [
-            acc[0] / acc[3],
-            acc[1] / acc[3],
-            acc[2] / acc[3],
-            acc[3] / 255.0,
-        ]
+        alpha_weighted_bilinear(
+            [
+                &self.pixel(c0, r0),
+                &self.pixel(c1, r0),
+                &self.pixel(c0, r1),
+                &self.pixel(c1, r1),
+            ],
+            fx,
+            fy,
+        )
     }
 }
 
@@ -762,4 +749,34 @@ fn footprint(georef: &Georeference, width: u32, height: u32) -> ((f64, f64, f64,
             (b, (a.dy.abs(), a.dx.abs()))
         }
     }
+}
+
+/// Alpha-weighted bilinear blend of four RGBA8 texels (top-left, top-right, bottom-left,
+/// bottom-right) at fractions `fx`, `fy`: straight colour 0-255, alpha 0-1; transparent where
+/// all four are.
+#[inline]
+pub(crate) fn alpha_weighted_bilinear(p: [&[u8]; 4], fx: f32, fy: f32) -> [f32; 4] {
+    let weights = [
+        (1.0 - fx) * (1.0 - fy),
+        fx * (1.0 - fy),
+        (1.0 - fx) * fy,
+        fx * fy,
+    ];
+    let mut acc = [0.0f32; 4];
+    for (px, w) in p.iter().zip(weights) {
+        let wa = w * f32::from(px[3]);
+        acc[0] += wa * f32::from(px[0]);
+        acc[1] += wa * f32::from(px[1]);
+        acc[2] += wa * f32::from(px[2]);
+        acc[3] += wa;
+    }
+    if acc[3] <= 0.0 {
+        return [0.0; 4];
+    }
+    [
+        acc[0] / acc[3],
+        acc[1] / acc[3],
+        acc[2] / acc[3],
+        acc[3] / 255.0,
+    ]
 }
