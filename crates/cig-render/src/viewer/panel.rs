@@ -645,6 +645,13 @@ fn stats_ui(ui: &mut egui::Ui, info: &FrameInfo) {
                 "meshes",
                 format!("{} built, {} deferred", s.meshes_built, s.meshes_deferred),
             );
+            row(
+                "imagery",
+                format!(
+                    "{} tiles written, {} loading",
+                    s.imagery_tiles_uploaded, s.imagery_tiles_pending
+                ),
+            );
         });
     ui.small(&info.adapter);
 }
