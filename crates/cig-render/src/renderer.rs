@@ -39,6 +39,7 @@ use crate::pass::{
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainFrame, TerrainGpu};
 use cig_geo::Geodetic;
+use cig_scene::detail::DetailSettings;
 use cig_scene::lighting::{FogMode, Lighting, SkyModel};
 use cig_scene::lod::{LodSettings, NodeLayout, TerrainLod};
 use cig_scene::models::{Model, ModelVertex};
@@ -277,7 +278,9 @@ pub struct Renderer {
     model_vertices: wgpu::Buffer,
     model_indices: wgpu::Buffer,
     models: HashMap<String, GpuModel>,
-    /// Level each entity had last frame, per view (hysteresis).
+    /// How models' levels are chosen: the detail control parameter's table, an optional fixed
+    /// `K_LOD` (else each view's) and the area of interest around the view's centre.
+    pub detail: DetailSettings,
     /// When each drawn node of each view first appeared, and the frame it was last drawn.
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
@@ -787,6 +790,7 @@ impl Renderer {
             adaptation,
             detail_axes,
             models: HashMap::new(),
+            detail: DetailSettings::standard(),
             node_first_seen: HashMap::new(),
             targets: None,
             puffs,
@@ -1425,6 +1429,7 @@ impl Renderer {
         snapshot: &FrameSnapshot,
     ) -> Vec<((u32, u32, i32, u32), InstanceRecord)> {
         let mut out = Vec::new();
+        let klod = self.detail.klod_for(&camera.view);
         for entity in snapshot.entities.iter().take(MAX_INSTANCES) {
             let Some(model) = self.models.get(&entity.model) else {
                 continue;
@@ -1441,14 +1446,29 @@ impl Renderer {
                 continue;
             }
             let distance = rel.length().max(1.0);
-            let diameter_px = 2.0 * radius * camera.pixels_per_tangent / distance;
-            let blend = model.model.lod_blend(diameter_px);
-            // (level, share of the pixels [from, to) in dither thresholds)
-            let mut levels = vec![(blend.finer, 0.0, blend.finer_share)];
+            // The detail control parameter (source 004, Eq 16): K_LOD r_c / R_s, removed at
+            // 98 % fade in the frame's fog, lowered away from the view's centre (the point of
+            // interest).
+            let fade = 1.0 - snapshot.fog.factor(distance);
+            let angle_deg = camera.forward.angle_between(rel).to_degrees();
+            let ne = self.detail.ne(
+                klod,
+                f64::from(model.model.critical_radius_m()),
+                distance,
+                fade,
+                angle_deg,
+            );
+            let blend = model.model.lod_blend(ne, &self.detail.table);
+            if blend.coverage <= 0.0 {
+                continue;
+            }
+            // (level, share of the pixels [from, to) in dither thresholds); a whole level
+            // draws up to 2, past every threshold.
+            let split = blend.finer_share * blend.coverage;
+            let whole = |share: f32| if share >= 1.0 { 2.0 } else { share };
+            let mut levels = vec![(blend.finer, 0.0, whole(split))];
             if let Some(coarser) = blend.coarser {
-                levels.push((coarser, blend.finer_share, 1.0));
-            } else {
-                levels[0].2 = 2.0;
+                levels.push((coarser, split, whole(blend.coverage)));
             }
             let enu = cig_geo::EnuFrame::new(Geodetic::new(
                 entity.position.lat_deg,

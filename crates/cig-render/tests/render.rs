@@ -745,16 +745,18 @@ fn model_levels_dissolve_into_each_other_across_the_switching_size() {
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
     let model = two_tone_box();
-    let radius_m = f64::from(model.bounding_radius_m);
+    let radius_m = f64::from(model.critical_radius_m());
     renderer.set_models(vec![model]);
     let size = (320, 240);
     let base = Geodetic::new(36.01, -121.2, 1500.0);
     let frame = EnuFrame::new(base);
     let box_view = view(base, (0.0, 0.0, 0.0), 30.0, size);
-    let pixels_per_tangent = box_view.camera().pixels_per_tangent;
-    // (share of red among the box's pixels) at a projected diameter.
-    let mut red_share = |diameter_px: f64| {
-        let distance_m = 2.0 * radius_m * pixels_per_tangent / diameter_px;
+    let klod = renderer.detail.klod_for(&box_view);
+    let table = renderer.detail.table;
+    // (share of red among the box's pixels) at a detail control parameter N_e (Eq 16: the box
+    // at the view's centre, clear air).
+    let mut red_share = |ne: f64| {
+        let distance_m = klod * radius_m / ne;
         let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
         snapshot.entities = vec![EntityInstance {
             id: 1,
@@ -775,23 +777,82 @@ fn model_levels_dissolve_into_each_other_across_the_switching_size() {
                 blue += 1;
             }
         }
-        assert!(red + blue > 30, "box not drawn at {diameter_px} px");
+        assert!(red + blue > 30, "box not drawn at N_e {ne}");
         f64::from(red) / f64::from(red + blue)
     };
-    let switch_px = cig_scene::models::LOD_SWITCH_PX[0];
+    // The combination zone below the finest level's first step (Table 3: step 6, N_e 54).
+    let finest_step = (1..=table.steps())
+        .find(|&s| table.level_of_step(s, 3) == 0)
+        .expect("a step draws the finest level");
+    let (start, end) = table.blend_zone(finest_step);
     assert!(
-        red_share(switch_px * 1.4) > 0.97,
-        "finest level whole above the band"
+        red_share(end * 1.2) > 0.97,
+        "finest level whole above the zone"
     );
     assert!(
-        red_share(switch_px / 1.4) < 0.03,
-        "coarser level whole below the band"
+        red_share(start * 0.9) < 0.03,
+        "coarser level whole below the zone"
     );
-    let half = red_share(switch_px);
+    let half = red_share((start + end) / 2.0);
     assert!((0.35..0.65).contains(&half), "half way: red share {half}");
-    let inner = red_share(switch_px * 1.15);
+    let inner = red_share(start + 0.8 * (end - start));
     assert!(
         inner > half + 0.1,
         "nearer the finer end: {inner} vs {half}"
+    );
+}
+
+/// A box that fades out below the table's first step instead of popping, and is gone where
+/// the fog has faded it by 98 %.
+#[test]
+fn a_model_fades_out_at_its_farthest_range_and_goes_in_thick_fog() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let model = two_tone_box();
+    let radius_m = f64::from(model.critical_radius_m());
+    renderer.set_models(vec![model]);
+    let base = Geodetic::new(36.01, -121.2, 1500.0);
+    let frame = EnuFrame::new(base);
+    let box_view = view(base, (0.0, 0.0, 0.0), 30.0, (320, 240));
+    // A fixed K_LOD that puts step 1 near: the box is large on screen while it fades.
+    renderer.detail.klod = Some(15.0);
+    let one = renderer.detail.table.value(1);
+    let mut image_at = |ne: f64, visibility_m: f64, with_box: bool| {
+        let distance_m = 15.0 * radius_m / ne;
+        let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
+        snapshot.fog = Fog::from_visibility(FogMode::Exponential, visibility_m);
+        if with_box {
+            snapshot.entities = vec![EntityInstance {
+                id: 1,
+                model: "two_tone".into(),
+                position: frame.enu_to_geodetic(DVec3::new(0.0, distance_m, -3.75)),
+                orientation: Hpr::default(),
+            }];
+        }
+        render(&mut renderer, &cache, &snapshot, true).0.rgba
+    };
+    let mut drawn = |ne: f64| {
+        image_at(ne, 40_000.0, true)
+            .chunks_exact(4)
+            .filter(|px| !is_key(px) && i32::from(px[2]) > i32::from(px[0]) + 20)
+            .count() as f64
+    };
+    let whole = drawn(one);
+    assert!(whole > 30.0, "box not drawn: {whole}");
+    // At half the first step's N_e the box is twice as far (a quarter of the pixels) and
+    // covers half of them.
+    let half = drawn(one / 2.0) / whole;
+    assert!(
+        (0.06..0.2).contains(&half),
+        "half faded: {half} of the whole"
+    );
+    // Just past the visibility (fade over 98 %) the box is gone although its N_e would put it
+    // at step 1: the frame is the frame without it.
+    let distance_m = 15.0 * radius_m / one;
+    let visibility_m = distance_m / 1.02;
+    assert!(
+        image_at(one, visibility_m, true) == image_at(one, visibility_m, false),
+        "removed in the fog"
     );
 }

@@ -1,13 +1,15 @@
 //! The renderer's plain data, computed on the CPU without touching the GPU: views and camera
 //! maths ([`view`]), the terrain quadtree's nodes ([`node`]), level-of-detail selection
 //! ([`lod`]) and node meshes ([`terrain_mesh`]), light, sky and fog ([`lighting`]), entity
-//! models ([`models`]) and the per-frame snapshot ([`snapshot`]), lightning bolts ready to draw
+//! models ([`models`]) and the choice of their levels by the detail control parameter
+//! ([`detail`]), the per-frame snapshot ([`snapshot`]), lightning bolts ready to draw
 //! and their flash ([`bolt`]).
 //!
 //! This crate is pure: it never opens files, sockets, the GPU or the terminal; `cig-render`
 //! turns what it computes into frames.
 
 pub mod bolt;
+pub mod detail;
 pub mod lighting;
 pub mod lod;
 pub mod models;

@@ -4,13 +4,14 @@
 //! Algorithm: models are assembled from boxes, prisms, cylinders and cones with flat-shaded
 //! faces (one normal per face), in a body frame with +X right, +Y forward and +Z up and the
 //! origin on the ground under the model's centre. Each level of detail is selected by the
-//! model's projected size in pixels (GE study, source 004 section 4.7: the detail of an object
-//! follows its projected size), and within a band around each switching size the two levels
-//! blend: each covers a complementary share of the model's pixels (a screen-door dissolve,
-//! the GE study's gradual transition, section 2), so a level change never pops.
+//! detail control parameter `N_e` (GE study, source 004 section 4.7: the resolution elements
+//! the model's critical radius subtends, see [`crate::detail`]), and within a combination zone
+//! of the table the two levels blend: each covers a complementary share of the model's pixels
+//! (a screen-door dissolve, the GE study's gradual transition, section 2), so a level change
+//! never pops; below the table's first step the coarsest level dissolves away.
 //!
 //! Limits: the dissolve is an ordered 4x4 dither (16 steps), visible as a fine pattern while a
-//! model sits in a band; the procedural models are recognisable shapes, not training-grade
+//! model sits in a combination zone; the procedural models are recognisable shapes, not training-grade
 //! models.
 
 use glam::Vec3;
@@ -158,10 +159,12 @@ pub struct Model {
     pub name: String,
     pub lods: Vec<ModelMesh>,
     pub bounding_radius_m: f32,
+    /// The critical radius `r_c` of the detail control parameter (source 004, Eq 16), when
+    /// set apart from the bounding radius (see [`Model::critical_radius_m`]).
+    pub critical_radius_m: Option<f32>,
 }
 
-/// Projected diameters (pixels) below which each coarser level takes over.
-pub const LOD_SWITCH_PX: [f64; 2] = [120.0, 24.0];
+pub use crate::detail::LodBlend;
 
 impl Model {
     pub fn new(name: &str, lods: Vec<ModelMesh>) -> Model {
@@ -173,64 +176,30 @@ impl Model {
             name: name.to_string(),
             lods,
             bounding_radius_m,
+            critical_radius_m: None,
         }
     }
 
-    /// The levels to draw for a projected diameter, and how they share the model's pixels.
+    /// The critical radius of the detail control parameter: the one set, else the bounding
+    /// radius of the model's levels.
+    pub fn critical_radius_m(&self) -> f32 {
+        self.critical_radius_m
+            .filter(|r| r.is_finite() && *r > 0.0)
+            .unwrap_or(self.bounding_radius_m)
+    }
+
+    /// The levels to draw at a detail control parameter `ne` (see [`crate::detail`]), and how
+    /// they share the model's pixels.
     ///
-    /// Outside the blend bands one level is drawn whole. Within a band (a factor
-    /// [`LOD_BLEND_FACTOR`] either side of a switching size) the finer and the coarser level
-    /// are both drawn, each on a complementary share of the pixels; the finer level's share
-    /// falls from 1 to 0 linearly in log-size across the band, so as a model recedes its detail
-    /// dissolves into the coarser level and never pops. The choice depends on the size alone
-    /// (no memory of the last frame), so every frame and every IG agrees.
-    pub fn lod_blend(&self, projected_diameter_px: f64) -> LodBlend {
-        let last = self.lods.len().saturating_sub(1);
-        let size = if projected_diameter_px.is_finite() {
-            projected_diameter_px.max(0.0)
-        } else {
-            f64::MAX
-        };
-        let level = LOD_SWITCH_PX
-            .iter()
-            .take(last)
-            .filter(|&&threshold| size < threshold)
-            .count()
-            .min(last);
-        // The band around the switch into this level (its finer neighbour's) or out of it.
-        for (switch, &threshold) in LOD_SWITCH_PX.iter().enumerate().take(last) {
-            let low = threshold / LOD_BLEND_FACTOR;
-            let high = threshold * LOD_BLEND_FACTOR;
-            if size > low && size < high {
-                let finer_share = (size / low).ln() / (high / low).ln();
-                return LodBlend {
-                    finer: switch,
-                    coarser: Some((switch + 1).min(last)),
-                    finer_share: finer_share.clamp(0.0, 1.0) as f32,
-                };
-            }
-        }
-        LodBlend {
-            finer: level,
-            coarser: None,
-            finer_share: 1.0,
-        }
+    /// In a pure zone of the table one level is drawn whole. In a combination zone the finer
+    /// and the coarser level are both drawn, each on a complementary share of the pixels; the
+    /// finer level's share falls linearly in `N_e` across the zone, so as a model recedes its
+    /// detail dissolves into the coarser level and never pops; below the table's first step
+    /// the coarsest level fades out. The choice depends on `N_e` alone (no memory of the last
+    /// frame), so every frame and every IG agrees.
+    pub fn lod_blend(&self, ne: f64, table: &crate::detail::DetailTable) -> LodBlend {
+        table.levels_for(ne, self.lods.len())
     }
-}
-
-/// Factor either side of a switching size over which two levels blend (1.25: from 0.8 to
-/// 1.25 times the switching size, the band the old hysteresis held).
-pub const LOD_BLEND_FACTOR: f64 = 1.25;
-
-/// Which levels of a model to draw and how they share its pixels (see [`Model::lod_blend`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LodBlend {
-    /// The finer level drawn (the only one when `coarser` is `None`).
-    pub finer: usize,
-    /// The coarser level blended in, within a band.
-    pub coarser: Option<usize>,
-    /// Share of the model's pixels the finer level covers, 0..1 (1 without a blend).
-    pub finer_share: f32,
 }
 
 const OLIVE: [u8; 4] = [86, 92, 58, 255];
@@ -412,31 +381,29 @@ mod tests {
     }
 
     #[test]
-    fn lod_blend_follows_size_and_dissolves_across_each_switch() {
+    fn lod_blend_follows_ne_and_dissolves_across_each_switch() {
+        use crate::detail::DetailTable;
         let m = builtin("tank").expect("tank");
-        let single = |size: f64, level: usize| {
-            assert_eq!(
-                m.lod_blend(size),
-                LodBlend {
-                    finer: level,
-                    coarser: None,
-                    finer_share: 1.0
-                },
-                "{size} px"
-            );
+        let table = DetailTable::default();
+        let single = |ne: f64, level: usize| {
+            assert_eq!(m.lod_blend(ne, &table), LodBlend::single(level), "N_e {ne}");
         };
         single(500.0, 0);
-        single(60.0, 1);
-        single(5.0, 2);
-        single(f64::NAN, 0);
-        single(-3.0, 2);
-        // Across the first switch (120 px) the finer share falls from 1 to 0.
+        single(f64::INFINITY, 0);
+        single(30.0, 1);
+        single(4.0, 2);
+        // Gone where N_e is 0 or not a number (removed by the fog), fading below step 1.
+        assert_eq!(m.lod_blend(f64::NAN, &table).coverage, 0.0);
+        assert_eq!(m.lod_blend(-3.0, &table).coverage, 0.0);
+        assert!((m.lod_blend(0.75, &table).coverage - 0.5).abs() < 1e-6);
+        // Across the switch to the finest level (step 6, N_e 54) the finer share falls from 1
+        // to 0 as N_e falls.
         let mut last_share = 1.0;
         for step in 0..=40 {
-            let size = 150.0 - f64::from(step) * 1.5;
-            let blend = m.lod_blend(size);
+            let ne = 60.0 - f64::from(step) * 0.5;
+            let blend = m.lod_blend(ne, &table);
             let share = if blend.coarser.is_some() {
-                assert_eq!((blend.finer, blend.coarser), (0, Some(1)), "{size} px");
+                assert_eq!((blend.finer, blend.coarser), (0, Some(1)), "N_e {ne}");
                 blend.finer_share
             } else if blend.finer == 0 {
                 1.0
@@ -445,20 +412,27 @@ mod tests {
             };
             assert!(
                 share <= last_share + 1e-6,
-                "{size} px: {share} after {last_share}"
+                "N_e {ne}: {share} after {last_share}"
             );
             assert!(
                 last_share - share < 0.1,
-                "{size} px: jumps from {last_share} to {share}"
+                "N_e {ne}: jumps from {last_share} to {share}"
             );
             last_share = share;
         }
         assert_eq!(last_share, 0.0);
-        // Half way (in log size) the two levels share the pixels equally.
-        let mid = m.lod_blend(120.0);
+        // Half way through the combination zone the two levels share the pixels equally.
+        let (start, end) = table.blend_zone(6);
+        let mid = m.lod_blend((start + end) / 2.0, &table);
         assert!((mid.finer_share - 0.5).abs() < 1e-6, "{mid:?}");
-        let second = m.lod_blend(24.0);
+        let (start, end) = table.blend_zone(3);
+        let second = m.lod_blend((start + end) / 2.0, &table);
         assert_eq!((second.finer, second.coarser), (1, Some(2)));
+        // A set critical radius replaces the bounding radius.
+        let mut set = m.clone();
+        set.critical_radius_m = Some(2.0);
+        assert_eq!(set.critical_radius_m(), 2.0);
+        assert_eq!(m.critical_radius_m(), m.bounding_radius_m);
     }
 }
 

@@ -56,6 +56,39 @@ pub enum Command {
     /// DIS (IEEE 1278.1) diagnostic tools: print received PDUs, send Entity State PDUs.
     #[command(subcommand)]
     Dis(DisCommand),
+    /// Level of detail of models: the detail control parameter of the GE study.
+    #[command(subcommand)]
+    Lod(LodCommand),
+}
+
+#[derive(Subcommand)]
+pub enum LodCommand {
+    /// The detail control parameter N_e = K_LOD r_c / R_s of a model (source 004, Eq 16) and
+    /// the step of Table 3 (1.5 step^2, steps 1-8) it reaches (0: below step 1, fading out).
+    #[command(allow_negative_numbers = true)]
+    Ne(LodNeArgs),
+}
+
+#[derive(Args)]
+pub struct LodNeArgs {
+    /// The model's critical radius, metres.
+    #[arg(long)]
+    pub radius_m: f64,
+    /// Slant range from the eye to the model, metres.
+    #[arg(long)]
+    pub range_m: f64,
+    /// The channel's horizontal field of view, degrees (0..180).
+    #[arg(long)]
+    pub fov_deg: f64,
+    /// The channel's width, pixels.
+    #[arg(long)]
+    pub width_px: f64,
+    /// Use this K_LOD instead of 1 / tan(FOV / width).
+    #[arg(long)]
+    pub klod: Option<f64>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]
@@ -538,6 +571,10 @@ pub struct RenderArgs {
     /// Write frame statistics (triangles, tiles, draw calls, CPU and GPU time) as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
+    /// The level-of-detail constant K_LOD of the models' detail control parameter (positive;
+    /// default 1 / tan(FOV / width) of the view): larger keeps finer levels farther away.
+    #[arg(long, allow_hyphen_values = true)]
+    pub klod: Option<f64>,
 }
 
 #[derive(Args)]

@@ -11,6 +11,7 @@ mod demo;
 mod dis;
 mod ephem;
 mod host;
+mod lod;
 mod output;
 mod plume;
 mod query;
@@ -79,6 +80,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Host(args) => host::run(&args),
         cli::Command::Dis(cli::DisCommand::Listen(args)) => dis::listen(&args),
         cli::Command::Dis(cli::DisCommand::Send(args)) => dis::send(&args),
+        cli::Command::Lod(cli::LodCommand::Ne(args)) => lod::ne(&args),
         cli::Command::Config(cli::ConfigCommand::Default) => {
             print!("{}", config::Config::default_toml()?);
             Ok(())

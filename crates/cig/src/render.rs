@@ -377,7 +377,12 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         (None, None) => None,
     };
     let lightning = args.lightning.as_deref().map(parse_lightning).transpose()?;
+    let klod = args
+        .klod
+        .map(|k| cig_scene::detail::validate_klod(k).map_err(|e| anyhow::anyhow!("--klod: {e}")))
+        .transpose()?;
     let (cache, mut renderer) = open(&args.db, config)?;
+    renderer.detail.klod = klod;
     let mut session = QuerySession::new(Arc::clone(&cache));
     // An eye inside the terrain is drawn from its surface, with a word.
     let mut views = [view];

@@ -399,7 +399,7 @@ fn readme_commands_that_need_nothing_run() {
         for args in variants {
             let words: Vec<&str> = args.iter().map(String::as_str).collect();
             match words.as_slice() {
-                ["ephem", ..] | ["plume", ..] => {
+                ["ephem", ..] | ["plume", ..] | ["lod", ..] => {
                     let out = cig()
                         .args(&args)
                         .current_dir(dir.path())
