@@ -4,13 +4,14 @@
 //! entity types (and CIGI 4.0 extended types, which are DIS types) take the most specific
 //! matching pattern of the scenario's table (the one with the most fields given), the earlier
 //! row on a tie. Types no row matches get the scenario's default model, so an unknown vehicle
-//! is still seen.
+//! is still seen. Models a row marks `cue_important` are important cues: the renderer keeps
+//! their detail under overload ([`ModelTable::is_cue_important`]).
 //!
 //! Limits: no substitution by country or by nearby categories beyond the patterns' wildcards.
 
 use crate::scenario::{DisTypePattern, Scenario};
 use cig_dis::EntityTypeCode;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
 /// An entity type as CIGI gives it.
@@ -29,6 +30,7 @@ pub struct ModelTable {
     dis: Vec<(DisTypePattern, String)>,
     default_model: String,
     gltf: Vec<(String, PathBuf)>,
+    cue_important: BTreeSet<String>,
 }
 
 impl Default for ModelTable {
@@ -38,6 +40,7 @@ impl Default for ModelTable {
             dis: Vec::new(),
             default_model: "truck".to_string(),
             gltf: Vec::new(),
+            cue_important: BTreeSet::new(),
         }
     }
 }
@@ -55,6 +58,9 @@ impl ModelTable {
             }
             if let Some(p) = row.dis_type.as_deref().and_then(DisTypePattern::parse) {
                 table.dis.push((p, row.model.clone()));
+            }
+            if row.cue_important {
+                table.cue_important.insert(row.model.clone());
             }
             if let Some(path) = &row.gltf {
                 if !table.gltf.iter().any(|(name, _)| *name == row.model) {
@@ -87,6 +93,11 @@ impl ModelTable {
                 .map_or(self.default_model.as_str(), String::as_str),
             CigiEntityType::Dis(code) => self.model_for_dis(&code),
         }
+    }
+
+    /// Whether a row of the table marks `model` as an important cue.
+    pub fn is_cue_important(&self, model: &str) -> bool {
+        self.cue_important.contains(model)
     }
 
     /// glTF files to load: (model name, path relative to the scenario).
@@ -128,6 +139,7 @@ cigi_type = 7
 [[models]]
 model = "ship"
 dis_type = "1:3:*"
+cue_important = true
 "#,
         )
         .expect("scenario");
@@ -147,5 +159,21 @@ dis_type = "1:3:*"
         assert_eq!(table.model_for_dis(&t(2, 9, 0, 0)), "building");
         assert_eq!(table.model_for_cigi(CigiEntityType::Short(7)), "tank");
         assert_eq!(table.model_for_cigi(CigiEntityType::Short(8)), "building");
+        assert!(table.is_cue_important("ship"));
+        assert!(!table.is_cue_important("tank"));
+        assert!(!table.is_cue_important("building"));
+    }
+
+    #[test]
+    fn cue_important_must_be_a_boolean() {
+        let e = Scenario::from_toml("[[models]]\nmodel = \"tank\"\ncue_important = 1\n")
+            .expect_err("not a boolean");
+        assert!(
+            e.to_string().contains("cue_important") || e.to_string().contains("bool"),
+            "{e}"
+        );
+        let e = Scenario::from_toml("[[models]]\nmodel = \"tank\"\ncue_importnat = true\n")
+            .expect_err("unknown key");
+        assert!(e.to_string().contains("cue_importnat"), "{e}");
     }
 }

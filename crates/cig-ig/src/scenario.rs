@@ -34,6 +34,7 @@
 //! model = "frigate"
 //! gltf = "models/frigate.glb"          # relative to this file
 //! dis_type = "1:3:*:6"                 # "*" matches any value
+//! cue_important = true                 # keeps its detail under overload (default false)
 //!
 //! [[entities]]                         # entities this IG owns (drawn, and published on DIS)
 //! id = 1                               # CIGI entity id space (0 is the ownship)
@@ -415,6 +416,12 @@ pub struct ModelMapping {
     /// DIS entity type pattern.
     #[serde(default)]
     pub dis_type: Option<String>,
+    /// An important cue (the runway, a target vehicle): the model keeps the nominal detail
+    /// control parameter when the renderer's overload control lowers it for the rest (source
+    /// 004 §4.6). The mark belongs to the model: any row marking a model marks it for every
+    /// entity drawn with it.
+    #[serde(default)]
+    pub cue_important: bool,
 }
 
 /// An entity the IG owns.

@@ -1271,6 +1271,7 @@ impl IgWorld {
                     model: e.model.clone(),
                     position: pose.position,
                     orientation: pose.orientation,
+                    cue_important: self.session.models().is_cue_important(&e.model),
                 });
             }
         }
@@ -1281,13 +1282,12 @@ impl IgWorld {
             let near = x.remote_entities_near(self.monotonic_s, &eyes, radius_m);
             for r in near {
                 let [heading_deg, pitch_deg, roll_deg] = r.heading_pitch_roll_deg;
+                let models = self.session.models();
+                let model = models.model_for_dis(&r.entity_type);
                 snapshot.entities.push(EntityInstance {
                     id: remote_instance_id(r.key),
-                    model: self
-                        .session
-                        .models()
-                        .model_for_dis(&r.entity_type)
-                        .to_string(),
+                    model: model.to_string(),
+                    cue_important: models.is_cue_important(model),
                     position: r.geodetic,
                     orientation: Hpr {
                         heading_deg,

@@ -43,6 +43,9 @@ use cig_scene::detail::DetailSettings;
 use cig_scene::lighting::{FogMode, Lighting, SkyModel};
 use cig_scene::lod::{LodSettings, NodeLayout, TerrainLod};
 use cig_scene::models::{Model, ModelVertex};
+use cig_scene::overload::{
+    klod_for, OverloadControl, OverloadCounters, OverloadError, OverloadSettings,
+};
 use cig_scene::{Camera, FrameSnapshot};
 use cig_terrain::database::GeoidLookup;
 use cig_terrain::TileCache;
@@ -101,6 +104,14 @@ pub mod serde_like {
         pub bolt_lines_drawn: u32,
         /// Rain drops or snow flakes drawn.
         pub precipitation_particles: u32,
+        /// The detail control parameter's constant `K_LOD` models were drawn at this frame
+        /// (the overload control's; cue-important models take the nominal).
+        pub klod: f64,
+        /// The view's nominal `K_LOD` (from its field of view and width, or the fixed one).
+        pub klod_nominal: f64,
+        /// What the overload control made of this frame's counters for the next frame:
+        /// "decrement", "hold", "increment", or "off" without one.
+        pub overload: &'static str,
     }
 }
 
@@ -281,6 +292,10 @@ pub struct Renderer {
     /// How models' levels are chosen: the detail control parameter's table, an optional fixed
     /// `K_LOD` (else each view's) and the area of interest around the view's centre.
     pub detail: DetailSettings,
+    /// The overload control's settings (source 004 Table 4; `None`: off) and each view's
+    /// state, fed each frame's counters after the frame, for the next one.
+    overload: Option<OverloadSettings>,
+    overload_controls: Vec<OverloadControl>,
     /// When each drawn node of each view first appeared, and the frame it was last drawn.
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
     targets: Option<Targets>,
@@ -791,6 +806,8 @@ impl Renderer {
             detail_axes,
             models: HashMap::new(),
             detail: DetailSettings::standard(),
+            overload: Some(OverloadSettings::default()),
+            overload_controls: Vec::new(),
             node_first_seen: HashMap::new(),
             targets: None,
             puffs,
@@ -1025,7 +1042,11 @@ impl Renderer {
         }
         self.terrain
             .write_indices(&self.gpu, &terrain_frame.indices);
-        let draws = self.entity_draws(&camera, snapshot);
+        let klod_nominal = self.detail.klod_for(&camera.view);
+        let klod = self
+            .overload_control(view_index)
+            .map_or(klod_nominal, |c| c.klod(klod_nominal));
+        let draws = self.entity_draws(&camera, snapshot, klod_nominal, klod);
         let instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
         if !instance_records.is_empty() {
             self.gpu.queue.write_buffer(
@@ -1075,6 +1096,9 @@ impl Renderer {
             illuminance_lux: lighting.natural_illuminance_lux,
             exposure_ev: cig_scene::lighting::exposure_value(lighting.adapted_illuminance_lux)
                 - snapshot.sky.exposure_compensation_ev,
+            klod,
+            klod_nominal,
+            overload: "off",
             ..Default::default()
         };
         self.targets(size);
@@ -1284,6 +1308,22 @@ impl Renderer {
             Some((frame_ms, puff_ms, cloud_ms)) => (frame_ms, puff_ms, cloud_ms, "timestamp_query"),
             None => (wall_gpu_ms, 0.0, 0.0, "submit_to_completion"),
         };
+        // The overload control takes this frame's counters for the next frame. The time from
+        // submission to completion includes waits that are not the GPU's: only timestamp
+        // queries count as the GPU's time (0: unknown, ignored).
+        let counters = OverloadCounters {
+            triangles: stats.triangles,
+            models: stats.entities_drawn,
+            gpu_ms: if stats.gpu_timed_by == "timestamp_query" {
+                stats.gpu_ms
+            } else {
+                0.0
+            },
+        };
+        if let Some(control) = self.overload_control(view_index) {
+            control.update(klod_nominal, &counters);
+            stats.overload = control.last_action().name();
+        }
         Ok(stats)
     }
 
@@ -1427,9 +1467,10 @@ impl Renderer {
         &mut self,
         camera: &Camera,
         snapshot: &FrameSnapshot,
+        klod_nominal: f64,
+        klod_controlled: f64,
     ) -> Vec<((u32, u32, i32, u32), InstanceRecord)> {
         let mut out = Vec::new();
-        let klod = self.detail.klod_for(&camera.view);
         for entity in snapshot.entities.iter().take(MAX_INSTANCES) {
             let Some(model) = self.models.get(&entity.model) else {
                 continue;
@@ -1448,7 +1489,8 @@ impl Renderer {
             let distance = rel.length().max(1.0);
             // The detail control parameter (source 004, Eq 16): K_LOD r_c / R_s, removed at
             // 98 % fade in the frame's fog, lowered away from the view's centre (the point of
-            // interest).
+            // interest). Cue-important models keep the nominal K_LOD under overload (§4.6).
+            let klod = klod_for(entity.cue_important, klod_nominal, klod_controlled);
             let fade = 1.0 - snapshot.fog.factor(distance);
             let angle_deg = camera.forward.angle_between(rel).to_degrees();
             let ne = self.detail.ne(
@@ -1529,6 +1571,36 @@ impl Renderer {
         self.node_first_seen
             .retain(|(v, _), (_, last)| *v != view_index || *last == frame);
         out
+    }
+
+    /// Sets the overload control (source 004 Table 4, [`cig_scene::overload`]); `None` turns
+    /// it off. On by default with [`OverloadSettings::default`]'s generous levels. Every
+    /// view starts again at its nominal `K_LOD`.
+    pub fn set_overload(
+        &mut self,
+        settings: Option<OverloadSettings>,
+    ) -> Result<(), OverloadError> {
+        if let Some(s) = &settings {
+            s.validate()?;
+        }
+        self.overload = settings;
+        self.overload_controls.clear();
+        Ok(())
+    }
+
+    /// The overload control's settings (`None`: off).
+    pub fn overload(&self) -> Option<&OverloadSettings> {
+        self.overload.as_ref()
+    }
+
+    /// View `view_index`'s overload control (made at the nominal `K_LOD` on first use).
+    fn overload_control(&mut self, view_index: usize) -> Option<&mut OverloadControl> {
+        let settings = self.overload?;
+        while self.overload_controls.len() <= view_index {
+            self.overload_controls
+                .push(OverloadControl::new(settings).ok()?);
+        }
+        self.overload_controls.get_mut(view_index)
     }
 
     /// Nodes with a mesh on the GPU.

@@ -51,12 +51,14 @@ fn golden_images_match_in_daylight_and_at_dusk_with_fog_and_models() {
     snapshot.entities = vec![
         EntityInstance {
             id: 1,
+            cue_important: false,
             model: "tank".into(),
             position: tank_at,
             orientation: Hpr::default(),
         },
         EntityInstance {
             id: 2,
+            cue_important: false,
             model: "building".into(),
             position: house_at,
             orientation: Hpr {
@@ -245,6 +247,7 @@ fn a_ship_thirty_km_away_sinks_hull_first_below_the_horizon() {
     let (empty, _) = render(&mut renderer, &cache, &snapshot, true);
     snapshot.entities = vec![EntityInstance {
         id: 1,
+        cue_important: false,
         model: "ship".into(),
         position: ship_at,
         orientation: Hpr::default(),
@@ -317,6 +320,7 @@ fn geometry_lands_on_its_pixel_far_from_the_database_origin() {
         let (empty, _) = render(&mut renderer, &cache, &snapshot, true);
         snapshot.entities = vec![EntityInstance {
             id: 7,
+            cue_important: false,
             model: "test_box".into(),
             position: box_at,
             orientation: Hpr::default(),
@@ -496,6 +500,7 @@ fn a_gltf_file_loads_with_three_levels_and_draws_where_placed() {
     );
     snapshot.entities = vec![EntityInstance {
         id: 1,
+        cue_important: false,
         model: "pyramid".into(),
         position: at,
         orientation: Hpr::default(),
@@ -760,6 +765,7 @@ fn model_levels_dissolve_into_each_other_across_the_switching_size() {
         let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
         snapshot.entities = vec![EntityInstance {
             id: 1,
+            cue_important: false,
             model: "two_tone".into(),
             position: frame.enu_to_geodetic(DVec3::new(0.0, distance_m, -3.75)),
             orientation: Hpr::default(),
@@ -825,6 +831,7 @@ fn a_model_fades_out_at_its_farthest_range_and_goes_in_thick_fog() {
         if with_box {
             snapshot.entities = vec![EntityInstance {
                 id: 1,
+                cue_important: false,
                 model: "two_tone".into(),
                 position: frame.enu_to_geodetic(DVec3::new(0.0, distance_m, -3.75)),
                 orientation: Hpr::default(),
@@ -855,4 +862,94 @@ fn a_model_fades_out_at_its_farthest_range_and_goes_in_thick_fog() {
         image_at(one, visibility_m, true) == image_at(one, visibility_m, false),
         "removed in the fog"
     );
+}
+
+/// Under the overload control (source 004 Table 4, §4.6) a cue-important model keeps its level
+/// while another of the same size at the same range and angle drops to a coarser one.
+#[test]
+fn cue_important_models_keep_their_step_under_overload() {
+    use cig_scene::overload::{CounterLimits, OverloadSettings};
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let model = two_tone_box();
+    let radius_m = f64::from(model.critical_radius_m());
+    renderer.set_models(vec![model]);
+    // A triangle budget the terrain alone exceeds: K_LOD falls every frame to the floor.
+    renderer
+        .set_overload(Some(OverloadSettings {
+            triangles: Some(CounterLimits {
+                capacity: 2.0,
+                begin_decrement: 1.0,
+                begin_increment: 0.5,
+            }),
+            models: None,
+            gpu_ms: None,
+            ..OverloadSettings::default()
+        }))
+        .expect("valid settings");
+    let size = (320, 240);
+    let base = Geodetic::new(36.01, -121.2, 1500.0);
+    let frame = EnuFrame::new(base);
+    let box_view = view(base, (0.0, 0.0, 0.0), 30.0, size);
+    let nominal = renderer.detail.klod_for(&box_view);
+    // Both boxes well inside the finest level's pure zone at the nominal K_LOD, 9 degrees
+    // either side of the view's centre (the same area-of-interest factor).
+    let finest = renderer.detail.table.value(6) * 1.2;
+    let distance_m = nominal * radius_m / finest;
+    let east_m = distance_m * 9f64.to_radians().tan();
+    let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
+    snapshot.entities = [(-east_m, true), (east_m, false)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(east, cue))| EntityInstance {
+            id: i as u32 + 1,
+            cue_important: cue,
+            model: "two_tone".into(),
+            position: frame.enu_to_geodetic(DVec3::new(east, distance_m, -3.75)),
+            orientation: Hpr::default(),
+        })
+        .collect();
+    // Red share of the box pixels in the left (cue) and right halves.
+    let shares = |image: &Image| {
+        let mut counts = [[0u32; 2]; 2];
+        for (i, px) in image.rgba.chunks_exact(4).enumerate() {
+            if is_key(px) {
+                continue;
+            }
+            let half = usize::from(i as u32 % image.width >= image.width / 2);
+            let (r, b) = (i32::from(px[0]), i32::from(px[2]));
+            if r > b + 20 {
+                counts[half][0] += 1;
+            } else if b > r + 20 {
+                counts[half][1] += 1;
+            }
+        }
+        counts.map(|[red, blue]| {
+            assert!(red + blue > 30, "a box is not drawn");
+            f64::from(red) / f64::from(red + blue)
+        })
+    };
+    let (first, stats) = render(&mut renderer, &cache, &snapshot, true);
+    assert_eq!(stats.klod, stats.klod_nominal);
+    assert_eq!(stats.overload, "decrement");
+    let [cue, other] = shares(&first);
+    assert!(
+        cue > 0.97 && other > 0.97,
+        "both finest unloaded: {cue} {other}"
+    );
+    let mut last = None;
+    for _ in 0..11 {
+        last = Some(render(&mut renderer, &cache, &snapshot, true));
+    }
+    let (image, stats) = last.expect("frames drawn");
+    assert!(
+        (stats.klod - 0.1 * stats.klod_nominal).abs() < 1e-6 * stats.klod_nominal,
+        "K_LOD at the floor: {} of {}",
+        stats.klod,
+        stats.klod_nominal
+    );
+    let [cue, other] = shares(&image);
+    assert!(cue > 0.97, "the cue keeps the finest level: {cue}");
+    assert!(other < 0.03, "the other drops to a coarser level: {other}");
 }

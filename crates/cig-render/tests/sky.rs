@@ -257,6 +257,7 @@ fn aerial_perspective_matches_a_march_of_the_same_air() {
                 let at = sea_level.enu_to_geodetic(DVec3::new(0.0, d, 0.0));
                 snapshot.entities = vec![EntityInstance {
                     id: 1,
+                    cue_important: false,
                     model: model.into(),
                     position: Geodetic::new(at.lat_deg, at.lon_deg, 0.0),
                     orientation: Hpr::default(),
@@ -324,6 +325,7 @@ fn aerial_perspective_takes_far_objects_toward_the_sky_colour() {
         snapshot.fog = Fog::from_visibility(FogMode::Off, 1e6);
         snapshot.entities = vec![EntityInstance {
             id: 1,
+            cue_important: false,
             model: "block".into(),
             position: Geodetic::new(at.lat_deg, at.lon_deg, 0.0),
             orientation: Hpr::default(),

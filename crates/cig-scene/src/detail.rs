@@ -52,8 +52,8 @@
 //! `f(v)` is a step, as in the study: the model goes with 2 % of its contrast left. The fog
 //! is the global one: a ground fog layer does not remove models. The area-of-interest curve
 //! is a tunable choice (the study leaves it open, §5.2), and its point of interest is the
-//! view's centre with no time lag (no eye tracker moves it yet). `K_LOD` is fixed per view:
-//! there is no overload control (Table 4) yet, and no cue-importance marking.
+//! view's centre with no time lag (no eye tracker moves it yet). `K_LOD` is the view's, lowered
+//! under load by [`crate::overload`] (Table 4) except for cue-important models (§4.6).
 
 /// Table 3's square-law constant: `N_e = 1.5 step²`.
 pub const TABLE3_K: f64 = 1.5;

@@ -14,6 +14,7 @@ pub mod lighting;
 pub mod lod;
 pub mod models;
 pub mod node;
+pub mod overload;
 pub mod snapshot;
 pub mod terrain_mesh;
 pub mod view;

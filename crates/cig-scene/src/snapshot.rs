@@ -52,6 +52,9 @@ pub struct EntityInstance {
     /// Body origin, altitude above the ellipsoid.
     pub position: Geodetic,
     pub orientation: Hpr,
+    /// Marked as an important cue in the model table: drawn at the nominal `K_LOD` whatever
+    /// the overload control does (source 004 §4.6, [`crate::overload`]).
+    pub cue_important: bool,
 }
 
 /// Places an entity, clamping it to the terrain when asked.
@@ -76,6 +79,7 @@ pub fn place_entity(
     }
     Ok(EntityInstance {
         id: spec.id,
+        cue_important: false,
         model: spec.model.clone(),
         position,
         orientation,

@@ -229,6 +229,7 @@ fn fly(
         gpu.describe()
     );
     let mut renderer = cig_render::Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
+    config.configure_renderer(&mut renderer)?;
     let started = Instant::now();
     let mut frames = Vec::new();
     let clear = cig_bench::demo::clear_skies(&shots);

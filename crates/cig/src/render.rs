@@ -252,6 +252,9 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "cloud_gpu_ms": stats.cloud_gpu_ms,
         "bolt_lines_drawn": stats.bolt_lines_drawn,
         "precipitation_particles": stats.precipitation_particles,
+        "klod": stats.klod,
+        "klod_nominal": stats.klod_nominal,
+        "overload": stats.overload,
         "adapter": gpu.describe(),
         "size": [view.width_px, view.height_px],
     })
@@ -292,7 +295,8 @@ pub fn open(db: &Path, config: &Config) -> anyhow::Result<(Arc<TileCache>, Rende
     let database = Arc::new(open_database(db)?);
     let cache = Arc::new(TileCache::new(database, config.paging.clone())?);
     let gpu = Gpu::headless()?;
-    let renderer = Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
+    let mut renderer = Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
+    config.configure_renderer(&mut renderer)?;
     Ok((cache, renderer))
 }
 

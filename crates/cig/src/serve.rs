@@ -217,13 +217,24 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
     );
 
     if !args.headless && !args.no_render {
-        return run_windowed(args, cache, world, query, cigi, dis, fallback, models);
+        return run_windowed(
+            args,
+            cache,
+            world,
+            query,
+            cigi,
+            dis,
+            fallback,
+            models,
+            config.overload()?,
+        );
     }
     let mut output = if args.no_render {
         Output::None
     } else {
         let gpu = cig_render::Gpu::headless()?;
         let mut renderer = cig_render::Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
+        config.configure_renderer(&mut renderer)?;
         if !models.is_empty() {
             renderer.set_models(models);
         }
@@ -428,8 +439,10 @@ fn run_windowed(
     dis: Option<UdpEndpoint>,
     fallback: View,
     models: Vec<cig_scene::models::Model>,
+    overload: Option<cig_scene::overload::OverloadSettings>,
 ) -> anyhow::Result<()> {
     let mut options = cig_render::ViewerOptions::new(fallback.eye, fallback.orientation);
+    options.overload = overload;
     options.title = format!("cig serve: {}", args.db.display());
     options.width_px = fallback.width_px;
     options.height_px = fallback.height_px;

@@ -74,6 +74,7 @@ pub fn run(args: &ViewArgs, config: &Config) -> anyhow::Result<()> {
     options.speed_mps = args.speed;
     options.exit_after_frames = args.frames;
     options.capture_last_frame = args.screenshot.is_some();
+    options.overload = config.overload()?;
     let report = match cig_render::run_viewer(cache, options) {
         Ok(report) => report,
         Err(ViewerError::NoDisplay(reason)) => {

@@ -302,6 +302,20 @@ fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
     std::fs::write(&conf, "[paging]\nhysteresis_box_m = 10\n").expect("write");
     let line = error_line(argv!["--config", conf, "db", "info", db]);
     assert!(line.contains("hysteresis_box_m"));
+    // Bad overload levels name the key.
+    let text = "[overload.models]\ncapacity = 100\nbegin_decrement = 50\nbegin_increment = 60\n";
+    std::fs::write(&conf, text).expect("write");
+    let line = error_line(argv!["--config", conf, "db", "info", db]);
+    assert!(
+        line.contains("overload.models.begin_increment = 60"),
+        "{line}"
+    );
+    std::fs::write(&conf, "[overload]\nfloor = 1.5\n").expect("write");
+    let line = error_line(argv!["--config", conf, "db", "info", db]);
+    assert!(line.contains("overload.floor = 1.5"), "{line}");
+    std::fs::write(&conf, "[overload]\nflor = 0.5\n").expect("write");
+    let line = error_line(argv!["--config", conf, "db", "info", db]);
+    assert!(line.contains("flor"), "{line}");
 }
 
 #[test]
@@ -396,6 +410,8 @@ fn config_default_round_trips() {
     let text = String::from_utf8_lossy(&out.get_output().stdout).to_string();
     assert!(text.contains("active_area_m = 16000.0"));
     assert!(text.contains("hysteresis_box_m = 1200.0"));
+    assert!(text.contains("[overload]"), "{text}");
+    assert!(text.contains("begin_decrement"), "{text}");
     let dir = tempfile::tempdir().expect("tmp");
     let conf = dir.path().join("cig.toml");
     std::fs::write(&conf, &text).expect("write");

@@ -57,6 +57,8 @@ fn render_writes_a_png_and_its_statistics() {
         "draw_calls",
         "cpu_ms",
         "gpu_ms",
+        "klod",
+        "klod_nominal",
     ] {
         assert!(json[key].is_number(), "{key} in {json}");
     }

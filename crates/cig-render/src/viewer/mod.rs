@@ -74,6 +74,8 @@ pub struct ViewerOptions {
     pub script: Vec<Shot>,
     /// Models added to the built-in ones (e.g. glTF files a scenario names).
     pub models: Vec<cig_scene::models::Model>,
+    /// The renderer's overload control (`None`: off; see [`Renderer::set_overload`]).
+    pub overload: Option<cig_scene::overload::OverloadSettings>,
 }
 
 /// Supplies each frame's world when the viewer is driven from outside (an IG serving a host):
@@ -257,6 +259,7 @@ impl ViewerOptions {
             capture_last_frame: false,
             script: Vec::new(),
             models: Vec::new(),
+            overload: Some(cig_scene::overload::OverloadSettings::default()),
         }
     }
 
@@ -556,6 +559,9 @@ impl App {
         if !self.options.models.is_empty() {
             renderer.set_models(self.options.models.clone());
         }
+        renderer
+            .set_overload(self.options.overload)
+            .map_err(|e| RenderError::Gpu(format!("bad overload settings: {e}")))?;
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(
             egui_ctx.clone(),

@@ -632,6 +632,12 @@ fn stats_ui(ui: &mut egui::Ui, info: &FrameInfo) {
             row("fps", format!("{:.1}", info.fps));
             row("size", format!("{} x {}", info.width_px, info.height_px));
             row("triangles", s.triangles.to_string());
+            row("models", s.entities_drawn.to_string());
+            // The overload control's K_LOD (source 004 Table 4) against the view's nominal.
+            row(
+                "K_LOD",
+                format!("{:.0} of {:.0} ({})", s.klod, s.klod_nominal, s.overload),
+            );
             row("nodes", s.terrain_nodes.to_string());
             row("draw calls", s.draw_calls.to_string());
             row("cpu select", format!("{:.2} ms", s.cpu_select_ms));
