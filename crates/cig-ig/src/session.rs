@@ -200,7 +200,20 @@ pub struct IgView {
     pub orientation: Hpr,
     /// Frustum half-angles; `None` until a View Definition gives them.
     pub fov: Option<FovDeg>,
+    /// Where the trainee looks within the view (a head or eye tracker's point of interest),
+    /// degrees right and up of the view's centre, as the host last set it through Component
+    /// Control ([`POINT_OF_INTEREST_COMPONENT`]); `None` is the view's centre.
+    pub point_of_interest_deg: Option<[f64; 2]>,
 }
+
+/// Component Control of a view (component class 1, instance = the view's identifier) that
+/// moves its area-of-interest point: component state 1 sets it to data words 0 and 1 (32-bit
+/// floats: degrees right and up of the view's centre, within 90), state 0 puts it back at
+/// the centre. Level of detail falls off with a model's angle from it (source 004, §3.4).
+pub const POINT_OF_INTEREST_COMPONENT: u16 = 1;
+
+/// Component class of a view in Component Control.
+const COMPONENT_CLASS_VIEW: u8 = 1;
 
 impl IgView {
     /// A view on an entity, with no offset, no relative orientation and no frustum yet.
@@ -212,6 +225,7 @@ impl IgView {
             offset: BodyOffset::default(),
             orientation: Hpr::default(),
             fov: None,
+            point_of_interest_deg: None,
         }
     }
 }
@@ -701,6 +715,45 @@ impl IgSession {
         std::mem::take(&mut self.user_packets)
     }
     /// Queues an IG Message for the host (deduplicated; at most 16 wait).
+    /// A Component Control: a view's point of interest ([`POINT_OF_INTEREST_COMPONENT`]) is
+    /// the one component defined; anything else is not applied.
+    fn apply_component(
+        &mut self,
+        class: u8,
+        instance: u16,
+        component: u16,
+        state: u8,
+        data: [u32; 2],
+    ) -> bool {
+        if class != COMPONENT_CLASS_VIEW || component != POINT_OF_INTEREST_COMPONENT {
+            return false;
+        }
+        let point = match state {
+            0 => None,
+            _ => {
+                let (right, up) = (
+                    f64::from(f32::from_bits(data[0])),
+                    f64::from(f32::from_bits(data[1])),
+                );
+                if !(right.is_finite() && up.is_finite() && right.abs() <= 90.0 && up.abs() <= 90.0)
+                {
+                    self.tell_host(format!(
+                        "Component Control: view {instance}'s point of interest ({right}, {up}) degrees must lie within 90 of its centre"
+                    ));
+                    return false;
+                }
+                Some([right, up])
+            }
+        };
+        match self.views.get_mut(&instance) {
+            Some(view) => {
+                view.point_of_interest_deg = point;
+                true
+            }
+            None => false,
+        }
+    }
+
     pub fn tell_host(&mut self, text: String) {
         if self.told.len() >= MAX_TOLD {
             // Forget old problems rather than grow: they may be told again.
@@ -853,10 +906,20 @@ impl IgSession {
                 }
                 None => false,
             },
-            Packet::ComponentControl(_) | Packet::ShortComponentControl(_) => {
-                // No component of the built-in models or the environment is defined yet.
-                false
-            }
+            Packet::ComponentControl(c) => self.apply_component(
+                c.component_class,
+                c.instance_id,
+                c.component_id,
+                c.component_state,
+                [c.data[0], c.data[1]],
+            ),
+            Packet::ShortComponentControl(c) => self.apply_component(
+                c.component_class,
+                c.instance_id,
+                c.component_id,
+                c.component_state,
+                c.data,
+            ),
             Packet::CelestialSphereControl(c) => {
                 if c.date_time_valid {
                     let month = c.date_mmddyyyy / 1_000_000;

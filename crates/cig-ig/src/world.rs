@@ -149,6 +149,10 @@ impl Script {
     }
 }
 
+/// Time constant with which a view's drawn area-of-interest point follows the host's, seconds
+/// (a saccade of about 30 ms moves it a sixth of the way; a fixation of half a second, most).
+pub const POINT_OF_INTEREST_LAG_S: f64 = 0.15;
+
 /// Everything the IG simulates.
 pub struct IgWorld {
     session: IgSession,
@@ -171,6 +175,9 @@ pub struct IgWorld {
     owned_effects: BTreeMap<(u16, cig_dis::EntityEffect), cig_effects::EffectHandle>,
     /// The first view's eye after the last step, and the geoid undulation there.
     first_eye: Option<Geodetic>,
+    /// Each host view's area-of-interest point as drawn, degrees right and up of its centre:
+    /// the host's point followed with a lag ([`POINT_OF_INTEREST_LAG_S`]).
+    points_of_interest: BTreeMap<u16, [f64; 2]>,
     eye_geoid_m: f64,
     /// Geoid undulation at the scenario's fixed eye, if it has one.
     fixed_eye_geoid_m: f64,
@@ -298,6 +305,7 @@ impl IgWorld {
             script_time_s: 0.0,
             owned_effects: BTreeMap::new(),
             first_eye: None,
+            points_of_interest: BTreeMap::new(),
             eye_geoid_m: 0.0,
             fixed_eye_geoid_m: 0.0,
             last_air_update_s: f64::NEG_INFINITY,
@@ -461,6 +469,7 @@ impl IgWorld {
             .as_ref()
             .map_or(self.clock.rate(), Exercise::rate);
         self.script_time_s += dt * rate.max(0.0);
+        self.follow_points_of_interest(dt);
         let mut script_velocity = BTreeMap::new();
         for (id, script) in &self.scripts {
             let Some(e) = self.session.entity_mut(*id) else {
@@ -1098,6 +1107,28 @@ impl IgWorld {
             .unwrap_or_default()
     }
 
+    /// Moves each host view's drawn area-of-interest point toward the host's (the view's centre
+    /// when none is set) by a first-order lag, so a saccade of a tracked eye does not make the
+    /// scene's detail flicker.
+    fn follow_points_of_interest(&mut self, dt: f64) {
+        let k = 1.0 - (-dt / POINT_OF_INTEREST_LAG_S).exp();
+        let views = self.session.views();
+        self.points_of_interest
+            .retain(|id, _| views.contains_key(id));
+        for (id, view) in views {
+            let target = view.point_of_interest_deg.unwrap_or([0.0, 0.0]);
+            let point = self.points_of_interest.entry(*id).or_insert([0.0, 0.0]);
+            for (p, t) in point.iter_mut().zip(target) {
+                // Within a thousandth of a degree it has arrived (the lag never would).
+                *p = if (t - *p).abs() < 1e-3 {
+                    t
+                } else {
+                    *p + (t - *p) * k
+                };
+            }
+        }
+    }
+
     /// The views to draw: the host's, else the scenario's, else `fallback`.
     pub fn views(&self, width_px: u32, height_px: u32, fallback: &View) -> Vec<View> {
         let mut views = self.world_views(width_px, height_px);
@@ -1172,6 +1203,25 @@ impl IgWorld {
     pub fn snapshot(&self, width_px: u32, height_px: u32, fallback: &View) -> FrameSnapshot {
         let views = self.views(width_px, height_px, fallback);
         let mut snapshot = FrameSnapshot::new(self.unix_time_s(), views.clone());
+        // The host's views are drawn in identifier order, those with a pose (as `world_views`).
+        let host_views: Vec<u16> = self
+            .session
+            .views()
+            .values()
+            .filter(|v| self.session.view_pose(v).is_some())
+            .map(|v| v.id)
+            .collect();
+        if host_views.len() == views.len() {
+            snapshot.points_of_interest_deg = host_views
+                .iter()
+                .map(|id| {
+                    self.points_of_interest
+                        .get(id)
+                        .copied()
+                        .filter(|p| *p != [0.0, 0.0])
+                })
+                .collect();
+        }
         snapshot.sky = self.scenario.sky_settings();
         let mut visibility_m = 40_000.0;
         if let Some(first) = views.first() {

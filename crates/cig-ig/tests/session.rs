@@ -1352,3 +1352,83 @@ fn the_hosts_cloud_layers_reach_the_snapshot_clamped_and_reported() {
     frame(&mut w, &mut q);
     assert_eq!(w.snapshot(64, 48, &fallback).cloud_layers.len(), 2);
 }
+
+/// A host's Component Control on a view moves its area-of-interest point (the eye tracker's
+/// gaze), and the drawn point follows with a short lag; state 0 brings it back to the centre;
+/// a point outside 90 degrees is refused and told to the host.
+#[test]
+fn a_views_point_of_interest_follows_the_hosts_component_control_with_a_lag() {
+    let mut q = query();
+    let mut w = world("");
+    let (lat, lon) = (lat_of_row(64.0), lon_of_col(20.0));
+    let fallback = View {
+        eye: Geodetic::new(lat, lon, 1000.0),
+        orientation: Hpr::default(),
+        fov: FovDeg::symmetric(60.0, 45.0),
+        width_px: 64,
+        height_px: 48,
+    };
+    let point = |state: u8, right: f32, up: f32| {
+        Packet::ShortComponentControl(cig_cigi::ShortComponentControl {
+            component_id: cig_ig::session::POINT_OF_INTEREST_COMPONENT,
+            instance_id: 0,
+            component_class: 1,
+            component_state: state,
+            data: [right.to_bits(), up.to_bits()],
+            ..Default::default()
+        })
+    };
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        1,
+        vec![
+            entity_3(1, lat, lon, 300.0, 0.0),
+            Packet::ViewControl(ViewControl {
+                view_id: 0,
+                entity_id: 1,
+                ..ViewControl::default()
+            }),
+            point(1, 20.0, -10.0),
+        ],
+    );
+    let drawn = |w: &IgWorld| w.snapshot(64, 48, &fallback).points_of_interest_deg[0];
+    frame(&mut w, &mut q);
+    let first = drawn(&w).expect("a point off the centre");
+    assert!(
+        first[0] > 0.0 && first[0] < 5.0 && first[1] < 0.0 && first[1] > -2.5,
+        "one frame moves it a little of the way: {first:?}"
+    );
+    for _ in 0..120 {
+        frame(&mut w, &mut q);
+    }
+    let settled = drawn(&w).expect("a point");
+    assert!(
+        (settled[0] - 20.0).abs() < 0.01 && (settled[1] + 10.0).abs() < 0.01,
+        "{settled:?}"
+    );
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        2,
+        vec![point(1, 120.0, 0.0)],
+    );
+    frame(&mut w, &mut q);
+    assert!(
+        (drawn(&w).expect("kept")[0] - 20.0).abs() < 0.01,
+        "a point beyond 90 degrees is refused"
+    );
+    send(
+        &mut w,
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        3,
+        vec![point(0, 0.0, 0.0)],
+    );
+    for _ in 0..120 {
+        frame(&mut w, &mut q);
+    }
+    assert_eq!(drawn(&w), None, "back at the view's centre");
+}

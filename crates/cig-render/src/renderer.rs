@@ -1046,7 +1046,12 @@ impl Renderer {
         let klod = self
             .overload_control(view_index)
             .map_or(klod_nominal, |c| c.klod(klod_nominal));
-        let draws = self.entity_draws(&camera, snapshot, klod_nominal, klod);
+        let point_of_interest = snapshot
+            .points_of_interest_deg
+            .get(view_index)
+            .copied()
+            .flatten();
+        let draws = self.entity_draws(&camera, snapshot, klod_nominal, klod, point_of_interest);
         let instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
         if !instance_records.is_empty() {
             self.gpu.queue.write_buffer(
@@ -1469,8 +1474,17 @@ impl Renderer {
         snapshot: &FrameSnapshot,
         klod_nominal: f64,
         klod_controlled: f64,
+        point_of_interest_deg: Option<[f64; 2]>,
     ) -> Vec<((u32, u32, i32, u32), InstanceRecord)> {
         let mut out = Vec::new();
+        // Where the trainee looks: the host's point of interest, else the view's centre.
+        let aim = point_of_interest_deg.map_or(camera.forward, |[right, up]| {
+            let (r, u) = (right.to_radians(), up.to_radians());
+            (camera.forward * (r.cos() * u.cos())
+                + camera.right * (r.sin() * u.cos())
+                + camera.up * u.sin())
+            .normalize()
+        });
         for entity in snapshot.entities.iter().take(MAX_INSTANCES) {
             let Some(model) = self.models.get(&entity.model) else {
                 continue;
@@ -1492,7 +1506,7 @@ impl Renderer {
             // interest). Cue-important models keep the nominal K_LOD under overload (§4.6).
             let klod = klod_for(entity.cue_important, klod_nominal, klod_controlled);
             let fade = 1.0 - snapshot.fog.factor(distance);
-            let angle_deg = camera.forward.angle_between(rel).to_degrees();
+            let angle_deg = aim.angle_between(rel).to_degrees();
             let ne = self.detail.ne(
                 klod,
                 f64::from(model.model.critical_radius_m()),

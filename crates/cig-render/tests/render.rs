@@ -953,3 +953,76 @@ fn cue_important_models_keep_their_step_under_overload() {
     assert!(cue > 0.97, "the cue keeps the finest level: {cue}");
     assert!(other < 0.03, "the other drops to a coarser level: {other}");
 }
+
+/// The area of interest follows the host's point of interest (source 004 §3.4): two boxes 20
+/// degrees either side of the view's centre draw at their finest level, and when the point of
+/// interest moves onto the left one the right one, 40 degrees from it, drops to a coarser level.
+#[test]
+fn the_point_of_interest_moves_where_models_keep_their_detail() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let model = two_tone_box();
+    let radius_m = f64::from(model.critical_radius_m());
+    renderer.set_models(vec![model]);
+    let size = (320, 240);
+    let base = Geodetic::new(36.01, -121.2, 1500.0);
+    let frame = EnuFrame::new(base);
+    let box_view = view(base, (0.0, 0.0, 0.0), 60.0, size);
+    let nominal = renderer.detail.klod_for(&box_view);
+    // N_e 70 at the point of interest: 63 at 20 degrees from it (the finest level, from 54),
+    // 37 at 40 degrees (the middle level: the area of interest falls to half by 45 degrees).
+    let distance_m = nominal * radius_m / 70.0;
+    let (sin20, cos20) = 20f64.to_radians().sin_cos();
+    let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
+    snapshot.entities = [-1.0, 1.0]
+        .iter()
+        .enumerate()
+        .map(|(i, &side)| EntityInstance {
+            id: i as u32 + 1,
+            cue_important: false,
+            model: "two_tone".into(),
+            position: frame.enu_to_geodetic(DVec3::new(
+                side * distance_m * sin20,
+                distance_m * cos20,
+                -3.75,
+            )),
+            orientation: Hpr::default(),
+        })
+        .collect();
+    // Red (finest level) share of the box pixels in the left and right halves.
+    let shares = |image: &Image| {
+        let mut counts = [[0u32; 2]; 2];
+        for (i, px) in image.rgba.chunks_exact(4).enumerate() {
+            if is_key(px) {
+                continue;
+            }
+            let half = usize::from(i as u32 % image.width >= image.width / 2);
+            // The boxes' red and blue, not the terrain's green-blue below them.
+            let (r, g, b) = (i32::from(px[0]), i32::from(px[1]), i32::from(px[2]));
+            if r > b + 20 && r > g + 40 {
+                counts[half][0] += 1;
+            } else if b > r + 20 && b > g + 60 {
+                counts[half][1] += 1;
+            }
+        }
+        counts.map(|[red, blue]| {
+            assert!(red + blue > 10, "a box is not drawn");
+            f64::from(red) / f64::from(red + blue)
+        })
+    };
+    let centred = render(&mut renderer, &cache, &snapshot, true).0;
+    write_png(&centred, &out_dir().join("point_of_interest_centre.png"));
+    let [left, right] = shares(&centred);
+    assert!(
+        left > 0.97 && right > 0.97,
+        "both finest at the centre's point: {left} {right}"
+    );
+    snapshot.points_of_interest_deg = vec![Some([-20.0, 0.0])];
+    let [left, right] = shares(&render(&mut renderer, &cache, &snapshot, true).0);
+    assert!(left > 0.97, "the box looked at keeps its detail: {left}");
+    assert!(
+        right < 0.03,
+        "the box 40 degrees away drops a level: {right}"
+    );
+}

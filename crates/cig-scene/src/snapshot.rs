@@ -173,6 +173,10 @@ pub struct FrameSnapshot {
     /// Draw the materials' detail noise and smooth material borders (on by default; off is
     /// the flat colour per post, the benchmarks' plain baseline).
     pub ground_detail: bool,
+    /// Per view, the point level of detail centres on (source 004's area of interest: where a
+    /// head or eye tracker says the trainee looks), degrees right and up of the view's centre;
+    /// `None`, or no entry, is the view's centre.
+    pub points_of_interest_deg: Vec<Option<[f64; 2]>>,
     pub entities: Vec<EntityInstance>,
     /// Obscurant puffs to draw (smoke, flame, dust), positions relative to
     /// `puff_origin_ecef_m` (fill with `cig_effects::EffectSystem::snapshot(origin, ..)`).
@@ -247,6 +251,7 @@ impl FrameSnapshot {
             max_pixel_error: 1.0,
             wireframe: false,
             ground_detail: true,
+            points_of_interest_deg: Vec::new(),
             entities: Vec::new(),
             puffs: Vec::new(),
             puff_origin_ecef_m: glam::DVec3::ZERO,
