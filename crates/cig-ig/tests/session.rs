@@ -1375,7 +1375,6 @@ fn a_views_point_of_interest_follows_the_hosts_component_control_with_a_lag() {
             component_class: 1,
             component_state: state,
             data: [right.to_bits(), up.to_bits()],
-            ..Default::default()
         })
     };
     send(
