@@ -178,6 +178,16 @@ pub fn build_database_with_imagery(
             if images.is_empty() && overlays.is_empty() {
                 return Ok(());
             }
+            if !drape.features.is_empty() {
+                // Kept with the database, so new imagery is painted with them again.
+                let path = staging.join(cig_terrain_io::features::DATABASE_FEATURES_FILE);
+                cig_terrain_io::features::write_features(&path, drape.features).map_err(|e| {
+                    ImageryError::Io {
+                        reason: e.to_string(),
+                        path: path.clone(),
+                    }
+                })?;
+            }
             (progress.borrow_mut())(BuildProgress::Begin(BuildStage::Imagery));
             let imagery = write_imagery(staging, manifest, images, &overlays, &mut |p| {
                 (progress.borrow_mut())(BuildProgress::Imagery(p));

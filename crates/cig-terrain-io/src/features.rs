@@ -243,6 +243,10 @@ pub fn features_to_geojson(features: &[Feature]) -> String {
     GeoJson::FeatureCollection(collection).to_string()
 }
 
+/// Name of the feature file a database keeps beside its tiles: the roads, rivers and lakes
+/// painted into its imagery, so new imagery (`cig db imagery`) is painted with them again.
+pub const DATABASE_FEATURES_FILE: &str = "features.geojson";
+
 /// Writes the features as a GeoJSON file.
 pub fn write_features(path: &Path, features: &[Feature]) -> Result<(), FeatureFileError> {
     std::fs::write(path, features_to_geojson(features)).map_err(|source| FeatureFileError::Io {

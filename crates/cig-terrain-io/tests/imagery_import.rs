@@ -584,3 +584,63 @@ fn overlays_paint_over_imagery_and_make_their_own_tiles() {
         "box at level 1",
     );
 }
+
+/// A database keeps the features it was built with (`features.geojson`), and new imagery
+/// added to it is painted with them again: the road still shows over the new image.
+#[test]
+fn new_imagery_is_painted_with_the_databases_own_features() {
+    use cig_terrain::features::{Feature, LineKind};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_database(dir.path(), "db", SOUTH, WEST, 64);
+    let road_lat = SOUTH + 30.0 * D;
+    cig_terrain_io::features::write_features(
+        &db.join(cig_terrain_io::features::DATABASE_FEATURES_FILE),
+        &[Feature::Line {
+            kind: LineKind::DirtRoad,
+            width_m: 6.0,
+            points_deg: vec![(road_lat, WEST + 2.0 * D), (road_lat, WEST + 60.0 * D)],
+        }],
+    )
+    .expect("features");
+    let spec = ImageSpec::geographic(512, 512, SOUTH + 64.0 * D, WEST, D / 8.0);
+    let image = write_file(
+        dir.path(),
+        "blue.tif",
+        &write_image(&spec, &rgb8(512, 512, |_, _| BLUE)),
+    );
+    let manifest = add_imagery(&db, &[image], &[], &mut |_| {}).expect("imagery");
+    let sources = manifest.imagery.expect("imagery").sources;
+    assert!(
+        sources.iter().any(|s| s.contains("features")),
+        "{sources:?}"
+    );
+    let (manifest, tiles) = read_tiles(&db);
+    // Texels of dirt (tan: red well above blue) and of the image, at the finest level with any.
+    let finest = tiles.keys().map(|k| k.level).min().expect("tiles");
+    eprintln!(
+        "levels {:?}, finest {finest}",
+        manifest.imagery.as_ref().map(|i| i.layout.levels)
+    );
+    let (mut tan, mut blue) = (0, 0);
+    for (key, rgba) in &tiles {
+        if key.level != finest {
+            continue;
+        }
+        for px in rgba.chunks_exact(4) {
+            if px[3] == 255 && px[0] > px[2] + 40 {
+                tan += 1;
+            } else if px[3] == 255 && px[2] > px[0] + 100 {
+                blue += 1;
+            }
+        }
+    }
+    assert!(
+        tan > 100 && blue > 10 * tan,
+        "road texels {tan}, image texels {blue}"
+    );
+    assert!(
+        db.join(cig_terrain_io::features::DATABASE_FEATURES_FILE)
+            .exists(),
+        "the features stay with the database"
+    );
+}

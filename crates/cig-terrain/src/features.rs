@@ -760,9 +760,11 @@ impl FeatureLayer {
         self.items.is_empty()
     }
 
-    /// The texel size that shows the narrowest line well, metres: an eighth of its width (a
-    /// 4 m track over eight texels, its edges anti-aliased), never finer than 0.4 m (the
-    /// markings, 0.15 m wide, are drawn by their coverage); 4 m for lakes alone.
+    /// The coarsest texel that shows the narrowest line well, metres: an eighth of its width
+    /// (a 4 m track over eight texels, its edges anti-aliased), never finer than 0.4 m (the
+    /// markings, 0.15 m wide, are drawn by their coverage), with a factor of the square root
+    /// of two to spare (texel sizes come in powers of two); 4 m for lakes alone. The pyramid's
+    /// finest level is chosen no coarser than this, so the layer paints at that level.
     pub fn finest_texel_m(&self) -> f64 {
         let narrowest = self
             .items
@@ -770,21 +772,24 @@ impl FeatureLayer {
             .filter(|i| i.kind != ItemKind::Lake)
             .map(|i| 2.0 * i.half_w)
             .fold(f64::INFINITY, f64::min);
-        if narrowest.is_finite() {
+        let wanted = if narrowest.is_finite() {
             (narrowest / 8.0).max(0.4)
         } else {
             4.0
-        }
+        };
+        wanted * std::f64::consts::SQRT_2
     }
 
-    /// The imagery level whose texels are nearest [`FeatureLayer::finest_texel_m`] (within a
-    /// factor of the square root of two), clamped to the layout's levels.
+    /// The coarsest imagery level whose texels are no larger than
+    /// [`FeatureLayer::finest_texel_m`] (level 0 when even its texels are larger), clamped to
+    /// the layout's levels.
     pub fn native_level(&self, layout: &ImageryLayout) -> u8 {
         let target = self.finest_texel_m();
         let t0 = (layout.texel_lat_deg * self.frame.my).min(layout.texel_lon_deg * self.frame.mx);
         let mut level = 0u8;
+        // A hundredth to spare, as `ImageryLayout::fine_shift_for` allows.
         while level + 1 < layout.levels
-            && t0 * f64::from(1u32 << (level + 1).min(31)) <= target * std::f64::consts::SQRT_2
+            && t0 * f64::from(1u32 << (level + 1).min(31)) <= target * 1.01
         {
             level += 1;
         }

@@ -167,7 +167,8 @@ pub fn write_imagery(
     })
 }
 
-/// Adds imagery to (or replaces the imagery of) the database at `db`: the new database is
+/// Adds imagery to (or replaces the imagery of) the database at `db`, its own features (the
+/// roads, rivers and lakes it was built with) painted over it again: the new database is
 /// assembled in a staging sibling directory (elevation tiles hard-linked, or copied where links
 /// are refused) and renamed over `db` only when complete. On any error `db` is unchanged.
 pub fn add_imagery(
@@ -199,7 +200,13 @@ pub fn add_imagery(
     }
     let result = (|| -> Result<(), ImageryError> {
         link_tree(db, &staging, true)?;
-        let imagery = write_imagery(&staging, &manifest, images, overlays, progress)?;
+        // The database's own roads, rivers and lakes are painted over the new imagery too.
+        let stored = stored_features(&staging)?;
+        let mut all: Vec<&dyn OverlayLayer> = overlays.to_vec();
+        if let Some(layer) = &stored {
+            all.push(layer);
+        }
+        let imagery = write_imagery(&staging, &manifest, images, &all, progress)?;
         manifest.imagery = Some(imagery);
         write_manifest(&staging, &manifest)?;
         Ok(())
@@ -214,6 +221,25 @@ pub fn add_imagery(
 
 /// Mirrors `from` into a new directory `to`, files hard-linked (copied where linking fails);
 /// at the top level the manifest and `imagery/` are left out when `top` is set.
+/// The feature layer of the features a database keeps
+/// ([`crate::features::DATABASE_FEATURES_FILE`]), when it has any.
+fn stored_features(
+    root: &Path,
+) -> Result<Option<cig_terrain::features::FeatureLayer>, ImageryError> {
+    let path = root.join(crate::features::DATABASE_FEATURES_FILE);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let bad = |reason: String| ImageryError::Corrupt {
+        reason: format!("the database's feature file: {reason}"),
+        path: path.clone(),
+    };
+    let features = crate::features::read_features(&path).map_err(|e| bad(e.to_string()))?;
+    let layer =
+        cig_terrain::features::FeatureLayer::new(&features).map_err(|e| bad(e.to_string()))?;
+    Ok((!layer.is_empty()).then_some(layer))
+}
+
 fn link_tree(from: &Path, to: &Path, top: bool) -> Result<(), ImageryError> {
     let io = |path: &Path, e: std::io::Error| ImageryError::Io {
         reason: e.to_string(),
