@@ -5,7 +5,8 @@
 //! matching pattern of the scenario's table (the one with the most fields given), the earlier
 //! row on a tie. Types no row matches get the scenario's default model, so an unknown vehicle
 //! is still seen. Models a row marks `cue_important` are important cues: the renderer keeps
-//! their detail under overload ([`ModelTable::is_cue_important`]).
+//! their detail under overload ([`ModelTable::is_cue_important`]); a row may set a model's
+//! critical radius for the detail control parameter ([`ModelTable::critical_radius_m`]).
 //!
 //! Limits: no substitution by country or by nearby categories beyond the patterns' wildcards.
 
@@ -31,6 +32,7 @@ pub struct ModelTable {
     default_model: String,
     gltf: Vec<(String, PathBuf)>,
     cue_important: BTreeSet<String>,
+    critical_radius_m: BTreeMap<String, f32>,
 }
 
 impl Default for ModelTable {
@@ -41,6 +43,7 @@ impl Default for ModelTable {
             default_model: "truck".to_string(),
             gltf: Vec::new(),
             cue_important: BTreeSet::new(),
+            critical_radius_m: BTreeMap::new(),
         }
     }
 }
@@ -61,6 +64,12 @@ impl ModelTable {
             }
             if row.cue_important {
                 table.cue_important.insert(row.model.clone());
+            }
+            if let Some(r) = row.critical_radius_m {
+                table
+                    .critical_radius_m
+                    .entry(row.model.clone())
+                    .or_insert(r as f32);
             }
             if let Some(path) = &row.gltf {
                 if !table.gltf.iter().any(|(name, _)| *name == row.model) {
@@ -98,6 +107,11 @@ impl ModelTable {
     /// Whether a row of the table marks `model` as an important cue.
     pub fn is_cue_important(&self, model: &str) -> bool {
         self.cue_important.contains(model)
+    }
+
+    /// The critical radius a row sets for `model` (the first row that does), metres.
+    pub fn critical_radius_m(&self, model: &str) -> Option<f32> {
+        self.critical_radius_m.get(model).copied()
     }
 
     /// glTF files to load: (model name, path relative to the scenario).
@@ -140,6 +154,7 @@ cigi_type = 7
 model = "ship"
 dis_type = "1:3:*"
 cue_important = true
+critical_radius_m = 60.0
 "#,
         )
         .expect("scenario");
@@ -162,6 +177,21 @@ cue_important = true
         assert!(table.is_cue_important("ship"));
         assert!(!table.is_cue_important("tank"));
         assert!(!table.is_cue_important("building"));
+        assert_eq!(table.critical_radius_m("ship"), Some(60.0));
+        assert_eq!(table.critical_radius_m("tank"), None);
+    }
+
+    #[test]
+    fn a_critical_radius_must_be_positive_and_finite() {
+        for bad in ["0.0", "-3.0", "1e9", "nan"] {
+            let text =
+                format!("[[models]]\nmodel = \"tank\"\ncigi_type = 1\ncritical_radius_m = {bad}\n");
+            let e = Scenario::from_toml(&text).expect_err("refused");
+            assert!(
+                e.to_string().contains("models[0].critical_radius_m"),
+                "{bad}: {e}"
+            );
+        }
     }
 
     #[test]

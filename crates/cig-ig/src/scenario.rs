@@ -35,6 +35,8 @@
 //! gltf = "models/frigate.glb"          # relative to this file
 //! dis_type = "1:3:*:6"                 # "*" matches any value
 //! cue_important = true                 # keeps its detail under overload (default false)
+//! critical_radius_m = 60.0             # r_c of the detail control parameter (default: the
+//!                                      # model's bounding radius)
 //!
 //! [[entities]]                         # entities this IG owns (drawn, and published on DIS)
 //! id = 1                               # CIGI entity id space (0 is the ownship)
@@ -422,6 +424,12 @@ pub struct ModelMapping {
     /// entity drawn with it.
     #[serde(default)]
     pub cue_important: bool,
+    /// The model's critical radius `r_c` in the detail control parameter (source 004 Eq 16),
+    /// metres, when the modeller sets it apart from the bounding radius (a long thin ship is
+    /// seen by its hull's length, a mast by less than its height). Like `cue_important` it
+    /// belongs to the model.
+    #[serde(default)]
+    pub critical_radius_m: Option<f64>,
 }
 
 /// An entity the IG owns.
@@ -736,6 +744,14 @@ impl Scenario {
             }
             if m.cigi_type.is_none() && m.dis_type.is_none() {
                 return Err(value_error(key, "names neither cigi_type nor dis_type"));
+            }
+            if let Some(r) = m.critical_radius_m {
+                if !(r.is_finite() && r > 0.0 && r <= 100_000.0) {
+                    return Err(value_error(
+                        format!("{key}.critical_radius_m"),
+                        format!("{r} must be more than 0 and at most 100 km"),
+                    ));
+                }
             }
             if let Some(t) = &m.dis_type {
                 if DisTypePattern::parse(t).is_none() {

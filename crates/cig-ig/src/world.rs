@@ -1322,6 +1322,7 @@ impl IgWorld {
                     position: pose.position,
                     orientation: pose.orientation,
                     cue_important: self.session.models().is_cue_important(&e.model),
+                    critical_radius_m: self.session.models().critical_radius_m(&e.model),
                 });
             }
         }
@@ -1338,6 +1339,7 @@ impl IgWorld {
                     id: remote_instance_id(r.key),
                     model: model.to_string(),
                     cue_important: models.is_cue_important(model),
+                    critical_radius_m: models.critical_radius_m(model),
                     position: r.geodetic,
                     orientation: Hpr {
                         heading_deg,

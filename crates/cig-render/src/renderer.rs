@@ -1509,7 +1509,11 @@ impl Renderer {
             let angle_deg = aim.angle_between(rel).to_degrees();
             let ne = self.detail.ne(
                 klod,
-                f64::from(model.model.critical_radius_m()),
+                f64::from(
+                    entity
+                        .critical_radius_m
+                        .unwrap_or_else(|| model.model.critical_radius_m()),
+                ),
                 distance,
                 fade,
                 angle_deg,

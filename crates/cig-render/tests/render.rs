@@ -52,6 +52,7 @@ fn golden_images_match_in_daylight_and_at_dusk_with_fog_and_models() {
         EntityInstance {
             id: 1,
             cue_important: false,
+            critical_radius_m: None,
             model: "tank".into(),
             position: tank_at,
             orientation: Hpr::default(),
@@ -59,6 +60,7 @@ fn golden_images_match_in_daylight_and_at_dusk_with_fog_and_models() {
         EntityInstance {
             id: 2,
             cue_important: false,
+            critical_radius_m: None,
             model: "building".into(),
             position: house_at,
             orientation: Hpr {
@@ -248,6 +250,7 @@ fn a_ship_thirty_km_away_sinks_hull_first_below_the_horizon() {
     snapshot.entities = vec![EntityInstance {
         id: 1,
         cue_important: false,
+        critical_radius_m: None,
         model: "ship".into(),
         position: ship_at,
         orientation: Hpr::default(),
@@ -321,6 +324,7 @@ fn geometry_lands_on_its_pixel_far_from_the_database_origin() {
         snapshot.entities = vec![EntityInstance {
             id: 7,
             cue_important: false,
+            critical_radius_m: None,
             model: "test_box".into(),
             position: box_at,
             orientation: Hpr::default(),
@@ -501,6 +505,7 @@ fn a_gltf_file_loads_with_three_levels_and_draws_where_placed() {
     snapshot.entities = vec![EntityInstance {
         id: 1,
         cue_important: false,
+        critical_radius_m: None,
         model: "pyramid".into(),
         position: at,
         orientation: Hpr::default(),
@@ -766,6 +771,7 @@ fn model_levels_dissolve_into_each_other_across_the_switching_size() {
         snapshot.entities = vec![EntityInstance {
             id: 1,
             cue_important: false,
+            critical_radius_m: None,
             model: "two_tone".into(),
             position: frame.enu_to_geodetic(DVec3::new(0.0, distance_m, -3.75)),
             orientation: Hpr::default(),
@@ -832,6 +838,7 @@ fn a_model_fades_out_at_its_farthest_range_and_goes_in_thick_fog() {
             snapshot.entities = vec![EntityInstance {
                 id: 1,
                 cue_important: false,
+                critical_radius_m: None,
                 model: "two_tone".into(),
                 position: frame.enu_to_geodetic(DVec3::new(0.0, distance_m, -3.75)),
                 orientation: Hpr::default(),
@@ -905,6 +912,7 @@ fn cue_important_models_keep_their_step_under_overload() {
         .map(|(i, &(east, cue))| EntityInstance {
             id: i as u32 + 1,
             cue_important: cue,
+            critical_radius_m: None,
             model: "two_tone".into(),
             position: frame.enu_to_geodetic(DVec3::new(east, distance_m, -3.75)),
             orientation: Hpr::default(),
@@ -981,6 +989,7 @@ fn the_point_of_interest_moves_where_models_keep_their_detail() {
         .map(|(i, &side)| EntityInstance {
             id: i as u32 + 1,
             cue_important: false,
+            critical_radius_m: None,
             model: "two_tone".into(),
             position: frame.enu_to_geodetic(DVec3::new(
                 side * distance_m * sin20,
@@ -1025,4 +1034,67 @@ fn the_point_of_interest_moves_where_models_keep_their_detail() {
         right < 0.03,
         "the box 40 degrees away drops a level: {right}"
     );
+}
+
+/// A critical radius the model table sets (source 004 Eq 16: `r_c`) replaces the model's own
+/// in the detail control parameter: of two identical boxes side by side at a range where the
+/// box's own radius gives the middle level, the one given twice the radius draws its finest.
+#[test]
+fn a_critical_radius_from_the_model_table_sets_the_level() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let model = two_tone_box();
+    let radius_m = f64::from(model.critical_radius_m());
+    renderer.set_models(vec![model]);
+    let size = (320, 240);
+    let base = Geodetic::new(36.01, -121.2, 1500.0);
+    let frame = EnuFrame::new(base);
+    let box_view = view(base, (0.0, 0.0, 0.0), 30.0, size);
+    let nominal = renderer.detail.klod_for(&box_view);
+    // N_e 35 with the box's own radius (the middle level), 70 with twice it (the finest),
+    // both 8 degrees from the centre (inside the area of interest).
+    let distance_m = nominal * radius_m / 35.0;
+    let (sin8, cos8) = 8f64.to_radians().sin_cos();
+    let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
+    snapshot.entities = [(-1.0, Some(2.0 * radius_m as f32)), (1.0, None)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(side, critical_radius_m))| EntityInstance {
+            id: i as u32 + 1,
+            cue_important: false,
+            critical_radius_m,
+            model: "two_tone".into(),
+            position: frame.enu_to_geodetic(DVec3::new(
+                side * distance_m * sin8,
+                distance_m * cos8,
+                -3.75,
+            )),
+            orientation: Hpr::default(),
+        })
+        .collect();
+    let image = render(&mut renderer, &cache, &snapshot, true).0;
+    // Red (finest level) share of the box pixels in the left and right halves.
+    let mut counts = [[0u32; 2]; 2];
+    for (i, px) in image.rgba.chunks_exact(4).enumerate() {
+        if is_key(px) {
+            continue;
+        }
+        let half = usize::from(i as u32 % image.width >= image.width / 2);
+        let (r, g, b) = (i32::from(px[0]), i32::from(px[1]), i32::from(px[2]));
+        if r > b + 20 && r > g + 40 {
+            counts[half][0] += 1;
+        } else if b > r + 20 && b > g + 60 {
+            counts[half][1] += 1;
+        }
+    }
+    let [left, right] = counts.map(|[red, blue]| {
+        assert!(red + blue > 10, "a box is not drawn");
+        f64::from(red) / f64::from(red + blue)
+    });
+    assert!(
+        left > 0.97,
+        "twice the critical radius: the finest level ({left})"
+    );
+    assert!(right < 0.03, "its own radius: a coarser level ({right})");
 }

@@ -258,6 +258,7 @@ fn aerial_perspective_matches_a_march_of_the_same_air() {
                 snapshot.entities = vec![EntityInstance {
                     id: 1,
                     cue_important: false,
+                    critical_radius_m: None,
                     model: model.into(),
                     position: Geodetic::new(at.lat_deg, at.lon_deg, 0.0),
                     orientation: Hpr::default(),
@@ -326,6 +327,7 @@ fn aerial_perspective_takes_far_objects_toward_the_sky_colour() {
         snapshot.entities = vec![EntityInstance {
             id: 1,
             cue_important: false,
+            critical_radius_m: None,
             model: "block".into(),
             position: Geodetic::new(at.lat_deg, at.lon_deg, 0.0),
             orientation: Hpr::default(),

@@ -55,6 +55,9 @@ pub struct EntityInstance {
     /// Marked as an important cue in the model table: drawn at the nominal `K_LOD` whatever
     /// the overload control does (source 004 §4.6, [`crate::overload`]).
     pub cue_important: bool,
+    /// The model table's critical radius for the entity's model, metres (`None`: the model's
+    /// own, its bounding radius unless the model sets one).
+    pub critical_radius_m: Option<f32>,
 }
 
 /// Places an entity, clamping it to the terrain when asked.
@@ -80,6 +83,7 @@ pub fn place_entity(
     Ok(EntityInstance {
         id: spec.id,
         cue_important: false,
+        critical_radius_m: None,
         model: spec.model.clone(),
         position,
         orientation,
