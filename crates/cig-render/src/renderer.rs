@@ -1505,7 +1505,11 @@ impl Renderer {
             // 98 % fade in the frame's fog, lowered away from the view's centre (the point of
             // interest). Cue-important models keep the nominal K_LOD under overload (§4.6).
             let klod = klod_for(entity.cue_important, klod_nominal, klod_controlled);
-            let fade = 1.0 - snapshot.fog.factor(distance);
+            // The global fog and the ground fog layer along the ray (f(v), §4.7).
+            let layer = drawn_ground_fog(snapshot).map_or(1.0, |l| {
+                l.transmittance(camera.view.eye.alt_m, entity.position.alt_m, distance)
+            });
+            let fade = 1.0 - snapshot.fog.factor(distance) * layer;
             let angle_deg = aim.angle_between(rel).to_degrees();
             let ne = self.detail.ne(
                 klod,

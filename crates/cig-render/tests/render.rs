@@ -1098,3 +1098,54 @@ fn a_critical_radius_from_the_model_table_sets_the_level() {
     );
     assert!(right < 0.03, "its own radius: a coarser level ({right})");
 }
+
+/// A model deep in a ground fog layer is removed like one in the global fog (f(v) counts the
+/// layer along the ray), while the same model above the layer's top is drawn.
+#[test]
+fn a_model_in_a_thick_ground_fog_layer_is_removed() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let model = two_tone_box();
+    renderer.set_models(vec![model]);
+    let base = Geodetic::new(36.01, -121.2, 1500.0);
+    let frame = EnuFrame::new(base);
+    let box_view = view(base, (0.0, 0.0, 0.0), 30.0, (320, 240));
+    // The box 150 m ahead, the layer's transmittance to it `t`: its visibility from
+    // Koschmieder's 3.912 over the optical depth.
+    let mut image_at = |top_m: f64, t: f64, with_box: bool| {
+        let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
+        snapshot.ground_fog = Some(cig_scene::FogLayer {
+            top_m,
+            visibility_m: 3.912 * 150.0 / -t.ln(),
+        });
+        if with_box {
+            snapshot.entities = vec![EntityInstance {
+                id: 1,
+                cue_important: false,
+                critical_radius_m: None,
+                model: "two_tone".into(),
+                position: frame.enu_to_geodetic(DVec3::new(0.0, 150.0, -3.75)),
+                orientation: Hpr::default(),
+            }];
+        }
+        render(&mut renderer, &cache, &snapshot, true).0.rgba
+    };
+    let top = base.alt_m + 100.0;
+    // Faded by just over 98 % (1.9 % left, the global fog's 1.5 % on top): removed, the frame
+    // is the frame without it, though its faint trace would show in the pixels.
+    assert!(
+        image_at(top, 0.019, true) == image_at(top, 0.019, false),
+        "removed in the layer"
+    );
+    // Faded by 96 %: still drawn.
+    assert!(
+        image_at(top, 0.04, true) != image_at(top, 0.04, false),
+        "drawn when a trace is left"
+    );
+    // The same layer with its top far below the eye and the box: drawn.
+    assert!(
+        image_at(base.alt_m - 500.0, 0.019, true) != image_at(base.alt_m - 500.0, 0.019, false),
+        "drawn above the layer"
+    );
+}

@@ -161,6 +161,22 @@ impl FogLayer {
     pub fn extinction_per_m(&self) -> f64 {
         crate::lighting::KOSCHMIEDER / self.visibility_m.max(1.0)
     }
+
+    /// Transmittance of the layer along a straight ray `distance_m` long from an eye at
+    /// `eye_alt_m` to a point at `point_alt_m` (altitudes above the ellipsoid): the ray's share
+    /// below the layer's top, heights linear along it, times the layer's extinction (the
+    /// shaders' `fog_layer_transmittance`, so a model is removed where it is drawn faded).
+    pub fn transmittance(&self, eye_alt_m: f64, point_alt_m: f64, distance_m: f64) -> f64 {
+        let (lo, hi) = (eye_alt_m.min(point_alt_m), eye_alt_m.max(point_alt_m));
+        let inside = if self.top_m >= hi {
+            1.0
+        } else if self.top_m > lo {
+            (self.top_m - lo) / (hi - lo).max(1e-3)
+        } else {
+            0.0
+        };
+        (-self.extinction_per_m() * distance_m.max(0.0) * inside).exp()
+    }
 }
 
 /// Everything the renderer needs for one frame.
@@ -348,5 +364,23 @@ mod eye_tests {
         assert!(lift_eyes_above_terrain(&mut session, &mut views).is_empty());
         let line = lifted[0].to_string();
         assert!(line.contains("30.0 m below the terrain"), "{line}");
+    }
+}
+
+#[cfg(test)]
+mod fog_layer_tests {
+    use super::*;
+
+    #[test]
+    fn a_fog_layer_dims_only_the_part_of_a_ray_below_its_top() {
+        let layer = FogLayer {
+            top_m: 100.0,
+            visibility_m: 391.2,
+        };
+        // Both ends above the top: clear; both below: the whole ray (extinction 0.01 / m).
+        assert_eq!(layer.transmittance(200.0, 150.0, 1000.0), 1.0);
+        assert!((layer.transmittance(50.0, 20.0, 100.0) - (-1.0f64).exp()).abs() < 1e-12);
+        // Half the height below the top: half the ray.
+        assert!((layer.transmittance(150.0, 50.0, 100.0) - (-0.5f64).exp()).abs() < 1e-12);
     }
 }
