@@ -1149,3 +1149,72 @@ fn a_model_in_a_thick_ground_fog_layer_is_removed() {
         "drawn above the layer"
     );
 }
+
+/// No pop on a slow approach (issue 18, source 004 §2.5): a tank approached from where it
+/// first appears (N_e well below the first step) to where it draws its finest level, 4 % of
+/// the range a frame, changes its pixel coverage between two frames only as the approach
+/// does (8 % a frame, within 12 % and 3 px of the pixel grid): it fades in, and its levels
+/// dissolve into each other, rather than appearing or switching at once.
+#[test]
+fn a_slowly_approached_model_never_pops() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let size = (200, 150);
+    let base = Geodetic::new(36.01, -121.2, 1500.0);
+    let frame = EnuFrame::new(base);
+    // Looking 10 degrees up, so the tank stands against the keyed sky.
+    let tank_view = view(base, (0.0, 10.0, 0.0), 30.0, size);
+    let klod = renderer.detail.klod_for(&tank_view);
+    let radius_m = f64::from(
+        cig_scene::models::builtin("tank")
+            .expect("tank")
+            .critical_radius_m(),
+    );
+    let (sin10, cos10) = 10f64.to_radians().sin_cos();
+    let coverage = |renderer: &mut cig_render::Renderer, ne: f64| {
+        let distance_m = klod * radius_m / ne;
+        let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![tank_view]);
+        snapshot.entities = vec![EntityInstance {
+            id: 1,
+            cue_important: false,
+            critical_radius_m: None,
+            model: "tank".into(),
+            position: frame.enu_to_geodetic(DVec3::new(
+                0.0,
+                distance_m * cos10,
+                distance_m * sin10,
+            )),
+            orientation: Hpr::default(),
+        }];
+        let image = render(renderer, &cache, &snapshot, true).0;
+        // The upper four fifths (the horizon's strip of terrain is below them).
+        let rows = image.height as usize * 4 / 5;
+        image.rgba[..rows * image.width as usize * 4]
+            .chunks_exact(4)
+            .filter(|px| !is_key(px))
+            .count() as f64
+    };
+    let mut ne = 0.3;
+    let mut previous = coverage(&mut renderer, ne);
+    let mut frames = 0;
+    let mut largest_step: f64 = 0.0;
+    while ne < 120.0 {
+        ne *= 1.04;
+        let now = coverage(&mut renderer, ne);
+        // The projected area grows as N_e squared (1.0816 a frame); 12 % either side of that
+        // and 3 px for the pixel grid.
+        let expected = previous * 1.0816;
+        assert!(
+            now <= expected * 1.12 + 3.0 && now >= expected / 1.12 - 3.0,
+            "at N_e {ne:.2} the coverage went from {previous} to {now} px in one frame"
+        );
+        if previous > 20.0 {
+            largest_step = largest_step.max(now / previous);
+        }
+        previous = now;
+        frames += 1;
+    }
+    eprintln!("{frames} frames; largest growth between frames {largest_step:.3}");
+    assert!(previous > 200.0, "the tank ends large: {previous} px");
+}
