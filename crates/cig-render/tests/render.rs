@@ -871,6 +871,28 @@ fn a_model_fades_out_at_its_farthest_range_and_goes_in_thick_fog() {
     );
 }
 
+/// The share of the finest level (red) among the two-tone box pixels (red or blue, not the
+/// terrain's green-blue) in the left and right halves of a frame.
+fn shares(image: &Image) -> [f64; 2] {
+    let mut counts = [[0u32; 2]; 2];
+    for (i, px) in image.rgba.chunks_exact(4).enumerate() {
+        if is_key(px) {
+            continue;
+        }
+        let half = usize::from(i as u32 % image.width >= image.width / 2);
+        let (r, g, b) = (i32::from(px[0]), i32::from(px[1]), i32::from(px[2]));
+        if r > b + 20 && r > g + 40 {
+            counts[half][0] += 1;
+        } else if b > r + 20 && b > g + 60 {
+            counts[half][1] += 1;
+        }
+    }
+    counts.map(|[red, blue]| {
+        assert!(red + blue > 10, "a box is not drawn");
+        f64::from(red) / f64::from(red + blue)
+    })
+}
+
 /// Under the overload control (source 004 Table 4, §4.6) a cue-important model keeps its level
 /// while another of the same size at the same range and angle drops to a coarser one.
 #[test]
@@ -919,25 +941,6 @@ fn cue_important_models_keep_their_step_under_overload() {
         })
         .collect();
     // Red share of the box pixels in the left (cue) and right halves.
-    let shares = |image: &Image| {
-        let mut counts = [[0u32; 2]; 2];
-        for (i, px) in image.rgba.chunks_exact(4).enumerate() {
-            if is_key(px) {
-                continue;
-            }
-            let half = usize::from(i as u32 % image.width >= image.width / 2);
-            let (r, b) = (i32::from(px[0]), i32::from(px[2]));
-            if r > b + 20 {
-                counts[half][0] += 1;
-            } else if b > r + 20 {
-                counts[half][1] += 1;
-            }
-        }
-        counts.map(|[red, blue]| {
-            assert!(red + blue > 30, "a box is not drawn");
-            f64::from(red) / f64::from(red + blue)
-        })
-    };
     let (first, stats) = render(&mut renderer, &cache, &snapshot, true);
     assert_eq!(stats.klod, stats.klod_nominal);
     assert_eq!(stats.overload, "decrement");
@@ -962,6 +965,34 @@ fn cue_important_models_keep_their_step_under_overload() {
     assert!(other < 0.03, "the other drops to a coarser level: {other}");
 }
 
+/// Two two-tone boxes `distance_m` from the origin of `frame` (slant range), `angle_deg`
+/// left and right of north, with the model table's critical radii given (left first).
+fn box_pair(
+    frame: &EnuFrame,
+    distance_m: f64,
+    angle_deg: f64,
+    critical_radius_m: [Option<f32>; 2],
+) -> Vec<EntityInstance> {
+    let (sin, cos) = angle_deg.to_radians().sin_cos();
+    [-1.0, 1.0]
+        .iter()
+        .zip(critical_radius_m)
+        .enumerate()
+        .map(|(i, (&side, critical_radius_m))| EntityInstance {
+            id: i as u32 + 1,
+            cue_important: false,
+            critical_radius_m,
+            model: "two_tone".into(),
+            position: frame.enu_to_geodetic(DVec3::new(
+                side * distance_m * sin,
+                distance_m * cos,
+                -3.75,
+            )),
+            orientation: Hpr::default(),
+        })
+        .collect()
+}
+
 /// The area of interest follows the host's point of interest (source 004 §3.4): two boxes 20
 /// degrees either side of the view's centre draw at their finest level, and when the point of
 /// interest moves onto the left one the right one, 40 degrees from it, drops to a coarser level.
@@ -981,45 +1012,8 @@ fn the_point_of_interest_moves_where_models_keep_their_detail() {
     // N_e 70 at the point of interest: 63 at 20 degrees from it (the finest level, from 54),
     // 37 at 40 degrees (the middle level: the area of interest falls to half by 45 degrees).
     let distance_m = nominal * radius_m / 70.0;
-    let (sin20, cos20) = 20f64.to_radians().sin_cos();
     let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
-    snapshot.entities = [-1.0, 1.0]
-        .iter()
-        .enumerate()
-        .map(|(i, &side)| EntityInstance {
-            id: i as u32 + 1,
-            cue_important: false,
-            critical_radius_m: None,
-            model: "two_tone".into(),
-            position: frame.enu_to_geodetic(DVec3::new(
-                side * distance_m * sin20,
-                distance_m * cos20,
-                -3.75,
-            )),
-            orientation: Hpr::default(),
-        })
-        .collect();
-    // Red (finest level) share of the box pixels in the left and right halves.
-    let shares = |image: &Image| {
-        let mut counts = [[0u32; 2]; 2];
-        for (i, px) in image.rgba.chunks_exact(4).enumerate() {
-            if is_key(px) {
-                continue;
-            }
-            let half = usize::from(i as u32 % image.width >= image.width / 2);
-            // The boxes' red and blue, not the terrain's green-blue below them.
-            let (r, g, b) = (i32::from(px[0]), i32::from(px[1]), i32::from(px[2]));
-            if r > b + 20 && r > g + 40 {
-                counts[half][0] += 1;
-            } else if b > r + 20 && b > g + 60 {
-                counts[half][1] += 1;
-            }
-        }
-        counts.map(|[red, blue]| {
-            assert!(red + blue > 10, "a box is not drawn");
-            f64::from(red) / f64::from(red + blue)
-        })
-    };
+    snapshot.entities = box_pair(&frame, distance_m, 20.0, [None, None]);
     let centred = render(&mut renderer, &cache, &snapshot, true).0;
     write_png(&centred, &out_dir().join("point_of_interest_centre.png"));
     let [left, right] = shares(&centred);
@@ -1055,43 +1049,10 @@ fn a_critical_radius_from_the_model_table_sets_the_level() {
     // N_e 35 with the box's own radius (the middle level), 70 with twice it (the finest),
     // both 8 degrees from the centre (inside the area of interest).
     let distance_m = nominal * radius_m / 35.0;
-    let (sin8, cos8) = 8f64.to_radians().sin_cos();
     let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![box_view]);
-    snapshot.entities = [(-1.0, Some(2.0 * radius_m as f32)), (1.0, None)]
-        .iter()
-        .enumerate()
-        .map(|(i, &(side, critical_radius_m))| EntityInstance {
-            id: i as u32 + 1,
-            cue_important: false,
-            critical_radius_m,
-            model: "two_tone".into(),
-            position: frame.enu_to_geodetic(DVec3::new(
-                side * distance_m * sin8,
-                distance_m * cos8,
-                -3.75,
-            )),
-            orientation: Hpr::default(),
-        })
-        .collect();
+    snapshot.entities = box_pair(&frame, distance_m, 8.0, [Some(2.0 * radius_m as f32), None]);
     let image = render(&mut renderer, &cache, &snapshot, true).0;
-    // Red (finest level) share of the box pixels in the left and right halves.
-    let mut counts = [[0u32; 2]; 2];
-    for (i, px) in image.rgba.chunks_exact(4).enumerate() {
-        if is_key(px) {
-            continue;
-        }
-        let half = usize::from(i as u32 % image.width >= image.width / 2);
-        let (r, g, b) = (i32::from(px[0]), i32::from(px[1]), i32::from(px[2]));
-        if r > b + 20 && r > g + 40 {
-            counts[half][0] += 1;
-        } else if b > r + 20 && b > g + 60 {
-            counts[half][1] += 1;
-        }
-    }
-    let [left, right] = counts.map(|[red, blue]| {
-        assert!(red + blue > 10, "a box is not drawn");
-        f64::from(red) / f64::from(red + blue)
-    });
+    let [left, right] = shares(&image);
     assert!(
         left > 0.97,
         "twice the critical radius: the finest level ({left})"
