@@ -259,11 +259,6 @@ impl ImageryClipmap {
         }
     }
 
-    /// Whether the database has imagery.
-    pub fn has_imagery(&self) -> bool {
-        self.layout.is_some()
-    }
-
     pub fn texture_view(&self) -> wgpu::TextureView {
         self.texture.create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),

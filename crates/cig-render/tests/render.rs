@@ -965,6 +965,40 @@ fn cue_important_models_keep_their_step_under_overload() {
     assert!(other < 0.03, "the other drops to a coarser level: {other}");
 }
 
+/// The scene of the two-tone box tests: the hills, a renderer that draws the box, and a
+/// level view 320 x 240 px across `fov_deg` from 1500 m, with the box's radius and the view's
+/// nominal K_LOD.
+struct BoxScene {
+    cache: std::sync::Arc<cig_terrain::TileCache>,
+    renderer: cig_render::Renderer,
+    radius_m: f64,
+    frame: EnuFrame,
+    view: cig_scene::View,
+    nominal: f64,
+}
+
+fn box_scene(fov_deg: f64) -> BoxScene {
+    let db = hills();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let model = two_tone_box();
+    let radius_m = f64::from(model.critical_radius_m());
+    renderer.set_models(vec![model]);
+    let size = (320, 240);
+    let base = Geodetic::new(36.01, -121.2, 1500.0);
+    let frame = EnuFrame::new(base);
+    let box_view = view(base, (0.0, 0.0, 0.0), fov_deg, size);
+    let nominal = renderer.detail.klod_for(&box_view);
+    BoxScene {
+        cache,
+        renderer,
+        radius_m,
+        frame,
+        view: box_view,
+        nominal,
+    }
+}
+
 /// Two two-tone boxes `distance_m` from the origin of `frame` (slant range), `angle_deg`
 /// left and right of north, with the model table's critical radii given (left first).
 fn box_pair(
@@ -998,17 +1032,14 @@ fn box_pair(
 /// interest moves onto the left one the right one, 40 degrees from it, drops to a coarser level.
 #[test]
 fn the_point_of_interest_moves_where_models_keep_their_detail() {
-    let db = hills();
-    let cache = cache(&db);
-    let mut renderer = renderer(&cache);
-    let model = two_tone_box();
-    let radius_m = f64::from(model.critical_radius_m());
-    renderer.set_models(vec![model]);
-    let size = (320, 240);
-    let base = Geodetic::new(36.01, -121.2, 1500.0);
-    let frame = EnuFrame::new(base);
-    let box_view = view(base, (0.0, 0.0, 0.0), 60.0, size);
-    let nominal = renderer.detail.klod_for(&box_view);
+    let BoxScene {
+        cache,
+        mut renderer,
+        radius_m,
+        frame,
+        view: box_view,
+        nominal,
+    } = box_scene(60.0);
     // N_e 70 at the point of interest: 63 at 20 degrees from it (the finest level, from 54),
     // 37 at 40 degrees (the middle level: the area of interest falls to half by 45 degrees).
     let distance_m = nominal * radius_m / 70.0;
@@ -1035,17 +1066,14 @@ fn the_point_of_interest_moves_where_models_keep_their_detail() {
 /// box's own radius gives the middle level, the one given twice the radius draws its finest.
 #[test]
 fn a_critical_radius_from_the_model_table_sets_the_level() {
-    let db = hills();
-    let cache = cache(&db);
-    let mut renderer = renderer(&cache);
-    let model = two_tone_box();
-    let radius_m = f64::from(model.critical_radius_m());
-    renderer.set_models(vec![model]);
-    let size = (320, 240);
-    let base = Geodetic::new(36.01, -121.2, 1500.0);
-    let frame = EnuFrame::new(base);
-    let box_view = view(base, (0.0, 0.0, 0.0), 30.0, size);
-    let nominal = renderer.detail.klod_for(&box_view);
+    let BoxScene {
+        cache,
+        mut renderer,
+        radius_m,
+        frame,
+        view: box_view,
+        nominal,
+    } = box_scene(30.0);
     // N_e 35 with the box's own radius (the middle level), 70 with twice it (the finest),
     // both 8 degrees from the centre (inside the area of interest).
     let distance_m = nominal * radius_m / 35.0;

@@ -186,8 +186,7 @@ fn own_weather(
 }
 
 /// Where the camera's view axis meets the terrain, within 30 km.
-fn ground_ahead(cache: &Arc<TileCache>, camera: &FlyCamera) -> Option<Geodetic> {
-    let mut q = cig_terrain::QuerySession::new(Arc::clone(cache));
+fn ground_ahead(q: &mut cig_terrain::QuerySession, camera: &FlyCamera) -> Option<Geodetic> {
     let (forward, _, _) = camera.orientation.axes_enu();
     let frame = cig_geo::EnuFrame::new(camera.eye);
     let end = frame.enu_to_geodetic(forward * 30_000.0);
@@ -408,6 +407,9 @@ struct Running {
     gpu: Arc<Gpu>,
     renderer: Renderer,
     cache: Arc<TileCache>,
+    /// The viewer's terrain questions (the free camera's clearance, the ground ahead), one
+    /// session for the window's life.
+    query: cig_terrain::QuerySession,
     mesh_budget: usize,
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
@@ -599,6 +601,7 @@ impl App {
             gpu,
             renderer,
             cache: Arc::clone(&self.cache),
+            query: cig_terrain::QuerySession::new(Arc::clone(&self.cache)),
             mesh_budget: self.options.mesh_budget,
             egui_ctx,
             egui_state,
@@ -659,8 +662,7 @@ impl App {
         if self.driver.is_none() {
             // The free camera does not fly into the ground: an eye that would go below the
             // terrain stays on its surface (a query may load one finest tile here).
-            let mut session = cig_terrain::QuerySession::new(Arc::clone(&r.cache));
-            if let Ok(hat_m) = session.hat_m(self.camera.eye) {
+            if let Ok(hat_m) = r.query.hat_m(self.camera.eye) {
                 let clearance_m = cig_scene::snapshot::EYE_CLEARANCE_M;
                 if hat_m.is_finite() && hat_m < clearance_m {
                     self.camera.eye.alt_m += clearance_m - hat_m;
@@ -733,7 +735,7 @@ impl App {
                 ObscurantCommand::StartPlume {
                     flame,
                     heat_release_w,
-                } => match ground_ahead(&r.cache, &self.camera) {
+                } => match ground_ahead(&mut r.query, &self.camera) {
                     Some(at) => orders.push(ObscurantOrder::StartPlume {
                         at,
                         flame,
@@ -748,7 +750,8 @@ impl App {
                 ObscurantCommand::SetPrecipitation(p) => {
                     orders.push(ObscurantOrder::SetPrecipitation(p));
                 }
-                ObscurantCommand::StrikeLightning => match ground_ahead(&r.cache, &self.camera) {
+                ObscurantCommand::StrikeLightning => match ground_ahead(&mut r.query, &self.camera)
+                {
                     Some(at) => orders.push(ObscurantOrder::StrikeLightning { at }),
                     None => {
                         self.panel.obscurant_note =
