@@ -34,6 +34,8 @@ pub enum DbError {
     Manifest { reason: String, path: PathBuf },
     #[error(transparent)]
     Build(#[from] BuildError),
+    #[error("culture: {0}")]
+    Culture(#[from] cig_terrain::culture::CultureError),
 }
 
 fn io_err(path: &Path, e: std::io::Error) -> DbError {
@@ -82,6 +84,45 @@ impl TileStore for FsTileStore {
     fn imagery_location(&self, key: ImageryKey) -> String {
         imagery_tile_path(&self.root, key).display().to_string()
     }
+
+    fn read_culture_tile(&self, key: TileKey) -> Result<Vec<u8>, StoreError> {
+        read_store_file(&culture_tile_path(&self.root, key))
+    }
+
+    fn culture_location(&self, key: TileKey) -> String {
+        culture_tile_path(&self.root, key).display().to_string()
+    }
+}
+
+/// Path of a finest tile's culture file under a database root (`culture/<row>_<col>.cul`).
+pub fn culture_tile_path(root: &Path, key: TileKey) -> PathBuf {
+    root.join("culture")
+        .join(format!("{}_{}.cul", key.row, key.col))
+}
+
+/// Bins `placements` into the finest tiles of `layout` and writes their culture files under
+/// `dir` (a database's staging directory), replacing any culture there. Returns the manifest's
+/// culture section (`None` without placements). A bad placement is an error and nothing of
+/// the culture is left in `dir`.
+pub fn write_culture(
+    dir: &Path,
+    layout: &cig_terrain::PyramidLayout,
+    placements: &[cig_terrain::CulturePlacement],
+) -> Result<Option<cig_terrain::CultureManifest>, DbError> {
+    let culture_dir = dir.join("culture");
+    if culture_dir.exists() {
+        std::fs::remove_dir_all(&culture_dir).map_err(|e| io_err(&culture_dir, e))?;
+    }
+    if placements.is_empty() {
+        return Ok(None);
+    }
+    let (tiles, manifest) = cig_terrain::culture::bin_placements(layout, placements)?;
+    std::fs::create_dir_all(&culture_dir).map_err(|e| io_err(&culture_dir, e))?;
+    for tile in &tiles {
+        let path = culture_tile_path(dir, tile.key);
+        std::fs::write(&path, tile.encode()).map_err(|e| io_err(&path, e))?;
+    }
+    Ok(Some(manifest))
 }
 
 /// A tile file's bytes; `Missing` when there is no such file.

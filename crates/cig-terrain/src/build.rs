@@ -222,6 +222,7 @@ fn build_tile(
         quadtree_depth: depth,
         lod_errors: None,
         degraded_from_level: None,
+        culture: None,
     };
     fill_bounds(&mut tile, raster, layout);
     tile

@@ -200,6 +200,8 @@ pub struct TileCache {
     completions: Receiver<(TileKey, Result<Tile, LoadError>)>,
     workers: Vec<std::thread::JoinHandle<()>>,
     tile_bytes: u64,
+    /// Bytes a finest tile's culture may take at most (counted with every finest tile).
+    culture_tile_bytes: u64,
     /// Bytes of the budget held by [`BudgetReservation`]s.
     reserved: Arc<AtomicU64>,
     eviction_epoch: AtomicU64,
@@ -219,10 +221,16 @@ impl TileCache {
             layout.posts_per_side(),
             quadtree_depth_for(layout.tile_cells as usize),
         ) as u64;
-        if config.budget_bytes < MIN_BUDGET_TILES * tile_bytes {
+        let culture_tile_bytes = db
+            .manifest()
+            .culture
+            .as_ref()
+            .map_or(0, |c| c.max_tile_bytes());
+        let tile_bytes_with_culture = tile_bytes + culture_tile_bytes;
+        if config.budget_bytes < MIN_BUDGET_TILES * tile_bytes_with_culture {
             return Err(PagingConfigError::BudgetTooSmall {
                 budget_bytes: config.budget_bytes,
-                min_bytes: MIN_BUDGET_TILES * tile_bytes,
+                min_bytes: MIN_BUDGET_TILES * tile_bytes_with_culture,
             });
         }
         let (req_tx, req_rx) = crossbeam_channel::unbounded::<TileKey>();
@@ -253,6 +261,7 @@ impl TileCache {
             completions: done_rx,
             workers,
             tile_bytes,
+            culture_tile_bytes,
             reserved: Arc::new(AtomicU64::new(0)),
             eviction_epoch: AtomicU64::new(0),
             metres_per_deg: cig_geo::metres_per_degree(centre_lat),
@@ -294,9 +303,20 @@ impl TileCache {
         &self.config
     }
 
-    /// Bytes one resident tile counts against the budget.
+    /// Bytes one resident tile counts against the budget (a finest tile also counts its
+    /// culture: [`TileCache::bytes_of`]).
     pub fn tile_bytes(&self) -> u64 {
         self.tile_bytes
+    }
+
+    /// Bytes tile `key` counts against the budget: a finest tile counts the most its culture
+    /// may take besides its posts.
+    pub fn bytes_of(&self, key: TileKey) -> u64 {
+        if key.level == 0 {
+            self.tile_bytes + self.culture_tile_bytes
+        } else {
+            self.tile_bytes
+        }
     }
 
     pub fn stats(&self) -> CacheStats {
@@ -365,7 +385,7 @@ impl TileCache {
             }
         }
         for key in to_request {
-            if !self.make_room(&mut s, self.tile_bytes) {
+            if !self.make_room(&mut s, self.bytes_of(key)) {
                 break;
             }
             if let Some(tx) = &self.requests {
@@ -420,7 +440,7 @@ impl TileCache {
             {
                 continue;
             }
-            if !self.make_room_sparing(&mut s, self.tile_bytes, clock) {
+            if !self.make_room_sparing(&mut s, self.bytes_of(key), clock) {
                 break;
             }
             if let Some(tx) = &self.requests {
@@ -508,7 +528,7 @@ impl TileCache {
                 }
                 // Room is made from tiles no eyepoint wants; a query never evicts what the
                 // eyepoints need. Without room the tile serves this query uncached.
-                let cached = self.make_room(&mut s, self.tile_bytes);
+                let cached = self.make_room(&mut s, self.bytes_of(key));
                 if cached {
                     self.insert_resident(&mut s, key, Arc::clone(&tile));
                     s.stats.loads_completed += 1;
@@ -542,7 +562,7 @@ impl TileCache {
     /// Makes `tile` resident; the caller has made room for it.
     fn insert_resident(&self, s: &mut State, key: TileKey, tile: Arc<Tile>) {
         let last_used = s.clock;
-        s.resident_bytes += self.tile_bytes;
+        s.resident_bytes += self.bytes_of(key);
         s.resident.insert(key, Resident { tile, last_used });
     }
 
@@ -562,7 +582,7 @@ impl TileCache {
     /// [`TileCache::make_room`], also sparing tiles used at or after paging step `used_since`.
     fn make_room_sparing(&self, s: &mut State, bytes: u64, used_since: u64) -> bool {
         let budget = self.tile_budget_bytes();
-        let in_flight = s.in_flight.len() as u64 * self.tile_bytes;
+        let in_flight: u64 = s.in_flight.iter().map(|&k| self.bytes_of(k)).sum();
         while s.resident_bytes + in_flight + bytes > budget {
             let victim = s
                 .resident
@@ -574,7 +594,7 @@ impl TileCache {
                 return false;
             };
             if s.resident.remove(&victim).is_some() {
-                s.resident_bytes -= self.tile_bytes;
+                s.resident_bytes -= self.bytes_of(victim);
                 s.stats.evictions += 1;
                 self.eviction_epoch.fetch_add(1, Ordering::Relaxed);
             }

@@ -7,6 +7,7 @@
 //! manifest turns them into heights above the WGS84 ellipsoid where geodetic altitudes are
 //! compared (line of sight, height above terrain).
 
+use crate::culture::CultureTile;
 use crate::imagery::{ImageryDecodeError, ImageryKey, ImageryTile};
 use crate::pyramid::{PyramidLayout, TileKey};
 use crate::tile::{Tile, TileDecodeError};
@@ -163,6 +164,9 @@ pub struct Manifest {
     /// Draped imagery, when the database has any (`crate::imagery`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub imagery: Option<crate::imagery::ImageryManifest>,
+    /// Culture on the finest tiles, when the database has any (`crate::culture`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub culture: Option<crate::culture::CultureManifest>,
 }
 
 /// Why a manifest is not usable.
@@ -254,6 +258,15 @@ pub trait TileStore: Send + Sync {
     fn imagery_location(&self, key: ImageryKey) -> String {
         format!("{key}")
     }
+    /// The bytes of one finest tile's culture (`crate::culture`); `Missing` where none is
+    /// stored.
+    fn read_culture_tile(&self, key: TileKey) -> Result<Vec<u8>, StoreError> {
+        Err(StoreError::Missing(self.culture_location(key)))
+    }
+    /// Where a culture tile lives, for messages.
+    fn culture_location(&self, key: TileKey) -> String {
+        format!("culture of {key}")
+    }
 }
 
 /// Tiles held in memory (for tests and for databases built on the fly).
@@ -261,6 +274,7 @@ pub trait TileStore: Send + Sync {
 pub struct MemoryTileStore {
     tiles: parking_lot::RwLock<std::collections::HashMap<TileKey, Vec<u8>>>,
     imagery: parking_lot::RwLock<std::collections::HashMap<ImageryKey, Vec<u8>>>,
+    culture: parking_lot::RwLock<std::collections::HashMap<TileKey, Vec<u8>>>,
 }
 
 impl MemoryTileStore {
@@ -276,6 +290,11 @@ impl MemoryTileStore {
     /// Stores (or replaces) an imagery tile's bytes.
     pub fn insert_imagery(&self, key: ImageryKey, bytes: Vec<u8>) {
         self.imagery.write().insert(key, bytes);
+    }
+
+    /// Stores (or replaces) a finest tile's culture bytes.
+    pub fn insert_culture(&self, key: TileKey, bytes: Vec<u8>) {
+        self.culture.write().insert(key, bytes);
     }
 }
 
@@ -303,6 +322,18 @@ impl TileStore for MemoryTileStore {
     fn imagery_location(&self, key: ImageryKey) -> String {
         format!("memory {key}")
     }
+
+    fn read_culture_tile(&self, key: TileKey) -> Result<Vec<u8>, StoreError> {
+        self.culture
+            .read()
+            .get(&key)
+            .cloned()
+            .ok_or_else(|| StoreError::Missing(self.culture_location(key)))
+    }
+
+    fn culture_location(&self, key: TileKey) -> String {
+        format!("memory culture of {key}")
+    }
 }
 
 /// Why a tile could not be loaded.
@@ -318,6 +349,11 @@ pub enum LoadError {
     #[error("{error}: {location}")]
     ImageryDecode {
         error: ImageryDecodeError,
+        location: String,
+    },
+    #[error("{error}: {location}")]
+    CultureDecode {
+        error: crate::culture::CultureError,
         location: String,
     },
 }
@@ -367,7 +403,33 @@ impl TerrainDatabase {
                 tile.posts_per_side, tile.quadtree_depth
             ))));
         }
+        let mut tile = tile;
+        if key.level == 0 {
+            tile.culture = self.load_culture(&tile)?;
+        }
         Ok(tile)
+    }
+
+    /// Reads a finest tile's culture and clamps it to `tile`'s surface; `Ok(None)` where the
+    /// database has none there. Blocks on the store.
+    fn load_culture(&self, tile: &Tile) -> Result<Option<CultureTile>, LoadError> {
+        if self.manifest.culture.is_none() {
+            return Ok(None);
+        }
+        let bytes = match self.store.read_culture_tile(tile.key) {
+            Ok(bytes) => bytes,
+            Err(StoreError::Missing(_)) => return Ok(None),
+            Err(e) => return Err(e.into()),
+        };
+        let mut culture =
+            CultureTile::decode(&bytes, Some(tile.key), self.manifest.layout.tile_cells).map_err(
+                |error| LoadError::CultureDecode {
+                    error,
+                    location: self.store.culture_location(tile.key),
+                },
+            )?;
+        culture.clamp_to(tile, self.manifest.spacing_m);
+        Ok(Some(culture))
     }
 
     /// Reads and decodes one imagery tile (checksum and key checked); `Ok(None)` where the
@@ -426,6 +488,7 @@ impl Manifest {
             sources,
             tile_count: summary.tiles,
             imagery: None,
+            culture: None,
         }
     }
 }

@@ -13,6 +13,7 @@
 pub mod build;
 pub mod cache;
 pub mod classify;
+pub mod culture;
 pub mod database;
 pub mod features;
 pub mod fill;
@@ -26,6 +27,7 @@ pub mod rtin;
 pub mod tile;
 
 pub use cache::{PagingConfig, TileCache};
+pub use culture::{CultureItem, CultureKind, CultureManifest, CulturePlacement, CultureTile};
 pub use database::{Manifest, TerrainDatabase, TileStore};
 pub use imagery::{ImageryKey, ImageryLayout, ImageryManifest, ImageryTile};
 pub use material::Material;

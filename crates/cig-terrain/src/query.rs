@@ -584,6 +584,7 @@ fn resample_from_parent(layout: &PyramidLayout, coarse: &Tile, key: TileKey) -> 
         quadtree_depth: depth,
         lod_errors: None,
         degraded_from_level: Some(coarse.key.level),
+        culture: None,
     }
 }
 

@@ -138,6 +138,9 @@ pub struct Tile {
     /// `Some(level)` when this tile was not read but rebuilt from a coarser level because the
     /// real one was unreadable (see `cache`).
     pub degraded_from_level: Option<u8>,
+    /// The culture standing on a finest tile, clamped to its surface (loaded with the tile by
+    /// `TerrainDatabase::load_tile`; `None` on coarser levels and where there is none).
+    pub culture: Option<crate::culture::CultureTile>,
 }
 
 /// Depth of the min/max quadtree of a tile with `tile_cells` cells per side.
@@ -370,6 +373,7 @@ impl Tile {
             quadtree_depth: depth,
             lod_errors,
             degraded_from_level: None,
+            culture: None,
         })
     }
 }
@@ -438,6 +442,7 @@ mod tests {
                     .collect(),
             }),
             degraded_from_level: None,
+            culture: None,
         }
     }
 
