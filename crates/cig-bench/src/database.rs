@@ -84,6 +84,7 @@ pub fn synthesize_database(
         Drape {
             images: &[],
             features: &features,
+            culture: &[],
         },
         out,
         force,
@@ -116,12 +117,14 @@ pub fn build_database(
     )
 }
 
-/// What is draped over a database as it is built: orthoimages, and roads, rivers and lakes as
-/// shapes.
+/// What is draped over a database as it is built: orthoimages, roads, rivers and lakes as
+/// shapes, and the culture standing on it.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Drape<'a> {
     pub images: &'a [PathBuf],
     pub features: &'a [Feature],
+    /// Trees, buildings, walls, fences and poles (`cig_terrain::culture`).
+    pub culture: &'a [cig_terrain::CulturePlacement],
 }
 
 /// [`build_database`] with the ground under `drape`'s features levelled (roads without cross
@@ -175,6 +178,8 @@ pub fn build_database_with_imagery(
         &mut |done, total| (progress.borrow_mut())(BuildProgress::Write { done, total }),
         &mut |staging, manifest| {
             (progress.borrow_mut())(BuildProgress::End);
+            manifest.culture =
+                cig_terrain_io::store::write_culture(staging, &manifest.layout, drape.culture)?;
             if images.is_empty() && overlays.is_empty() {
                 return Ok(());
             }

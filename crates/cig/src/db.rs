@@ -104,6 +104,7 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
         cig_bench::database::Drape {
             images: &args.imagery,
             features: &features,
+            culture: &[],
         },
         &args.out,
         args.force,
