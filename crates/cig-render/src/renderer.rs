@@ -39,6 +39,7 @@ use crate::pass::{
 use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainFrame, TerrainGpu};
 use cig_geo::Geodetic;
+use cig_scene::culture::{CultureFrame, CultureInstance, CultureSelect, CultureSelector};
 use cig_scene::detail::DetailSettings;
 use cig_scene::lighting::{FogMode, Lighting, SkyModel};
 use cig_scene::lod::{LodSettings, NodeLayout, TerrainLod};
@@ -48,6 +49,7 @@ use cig_scene::overload::{
 };
 use cig_scene::{Camera, FrameSnapshot};
 use cig_terrain::database::GeoidLookup;
+use cig_terrain::CultureKind;
 use cig_terrain::TileCache;
 use serde_like::FrameStats;
 use std::collections::HashMap;
@@ -70,6 +72,11 @@ pub mod serde_like {
         pub node_stand_ins: u32,
         pub nodes_dropped: u32,
         pub entities_drawn: u32,
+        /// Culture objects drawn (one blending two levels counts once), their triangles, and
+        /// the CPU time of their selection and culling, milliseconds.
+        pub culture_drawn: u32,
+        pub culture_triangles: u64,
+        pub culture_cpu_ms: f64,
         /// Obscurant puffs drawn (after culling to the view).
         pub puffs_drawn: u32,
         pub tiles_resident: u32,
@@ -124,6 +131,8 @@ const MAX_NODE_SLOTS: usize = 16384;
 /// Terrain records are kept by slot, so there is room for one per slot.
 const MAX_NODE_RECORDS: usize = MAX_NODE_SLOTS;
 const MAX_INSTANCES: usize = 8192;
+/// Culture instances a view draws at most (a frame past it drops the rest, counted).
+const MAX_CULTURE_INSTANCES: usize = 4_000_000;
 /// Tile loads a view may request per frame beyond the paging areas.
 const PREFETCH_PER_FRAME: usize = 8;
 /// Detail-noise cell sizes, metres (incommensurate so the pattern never visibly repeats).
@@ -270,8 +279,13 @@ pub struct Renderer {
     globals: wgpu::Buffer,
     node_records: wgpu::Buffer,
     instances: wgpu::Buffer,
+    /// Instance records the instance buffer holds (entities first, then culture).
+    instance_capacity: usize,
+    model_layout: wgpu::BindGroupLayout,
     terrain_bind: wgpu::BindGroup,
     model_bind: wgpu::BindGroup,
+    /// The culture standing on the resident tiles, selected per view.
+    culture: CultureSelector,
     sky_bind: wgpu::BindGroup,
     terrain_pipelines: TerrainPipelines,
     /// East and north (ECEF unit vectors) of the database centre's tangent plane, the plane the
@@ -462,6 +476,18 @@ fn fog_mode_index(mode: FogMode) -> u8 {
 }
 
 /// The frame's ground fog layer, where it has one the shaders can draw.
+/// Where the trainee looks (ECEF unit vector): the host's point of interest, else the view's
+/// centre.
+fn aim_of(camera: &Camera, point_of_interest_deg: Option<[f64; 2]>) -> glam::DVec3 {
+    point_of_interest_deg.map_or(camera.forward, |[right, up]| {
+        let (r, u) = (right.to_radians(), up.to_radians());
+        (camera.forward * (r.cos() * u.cos())
+            + camera.right * (r.sin() * u.cos())
+            + camera.up * u.sin())
+        .normalize()
+    })
+}
+
 fn drawn_ground_fog(snapshot: &FrameSnapshot) -> Option<cig_scene::FogLayer> {
     snapshot
         .ground_fog
@@ -793,8 +819,14 @@ impl Renderer {
             globals,
             node_records,
             instances,
+            instance_capacity: MAX_INSTANCES,
+            model_layout,
             terrain_bind,
             model_bind,
+            culture: CultureSelector::new(
+                *cache.database().layout(),
+                GeoidLookup::new(&cache.database().manifest().geoid),
+            ),
             sky_bind,
             terrain_pipelines,
             specialise: true,
@@ -823,6 +855,11 @@ impl Renderer {
             .filter_map(|name| cig_scene::models::builtin(name))
             .collect();
         renderer.set_models(builtins);
+        let culture_models: Vec<Model> = CultureKind::ALL
+            .into_iter()
+            .map(cig_scene::culture::culture_model)
+            .collect();
+        renderer.set_models(culture_models);
         renderer
     }
 
@@ -1052,7 +1089,39 @@ impl Renderer {
             .copied()
             .flatten();
         let draws = self.entity_draws(&camera, snapshot, klod_nominal, klod, point_of_interest);
-        let instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
+        let mut instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
+        let culture_started = std::time::Instant::now();
+        let culture = if snapshot.culture {
+            self.culture_frame(cache, &camera, snapshot, klod, point_of_interest)
+        } else {
+            CultureFrame::default()
+        };
+        let culture_cpu_ms = culture_started.elapsed().as_secs_f64() * 1e3;
+        // Culture draws: (first index, count, base vertex, triangles), first instance, count.
+        let culture_first = instance_records.len();
+        let mut culture_draws: Vec<((u32, u32, i32, u32), u32, u32)> = Vec::new();
+        let room = MAX_CULTURE_INSTANCES.min(culture.instances.len());
+        for draw in &culture.draws {
+            let name = cig_scene::culture::culture_model_name(draw.kind);
+            let Some(range) = self.models.get(&name).and_then(|m| m.lods.get(draw.level)) else {
+                continue;
+            };
+            let end = draw.instances.end.min(room);
+            if draw.instances.start >= end {
+                continue;
+            }
+            culture_draws.push((
+                *range,
+                (culture_first + draw.instances.start) as u32,
+                (end - draw.instances.start) as u32,
+            ));
+        }
+        instance_records.extend(
+            culture.instances[..room]
+                .iter()
+                .map(|c| bytemuck::cast::<CultureInstance, InstanceRecord>(*c)),
+        );
+        self.reserve_instances(instance_records.len());
         if !instance_records.is_empty() {
             self.gpu.queue.write_buffer(
                 &self.instances,
@@ -1189,6 +1258,24 @@ impl Renderer {
                 // A model blending two levels is drawn twice; count it once.
                 stats.entities_drawn = draws.iter().filter(|d| d.1.col0[3] == 0.0).count() as u32;
             }
+            if !culture_draws.is_empty() {
+                pass.set_pipeline(&self.model_pipeline);
+                pass.set_bind_group(0, &self.model_bind, &[]);
+                pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
+                pass.set_vertex_buffer(0, self.model_vertices.slice(..));
+                pass.set_index_buffer(self.model_indices.slice(..), wgpu::IndexFormat::Uint32);
+                for &((first, count, base, tris), first_instance, instances) in &culture_draws {
+                    pass.draw_indexed(
+                        first..first + count,
+                        base,
+                        first_instance..first_instance + instances,
+                    );
+                    stats.culture_triangles += u64::from(tris) * u64::from(instances);
+                }
+                stats.draw_calls += culture_draws.len() as u32;
+            }
+            stats.culture_drawn = culture.objects_drawn as u32;
+            stats.culture_cpu_ms = culture_cpu_ms;
             // The sky where no geometry was drawn (its depth test passes at the cleared far
             // plane only).
             pass.set_pipeline(&self.sky_pipeline);
@@ -1284,7 +1371,7 @@ impl Renderer {
             encoder.resolve_query_set(set, 0..queries, resolve, 0);
             encoder.copy_buffer_to_buffer(resolve, 0, readback, 0, u64::from(queries) * 8);
         }
-        stats.triangles = stats.terrain_triangles + stats.model_triangles;
+        stats.triangles = stats.terrain_triangles + stats.model_triangles + stats.culture_triangles;
         let submit_started = std::time::Instant::now();
         self.gpu.queue.submit([encoder.finish()]);
         stats.cpu_frame_ms = started.elapsed().as_secs_f64() * 1e3;
@@ -1477,14 +1564,7 @@ impl Renderer {
         point_of_interest_deg: Option<[f64; 2]>,
     ) -> Vec<((u32, u32, i32, u32), InstanceRecord)> {
         let mut out = Vec::new();
-        // Where the trainee looks: the host's point of interest, else the view's centre.
-        let aim = point_of_interest_deg.map_or(camera.forward, |[right, up]| {
-            let (r, u) = (right.to_radians(), up.to_radians());
-            (camera.forward * (r.cos() * u.cos())
-                + camera.right * (r.sin() * u.cos())
-                + camera.up * u.sin())
-            .normalize()
-        });
+        let aim = aim_of(camera, point_of_interest_deg);
         for entity in snapshot.entities.iter().take(MAX_INSTANCES) {
             let Some(model) = self.models.get(&entity.model) else {
                 continue;
@@ -1560,6 +1640,70 @@ impl Renderer {
             }
         }
         out
+    }
+
+    /// The culture view `camera` draws: by the detail control parameter at `klod` (removed at
+    /// 98 % fade in the frame's fog and ground fog layer, lowered toward the periphery), or,
+    /// with `snapshot.culture_managed` off, everything resident at its finest level.
+    fn culture_frame(
+        &mut self,
+        cache: &TileCache,
+        camera: &Camera,
+        snapshot: &FrameSnapshot,
+        klod: f64,
+        point_of_interest_deg: Option<[f64; 2]>,
+    ) -> CultureFrame {
+        let aim = aim_of(camera, point_of_interest_deg);
+        let layer = drawn_ground_fog(snapshot);
+        let eye_alt_m = camera.view.eye.alt_m;
+        let fade = |distance_m: f64, alt_m: f64| {
+            let t = layer.map_or(1.0, |l| l.transmittance(eye_alt_m, alt_m, distance_m));
+            1.0 - snapshot.fog.factor(distance_m) * t
+        };
+        let detail = self.detail;
+        self.culture.select(
+            cache,
+            camera,
+            &CultureSelect {
+                detail: &detail,
+                klod,
+                aim,
+                managed: snapshot.culture_managed,
+            },
+            &fade,
+        )
+    }
+
+    /// Makes the instance buffer hold at least `records` instance records.
+    fn reserve_instances(&mut self, records: usize) {
+        if records <= self.instance_capacity {
+            return;
+        }
+        let capacity = records.next_power_of_two();
+        self.instances = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("instances"),
+            size: (capacity * std::mem::size_of::<InstanceRecord>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        self.model_bind = self
+            .gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("model"),
+                layout: &self.model_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: self.globals.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: self.instances.as_entire_binding(),
+                    },
+                ],
+            });
+        self.instance_capacity = capacity;
     }
 
     /// Least morph of each node: 1 when it first replaces its parent, falling to 0 over

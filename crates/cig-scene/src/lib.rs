@@ -9,6 +9,7 @@
 //! turns what it computes into frames.
 
 pub mod bolt;
+pub mod culture;
 pub mod detail;
 pub mod lighting;
 pub mod lod;

@@ -51,7 +51,7 @@ impl ModelMesh {
         self.indices.extend_from_slice(&[base, base + 1, base + 2]);
     }
 
-    fn quad(&mut self, a: Vec3, b: Vec3, c: Vec3, d: Vec3, colour: [u8; 4]) {
+    pub(crate) fn quad(&mut self, a: Vec3, b: Vec3, c: Vec3, d: Vec3, colour: [u8; 4]) {
         self.tri(a, b, c, colour);
         self.tri(a, c, d, colour);
     }

@@ -193,6 +193,12 @@ pub struct FrameSnapshot {
     /// Draw the materials' detail noise and smooth material borders (on by default; off is
     /// the flat colour per post, the benchmarks' plain baseline).
     pub ground_detail: bool,
+    /// Draw the culture standing on the database (trees, buildings, walls, fences, poles; on
+    /// by default, off for `cig render --culture off`).
+    pub culture: bool,
+    /// `false`: culture drawn with every object of the resident tiles at its finest level and
+    /// none removed (the unmanaged reference of `cig bench culture`); `true` by default.
+    pub culture_managed: bool,
     /// Per view, the point level of detail centres on (source 004's area of interest: where a
     /// head or eye tracker says the trainee looks), degrees right and up of the view's centre;
     /// `None`, or no entry, is the view's centre.
@@ -271,6 +277,8 @@ impl FrameSnapshot {
             max_pixel_error: 1.0,
             wireframe: false,
             ground_detail: true,
+            culture: true,
+            culture_managed: true,
             points_of_interest_deg: Vec::new(),
             entities: Vec::new(),
             puffs: Vec::new(),

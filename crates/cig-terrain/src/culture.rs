@@ -393,10 +393,16 @@ impl CultureManifest {
 /// Checks one placement's sizes.
 fn check_placement(p: &CulturePlacement) -> Result<(), CultureError> {
     let max = p.kind.max_extent_m();
+    // Round objects take their length from their width.
+    let length_m = if p.kind.is_linear() || p.kind.is_building() {
+        p.length_m
+    } else {
+        p.width_m
+    };
     for (what, value, max) in [
         ("height", p.height_m, max.max(60.0)),
         ("width", p.width_m, max),
-        ("length", p.length_m, max),
+        ("length", length_m, max),
     ] {
         if !(value.is_finite() && value > 0.0 && value <= max) {
             return Err(CultureError::BadSize {

@@ -38,7 +38,8 @@ fn vs_main(
     out.clip = g.view_proj * vec4<f32>(rel, 1.0);
     out.rel = rel;
     out.normal = normalize(m.col0.xyz * normal.x + m.col1.xyz * normal.y + m.col2.xyz * normal.z);
-    out.colour = pow(colour.rgb, vec3<f32>(2.2));
+    // origin.w: a culture instance's tint (0 for entities).
+    out.colour = pow(colour.rgb, vec3<f32>(2.2)) * (1.0 + m.origin.w);
     out.share = vec2<f32>(m.col0.w, m.col1.w);
     return out;
 }

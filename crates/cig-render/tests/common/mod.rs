@@ -297,3 +297,24 @@ pub fn check_golden(name: &str, image: &Image) {
         out_dir().display()
     );
 }
+
+/// A database of `raster` (no geoid) with `placements` as its culture.
+pub fn database_with_culture(
+    raster: &Raster,
+    placements: &[cig_terrain::CulturePlacement],
+) -> Arc<TerrainDatabase> {
+    let store = Arc::new(MemoryTileStore::new());
+    let summary = build_pyramid::<cig_terrain::build::BuildError>(raster, 128, &mut |t| {
+        store.insert(t.key, t.encode());
+        Ok(())
+    })
+    .expect("build");
+    let mut manifest = Manifest::from_build(&summary, GeoidGrid::zero(), 0, vec!["test".into()]);
+    let (tiles, culture) =
+        cig_terrain::culture::bin_placements(&manifest.layout, placements).expect("culture");
+    for tile in &tiles {
+        store.insert_culture(tile.key, tile.encode());
+    }
+    manifest.culture = Some(culture);
+    Arc::new(TerrainDatabase::new(manifest, store as Arc<dyn cig_terrain::TileStore>).expect("db"))
+}

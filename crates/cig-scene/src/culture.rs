@@ -1,0 +1,729 @@
+//! Culture to draw: the level-of-detail selection, culling and instancing of the trees,
+//! bushes, buildings, walls, fences and poles that stand on the resident finest tiles.
+//!
+//! Algorithm: every culture object is an instance of one of a few unit meshes
+//! ([`culture_model`]: a kind's levels in a unit box, x across, y along the heading, z up),
+//! scaled by its width, length and height. Per view, the selection walks the resident finest
+//! tiles within the farthest range any object can be drawn at, culls their 8 x 8-cell blocks
+//! by the frustum (a bounding sphere per block) and by distance, and gives each object in a
+//! block that survives its detail control parameter (source 004 Eq 16: `N_e = K_LOD r_c / R_s
+//! f(v)`, `r_c` the object's bounding radius, `f(v)` removing it at 98 % fade in the fog, the
+//! area-of-interest factor toward the periphery), which chooses its levels from the square-law
+//! table with the dithered blend of [`crate::models::Model::lod_blend`]. Below the table's
+//! first step an object dissolves away over one step (`N_e` from 1.5 down to 0.75, a radius
+//! of 1.5 to 0.75 resolution elements), so no object pops in or out at its farthest range.
+//! Instances come out grouped by kind and level, one instanced draw each.
+//!
+//! Positions: a tile's objects are turned once (when the tile becomes resident) into offsets
+//! in metres from their block's anchor, an ECEF point at the block's centre, along the
+//! anchor's east, north and up; within a 240 m block the earth's curvature is under 2 mm. The
+//! eye-relative position of an object is then the anchor's (an f64 subtraction) plus its
+//! offset, in f32, as the renderer wants it.
+//!
+//! Limits: no occlusion culling behind ridges (blocks hidden by terrain are drawn and depth
+//! tested); far culture is removed, not replaced by an area texture; one unit mesh per kind
+//! (variants differ in size, heading and tint only).
+
+use crate::detail::{DetailSettings, DetailTable, LodBlend};
+use crate::models::{Model, ModelMesh};
+use crate::view::Camera;
+use cig_geo::Geodetic;
+use cig_terrain::culture::{CultureKind, CultureTile, CULTURE_BLOCK_CELLS};
+use cig_terrain::database::GeoidLookup;
+use cig_terrain::tile::Tile;
+use cig_terrain::{PyramidLayout, TileCache, TileKey};
+use glam::{DVec3, Vec3};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// The lowest `N_e` an object is drawn at, as a fraction of the table's first step: between
+/// this and the first step it dissolves.
+const FADE_OUT_START: f64 = 0.5;
+
+/// One instance for the GPU: the columns of its body-to-eye-relative-ECEF transform, scaled by
+/// its size; `col0.w..col1.w` the share of its pixels this draw covers (dither thresholds, for
+/// the level blend), `origin.w` a tint (-0.15..0.15, multiplies the colour by `1 + tint`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct CultureInstance {
+    pub col0: [f32; 4],
+    pub col1: [f32; 4],
+    pub col2: [f32; 4],
+    pub origin: [f32; 4],
+}
+
+/// One instanced draw: a kind's level, a range of [`CultureFrame::instances`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct CultureDraw {
+    pub kind: CultureKind,
+    pub level: usize,
+    pub instances: std::ops::Range<usize>,
+}
+
+/// What a view draws of the culture this frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CultureFrame {
+    pub instances: Vec<CultureInstance>,
+    pub draws: Vec<CultureDraw>,
+    /// Objects drawn (an object blending two levels counts once).
+    pub objects_drawn: usize,
+    /// Objects in the blocks that survived culling (each given an `N_e`).
+    pub objects_considered: usize,
+    /// Blocks in range, and those the frustum kept.
+    pub blocks_in_range: usize,
+    pub blocks_drawn: usize,
+}
+
+/// How a view selects its culture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CultureSelect<'a> {
+    pub detail: &'a DetailSettings,
+    /// The `K_LOD` the objects are drawn at (the overload control's).
+    pub klod: f64,
+    /// Where the trainee looks (unit vector, ECEF): the area of interest's centre.
+    pub aim: DVec3,
+    /// `false`: every object of the resident tiles in the frustum at its finest level, no
+    /// removal (the unmanaged reference of `cig bench culture`).
+    pub managed: bool,
+}
+
+/// An object ready for selection: its offset from its block's anchor and its look.
+#[derive(Clone, Copy, Debug)]
+struct RenderItem {
+    /// East, north, up from the anchor, metres (up to the bottom of the drawn mesh).
+    offset_m: [f32; 3],
+    /// Unit heading along the length, in (east, north).
+    heading: [f32; 2],
+    /// Width, length and drawn height (buildings carried down to the footprint's lowest point).
+    size_m: [f32; 3],
+    critical_radius_m: f32,
+    tint: f32,
+    kind: CultureKind,
+}
+
+#[derive(Clone, Debug)]
+struct RenderBlock {
+    anchor_ecef: DVec3,
+    east: Vec3,
+    north: Vec3,
+    up: Vec3,
+    /// Radius of a sphere about the anchor holding every object of the block.
+    radius_m: f64,
+    /// Largest critical radius in the block.
+    max_critical_m: f32,
+    items: std::ops::Range<usize>,
+}
+
+struct RenderTile {
+    /// The tile this was made from (a reload makes it again).
+    source: Arc<Tile>,
+    blocks: Vec<RenderBlock>,
+    items: Vec<RenderItem>,
+}
+
+/// Per-view culture selection over a [`TileCache`]'s resident finest tiles; keeps each
+/// resident tile's objects in the form the selection walks.
+pub struct CultureSelector {
+    layout: PyramidLayout,
+    geoid: GeoidLookup,
+    tiles: HashMap<TileKey, RenderTile>,
+    /// Triangles of each kind's levels (for the counters).
+    triangles: HashMap<(CultureKind, usize), u32>,
+    levels: usize,
+}
+
+impl CultureSelector {
+    pub fn new(layout: PyramidLayout, geoid: GeoidLookup) -> CultureSelector {
+        let mut triangles = HashMap::new();
+        let mut levels = 0;
+        for kind in CultureKind::ALL {
+            let model = culture_model(kind);
+            levels = levels.max(model.lods.len());
+            for (level, mesh) in model.lods.iter().enumerate() {
+                triangles.insert((kind, level), mesh.triangle_count() as u32);
+            }
+        }
+        CultureSelector {
+            layout,
+            geoid,
+            tiles: HashMap::new(),
+            triangles,
+            levels,
+        }
+    }
+
+    /// Triangles one instance of `kind` at `level` draws.
+    pub fn triangles_of(&self, kind: CultureKind, level: usize) -> u32 {
+        self.triangles.get(&(kind, level)).copied().unwrap_or(0)
+    }
+
+    /// Triangles a frame's draws add up to.
+    pub fn frame_triangles(&self, frame: &CultureFrame) -> u64 {
+        frame
+            .draws
+            .iter()
+            .map(|d| u64::from(self.triangles_of(d.kind, d.level)) * d.instances.len() as u64)
+            .sum()
+    }
+
+    /// Selects the culture `camera` draws this frame. `fade(distance_m, altitude_m)` is how far
+    /// the fog has faded an object at that slant range and altitude (0 clear, 1 gone).
+    pub fn select(
+        &mut self,
+        cache: &TileCache,
+        camera: &Camera,
+        select: &CultureSelect<'_>,
+        fade: &dyn Fn(f64, f64) -> f64,
+    ) -> CultureFrame {
+        let mut frame = CultureFrame::default();
+        let table = &select.detail.table;
+        let first_step = table.value(1);
+        let min_ne = first_step * FADE_OUT_START;
+        // The farthest any object may be drawn: the largest radius at the lowest N_e.
+        let max_radius_m = 40.0;
+        let range_m = if select.managed {
+            select.klod * max_radius_m / min_ne
+        } else {
+            f64::INFINITY
+        };
+        let keys = self.tiles_near(camera, range_m, cache);
+        // Forget tiles that left the cache.
+        self.tiles.retain(|key, t| {
+            cache
+                .resident(*key)
+                .is_some_and(|r| Arc::ptr_eq(&r, &t.source))
+        });
+        let levels = self.levels.max(1);
+        let mut buckets: Vec<Vec<CultureInstance>> =
+            vec![Vec::new(); CultureKind::ALL.len() * levels];
+        let eye = camera.eye_ecef;
+        let local_up = camera.local_up.as_vec3();
+        for key in keys {
+            let Some(tile) = cache.resident(key) else {
+                continue;
+            };
+            if tile.culture.is_none() {
+                continue;
+            }
+            let render = match self.tiles.get(&key) {
+                Some(r) if Arc::ptr_eq(&r.source, &tile) => r,
+                _ => {
+                    let made = make_render_tile(&self.layout, &self.geoid, tile);
+                    self.tiles.insert(key, made);
+                    match self.tiles.get(&key) {
+                        Some(r) => r,
+                        None => continue,
+                    }
+                }
+            };
+            for block in &render.blocks {
+                let rel = block.anchor_ecef - eye;
+                let distance = rel.length();
+                if distance - block.radius_m > range_m {
+                    continue;
+                }
+                frame.blocks_in_range += 1;
+                if camera
+                    .planes
+                    .iter()
+                    .any(|p| p.normal.dot(rel) < p.offset_m - block.radius_m)
+                {
+                    continue;
+                }
+                if select.managed {
+                    let nearest = (distance - block.radius_m).max(1.0);
+                    if select.klod * f64::from(block.max_critical_m) / nearest < min_ne {
+                        continue;
+                    }
+                }
+                frame.blocks_drawn += 1;
+                let rel32 = rel.as_vec3();
+                for item in &render.items[block.items.clone()] {
+                    frame.objects_considered += 1;
+                    let o = item.offset_m;
+                    let pos = rel32 + block.east * o[0] + block.north * o[1] + block.up * o[2];
+                    let d = f64::from(pos.length()).max(1.0);
+                    let blend = if select.managed {
+                        if d > range_m {
+                            continue;
+                        }
+                        let centre = pos + block.up * (0.5 * item.size_m[2]);
+                        let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
+                        let fog = fade(d, altitude);
+                        let angle_deg = select.aim.angle_between(centre.as_dvec3()).to_degrees();
+                        let ne = select.detail.ne(
+                            select.klod,
+                            f64::from(item.critical_radius_m),
+                            d,
+                            fog,
+                            angle_deg,
+                        );
+                        culture_blend(ne, levels, table)
+                    } else {
+                        LodBlend::single(0)
+                    };
+                    if blend.coverage <= 0.0 {
+                        continue;
+                    }
+                    frame.objects_drawn += 1;
+                    let [he, hn] = item.heading;
+                    let forward = block.east * he + block.north * hn;
+                    let right = block.east * hn - block.north * he;
+                    let [w, l, h] = item.size_m;
+                    let split = blend.finer_share * blend.coverage;
+                    let whole = |share: f32| if share >= 1.0 { 2.0 } else { share };
+                    let mut push = |level: usize, from: f32, to: f32| {
+                        let r = right * w;
+                        let f = forward * l;
+                        let u = block.up * h;
+                        let index = item.kind as usize * levels + level.min(levels - 1);
+                        buckets[index].push(CultureInstance {
+                            col0: [r.x, r.y, r.z, from],
+                            col1: [f.x, f.y, f.z, to],
+                            col2: [u.x, u.y, u.z, 0.0],
+                            origin: [pos.x, pos.y, pos.z, item.tint],
+                        });
+                    };
+                    push(blend.finer, 0.0, whole(split));
+                    if let Some(coarser) = blend.coarser {
+                        push(coarser, split, whole(blend.coverage));
+                    }
+                }
+            }
+        }
+        for (index, bucket) in buckets.into_iter().enumerate() {
+            if bucket.is_empty() {
+                continue;
+            }
+            let start = frame.instances.len();
+            frame.instances.extend(bucket);
+            frame.draws.push(CultureDraw {
+                kind: CultureKind::ALL[index / levels],
+                level: index % levels,
+                instances: start..frame.instances.len(),
+            });
+        }
+        frame
+    }
+
+    /// Resident finest tiles within `range_m` of the eye (every resident finest tile when the
+    /// range is unbounded).
+    fn tiles_near(&self, camera: &Camera, range_m: f64, cache: &TileCache) -> Vec<TileKey> {
+        let g = &self.layout.grid;
+        let eye = camera.view.eye;
+        let (m_lat, m_lon) = cig_geo::metres_per_degree(eye.lat_deg);
+        let tile_cells = f64::from(self.layout.tile_cells);
+        let (rows, cols) = self.layout.tiles_at(0);
+        let span = |range: f64, m_per_deg: f64, d_deg: f64| {
+            if range.is_finite() {
+                (range / (m_per_deg * d_deg * tile_cells)).ceil() as i64 + 1
+            } else {
+                i64::from(rows.max(cols))
+            }
+        };
+        let eye_row = ((eye.lat_deg - g.south_lat_deg) / g.dlat_deg / tile_cells).floor() as i64;
+        let eye_col = ((eye.lon_deg - g.west_lon_deg) / g.dlon_deg / tile_cells).floor() as i64;
+        let dr = span(range_m, m_lat, g.dlat_deg);
+        let dc = span(range_m, m_lon.max(1.0), g.dlon_deg);
+        let mut keys = Vec::new();
+        for row in (eye_row - dr).max(0)..=(eye_row + dr).min(i64::from(rows) - 1) {
+            for col in (eye_col - dc).max(0)..=(eye_col + dc).min(i64::from(cols) - 1) {
+                let key = TileKey {
+                    level: 0,
+                    row: row as u32,
+                    col: col as u32,
+                };
+                if cache.resident(key).is_some() {
+                    keys.push(key);
+                }
+            }
+        }
+        keys
+    }
+}
+
+/// The levels of a culture object at `ne`: the models' blend, with the fade below the table's
+/// first step over one step only (gone at half the first step's value).
+pub fn culture_blend(ne: f64, levels: usize, table: &DetailTable) -> LodBlend {
+    let first = table.value(1);
+    if !(ne >= first * FADE_OUT_START) {
+        return LodBlend {
+            coverage: 0.0,
+            ..LodBlend::single(levels.saturating_sub(1))
+        };
+    }
+    let mut blend = table.levels_for(ne, levels);
+    if ne < first {
+        blend.coverage = (((ne - first * FADE_OUT_START) / (first * (1.0 - FADE_OUT_START)))
+            as f32)
+            .clamp(0.0, 1.0);
+    }
+    blend
+}
+
+/// Turns a resident tile's culture into blocks of anchor-relative offsets.
+fn make_render_tile(layout: &PyramidLayout, geoid: &GeoidLookup, tile: Arc<Tile>) -> RenderTile {
+    let mut blocks = Vec::new();
+    let mut items = Vec::new();
+    if let Some(culture) = &tile.culture {
+        let (dlat, dlon) = layout.spacing_deg(0);
+        let (row0, col0) = layout.finest_index_of_post(tile.key, 0, 0);
+        let south = layout.grid.south_lat_deg + row0 as f64 * dlat;
+        let west = layout.grid.west_lon_deg + col0 as f64 * dlon;
+        for b in CultureTile::blocks(culture) {
+            let half = CULTURE_BLOCK_CELLS as f64 * 0.5;
+            let fi0 = f64::from(b.block_row) * CULTURE_BLOCK_CELLS as f64 + half;
+            let fj0 = f64::from(b.block_col) * CULTURE_BLOCK_CELLS as f64 + half;
+            let lat = south + fi0 * dlat;
+            let lon = west + fj0 * dlon;
+            let undulation = geoid.undulation_m(lat, lon);
+            let anchor = Geodetic::new(lat, lon, undulation);
+            let enu = cig_geo::EnuFrame::new(anchor);
+            let east = enu.enu_vector_to_ecef(DVec3::X).as_vec3();
+            let north = enu.enu_vector_to_ecef(DVec3::Y).as_vec3();
+            let up = enu.enu_vector_to_ecef(DVec3::Z).as_vec3();
+            let (m_lat, m_lon) = cig_geo::metres_per_degree(lat);
+            let start = items.len();
+            let mut radius_m: f64 = 0.0;
+            let mut max_critical_m: f32 = 0.0;
+            for item in &culture.items[b.start..b.end] {
+                let e = (f64::from(item.fj) - fj0) * dlon * m_lon;
+                let n = (f64::from(item.fi) - fi0) * dlat * m_lat;
+                let building_like = item.kind.is_building() || item.kind.is_linear();
+                let sink = if building_like { item.sink_m } else { 0.0 };
+                let up_m = f64::from(item.base_m - sink);
+                let heading = item.heading_deg().to_radians();
+                let critical = item.bounding_radius_m();
+                radius_m =
+                    radius_m.max((e * e + n * n).sqrt() + f64::from(item.footprint_radius_m()));
+                max_critical_m = max_critical_m.max(critical);
+                items.push(RenderItem {
+                    offset_m: [e as f32, n as f32, up_m as f32],
+                    heading: [heading.sin() as f32, heading.cos() as f32],
+                    size_m: [item.width_m, item.length_m, item.height_m + sink],
+                    critical_radius_m: critical,
+                    tint: (f32::from(item.variant) / 255.0 - 0.5) * 0.3,
+                    kind: item.kind,
+                });
+            }
+            // The vertical extent: the anchor sits at sea level, objects from their base up.
+            let (low, high) = items[start..]
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(lo, hi), it| {
+                    (
+                        lo.min(f64::from(it.offset_m[2])),
+                        hi.max(f64::from(it.offset_m[2] + it.size_m[2])),
+                    )
+                });
+            let vertical = low.abs().max(high.abs());
+            blocks.push(RenderBlock {
+                anchor_ecef: anchor.to_ecef(),
+                east,
+                north,
+                up,
+                radius_m: radius_m.hypot(vertical),
+                max_critical_m,
+                items: start..items.len(),
+            });
+        }
+    }
+    RenderTile {
+        source: tile,
+        blocks,
+        items,
+    }
+}
+
+/// The name a culture kind's model is registered under in a renderer.
+pub fn culture_model_name(kind: CultureKind) -> String {
+    format!("culture/{}", kind.name())
+}
+
+fn rgb(r: u8, g: u8, b: u8) -> [u8; 4] {
+    [r, g, b, 255]
+}
+
+/// An ellipsoid about `centre` with semi-axes `radii`, `segments` around and `rings` from pole
+/// to pole (flat-shaded).
+fn add_ellipsoid(
+    m: &mut ModelMesh,
+    centre: Vec3,
+    radii: Vec3,
+    segments: u32,
+    rings: u32,
+    colour: [u8; 4],
+) {
+    let point = |ring: u32, seg: u32| {
+        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
+        let phi = std::f32::consts::TAU * seg as f32 / segments as f32;
+        centre
+            + Vec3::new(
+                radii.x * theta.sin() * phi.cos(),
+                radii.y * theta.sin() * phi.sin(),
+                radii.z * theta.cos(),
+            )
+    };
+    for ring in 0..rings {
+        for seg in 0..segments {
+            let (a, b) = (point(ring, seg), point(ring, seg + 1));
+            let (c, d) = (point(ring + 1, seg + 1), point(ring + 1, seg));
+            if ring == 0 {
+                m.tri(a, d, c, colour);
+            } else if ring + 1 == rings {
+                m.tri(a, c, b, colour);
+            } else {
+                m.quad(a, d, c, b, colour);
+            }
+        }
+    }
+}
+
+/// A gable-roofed building in the unit box: walls to `eave` of the height, the ridge along y.
+fn gabled(m: &mut ModelMesh, eave: f32, wall: [u8; 4], roof: [u8; 4]) {
+    let v = Vec3::new;
+    m.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, eave), wall);
+    let (w, d, h, r) = (0.52, 0.53, eave, 1.0);
+    m.quad(v(-w, -d, h), v(-w, d, h), v(0.0, d, r), v(0.0, -d, r), roof);
+    m.quad(v(w, d, h), v(w, -d, h), v(0.0, -d, r), v(0.0, d, r), roof);
+    m.tri(v(-0.5, -0.5, h), v(0.5, -0.5, h), v(0.0, -0.5, r), wall);
+    m.tri(v(0.5, 0.5, h), v(-0.5, 0.5, h), v(0.0, 0.5, r), wall);
+}
+
+/// Windows and a door on a building's walls (slightly proud of them).
+fn windows(m: &mut ModelMesh, eave: f32, floors: u32, per_side: u32, colour: [u8; 4]) {
+    let v = Vec3::new;
+    for floor in 0..floors {
+        let z0 = eave * (0.18 + floor as f32 / floors as f32 * 0.9);
+        let z1 = z0 + eave * 0.45 / floors as f32;
+        for k in 0..per_side {
+            let y = -0.5 + (k as f32 + 0.5) / per_side as f32;
+            let half = 0.22 / per_side as f32;
+            m.add_box(v(-0.505, y - half, z0), v(0.505, y + half, z1), colour);
+        }
+        m.add_box(v(-0.2, -0.505, z0), v(0.2, 0.505, z1), colour);
+    }
+}
+
+/// The unit model of a culture kind, finest level first (three levels, as the built-in models).
+pub fn culture_model(kind: CultureKind) -> Model {
+    let v = Vec3::new;
+    let bark = rgb(78, 60, 42);
+    let lods: Vec<ModelMesh> = match kind {
+        CultureKind::ConiferTree => {
+            let needles = rgb(34, 66, 38);
+            let dark = rgb(28, 54, 32);
+            let mut l0 = ModelMesh::default();
+            l0.add_cylinder(v(0.0, 0.0, -0.02), v(0.0, 0.0, 0.3), 0.06, 0.04, 6, bark);
+            for (k, (z, r, h)) in [(0.16, 0.5, 0.42), (0.38, 0.4, 0.38), (0.58, 0.28, 0.42)]
+                .into_iter()
+                .enumerate()
+            {
+                let colour = if k % 2 == 0 { needles } else { dark };
+                l0.add_cylinder(v(0.0, 0.0, z), v(0.0, 0.0, h), r, 0.0, 10, colour);
+            }
+            // Coarser levels keep the finest one's silhouette and its mean shade (a polygon
+            // inscribed in a circle covers less: its radius grows to the circle's area).
+            let mean = rgb(31, 60, 35);
+            let mut l1 = ModelMesh::default();
+            l1.add_cylinder(v(0.0, 0.0, -0.02), v(0.0, 0.0, 0.22), 0.06, 0.06, 3, bark);
+            l1.add_cylinder(v(0.0, 0.0, 0.14), v(0.0, 0.0, 0.86), 0.55, 0.0, 6, mean);
+            let mut l2 = ModelMesh::default();
+            l2.add_cylinder(v(0.0, 0.0, 0.05), v(0.0, 0.0, 0.95), 0.6, 0.0, 4, mean);
+            vec![l0, l1, l2]
+        }
+        CultureKind::BroadleafTree => {
+            let leaves = rgb(58, 92, 42);
+            let mut l0 = ModelMesh::default();
+            l0.add_cylinder(v(0.0, 0.0, -0.02), v(0.0, 0.0, 0.5), 0.05, 0.035, 6, bark);
+            add_ellipsoid(&mut l0, v(0.0, 0.0, 0.66), v(0.5, 0.5, 0.34), 10, 6, leaves);
+            add_ellipsoid(
+                &mut l0,
+                v(0.18, 0.1, 0.8),
+                v(0.26, 0.26, 0.2),
+                6,
+                4,
+                rgb(66, 102, 46),
+            );
+            let mut l1 = ModelMesh::default();
+            l1.add_cylinder(v(0.0, 0.0, -0.02), v(0.0, 0.0, 0.4), 0.05, 0.05, 3, bark);
+            add_ellipsoid(&mut l1, v(0.0, 0.0, 0.66), v(0.5, 0.5, 0.34), 6, 4, leaves);
+            let mut l2 = ModelMesh::default();
+            add_ellipsoid(&mut l2, v(0.0, 0.0, 0.64), v(0.6, 0.6, 0.4), 4, 2, leaves);
+            vec![l0, l1, l2]
+        }
+        CultureKind::Bush => {
+            let leaves = rgb(70, 96, 48);
+            let mut l0 = ModelMesh::default();
+            add_ellipsoid(&mut l0, v(0.0, 0.0, 0.5), v(0.5, 0.5, 0.5), 8, 5, leaves);
+            let mut l1 = ModelMesh::default();
+            add_ellipsoid(&mut l1, v(0.0, 0.0, 0.5), v(0.5, 0.5, 0.5), 5, 3, leaves);
+            let mut l2 = ModelMesh::default();
+            add_ellipsoid(&mut l2, v(0.0, 0.0, 0.45), v(0.5, 0.5, 0.45), 3, 2, leaves);
+            vec![l0, l1, l2]
+        }
+        CultureKind::House | CultureKind::Shed => {
+            let (wall, roof, eave) = if kind == CultureKind::House {
+                (rgb(206, 196, 176), rgb(140, 62, 48), 0.62)
+            } else {
+                (rgb(150, 124, 96), rgb(92, 92, 96), 0.7)
+            };
+            let mut l0 = ModelMesh::default();
+            gabled(&mut l0, eave, wall, roof);
+            let floors = if kind == CultureKind::House { 2 } else { 1 };
+            windows(&mut l0, eave, floors, 3, rgb(52, 58, 66));
+            if kind == CultureKind::House {
+                l0.add_box(v(0.2, 0.15, 0.7), v(0.3, 0.25, 1.02), rgb(120, 70, 60));
+            }
+            let mut l1 = ModelMesh::default();
+            gabled(&mut l1, eave, wall, roof);
+            let mut l2 = ModelMesh::default();
+            l2.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 0.8), wall);
+            vec![l0, l1, l2]
+        }
+        CultureKind::LargeBuilding => {
+            let wall = rgb(176, 172, 164);
+            let roof = rgb(96, 96, 100);
+            let mut l0 = ModelMesh::default();
+            l0.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 0.96), wall);
+            l0.add_box(v(-0.48, -0.48, 0.96), v(0.48, 0.48, 1.0), roof);
+            windows(&mut l0, 0.96, 4, 6, rgb(60, 70, 84));
+            let mut l1 = ModelMesh::default();
+            l1.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 0.96), wall);
+            l1.add_box(v(-0.48, -0.48, 0.96), v(0.48, 0.48, 1.0), roof);
+            let mut l2 = ModelMesh::default();
+            l2.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 1.0), wall);
+            vec![l0, l1, l2]
+        }
+        CultureKind::Wall => {
+            let stone = rgb(150, 140, 124);
+            let mut l0 = ModelMesh::default();
+            l0.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 0.92), stone);
+            l0.add_box(v(-0.6, -0.5, 0.92), v(0.6, 0.5, 1.0), rgb(128, 120, 108));
+            let mut l1 = ModelMesh::default();
+            l1.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 1.0), stone);
+            let mut l2 = ModelMesh::default();
+            l2.quad(
+                v(0.0, -0.5, 0.0),
+                v(0.0, 0.5, 0.0),
+                v(0.0, 0.5, 1.0),
+                v(0.0, -0.5, 1.0),
+                stone,
+            );
+            l2.quad(
+                v(0.0, 0.5, 0.0),
+                v(0.0, -0.5, 0.0),
+                v(0.0, -0.5, 1.0),
+                v(0.0, 0.5, 1.0),
+                stone,
+            );
+            vec![l0, l1, l2]
+        }
+        CultureKind::Fence => {
+            let wood = rgb(112, 92, 70);
+            let mut l0 = ModelMesh::default();
+            for k in 0..5 {
+                let y = -0.5 + k as f32 * 0.25;
+                l0.add_box(v(-0.5, y - 0.008, 0.0), v(0.5, y + 0.008, 1.0), wood);
+            }
+            for z in [0.45, 0.85] {
+                l0.add_box(v(-0.2, -0.5, z), v(0.2, 0.5, z + 0.05), wood);
+            }
+            let mut l1 = ModelMesh::default();
+            for y in [-0.5, 0.0, 0.5] {
+                l1.add_box(v(-0.5, y - 0.01, 0.0), v(0.5, y + 0.01, 1.0), wood);
+            }
+            l1.add_box(v(-0.2, -0.5, 0.8), v(0.2, 0.5, 0.86), wood);
+            let mut l2 = ModelMesh::default();
+            l2.quad(
+                v(0.0, -0.5, 0.8),
+                v(0.0, 0.5, 0.8),
+                v(0.0, 0.5, 0.86),
+                v(0.0, -0.5, 0.86),
+                wood,
+            );
+            l2.quad(
+                v(0.0, 0.5, 0.8),
+                v(0.0, -0.5, 0.8),
+                v(0.0, -0.5, 0.86),
+                v(0.0, 0.5, 0.86),
+                wood,
+            );
+            vec![l0, l1, l2]
+        }
+        CultureKind::PowerPole => {
+            let wood = rgb(96, 76, 56);
+            let mut l0 = ModelMesh::default();
+            l0.add_cylinder(v(0.0, 0.0, -0.02), v(0.0, 0.0, 1.02), 0.5, 0.4, 8, wood);
+            l0.add_box(v(-3.5, -0.3, 0.88), v(3.5, 0.3, 0.91), wood);
+            for x in [-3.0, 0.0, 3.0] {
+                l0.add_box(
+                    v(x - 0.2, -0.2, 0.91),
+                    v(x + 0.2, 0.2, 0.94),
+                    rgb(200, 200, 190),
+                );
+            }
+            let mut l1 = ModelMesh::default();
+            l1.add_cylinder(v(0.0, 0.0, -0.02), v(0.0, 0.0, 1.02), 0.5, 0.4, 4, wood);
+            l1.add_box(v(-3.5, -0.3, 0.88), v(3.5, 0.3, 0.91), wood);
+            let mut l2 = ModelMesh::default();
+            l2.add_cylinder(v(0.0, 0.0, 0.0), v(0.0, 0.0, 1.0), 0.5, 0.5, 3, wood);
+            vec![l0, l1, l2]
+        }
+    };
+    Model::new(&culture_model_name(kind), lods)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_culture_model_has_three_levels_getting_coarser_in_the_unit_box() {
+        for kind in CultureKind::ALL {
+            let m = culture_model(kind);
+            assert_eq!(m.lods.len(), 3, "{kind}");
+            let tris: Vec<usize> = m.lods.iter().map(ModelMesh::triangle_count).collect();
+            assert!(tris[0] > tris[1] && tris[1] > tris[2], "{kind}: {tris:?}");
+            for lod in &m.lods {
+                assert!(lod
+                    .indices
+                    .iter()
+                    .all(|&i| (i as usize) < lod.vertices.len()));
+                for vtx in &lod.vertices {
+                    let [x, y, z] = vtx.position;
+                    // The pole's cross-arm reaches out 3.5 pole widths.
+                    let reach = if kind == CultureKind::PowerPole {
+                        3.6
+                    } else {
+                        0.61
+                    };
+                    assert!(x.abs() <= reach && y.abs() <= 0.61, "{kind}: {x} {y}");
+                    assert!((-0.03..=1.03).contains(&z), "{kind}: z {z}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn culture_dissolves_over_one_step_below_the_first() {
+        let table = DetailTable::default();
+        let first = table.value(1);
+        assert_eq!(culture_blend(first * 0.49, 3, &table).coverage, 0.0);
+        assert_eq!(culture_blend(f64::NAN, 3, &table).coverage, 0.0);
+        let mid = culture_blend(first * 0.75, 3, &table);
+        assert!((mid.coverage - 0.5).abs() < 1e-5, "{mid:?}");
+        assert_eq!(culture_blend(first * 1.01, 3, &table).coverage, 1.0);
+        // Coverage never jumps as N_e falls slowly.
+        let mut last = 1.0_f32;
+        for k in 0..400 {
+            let ne = first * 1.2 - f64::from(k) * first * 0.002;
+            let c = culture_blend(ne, 3, &table).coverage;
+            assert!(
+                last - c <= 0.02 && c <= last + 1e-6,
+                "N_e {ne}: {last} -> {c}"
+            );
+            last = c;
+        }
+        assert_eq!(last, 0.0);
+    }
+}
