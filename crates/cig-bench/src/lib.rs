@@ -27,6 +27,7 @@
 //! each module). The GPU benchmarks need a device (lavapipe does). Nothing here prints: the
 //! caller prints the reports, and draws the progress the callbacks report.
 
+pub mod culture;
 pub mod database;
 pub mod db;
 pub mod demo;

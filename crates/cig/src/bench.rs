@@ -2,7 +2,7 @@
 //! the reports printed (figures as JSON, or the benchmark's summary).
 
 use crate::cli::{
-    BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs, BenchParticlesArgs, BenchRenderArgs,
+    BenchCultureArgs, BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs, BenchParticlesArgs, BenchRenderArgs,
 };
 use crate::config::Config;
 use crate::output::build_progress;
@@ -76,6 +76,18 @@ pub fn render(args: &BenchRenderArgs, config: &Config) -> anyhow::Result<()> {
         max_pixel_error: args.max_pixel_error,
         frames: args.frames,
         compare_frames: args.compare_frames,
+        paging: config.paging.clone(),
+        commit: commit(),
+    })?;
+    print_report(&report, args.json)
+}
+
+pub fn culture(args: &BenchCultureArgs, config: &Config) -> anyhow::Result<()> {
+    let report = cig_bench::culture::run(&cig_bench::culture::CultureOptions {
+        db: args.db.clone(),
+        size: parse_size(&args.size)?,
+        fov: args.fov,
+        climb_frames: args.climb_frames,
         paging: config.paging.clone(),
         commit: commit(),
     })?;

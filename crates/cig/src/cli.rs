@@ -300,6 +300,9 @@ pub enum BenchCommand {
     Particles(BenchParticlesArgs),
     /// Renderer: a 300 m/s low-level pass, level of detail against full detail in one run.
     Render(BenchRenderArgs),
+    /// Culture: triangles and frame time with level-of-detail management against full detail
+    /// over the densest area, the overload control through a climb, selection CPU time.
+    Culture(BenchCultureArgs),
     /// Network side of the IG: DIS decoding, 10,000 dead-reckoned remote entities, 100 HAT/HOT
     /// requests a frame, CIGI decoding, and (with --flood) a 100,000 PDU/s flood at 60 Hz.
     #[command(allow_negative_numbers = true)]
@@ -349,6 +352,25 @@ pub struct BenchNetArgs {
     /// PDUs per second of the flood.
     #[arg(long, default_value_t = 100_000, value_name = "N")]
     pub flood_rate: u64,
+}
+
+#[derive(Args)]
+pub struct BenchCultureArgs {
+    /// Terrain database directory (with culture).
+    #[arg(long)]
+    pub db: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Frame size.
+    #[arg(long, default_value = "640x480")]
+    pub size: String,
+    /// Horizontal field of view, degrees.
+    #[arg(long, default_value_t = 60.0)]
+    pub fov: f64,
+    /// Frames (at 60 Hz) of the climb from 50 m to 3000 m.
+    #[arg(long, default_value_t = 240)]
+    pub climb_frames: usize,
 }
 
 #[derive(Args)]
@@ -575,6 +597,9 @@ pub struct RenderArgs {
     /// default 1 / tan(FOV / width) of the view): larger keeps finer levels farther away.
     #[arg(long, allow_hyphen_values = true)]
     pub klod: Option<f64>,
+    /// Draw the database's culture (trees, buildings, walls, fences, power poles): on or off.
+    #[arg(long, value_name = "on|off", default_value = "on")]
+    pub culture: String,
 }
 
 #[derive(Args)]

@@ -71,6 +71,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::View(args) => view::run(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Particles(args)) => bench::particles(&args),
         cli::Command::Bench(cli::BenchCommand::Render(args)) => bench::render(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Culture(args)) => bench::culture(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Net(args)) => bench::net(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Env(args)) => bench::env(&args, &config),
         cli::Command::Plume(args) => plume::run(&args),

@@ -232,6 +232,9 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "triangles": stats.triangles,
         "terrain_triangles": stats.terrain_triangles,
         "model_triangles": stats.model_triangles,
+        "culture_triangles": stats.culture_triangles,
+        "culture_drawn": stats.culture_drawn,
+        "culture_cpu_ms": stats.culture_cpu_ms,
         "tiles_resident": stats.tiles_resident,
         "draw_calls": stats.draw_calls,
         "cpu_ms": stats.cpu_frame_ms,
@@ -385,6 +388,11 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .klod
         .map(|k| cig_scene::detail::validate_klod(k).map_err(|e| anyhow::anyhow!("--klod: {e}")))
         .transpose()?;
+    let culture = match args.culture.to_ascii_lowercase().as_str() {
+        "on" => true,
+        "off" => false,
+        other => bail!("--culture \"{other}\" is not on or off"),
+    };
     let (cache, mut renderer) = open(&args.db, config)?;
     renderer.detail.klod = klod;
     let mut session = QuerySession::new(Arc::clone(&cache));
@@ -418,6 +426,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         );
     }
     let mut snapshot = FrameSnapshot::new(unix_time_s, vec![view]);
+    snapshot.culture = culture;
     snapshot.fog = Fog::from_visibility(fog_mode, args.visibility);
     if let Some(p) = precipitation {
         // The rain's or snow's extinction adds to the air's.
