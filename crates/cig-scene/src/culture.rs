@@ -251,13 +251,31 @@ impl CultureSelector {
                         let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
                         let fog = fade(d, altitude);
                         let angle_deg = select.aim.angle_between(centre.as_dvec3()).to_degrees();
-                        let ne = select.detail.ne(
-                            select.klod,
-                            f64::from(item.critical_radius_m),
-                            d,
-                            fog,
-                            angle_deg,
-                        );
+                        let ne = if item.kind.is_linear() {
+                            // A wall or fence is a face: Eq 17 with the ellipse of its half
+                            // length and half height, seen from the eye's distance off its
+                            // plane (edge on, it dissolves).
+                            let [he, hn] = item.heading;
+                            let along = block.east * he + block.north * hn;
+                            let normal = block.east * hn - block.north * he;
+                            ne_of_face(
+                                select,
+                                centre,
+                                along,
+                                normal,
+                                [0.5 * item.size_m[1], 0.5 * item.size_m[2]],
+                                fog,
+                                angle_deg,
+                            )
+                        } else {
+                            select.detail.ne(
+                                select.klod,
+                                f64::from(item.critical_radius_m),
+                                d,
+                                fog,
+                                angle_deg,
+                            )
+                        };
                         culture_blend(ne, levels, table)
                     } else {
                         LodBlend::single(0)
@@ -339,6 +357,48 @@ impl CultureSelector {
             }
         }
         keys
+    }
+}
+
+/// `N_e` of a vertical face (a wall or a fence) centred `centre` (eye-relative), its long axis
+/// `along` and its normal `normal` (unit vectors), of half length and half height `radii_m`:
+/// source 004 Eq 17 with Eq 15's effective radius toward the eye's foot in the face's plane,
+/// times the area-of-interest factor.
+fn ne_of_face(
+    select: &CultureSelect<'_>,
+    centre: Vec3,
+    along: Vec3,
+    normal: Vec3,
+    radii_m: [f32; 2],
+    fade: f64,
+    angle_deg: f64,
+) -> f64 {
+    let rel = centre.as_dvec3();
+    let n = normal.as_dvec3();
+    let off_plane_m = rel.dot(n).abs();
+    let in_plane = rel - n * rel.dot(n);
+    let ground_range_m = in_plane.length();
+    let theta_deg = if ground_range_m > 1e-6 {
+        (in_plane.dot(along.as_dvec3()).abs() / ground_range_m)
+            .clamp(0.0, 1.0)
+            .acos()
+            .to_degrees()
+    } else {
+        90.0
+    };
+    let effective =
+        crate::detail::effective_radius_m(f64::from(radii_m[0]), f64::from(radii_m[1]), theta_deg);
+    let ne = crate::detail::ne_2d(
+        select.klod,
+        effective,
+        off_plane_m,
+        rel.length().max(1.0),
+        ground_range_m,
+        crate::detail::visibility_factor(fade),
+    );
+    match &select.detail.aoi {
+        Some(aoi) => ne * crate::detail::aoi_factor(angle_deg, aoi),
+        None => ne,
     }
 }
 
@@ -548,7 +608,7 @@ pub fn culture_model(kind: CultureKind) -> Model {
             l1.add_cylinder(v(0.0, 0.0, -0.02), v(0.0, 0.0, 0.4), 0.05, 0.05, 3, bark);
             add_ellipsoid(&mut l1, v(0.0, 0.0, 0.66), v(0.5, 0.5, 0.34), 6, 4, leaves);
             let mut l2 = ModelMesh::default();
-            add_ellipsoid(&mut l2, v(0.0, 0.0, 0.64), v(0.6, 0.6, 0.4), 4, 2, leaves);
+            add_ellipsoid(&mut l2, v(0.0, 0.0, 0.6), v(0.6, 0.6, 0.4), 4, 2, leaves);
             vec![l0, l1, l2]
         }
         CultureKind::Bush => {
@@ -702,6 +762,67 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_wall_is_a_face_of_eq_17_seen_face_on_and_dissolving_edge_on() {
+        let detail = DetailSettings {
+            aoi: None,
+            ..DetailSettings::standard()
+        };
+        let select = CultureSelect {
+            detail: &detail,
+            klod: 1467.0,
+            aim: DVec3::Y,
+            managed: true,
+        };
+        // A 20 m x 2 m wall along x, 100 m ahead (y), seen face on.
+        let (along, normal) = (Vec3::X, Vec3::Y);
+        let face_on = ne_of_face(
+            &select,
+            Vec3::new(0.0, 100.0, 0.0),
+            along,
+            normal,
+            [10.0, 1.0],
+            0.0,
+            0.0,
+        );
+        // Eq 17 with R_g = 0: K r_e H / R_s^2 = K r_e / R_s, r_e the short radius.
+        assert!((face_on - 1467.0 * 1.0 / 100.0).abs() < 1e-6, "{face_on}");
+        // Edge on (the eye in its plane) it has no size; obliquely, between.
+        let edge_on = ne_of_face(
+            &select,
+            Vec3::new(100.0, 0.0, 0.0),
+            along,
+            normal,
+            [10.0, 1.0],
+            0.0,
+            0.0,
+        );
+        assert_eq!(edge_on, 0.0);
+        let oblique = ne_of_face(
+            &select,
+            Vec3::new(70.7, 70.7, 0.0),
+            along,
+            normal,
+            [10.0, 1.0],
+            0.0,
+            0.0,
+        );
+        // Obliquely its long radius faces the eye's foot (Eq 15): more than face on, at most
+        // the long radius's N_e of a 3-D model.
+        assert!(oblique > face_on && oblique < 1467.0 * 10.0 / 100.0 * 1.2, "{oblique}");
+        // Removed in the fog at 98 % fade.
+        let fogged = ne_of_face(
+            &select,
+            Vec3::new(0.0, 100.0, 0.0),
+            along,
+            normal,
+            [10.0, 1.0],
+            0.985,
+            0.0,
+        );
+        assert_eq!(fogged, 0.0);
     }
 
     #[test]
