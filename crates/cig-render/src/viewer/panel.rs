@@ -633,6 +633,13 @@ fn stats_ui(ui: &mut egui::Ui, info: &FrameInfo) {
             row("size", format!("{} x {}", info.width_px, info.height_px));
             row("triangles", s.triangles.to_string());
             row("models", s.entities_drawn.to_string());
+            row(
+                "culture",
+                format!(
+                    "{} objects, {} triangles, {:.2} ms",
+                    s.culture_drawn, s.culture_triangles, s.culture_cpu_ms
+                ),
+            );
             // The overload control's K_LOD (source 004 Table 4) against the view's nominal.
             row(
                 "K_LOD",
