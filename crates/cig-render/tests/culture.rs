@@ -155,3 +155,96 @@ fn managed_culture_draws_far_fewer_triangles_than_full_detail() {
         "managed culture looks different from full detail: FLIP {flip}"
     );
 }
+
+/// A flat grass plain 6 km square at 30 m posts, 100 m above the sea, south-west corner
+/// 36 N 121 W.
+fn plain() -> Raster {
+    let (n, e) = cig_geo::metres_per_degree(36.0);
+    let posts = 201;
+    Raster {
+        grid: cig_terrain::GeoGrid {
+            south_lat_deg: 36.0,
+            west_lon_deg: -121.0,
+            dlat_deg: 30.0 / n,
+            dlon_deg: 30.0 / e,
+            rows: posts,
+            cols: posts,
+        },
+        elevation_m: vec![100.0; posts * posts],
+        material: Some(vec![cig_terrain::Material::Grass; posts * posts]),
+    }
+}
+
+#[test]
+fn a_slowly_approached_tree_never_pops() {
+    let raster = plain();
+    let g = raster.grid;
+    let (tree_lat, tree_lon) = (
+        g.south_lat_deg + 150.0 * g.dlat_deg,
+        g.west_lon_deg + 100.0 * g.dlon_deg,
+    );
+    let tree = CulturePlacement {
+        kind: CultureKind::BroadleafTree,
+        lat_deg: tree_lat,
+        lon_deg: tree_lon,
+        height_m: 20.0,
+        width_m: 12.0,
+        length_m: 12.0,
+        heading_deg: 0.0,
+        variant: 128,
+    };
+    let db = database_with_culture(&raster, &[tree]);
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let size = (200, 150);
+    let (m_lat, _) = cig_geo::metres_per_degree(tree_lat);
+    let klod = renderer.detail.klod_for(&view(
+        Geodetic::new(0.0, 0.0, 0.0),
+        (0.0, 0.0, 0.0),
+        30.0,
+        size,
+    ));
+    let radius_m = 0.5 * (20.0f64 * 20.0 + 2.0 * 12.0 * 12.0).sqrt();
+    // The tree's pixels: where the frame with culture differs from the frame without.
+    let coverage = |renderer: &mut Renderer, ne: f64| {
+        let distance_m = klod * radius_m / ne;
+        let eye = Geodetic::new(tree_lat - distance_m / m_lat, tree_lon, 110.0);
+        let on = snapshot_at(eye, size, true);
+        let off = snapshot_at(eye, size, false);
+        let with = render(renderer, &cache, &on, false).0;
+        let without = render(renderer, &cache, &off, false).0;
+        with.rgba
+            .chunks_exact(4)
+            .zip(without.rgba.chunks_exact(4))
+            .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
+            .count() as f64
+    };
+    let mut ne = 0.6;
+    let mut previous = coverage(&mut renderer, ne);
+    assert_eq!(previous, 0.0, "removed below half the first step");
+    let mut largest_step: f64 = 0.0;
+    while ne < 40.0 {
+        ne *= 1.04;
+        let now = coverage(&mut renderer, ne);
+        // The projected area grows as N_e squared (1.0816 a frame); 15 % either side of that
+        // and 4 px for the pixel grid and the dissolve's dither.
+        let expected = previous * 1.0816;
+        assert!(
+            now <= expected * 1.15 + 4.0 && now >= expected / 1.15 - 4.0,
+            "at N_e {ne:.2} the tree's coverage went from {previous} to {now} px in one frame"
+        );
+        if previous > 20.0 {
+            largest_step = largest_step.max(now / previous);
+        }
+        previous = now;
+    }
+    eprintln!("largest growth between frames {largest_step:.3}");
+    assert!(previous > 300.0, "the tree ends large: {previous} px");
+}
+
+fn snapshot_at(eye: Geodetic, size: (u32, u32), culture: bool) -> FrameSnapshot {
+    let mut s = FrameSnapshot::new(MORNING_UNIX_S, vec![view(eye, (0.0, 0.0, 0.0), 30.0, size)]);
+    s.culture = culture;
+    s.fog = cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, 200_000.0);
+    s
+}
