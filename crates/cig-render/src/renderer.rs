@@ -286,6 +286,8 @@ pub struct Renderer {
     model_bind: wgpu::BindGroup,
     /// The culture standing on the resident tiles, selected per view.
     culture: CultureSelector,
+    /// Culture kinds that keep the nominal `K_LOD` under overload (cue-important, §4.6).
+    pub culture_cue_important: Vec<CultureKind>,
     sky_bind: wgpu::BindGroup,
     terrain_pipelines: TerrainPipelines,
     /// East and north (ECEF unit vectors) of the database centre's tangent plane, the plane the
@@ -823,6 +825,7 @@ impl Renderer {
             model_layout,
             terrain_bind,
             model_bind,
+            culture_cue_important: Vec::new(),
             culture: CultureSelector::new(
                 *cache.database().layout(),
                 GeoidLookup::new(&cache.database().manifest().geoid),
@@ -1092,7 +1095,14 @@ impl Renderer {
         let mut instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
         let culture_started = std::time::Instant::now();
         let culture = if snapshot.culture {
-            self.culture_frame(cache, &camera, snapshot, klod, point_of_interest)
+            self.culture_frame(
+                cache,
+                &camera,
+                snapshot,
+                klod,
+                klod_nominal,
+                point_of_interest,
+            )
         } else {
             CultureFrame::default()
         };
@@ -1651,6 +1661,7 @@ impl Renderer {
         camera: &Camera,
         snapshot: &FrameSnapshot,
         klod: f64,
+        klod_nominal: f64,
         point_of_interest_deg: Option<[f64; 2]>,
     ) -> CultureFrame {
         let aim = aim_of(camera, point_of_interest_deg);
@@ -1661,12 +1672,18 @@ impl Renderer {
             1.0 - snapshot.fog.factor(distance_m) * t
         };
         let detail = self.detail;
+        let mut cue_important = [false; 9];
+        for kind in &self.culture_cue_important {
+            cue_important[*kind as usize] = true;
+        }
         self.culture.select(
             cache,
             camera,
             &CultureSelect {
                 detail: &detail,
                 klod,
+                klod_nominal,
+                cue_important,
                 aim,
                 managed: snapshot.culture_managed,
             },

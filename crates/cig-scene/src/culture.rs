@@ -80,6 +80,11 @@ pub struct CultureSelect<'a> {
     pub detail: &'a DetailSettings,
     /// The `K_LOD` the objects are drawn at (the overload control's).
     pub klod: f64,
+    /// The view's nominal `K_LOD`, which cue-important kinds keep under overload (§4.6).
+    pub klod_nominal: f64,
+    /// Kinds marked cue-important (indexed by the kind's byte), e.g. power poles for a
+    /// helicopter trainer: they keep the nominal `K_LOD`.
+    pub cue_important: [bool; 9],
     /// Where the trainee looks (unit vector, ECEF): the area of interest's centre.
     pub aim: DVec3,
     /// `false`: every object of the resident tiles in the frustum at its finest level, no
@@ -181,8 +186,13 @@ impl CultureSelector {
         let min_ne = first_step * FADE_OUT_START;
         // The farthest any object may be drawn: the largest radius at the lowest N_e.
         let max_radius_m = 40.0;
+        let klod_most = select.klod.max(if select.cue_important.contains(&true) {
+            select.klod_nominal
+        } else {
+            0.0
+        });
         let range_m = if select.managed {
-            select.klod * max_radius_m / min_ne
+            klod_most * max_radius_m / min_ne
         } else {
             f64::INFINITY
         };
@@ -232,7 +242,7 @@ impl CultureSelector {
                 }
                 if select.managed {
                     let nearest = (distance - block.radius_m).max(1.0);
-                    if select.klod * f64::from(block.max_critical_m) / nearest < min_ne {
+                    if klod_most * f64::from(block.max_critical_m) / nearest < min_ne {
                         continue;
                     }
                 }
@@ -251,6 +261,11 @@ impl CultureSelector {
                         let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
                         let fog = fade(d, altitude);
                         let angle_deg = select.aim.angle_between(centre.as_dvec3()).to_degrees();
+                        let klod = if select.cue_important[item.kind as usize] {
+                            select.klod_nominal
+                        } else {
+                            select.klod
+                        };
                         let ne = if item.kind.is_linear() {
                             // A wall or fence is a face: Eq 17 with the ellipse of its half
                             // length and half height, seen from the eye's distance off its
@@ -260,6 +275,7 @@ impl CultureSelector {
                             let normal = block.east * hn - block.north * he;
                             ne_of_face(
                                 select,
+                                klod,
                                 centre,
                                 along,
                                 normal,
@@ -269,7 +285,7 @@ impl CultureSelector {
                             )
                         } else {
                             select.detail.ne(
-                                select.klod,
+                                klod,
                                 f64::from(item.critical_radius_m),
                                 d,
                                 fog,
@@ -366,6 +382,7 @@ impl CultureSelector {
 /// times the area-of-interest factor.
 fn ne_of_face(
     select: &CultureSelect<'_>,
+    klod: f64,
     centre: Vec3,
     along: Vec3,
     normal: Vec3,
@@ -389,7 +406,7 @@ fn ne_of_face(
     let effective =
         crate::detail::effective_radius_m(f64::from(radii_m[0]), f64::from(radii_m[1]), theta_deg);
     let ne = crate::detail::ne_2d(
-        select.klod,
+        klod,
         effective,
         off_plane_m,
         rel.length().max(1.0),
@@ -773,6 +790,8 @@ mod tests {
         let select = CultureSelect {
             detail: &detail,
             klod: 1467.0,
+            klod_nominal: 1467.0,
+            cue_important: [false; 9],
             aim: DVec3::Y,
             managed: true,
         };
@@ -780,6 +799,7 @@ mod tests {
         let (along, normal) = (Vec3::X, Vec3::Y);
         let face_on = ne_of_face(
             &select,
+            1467.0,
             Vec3::new(0.0, 100.0, 0.0),
             along,
             normal,
@@ -792,6 +812,7 @@ mod tests {
         // Edge on (the eye in its plane) it has no size; obliquely, between.
         let edge_on = ne_of_face(
             &select,
+            1467.0,
             Vec3::new(100.0, 0.0, 0.0),
             along,
             normal,
@@ -802,6 +823,7 @@ mod tests {
         assert_eq!(edge_on, 0.0);
         let oblique = ne_of_face(
             &select,
+            1467.0,
             Vec3::new(70.7, 70.7, 0.0),
             along,
             normal,
@@ -811,10 +833,14 @@ mod tests {
         );
         // Obliquely its long radius faces the eye's foot (Eq 15): more than face on, at most
         // the long radius's N_e of a 3-D model.
-        assert!(oblique > face_on && oblique < 1467.0 * 10.0 / 100.0 * 1.2, "{oblique}");
+        assert!(
+            oblique > face_on && oblique < 1467.0 * 10.0 / 100.0 * 1.2,
+            "{oblique}"
+        );
         // Removed in the fog at 98 % fade.
         let fogged = ne_of_face(
             &select,
+            1467.0,
             Vec3::new(0.0, 100.0, 0.0),
             along,
             normal,

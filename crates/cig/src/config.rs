@@ -10,6 +10,31 @@ pub struct Config {
     pub paging: cig_terrain::PagingConfig,
     pub database: DatabaseConfig,
     pub overload: OverloadConfig,
+    pub culture: CultureConfig,
+}
+
+/// `[culture]`: how the database's culture is drawn.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CultureConfig {
+    /// Kinds that keep their detail under overload (cue-important, source 004 §4.6), by name:
+    /// conifer_tree, broadleaf_tree, bush, house, shed, large_building, wall, fence, power_pole
+    /// (e.g. `["power_pole"]` for a helicopter trainer's wire-strike cues).
+    pub cue_important: Vec<String>,
+}
+
+impl CultureConfig {
+    /// The kinds named, or the first name that is no kind.
+    pub fn cue_important_kinds(&self) -> Result<Vec<cig_terrain::CultureKind>, String> {
+        self.cue_important
+            .iter()
+            .map(|name| {
+                cig_terrain::CultureKind::from_name(name).ok_or_else(|| {
+                    format!("culture.cue_important: \"{name}\" is not a culture kind")
+                })
+            })
+            .collect()
+    }
 }
 
 /// `[overload]`: the renderer's overload control of models' detail (source 004 Table 4,
@@ -148,6 +173,9 @@ impl Config {
         if let Err(e) = config.overload.settings() {
             anyhow::bail!("bad configuration: overload.{e}: {}", path.display());
         }
+        if let Err(e) = config.culture.cue_important_kinds() {
+            anyhow::bail!("bad configuration: {e}: {}", path.display());
+        }
         Ok(config)
     }
 
@@ -160,6 +188,10 @@ impl Config {
 
     /// Applies the configuration's overload control to a renderer.
     pub fn configure_renderer(&self, renderer: &mut cig_render::Renderer) -> anyhow::Result<()> {
+        renderer.culture_cue_important = self
+            .culture
+            .cue_important_kinds()
+            .map_err(|e| anyhow::anyhow!("bad configuration: {e}"))?;
         renderer
             .set_overload(self.overload()?)
             .map_err(|e| anyhow::anyhow!("bad configuration: overload.{e}"))

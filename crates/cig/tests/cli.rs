@@ -316,6 +316,20 @@ fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
     std::fs::write(&conf, "[overload]\nflor = 0.5\n").expect("write");
     let line = error_line(argv!["--config", conf, "db", "info", db]);
     assert!(line.contains("flor"), "{line}");
+    // An unknown cue-important culture kind is named.
+    std::fs::write(&conf, "[culture]\ncue_important = [\"pylon\"]\n").expect("write");
+    let line = error_line(argv!["--config", conf, "db", "info", db]);
+    assert!(line.contains("\"pylon\" is not a culture kind"), "{line}");
+    // Bad render switches.
+    let mut args = argv!["render", "--db", db, "--eye", "35.99,-121.22,900"];
+    args.extend(argv![
+        "--out",
+        dir.path().join("x.png"),
+        "--culture",
+        "maybe"
+    ]);
+    let line = error_line(args);
+    assert!(line.contains("--culture \"maybe\""), "{line}");
 }
 
 #[test]
