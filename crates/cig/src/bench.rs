@@ -2,7 +2,8 @@
 //! the reports printed (figures as JSON, or the benchmark's summary).
 
 use crate::cli::{
-    BenchCultureArgs, BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs, BenchParticlesArgs, BenchRenderArgs,
+    BenchCultureArgs, BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs,
+    BenchParticlesArgs, BenchRenderArgs,
 };
 use crate::config::Config;
 use crate::output::build_progress;
