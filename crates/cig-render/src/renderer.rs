@@ -131,8 +131,9 @@ const MAX_NODE_SLOTS: usize = 16384;
 /// Terrain records are kept by slot, so there is room for one per slot.
 const MAX_NODE_RECORDS: usize = MAX_NODE_SLOTS;
 const MAX_INSTANCES: usize = 8192;
-/// Culture instances a view draws at most (a frame past it drops the rest, counted).
-const MAX_CULTURE_INSTANCES: usize = 4_000_000;
+/// Culture instances a view draws at most (64 MB of records; also bounded by the device's
+/// largest storage binding): a frame past it drops the farthest kinds' rest.
+const MAX_CULTURE_INSTANCES: usize = 1_000_000;
 /// Tile loads a view may request per frame beyond the paging areas.
 const PREFETCH_PER_FRAME: usize = 8;
 /// Detail-noise cell sizes, metres (incommensurate so the pattern never visibly repeats).
@@ -1110,7 +1111,11 @@ impl Renderer {
         // Culture draws: (first index, count, base vertex, triangles), first instance, count.
         let culture_first = instance_records.len();
         let mut culture_draws: Vec<((u32, u32, i32, u32), u32, u32)> = Vec::new();
-        let room = MAX_CULTURE_INSTANCES.min(culture.instances.len());
+        let binding_records = self.gpu.device.limits().max_storage_buffer_binding_size as usize
+            / std::mem::size_of::<InstanceRecord>();
+        let room = MAX_CULTURE_INSTANCES
+            .min(binding_records.saturating_sub(culture_first))
+            .min(culture.instances.len());
         for draw in &culture.draws {
             let name = cig_scene::culture::culture_model_name(draw.kind);
             let Some(range) = self.models.get(&name).and_then(|m| m.lods.get(draw.level)) else {
