@@ -42,11 +42,20 @@
 //! through the puffs (thesis 000 Eq 1-4), which stops the line when it reaches the request's
 //! alpha threshold.
 //!
-//! Limits: line-of-sight and collision segments test the terrain only (not entity geometry);
-//! collision volumes test other entities' volumes as bounding spheres; sensor tracking is not
-//! simulated (a sensor in a track mode reports "searching"); motion trackers and trajectory
-//! packets are not supported (the codec skips them with a warning). Answers that do not fit one
-//! message (over [`MAX_PACKETS_PER_MESSAGE`]) wait for the next frame.
+//! Line of sight and collision segments also see the database's culture as its simple volumes
+//! (`cig_terrain::culture_hit`): line of sight is stopped by every object but fences, collision
+//! segments by every object. A hit on an object reports the material code
+//! [`CULTURE_MATERIAL_CODE_BASE`] + the object's kind byte (`CultureKind`: 16 conifer ...
+//! 24 power pole; terrain materials are 0-8), which a collision segment's material mask
+//! selects like any other, and (extended LOS) the normal of the object's volume. HAT/HOT
+//! answers the bare terrain (`QuerySession::hot_with_culture` is not wired to CIGI).
+//!
+//! Limits: line-of-sight and collision segments test the terrain and the culture's simple
+//! volumes only (not entity geometry); collision volumes test other entities' volumes as
+//! bounding spheres; sensor tracking is not simulated (a sensor in a track mode reports
+//! "searching"); motion trackers and trajectory packets are not supported (the codec skips them
+//! with a warning). Answers that do not fit one message (over [`MAX_PACKETS_PER_MESSAGE`]) wait
+//! for the next frame.
 
 use crate::model_table::{CigiEntityType, ModelTable};
 use crate::pose::{
@@ -71,7 +80,7 @@ use cig_environment::UtcTime;
 use cig_geo::Geodetic;
 use cig_scene::snapshot::Clamp;
 use cig_scene::{FovDeg, Hpr};
-use cig_terrain::{QuerySession, SurfacePoint};
+use cig_terrain::{LosHit, QuerySession, SurfacePoint};
 use glam::DVec3;
 use std::collections::{BTreeMap, VecDeque};
 
@@ -90,6 +99,18 @@ pub const MAX_STANDING_REQUESTS: usize = 4096;
 
 /// At most this many answers wait for a later message; beyond, the oldest are dropped (counted).
 pub const MAX_DEFERRED_ANSWERS: usize = 4 * MAX_PACKETS_PER_MESSAGE;
+
+/// CIGI material code of a culture object: this plus its kind's byte (terrain materials use
+/// their own bytes, 0-8).
+pub const CULTURE_MATERIAL_CODE_BASE: u32 = 16;
+
+/// The CIGI material code of what a line of sight or collision segment met.
+pub fn hit_material_code(hit: &LosHit) -> u32 {
+    match hit.culture {
+        Some(c) => CULTURE_MATERIAL_CODE_BASE + u32::from(c.kind as u8),
+        None => u32::from(hit.material.to_byte()),
+    }
+}
 
 /// At most this many collision notifications a frame.
 pub const MAX_COLLISION_NOTES: usize = 256;
@@ -1709,7 +1730,7 @@ impl IgSession {
                 if let Some(h) = hit {
                     response.range_valid = true;
                     response.range_m = h.range_m + range_offset_m;
-                    response.material_code = u32::from(h.material.to_byte());
+                    response.material_code = hit_material_code(&h);
                     let position = match (entity_relative, self.poses.get(&entity_id)) {
                         (true, Some(pose)) => {
                             let o = offset_of(*pose, h.point);
@@ -1726,7 +1747,12 @@ impl IgSession {
                         response.lon_deg_or_y_m,
                         response.alt_m_or_z_m,
                     ] = position;
-                    if let Ok(s) = query.hot(h.point.lat_deg, h.point.lon_deg) {
+                    if let Some(c) = h.culture {
+                        let [e, n, u] = c.normal_enu;
+                        let (az, el) = azimuth_elevation_deg(DVec3::new(e, n, u));
+                        response.normal_azimuth_deg = az as f32;
+                        response.normal_elevation_deg = el as f32;
+                    } else if let Ok(s) = query.hot(h.point.lat_deg, h.point.lon_deg) {
                         let (az, el) = normal_az_el(&s);
                         response.normal_azimuth_deg = az;
                         response.normal_elevation_deg = el;
@@ -1949,27 +1975,26 @@ impl IgSession {
                         z_m: f64::from(s.z2_m),
                     },
                 );
-                let hit = query.los(a, b).ok().and_then(|r| r.hit);
+                // Terrain and every culture object, fences included.
+                let hit = query.collision(a, b).ok().and_then(|r| r.hit);
                 // A segment whose start is already below the surface is in contact too.
                 let start_below = query
                     .hat(a)
                     .ok()
                     .filter(|(hat, _)| *hat < 0.0)
-                    .map(|(_, s)| s.material);
+                    .map(|(_, s)| u32::from(s.material.to_byte()));
                 let contact = hit
-                    .map(|h| (h.range_m, h.material))
+                    .map(|h| (h.range_m, hit_material_code(&h)))
                     .or(start_below.map(|m| (0.0, m)));
-                if let Some((range_m, material)) = contact {
-                    if s.material_mask == 0
-                        || s.material_mask & (1 << (material.to_byte() % 32)) != 0
-                    {
+                if let Some((range_m, material_code)) = contact {
+                    if s.material_mask == 0 || s.material_mask & (1 << (material_code % 32)) != 0 {
                         notes.push(Packet::CollisionSegmentNotification(
                             CollisionSegmentNotification {
                                 entity_id: e.id,
                                 segment_id: s.segment_id,
                                 collision_with_entity: false,
                                 contacted_entity_id: 0,
-                                material_code: u32::from(material.to_byte()),
+                                material_code,
                                 intersection_distance_m: range_m as f32,
                             },
                         ));

@@ -15,16 +15,40 @@
 //! triangles: the terrain is linear along the sightline within a triangle, and the sightline's
 //! altitude is taken as linear across one cell (its curvature there is far below a millimetre).
 //!
+//! Culture: line of sight also stops at the first culture object it enters before the terrain
+//! (`crate::culture_hit`: each object's simple volumes, found through its tile's 8 x 8-cell
+//! blocks). After the terrain walk of a piece, the objects of the finest tiles within a
+//! footprint of the piece's stretch up to the terrain hit are tested: blocks and objects whose
+//! footprint the piece does not pass over, or whose highest top it stays above, are skipped;
+//! the rest are tested exactly in the object's frame, where the piece's altitude is taken as
+//! linear over the object's footprint (under a millimetre from the quadratic). Fences are seen
+//! through ([`CultureTest::LineOfSight`]); the collision form ([`QuerySession::collision`])
+//! counts every object. A sightline that starts inside an object meets it at once. HOT and HAT
+//! answer the bare terrain (a tree's base is HOT at its trunk);
+//! [`QuerySession::hot_with_culture`] gives the highest surface counting the objects' tops.
+//!
 //! Limits: a chord that leaves the database sees no terrain outside it; the geoid undulation is
-//! bilinear on the manifest's coarse grid (EGM96 varies by centimetres per kilometre).
+//! bilinear on the manifest's coarse grid (EGM96 varies by centimetres per kilometre). Culture
+//! is tested on the finest tiles the sightline passes over (the tiles the terrain walk loads;
+//! where the sightline stays above every post, those under it while it is within the tallest
+//! valid object of the highest post); an object overhanging from a tile the sightline does not
+//! pass over is seen only while that tile is at hand (resident in the paging cache or in the
+//! session), so no query loads a tile for culture alone. The culture index a session builds
+//! for each tile it uses (a few bytes per non-empty block) is outside the paging budget.
 
 use crate::cache::TileCache;
+use crate::culture::CULTURE_BLOCK_CELLS;
+use crate::culture_hit::{
+    segment_entry, tallest_object_m, top_at, widest_footprint_m, CultureHit, CultureIndex,
+    CultureTest, ItemFrame,
+};
 use crate::database::{GeoidLookup, LoadError, TerrainDatabase};
 use crate::material::Material;
 use crate::pyramid::{quadtree_index, PyramidLayout, TileKey};
 use crate::raster::{triangulated_height, triangulated_slopes, Diagonal};
 use crate::tile::Tile;
 use cig_geo::Geodetic;
+use std::collections::HashMap;
 use std::sync::Arc;
 
 /// A point on the terrain surface.
@@ -50,15 +74,39 @@ impl SurfacePoint {
     }
 }
 
-/// Where a sightline first meets the terrain.
+/// Where a sightline first meets the terrain or a culture object.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LosHit {
     /// The intersection; altitude above the ellipsoid.
     pub point: Geodetic,
     /// Distance from the sightline's start, metres.
     pub range_m: f64,
+    /// The terrain's material at the hit, or under the object's centre for a culture hit.
     pub material: Material,
     pub level: u8,
+    /// The culture object the sightline met before the terrain, if any.
+    pub culture: Option<CultureHit>,
+}
+
+/// The highest surface at a point counting the culture objects' tops
+/// ([`QuerySession::hot_with_culture`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CultureSurface {
+    /// The bare terrain there (HOT).
+    pub terrain: SurfacePoint,
+    /// The highest surface above mean sea level: the terrain or an object's top, metres.
+    pub height_msl_m: f64,
+    /// Unit normal of that surface in the local east-north-up frame.
+    pub normal_enu: [f64; 3],
+    /// The object whose top it is, if any.
+    pub culture: Option<CultureHit>,
+}
+
+impl CultureSurface {
+    /// Height of the highest surface above the WGS84 ellipsoid, metres.
+    pub fn height_ellipsoid_m(&self) -> f64 {
+        self.height_msl_m + self.terrain.geoid_undulation_m
+    }
 }
 
 /// Answer to a line-of-sight query.
@@ -94,6 +142,8 @@ pub struct QuerySession {
     /// Precomputed for the per-query path: no division, no search.
     fast: FastIndex,
     geoid: GeoidLookup,
+    /// Posts (east, north) that hold the widest valid footprint anywhere on the database.
+    footprint_bound_posts: (f64, f64),
 }
 
 /// What the per-query path needs to find a point's finest cell with multiplications and shifts.
@@ -131,6 +181,8 @@ struct TileSlots {
     /// from a coarser level).
     uncached: usize,
     epoch: u64,
+    /// Culture indices of slotted tiles that have culture (forgotten with the slots).
+    culture: HashMap<TileKey, Arc<CultureIndex>>,
 }
 
 /// Most finest tiles outside the paging cache one query session keeps at hand (about 5.6 MB of
@@ -164,11 +216,23 @@ impl QuerySession {
             last_cell_col: g.cols - 2,
             tile_shift: layout.tile_cells.trailing_zeros(),
         };
+        // The fewest metres per post anywhere on the database: at its poleward edge
+        // eastwards, at the latitude nearest the equator northwards.
+        let (south, north) = (g.south_lat_deg, g.north_lat_deg());
+        let mut min_m = (f64::INFINITY, f64::INFINITY);
+        for lat in [south, north, 0.0f64.clamp(south, north)] {
+            let (north_m_per_deg, east_m_per_deg) =
+                cig_geo::metres_per_degree(lat.clamp(-90.0, 90.0));
+            min_m.0 = min_m.0.min(g.dlon_deg * east_m_per_deg);
+            min_m.1 = min_m.1.min(g.dlat_deg * north_m_per_deg);
+        }
+        let bound_m = widest_footprint_m();
         QuerySession {
             geoid: GeoidLookup::new(&cache.database().manifest().geoid),
             db: Arc::clone(cache.database()),
             layout,
             fast,
+            footprint_bound_posts: (bound_m / min_m.0.max(1e-9), bound_m / min_m.1.max(1e-9)),
             tiles: TileSlots {
                 epoch: cache.eviction_epoch(),
                 cache,
@@ -176,6 +240,7 @@ impl QuerySession {
                 tile_cols: cols as usize,
                 slots: vec![None; rows as usize * cols as usize],
                 uncached: 0,
+                culture: HashMap::new(),
             },
         }
     }
@@ -316,8 +381,25 @@ impl QuerySession {
         Ok((point.alt_m - s.height_ellipsoid_m(), s))
     }
 
-    /// Line of sight between two geodetic points (altitudes above the ellipsoid).
+    /// Line of sight between two geodetic points (altitudes above the ellipsoid): stopped by
+    /// the terrain and by every culture object but fences ([`CultureTest::LineOfSight`]).
     pub fn los(&mut self, from: Geodetic, to: Geodetic) -> Result<LosResult, QueryError> {
+        self.los_with(from, to, CultureTest::LineOfSight)
+    }
+
+    /// A collision segment between two geodetic points: where it first meets the terrain or
+    /// any culture object, fences included ([`CultureTest::Collision`]).
+    pub fn collision(&mut self, from: Geodetic, to: Geodetic) -> Result<LosResult, QueryError> {
+        self.los_with(from, to, CultureTest::Collision)
+    }
+
+    /// Line of sight seeing the culture objects `test` counts (none: the bare terrain).
+    pub fn los_with(
+        &mut self,
+        from: Geodetic,
+        to: Geodetic,
+        test: CultureTest,
+    ) -> Result<LosResult, QueryError> {
         for p in [from, to] {
             if !(p.lat_deg.is_finite() && p.lon_deg.is_finite())
                 || p.lat_deg.abs() > 90.0
@@ -359,7 +441,14 @@ impl QuerySession {
                     end.alt_m - self.geoid.undulation_m(end.lat_deg, end.lon_deg),
                 ),
             };
-            if let Some((s, material, level)) = self.trace_piece(&piece, &mut crosses)? {
+            let terrain = self.trace_piece(&piece, &mut crosses)?;
+            let culture = self.trace_culture(&piece, terrain.map_or(1.0, |(s, _, _)| s), test)?;
+            let hit = match (culture, terrain) {
+                (Some((s, hit, material)), _) => Some((s, material, 0, Some(hit))),
+                (None, Some((s, material, level))) => Some((s, material, level, None)),
+                (None, None) => None,
+            };
+            if let Some((s, material, level, culture)) = hit {
                 let t = t0 + s * (t1 - t0);
                 return Ok(LosResult {
                     visible: false,
@@ -368,6 +457,7 @@ impl QuerySession {
                         range_m: t * length_m,
                         material,
                         level,
+                        culture,
                     }),
                 });
             }
@@ -501,6 +591,328 @@ impl QuerySession {
         }
         Ok(None)
     }
+
+    /// Height of the highest surface at a point counting the culture objects' tops (a
+    /// building's roof, as its box, a crown's top, a pole's top), with the bare terrain. Every
+    /// object counts, fences included. Objects are taken from the point's finest tile and from
+    /// the tiles around it that are at hand (see the module's limits).
+    pub fn hot_with_culture(
+        &mut self,
+        lat_deg: f64,
+        lon_deg: f64,
+    ) -> Result<CultureSurface, QueryError> {
+        let terrain = self.hot(lat_deg, lon_deg)?;
+        let mut out = CultureSurface {
+            terrain,
+            height_msl_m: terrain.height_msl_m,
+            normal_enu: terrain.normal_enu,
+            culture: None,
+        };
+        if self.db.manifest().culture.is_none() {
+            return Ok(out);
+        }
+        let home = self.cell(lat_deg, lon_deg)?.key;
+        let g = self.layout.grid;
+        let col = (lon_deg - g.west_lon_deg) / g.dlon_deg;
+        let row = (lat_deg - g.south_lat_deg) / g.dlat_deg;
+        let (bx, by) = self.footprint_bound_posts;
+        let cells = f64::from(self.layout.tile_cells);
+        let (tiles_r, tiles_c) = self.layout.tiles_at(0);
+        let (c_lo, c_hi) = tile_span(col - bx, col + bx, cells, tiles_c);
+        let (r_lo, r_hi) = tile_span(row - by, row + by, cells, tiles_r);
+        for tr in r_lo..=r_hi {
+            for tc in c_lo..=c_hi {
+                let key = TileKey {
+                    level: 0,
+                    row: tr,
+                    col: tc,
+                };
+                let tile = if key == home {
+                    Some(self.tiles.get_arc(key)?)
+                } else {
+                    self.tiles.at_hand(key)
+                };
+                let Some(index) = tile.and_then(|t| self.tiles.culture_index(key, &t)) else {
+                    continue;
+                };
+                self.culture_top_in_tile(&index, key, col, row, &mut out);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Height above the highest surface counting culture ([`QuerySession::hot_with_culture`])
+    /// of a geodetic point (altitude above the ellipsoid), with that surface.
+    pub fn hat_with_culture(
+        &mut self,
+        point: Geodetic,
+    ) -> Result<(f64, CultureSurface), QueryError> {
+        let s = self.hot_with_culture(point.lat_deg, point.lon_deg)?;
+        Ok((point.alt_m - s.height_ellipsoid_m(), s))
+    }
+
+    /// Raises `out` to the highest top of `index`'s objects over finest-grid `(col, row)`.
+    fn culture_top_in_tile(
+        &self,
+        index: &CultureIndex,
+        key: TileKey,
+        col: f64,
+        row: f64,
+        out: &mut CultureSurface,
+    ) {
+        let cells = f64::from(self.layout.tile_cells);
+        let (ox, oy) = (f64::from(key.col) * cells, f64::from(key.row) * cells);
+        let [east_m, north_m] = index.min_m_per_post;
+        let (mx, my) = (index.footprint_m / east_m, index.footprint_m / north_m);
+        let (lx, ly) = (col - ox, row - oy);
+        if lx < -mx || lx > cells + mx || ly < -my || ly > cells + my {
+            return;
+        }
+        let block = CULTURE_BLOCK_CELLS as f64;
+        let max_block = CultureIndex::blocks_per_side(self.layout.tile_cells) - 1;
+        let (br_lo, br_hi) = block_span(ly - my, ly + my, block, max_block);
+        let (bc_lo, bc_hi) = block_span(lx - mx, lx + mx, block, max_block);
+        let items = index.items();
+        for br in br_lo..=br_hi {
+            for b in index.blocks_in_row(br, bc_lo, bc_hi) {
+                if f64::from(b.top_msl_m) <= out.height_msl_m {
+                    continue;
+                }
+                let (bmx, bmy) = (
+                    f64::from(b.footprint_m) / east_m,
+                    f64::from(b.footprint_m) / north_m,
+                );
+                let (x0, y0) = (
+                    f64::from(b.block_col) * block,
+                    f64::from(b.block_row) * block,
+                );
+                if lx < x0 - bmx || lx > x0 + block + bmx || ly < y0 - bmy || ly > y0 + block + bmy
+                {
+                    continue;
+                }
+                for k in index.block_items(b) {
+                    let item = &items[k];
+                    let r = f64::from(item.footprint_radius_m());
+                    if f64::from(item.base_m + item.height_m) <= out.height_msl_m
+                        || (lx - f64::from(item.fj)).abs() > r / east_m
+                        || (ly - f64::from(item.fi)).abs() > r / north_m
+                    {
+                        continue;
+                    }
+                    let frame = ItemFrame::new(&self.layout, key, item);
+                    let p = frame.local(col, row, 0.0);
+                    for volume in item.volume().into_iter().flatten() {
+                        if let Some((z, normal)) = top_at(&volume, p[0], p[1]) {
+                            let top = frame.base_m + z;
+                            if top > out.height_msl_m {
+                                out.height_msl_m = top;
+                                out.normal_enu = frame.to_enu(normal);
+                                out.culture = Some(CultureHit {
+                                    kind: item.kind,
+                                    tile: key,
+                                    index: k,
+                                    item: *item,
+                                    normal_enu: out.normal_enu,
+                                });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// First culture object `test` counts that the piece enters in `[0, s_hi]`: (parameter in
+    /// the piece, the object, the terrain's material under its centre).
+    fn trace_culture(
+        &mut self,
+        piece: &Piece,
+        s_hi: f64,
+        test: CultureTest,
+    ) -> Result<Option<(f64, CultureHit, Material)>, QueryError> {
+        if test == CultureTest::Ignore
+            || self.db.manifest().culture.is_none()
+            || s_hi.is_nan()
+            || s_hi < 0.0
+        {
+            return Ok(None);
+        }
+        let g = self.layout.grid;
+        let (max_x, max_y) = ((g.cols - 1) as f64, (g.rows - 1) as f64);
+        let (dx, dy) = (piece.x1 - piece.x0, piece.y1 - piece.y0);
+        let (bx, by) = self.footprint_bound_posts;
+        let Some((s0, s1)) = clip(piece.x0, dx, -bx, max_x + bx, 0.0, s_hi)
+            .and_then(|(a, b)| clip(piece.y0, dy, -by, max_y + by, a, b))
+        else {
+            return Ok(None);
+        };
+        let highest_top = f64::from(self.db.manifest().max_elevation_m) + tallest_object_m();
+        if piece.alt.min_on(s0, s1) > highest_top {
+            return Ok(None);
+        }
+        // The stretch over the database proper: the tiles under it are the terrain walk's.
+        let over = clip(piece.x0, dx, 0.0, max_x, s0, s1)
+            .and_then(|(a, b)| clip(piece.y0, dy, 0.0, max_y, a, b));
+        let cells = f64::from(self.layout.tile_cells);
+        let (tiles_r, tiles_c) = self.layout.tiles_at(0);
+        let (xa, xb) = (piece.x0 + dx * s0, piece.x0 + dx * s1);
+        let (ya, yb) = (piece.y0 + dy * s0, piece.y0 + dy * s1);
+        let (c_lo, c_hi) = tile_span(xa.min(xb) - bx, xa.max(xb) + bx, cells, tiles_c);
+        let (r_lo, r_hi) = tile_span(ya.min(yb) - by, ya.max(yb) + by, cells, tiles_r);
+        let mut best: Option<(f64, CultureHit, Material)> = None;
+        // Tiles, block rows and blocks are visited in the piece's direction, so that the first
+        // hit found caps the stretch the rest are tested over.
+        for tr in along(r_lo, r_hi, dy) {
+            for tc in along(c_lo, c_hi, dx) {
+                let key = TileKey {
+                    level: 0,
+                    row: tr,
+                    col: tc,
+                };
+                let (x_lo, y_lo) = (f64::from(tc) * cells, f64::from(tr) * cells);
+                let (x_hi, y_hi) = ((x_lo + cells).min(max_x), (y_lo + cells).min(max_y));
+                let s_cap = best.map_or(s1, |(s, _, _)| s);
+                // Not within the widest footprint of the tile: nothing of it can be met.
+                if clip(piece.x0, dx, x_lo - bx, x_hi + bx, s0, s_cap)
+                    .and_then(|(a, b)| clip(piece.y0, dy, y_lo - by, y_hi + by, a, b))
+                    .is_none()
+                {
+                    continue;
+                }
+                let passes_over = over
+                    .and_then(|(a, b)| clip(piece.x0, dx, x_lo, x_hi, a, b.min(s_cap)))
+                    .and_then(|(a, b)| clip(piece.y0, dy, y_lo, y_hi, a, b))
+                    .is_some();
+                let tile = if passes_over {
+                    Some(self.tiles.get_arc(key)?)
+                } else {
+                    self.tiles.at_hand(key)
+                };
+                let Some(index) = tile.and_then(|t| self.tiles.culture_index(key, &t)) else {
+                    continue;
+                };
+                if let Some(hit) = self.culture_in_tile(&index, key, piece, s0, s_cap, test) {
+                    if best.is_none_or(|(s, _, _)| hit.0 < s) {
+                        best = Some(hit);
+                    }
+                }
+            }
+        }
+        Ok(best)
+    }
+
+    /// [`QuerySession::trace_culture`] on one tile's objects, over `[s_lo, s_hi]`.
+    fn culture_in_tile(
+        &self,
+        index: &CultureIndex,
+        key: TileKey,
+        piece: &Piece,
+        s_lo: f64,
+        s_hi: f64,
+        test: CultureTest,
+    ) -> Option<(f64, CultureHit, Material)> {
+        let cells = f64::from(self.layout.tile_cells);
+        let (ox, oy) = (f64::from(key.col) * cells, f64::from(key.row) * cells);
+        let [east_m, north_m] = index.min_m_per_post;
+        let (mx, my) = (index.footprint_m / east_m, index.footprint_m / north_m);
+        let (dx, dy) = (piece.x1 - piece.x0, piece.y1 - piece.y0);
+        let (sa, sb) = clip(piece.x0, dx, ox - mx, ox + cells + mx, s_lo, s_hi)
+            .and_then(|(a, b)| clip(piece.y0, dy, oy - my, oy + cells + my, a, b))?;
+        if piece.alt.min_on(sa, sb) > index.top_msl_m {
+            return None;
+        }
+        let block = CULTURE_BLOCK_CELLS as f64;
+        let max_block = CultureIndex::blocks_per_side(self.layout.tile_cells) - 1;
+        let (ya, yb) = (piece.y0 + dy * sa - oy, piece.y0 + dy * sb - oy);
+        let (br_lo, br_hi) = block_span(ya.min(yb) - my, ya.max(yb) + my, block, max_block);
+        let items = index.items();
+        let tile = &index.tile;
+        let mut best: Option<(f64, CultureHit, Material)> = None;
+        let mut s_cap = sb;
+        for br in along(br_lo, br_hi, dy) {
+            let y_band = oy + f64::from(br) * block;
+            let Some((sc, sd)) = clip(piece.y0, dy, y_band - my, y_band + block + my, sa, s_cap)
+            else {
+                continue;
+            };
+            let (xc, xd) = (piece.x0 + dx * sc - ox, piece.x0 + dx * sd - ox);
+            let (bc_lo, bc_hi) = block_span(xc.min(xd) - mx, xc.max(xd) + mx, block, max_block);
+            let row_blocks = index.blocks_in_row(br, bc_lo, bc_hi);
+            for n in along(0, row_blocks.len() as u32, dx) {
+                let Some(b) = row_blocks.get(n as usize) else {
+                    continue;
+                };
+                let (bmx, bmy) = (
+                    f64::from(b.footprint_m) / east_m,
+                    f64::from(b.footprint_m) / north_m,
+                );
+                let bx0 = ox + f64::from(b.block_col) * block;
+                let by0 = oy + f64::from(b.block_row) * block;
+                let Some((se, sf)) = clip(piece.x0, dx, bx0 - bmx, bx0 + block + bmx, sc, s_cap)
+                    .and_then(|(a, b)| clip(piece.y0, dy, by0 - bmy, by0 + block + bmy, a, b))
+                else {
+                    continue;
+                };
+                if piece.alt.min_on(se, sf) > f64::from(b.top_msl_m) {
+                    continue;
+                }
+                for k in index.block_items(b) {
+                    let item = &items[k];
+                    if !test.counts(item.kind) {
+                        continue;
+                    }
+                    let r = f64::from(item.footprint_radius_m());
+                    let (gx, gy) = (ox + f64::from(item.fj), oy + f64::from(item.fi));
+                    let Some((sg, sh)) = clip(
+                        piece.x0,
+                        dx,
+                        gx - r / east_m,
+                        gx + r / east_m,
+                        se,
+                        sf.min(s_cap),
+                    )
+                    .and_then(|(a, b)| {
+                        clip(piece.y0, dy, gy - r / north_m, gy + r / north_m, a, b)
+                    }) else {
+                        continue;
+                    };
+                    if piece.alt.min_on(sg, sh) > f64::from(item.base_m + item.height_m) {
+                        continue;
+                    }
+                    // Straight across the footprint: the altitude's chord between its ends.
+                    let frame = ItemFrame::new(&self.layout, key, item);
+                    let at =
+                        |s: f64| frame.local(piece.x0 + dx * s, piece.y0 + dy * s, piece.alt.at(s));
+                    let (p0, p1) = (at(sg), at(sh));
+                    for volume in item.volume().into_iter().flatten() {
+                        let Some(entry) = segment_entry(&volume, p0, p1) else {
+                            continue;
+                        };
+                        let s = sg + entry.t * (sh - sg);
+                        if s > s_cap || best.is_some_and(|(b, _, _)| s >= b) {
+                            continue;
+                        }
+                        let n = tile.posts_per_side;
+                        let ni = (f64::from(item.fi).round().max(0.0) as usize).min(n - 1);
+                        let nj = (f64::from(item.fj).round().max(0.0) as usize).min(n - 1);
+                        s_cap = s;
+                        best = Some((
+                            s,
+                            CultureHit {
+                                kind: item.kind,
+                                tile: key,
+                                index: k,
+                                item: *item,
+                                normal_enu: frame.to_enu(entry.normal),
+                            },
+                            tile.material_at(ni, nj),
+                        ));
+                    }
+                }
+            }
+        }
+        best
+    }
 }
 
 impl TileSlots {
@@ -508,13 +920,21 @@ impl TileSlots {
     /// readable coarser level.
     #[inline]
     fn get(&mut self, key: TileKey) -> Result<&Tile, QueryError> {
+        self.get_slot(key).map(|t| &**t)
+    }
+
+    /// [`TileSlots::get`], as the shared tile.
+    fn get_arc(&mut self, key: TileKey) -> Result<Arc<Tile>, QueryError> {
+        self.get_slot(key).map(Arc::clone)
+    }
+
+    #[inline]
+    fn get_slot(&mut self, key: TileKey) -> Result<&Arc<Tile>, QueryError> {
         let epoch = self.cache.eviction_epoch();
         let slot = key.row as usize * self.tile_cols + key.col as usize;
         let missing = !matches!(self.slots.get(slot), Some(Some(_)));
         if epoch != self.epoch || (missing && self.uncached >= SESSION_TILES) {
-            self.slots.iter_mut().for_each(|s| *s = None);
-            self.uncached = 0;
-            self.epoch = epoch;
+            self.forget(epoch);
         }
         let entry = self
             .slots
@@ -525,8 +945,73 @@ impl TileSlots {
             *entry = Some(tile);
             self.uncached += usize::from(!cached);
         }
-        entry.as_deref().ok_or(QueryError::NoSuchTile(key))
+        entry.as_ref().ok_or(QueryError::NoSuchTile(key))
     }
+
+    /// Forgets every slotted tile and culture index.
+    fn forget(&mut self, epoch: u64) {
+        self.slots.iter_mut().for_each(|s| *s = None);
+        self.culture.clear();
+        self.uncached = 0;
+        self.epoch = epoch;
+    }
+
+    /// The finest tile `key` if it is at hand without a load: in a slot or resident in the
+    /// cache.
+    fn at_hand(&mut self, key: TileKey) -> Option<Arc<Tile>> {
+        let epoch = self.cache.eviction_epoch();
+        if epoch != self.epoch {
+            self.forget(epoch);
+        }
+        let (rows, cols) = self.layout.tiles_at(0);
+        if key.level != 0 || key.row >= rows || key.col >= cols {
+            return None;
+        }
+        let entry = self
+            .slots
+            .get_mut(key.row as usize * self.tile_cols + key.col as usize)?;
+        if let Some(tile) = entry {
+            return Some(Arc::clone(tile));
+        }
+        let tile = self.cache.resident(key)?;
+        *entry = Some(Arc::clone(&tile));
+        Some(tile)
+    }
+
+    /// The culture index of `tile` (slotted as `key`), built on first use; `None` where the
+    /// tile has no culture.
+    fn culture_index(&mut self, key: TileKey, tile: &Arc<Tile>) -> Option<Arc<CultureIndex>> {
+        if tile.culture.as_ref().is_none_or(|c| c.items.is_empty()) {
+            return None;
+        }
+        if let Some(index) = self.culture.get(&key) {
+            if Arc::ptr_eq(&index.tile, tile) {
+                return Some(Arc::clone(index));
+            }
+        }
+        let index = Arc::new(CultureIndex::new(&self.layout, Arc::clone(tile))?);
+        self.culture.insert(key, Arc::clone(&index));
+        Some(index)
+    }
+}
+
+/// Tiles `lo..=hi` of `count` that finest-grid coordinates `lo..=hi` fall in (clamped).
+fn tile_span(lo: f64, hi: f64, cells: f64, count: u32) -> (u32, u32) {
+    let last = count.saturating_sub(1);
+    let at = |v: f64| ((v / cells).floor().max(0.0) as u32).min(last);
+    (at(lo), at(hi))
+}
+
+/// `lo..=hi`, upwards where `d` is not negative and downwards where it is.
+fn along(lo: u32, hi: u32, d: f64) -> impl Iterator<Item = u32> {
+    let forward = d >= 0.0;
+    (0..=hi.saturating_sub(lo)).map(move |k| if forward { lo + k } else { hi - k })
+}
+
+/// Blocks `lo..=hi` (at most `max_block`) that tile-local coordinates `lo..=hi` fall in.
+fn block_span(lo: f64, hi: f64, block: f64, max_block: u32) -> (u32, u32) {
+    let at = |v: f64| ((v / block).floor().max(0.0) as u32).min(max_block);
+    (at(lo), at(hi))
 }
 
 /// Loads a finest tile, or rebuilds it from the nearest readable coarser level.
