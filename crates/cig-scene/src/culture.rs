@@ -273,16 +273,13 @@ impl CultureSelector {
                             let [he, hn] = item.heading;
                             let along = block.east * he + block.north * hn;
                             let normal = block.east * hn - block.north * he;
-                            ne_of_face(
-                                select,
-                                klod,
+                            let face = Face {
                                 centre,
                                 along,
                                 normal,
-                                [0.5 * item.size_m[1], 0.5 * item.size_m[2]],
-                                fog,
-                                angle_deg,
-                            )
+                                radii_m: [0.5 * item.size_m[1], 0.5 * item.size_m[2]],
+                            };
+                            ne_of_face(select, klod, &face, fog, angle_deg)
                         } else {
                             select.detail.ne(
                                 klod,
@@ -376,6 +373,16 @@ impl CultureSelector {
     }
 }
 
+/// A vertical face seen by Eq 17: its centre (eye-relative), long axis and normal (unit
+/// vectors), half length and half height.
+#[derive(Clone, Copy, Debug)]
+struct Face {
+    centre: Vec3,
+    along: Vec3,
+    normal: Vec3,
+    radii_m: [f32; 2],
+}
+
 /// `N_e` of a vertical face (a wall or a fence) centred `centre` (eye-relative), its long axis
 /// `along` and its normal `normal` (unit vectors), of half length and half height `radii_m`:
 /// source 004 Eq 17 with Eq 15's effective radius toward the eye's foot in the face's plane,
@@ -383,13 +390,16 @@ impl CultureSelector {
 fn ne_of_face(
     select: &CultureSelect<'_>,
     klod: f64,
-    centre: Vec3,
-    along: Vec3,
-    normal: Vec3,
-    radii_m: [f32; 2],
+    face: &Face,
     fade: f64,
     angle_deg: f64,
 ) -> f64 {
+    let Face {
+        centre,
+        along,
+        normal,
+        radii_m,
+    } = *face;
     let rel = centre.as_dvec3();
     let n = normal.as_dvec3();
     let off_plane_m = rel.dot(n).abs();
@@ -423,7 +433,7 @@ fn ne_of_face(
 /// first step over one step only (gone at half the first step's value).
 pub fn culture_blend(ne: f64, levels: usize, table: &DetailTable) -> LodBlend {
     let first = table.value(1);
-    if !(ne >= first * FADE_OUT_START) {
+    if ne.is_nan() || ne < first * FADE_OUT_START {
         return LodBlend {
             coverage: 0.0,
             ..LodBlend::single(levels.saturating_sub(1))
@@ -800,10 +810,12 @@ mod tests {
         let face_on = ne_of_face(
             &select,
             1467.0,
-            Vec3::new(0.0, 100.0, 0.0),
-            along,
-            normal,
-            [10.0, 1.0],
+            &Face {
+                centre: Vec3::new(0.0, 100.0, 0.0),
+                along,
+                normal,
+                radii_m: [10.0, 1.0],
+            },
             0.0,
             0.0,
         );
@@ -813,10 +825,12 @@ mod tests {
         let edge_on = ne_of_face(
             &select,
             1467.0,
-            Vec3::new(100.0, 0.0, 0.0),
-            along,
-            normal,
-            [10.0, 1.0],
+            &Face {
+                centre: Vec3::new(100.0, 0.0, 0.0),
+                along,
+                normal,
+                radii_m: [10.0, 1.0],
+            },
             0.0,
             0.0,
         );
@@ -824,10 +838,12 @@ mod tests {
         let oblique = ne_of_face(
             &select,
             1467.0,
-            Vec3::new(70.7, 70.7, 0.0),
-            along,
-            normal,
-            [10.0, 1.0],
+            &Face {
+                centre: Vec3::new(70.7, 70.7, 0.0),
+                along,
+                normal,
+                radii_m: [10.0, 1.0],
+            },
             0.0,
             0.0,
         );
@@ -841,10 +857,12 @@ mod tests {
         let fogged = ne_of_face(
             &select,
             1467.0,
-            Vec3::new(0.0, 100.0, 0.0),
-            along,
-            normal,
-            [10.0, 1.0],
+            &Face {
+                centre: Vec3::new(0.0, 100.0, 0.0),
+                along,
+                normal,
+                radii_m: [10.0, 1.0],
+            },
             0.985,
             0.0,
         );
