@@ -252,9 +252,13 @@ struct InstanceRecord {
     origin: [f32; 4],
 }
 
+/// One level of a model in the shared buffers: first index, index count, base vertex,
+/// triangles.
+type LevelRange = (u32, u32, i32, u32);
+
 struct GpuModel {
     /// Per level: first index, index count, base vertex, triangles.
-    lods: Vec<(u32, u32, i32, u32)>,
+    lods: Vec<LevelRange>,
     model: Model,
 }
 
@@ -1108,9 +1112,9 @@ impl Renderer {
             CultureFrame::default()
         };
         let culture_cpu_ms = culture_started.elapsed().as_secs_f64() * 1e3;
-        // Culture draws: (first index, count, base vertex, triangles), first instance, count.
+        // Culture draws: a level's range, first instance and instance count.
         let culture_first = instance_records.len();
-        let mut culture_draws: Vec<((u32, u32, i32, u32), u32, u32)> = Vec::new();
+        let mut culture_draws: Vec<(LevelRange, u32, u32)> = Vec::new();
         let binding_records = self.gpu.device.limits().max_storage_buffer_binding_size as usize
             / std::mem::size_of::<InstanceRecord>();
         let room = MAX_CULTURE_INSTANCES
