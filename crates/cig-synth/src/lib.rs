@@ -18,6 +18,10 @@
 //!    polylines along the D8 receivers, lake shores traced between the posts where the ground
 //!    meets the water level), for draped imagery and `cig_terrain::features::level_terrain`.
 //!    They do not change the raster.
+//! 6. `culture` (on request, [`culture::place_culture`]): buildings, garden walls and fences
+//!    along the roads in and between the settlements, power poles beside the paved roads, and
+//!    trees and bushes scattered by material in stands with clearings
+//!    ([`culture::scatter_by_material`], which also serves imported rasters).
 //!
 //! Everything is in metres, so the landscape does not depend on the post spacing: a 90 m and a
 //! 30 m database of the same seed, origin and size show the same hills.
@@ -36,6 +40,7 @@
 //! coarse landform's outlets and the road network depend on the area's extent. The local metric
 //! frame is a flat square of `size_km` on a side about the area's centre latitude.
 
+pub mod culture;
 mod features;
 mod flood;
 mod hydro;

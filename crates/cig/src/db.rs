@@ -105,6 +105,7 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
             images: &args.imagery,
             features: &features,
             culture: &[],
+            culture_rules: None,
         },
         &args.out,
         args.force,
