@@ -1,4 +1,5 @@
-//! Feature files: roads, rivers and lakes as GeoJSON (RFC 7946), for `--features FILE`.
+//! Feature files: roads, rivers and lakes as GeoJSON (RFC 7946), for `--features FILE`, and
+//! the culture of the same file ([`crate::culture`]).
 //!
 //! A FeatureCollection (or a single Feature) whose features carry
 //!
@@ -9,9 +10,14 @@
 //!   `lake`; `width_m`, the width in metres, required for lines; `level_m`, the water level in
 //!   metres MSL, optional for lakes.
 //!
-//! Each part of a Multi geometry becomes its own [`Feature`]. Errors are one line, the reason
-//! first (with the file's feature index) and the file last; nothing in the file can panic.
+//! Each part of a Multi geometry becomes its own [`Feature`]. A feature whose `type` names a
+//! culture kind (`conifer_tree`, `house`, `wall`, ...) is culture, read by [`crate::culture`]
+//! into [`FeatureFile::culture`]; [`read_features`] checks it and leaves it out. Errors are one
+//! line, the reason first (with the file's feature index, and its `id` for culture) and the
+//! file last (broken JSON with its line and column); nothing in the file can panic.
 
+use crate::culture::{culture_feature, CultureFeature, MAX_CULTURE_OBJECTS};
+use cig_terrain::culture::CultureKind;
 use cig_terrain::features::{Feature, FeatureError, FeatureKind};
 use geojson::{GeoJson, JsonObject, JsonValue, Value};
 use std::path::{Path, PathBuf};
@@ -30,13 +36,26 @@ pub enum FeatureFileError {
     Invalid { path: PathBuf, reason: String },
 }
 
-/// Reads a GeoJSON feature file.
+/// What a feature file holds: roads, rivers and lakes, and culture.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FeatureFile {
+    pub features: Vec<Feature>,
+    pub culture: Vec<CultureFeature>,
+}
+
+/// Reads a GeoJSON feature file's roads, rivers and lakes (its culture is checked and left
+/// out).
 pub fn read_features(path: &Path) -> Result<Vec<Feature>, FeatureFileError> {
+    read_feature_file(path).map(|f| f.features)
+}
+
+/// Reads a GeoJSON feature file: roads, rivers, lakes and culture.
+pub fn read_feature_file(path: &Path) -> Result<FeatureFile, FeatureFileError> {
     let text = std::fs::read_to_string(path).map_err(|source| FeatureFileError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    parse_features(&text).map_err(|e| match e {
+    parse_feature_file(&text).map_err(|e| match e {
         ParseError::NotGeoJson(reason) => FeatureFileError::NotGeoJson {
             path: path.to_path_buf(),
             reason,
@@ -57,10 +76,26 @@ pub enum ParseError {
     Invalid(String),
 }
 
-/// Parses GeoJSON text into features.
+/// Parses GeoJSON text into roads, rivers and lakes (culture checked and left out).
 pub fn parse_features(text: &str) -> Result<Vec<Feature>, ParseError> {
-    let geojson: GeoJson = text
-        .parse()
+    parse_feature_file(text).map(|f| f.features)
+}
+
+/// Every `type` a feature may have, for messages.
+fn known_types() -> String {
+    let culture: Vec<&str> = CultureKind::ALL.iter().map(|k| k.name()).collect();
+    format!(
+        "paved_road, road, dirt_road, track, river, lake, {}",
+        culture.join(", ")
+    )
+}
+
+/// Parses GeoJSON text into roads, rivers, lakes and culture.
+pub fn parse_feature_file(text: &str) -> Result<FeatureFile, ParseError> {
+    // Parsed as JSON first: its errors name the line and column.
+    let json: JsonValue =
+        serde_json::from_str(text).map_err(|e| ParseError::NotGeoJson(one_line(&e.to_string())))?;
+    let geojson = GeoJson::from_json_value(json)
         .map_err(|e: geojson::Error| ParseError::NotGeoJson(one_line(&e.to_string())))?;
     let features = match geojson {
         GeoJson::FeatureCollection(fc) => fc.features,
@@ -71,25 +106,50 @@ pub fn parse_features(text: &str) -> Result<Vec<Feature>, ParseError> {
             ))
         }
     };
-    let mut out = Vec::new();
+    let mut out = FeatureFile::default();
+    let mut culture_budget = MAX_CULTURE_OBJECTS;
     for (index, f) in features.iter().enumerate() {
+        let id = f.id.as_ref().map(|id| match id {
+            geojson::feature::Id::String(s) => s.clone(),
+            geojson::feature::Id::Number(n) => n.to_string(),
+        });
+        let label = crate::culture::feature_label(index, id.as_deref());
         let invalid = |reason: String| ParseError::Invalid(format!("{reason} (feature {index})"));
         let empty = JsonObject::new();
         let props = f.properties.as_ref().unwrap_or(&empty);
         let name = match props.get("type") {
             Some(JsonValue::String(s)) => s.clone(),
-            Some(_) => return Err(invalid("property type is not a string".to_string())),
-            None => return Err(invalid("property type is missing".to_string())),
+            Some(_) => {
+                return Err(ParseError::Invalid(format!(
+                    "property type is not a string ({label})"
+                )))
+            }
+            None => {
+                return Err(ParseError::Invalid(format!(
+                    "property type is missing ({label})"
+                )))
+            }
         };
-        let kind = FeatureKind::from_name(&name).ok_or_else(|| {
-            ParseError::Invalid(
-                FeatureError::UnknownKind {
-                    index,
-                    name: name.clone(),
-                }
-                .to_string(),
-            )
-        })?;
+        let Some(kind) = FeatureKind::from_name(&name) else {
+            let Some(culture) = CultureKind::from_name(&name.trim().to_ascii_lowercase()) else {
+                return Err(ParseError::Invalid(format!(
+                    "unknown type {name:?}, expected one of {} ({label})",
+                    known_types()
+                )));
+            };
+            let geometry = f.geometry.as_ref().ok_or_else(|| {
+                ParseError::Invalid(format!("the feature has no geometry ({label})"))
+            })?;
+            out.culture.push(culture_feature(
+                index,
+                id,
+                culture,
+                props,
+                &geometry.value,
+                &mut culture_budget,
+            )?);
+            continue;
+        };
         let number = |key: &str| -> Result<Option<f64>, ParseError> {
             match props.get(key) {
                 None | Some(JsonValue::Null) => Ok(None),
@@ -175,7 +235,7 @@ pub fn parse_features(text: &str) -> Result<Vec<Feature>, ParseError> {
             m.validate(index)
                 .map_err(|e| ParseError::Invalid(e.to_string()))?;
         }
-        out.extend(made);
+        out.features.extend(made);
     }
     Ok(out)
 }

@@ -125,6 +125,75 @@ pub fn write_culture(
     Ok(Some(manifest))
 }
 
+/// Replaces the culture of the database at `db` with `placements` (none removes it): the new
+/// database is assembled in a staging sibling directory (every other file hard-linked, or
+/// copied where links are refused), its culture and manifest written there, and renamed over
+/// `db` only when complete. On any error (a placement outside the database among them) `db` is
+/// unchanged. Returns the new manifest.
+pub fn replace_culture(
+    db: &Path,
+    placements: &[cig_terrain::CulturePlacement],
+) -> Result<Manifest, DbError> {
+    let database = open_database(db)?;
+    let mut manifest = database.manifest().clone();
+    drop(database);
+    let staging = staging_sibling(db, "culture")?;
+    let result = (|| -> Result<(), DbError> {
+        link_tree(db, &staging, &["culture", MANIFEST_FILE])?;
+        manifest.culture = write_culture(&staging, &manifest.layout, placements)?;
+        write_manifest(&staging, &manifest)?;
+        Ok(())
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_dir_all(&staging);
+        return Err(e);
+    }
+    swap_into_place(&staging, db)?;
+    Ok(manifest)
+}
+
+/// A fresh hidden sibling directory's path for staging a change of `db`
+/// (`.<name>.<what>-<pid>`), anything left there by an earlier process removed.
+pub(crate) fn staging_sibling(db: &Path, what: &str) -> Result<PathBuf, DbError> {
+    let parent = match db.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = db
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .ok_or_else(|| DbError::Io {
+            reason: "database path has no directory name".into(),
+            path: db.to_path_buf(),
+        })?;
+    let staging = parent.join(format!(".{name}.{what}-{}", std::process::id()));
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging).map_err(|e| io_err(&staging, e))?;
+    }
+    Ok(staging)
+}
+
+/// Mirrors `from` into a new directory `to`, files hard-linked (copied where linking fails);
+/// the entries of `from` named in `skip` (at the top level only) are left out.
+pub(crate) fn link_tree(from: &Path, to: &Path, skip: &[&str]) -> Result<(), DbError> {
+    std::fs::create_dir(to).map_err(|e| io_err(to, e))?;
+    for entry in std::fs::read_dir(from).map_err(|e| io_err(from, e))? {
+        let entry = entry.map_err(|e| io_err(from, e))?;
+        let name = entry.file_name();
+        if skip.iter().any(|s| name == *s) {
+            continue;
+        }
+        let (src, dst) = (entry.path(), to.join(&name));
+        let kind = entry.file_type().map_err(|e| io_err(&src, e))?;
+        if kind.is_dir() {
+            link_tree(&src, &dst, &[])?;
+        } else if std::fs::hard_link(&src, &dst).is_err() {
+            std::fs::copy(&src, &dst).map_err(|e| io_err(&src, e))?;
+        }
+    }
+    Ok(())
+}
+
 /// A tile file's bytes; `Missing` when there is no such file.
 fn read_store_file(path: &Path) -> Result<Vec<u8>, StoreError> {
     std::fs::read(path).map_err(|e| {

@@ -179,6 +179,10 @@ pub enum DbCommand {
     /// Add orthoimagery (GeoTIFF, EPSG:4326 or UTM) to a database, replacing its imagery; the
     /// database is unchanged if anything fails.
     Imagery(ImageryArgs),
+    /// Replace a database's culture with the culture of a feature file (as `import
+    /// --features` reads it; its roads, rivers and lakes are laid only at import); the
+    /// database is unchanged if anything fails.
+    Culture(CultureArgs),
     /// Describe a database.
     Info(InfoArgs),
 }
@@ -220,10 +224,16 @@ pub struct ImportArgs {
     /// the database; finer images are drawn over coarser ones.
     #[arg(long, num_args = 1.., value_name = "IMAGE")]
     pub imagery: Vec<PathBuf>,
-    /// Roads, rivers and lakes as shapes: a GeoJSON file of LineStrings (property "type":
-    /// paved_road, dirt_road or river, and "width_m") and Polygons ("type": lake, optional
-    /// "level_m"), WGS84 [lon, lat]. Roads are painted at their width with markings and the
-    /// ground levelled across them; lakes are flat at their level.
+    /// Roads, rivers, lakes and culture: a GeoJSON file, WGS84 [lon, lat]. Roads and rivers
+    /// are LineStrings (property "type": paved_road, dirt_road or river, and "width_m"), lakes
+    /// Polygons ("type": lake, optional "level_m"): roads are painted at their width with
+    /// markings and the ground levelled across them; lakes are flat at their level. Culture
+    /// ("type": conifer_tree, broadleaf_tree, bush, house, shed, large_building, wall, fence or
+    /// power_pole; "height_m", required for buildings, walls and fences; optional "width_m",
+    /// "length_m", "heading_deg", "spacing_m") stands on the terrain: Points are single
+    /// objects, building Polygons footprints, tree and bush Polygons stands at
+    /// "density_per_ha", wall and fence LineStrings cut into segments, power pole LineStrings
+    /// a pole every "spacing_m" (default 50 m).
     #[arg(long, value_name = "FILE")]
     pub features: Option<PathBuf>,
 }
@@ -236,6 +246,15 @@ pub struct ImageryArgs {
     /// are drawn over coarser ones.
     #[arg(required = true)]
     pub images: Vec<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct CultureArgs {
+    /// Database directory.
+    pub db: PathBuf,
+    /// GeoJSON feature file whose culture features replace the database's culture (a file
+    /// without any removes it).
+    pub features: PathBuf,
 }
 
 #[derive(Args)]

@@ -1,6 +1,6 @@
-//! `cig db synth|import|imagery|info`.
+//! `cig db synth|import|imagery|culture|info`.
 
-use crate::cli::{ImageryArgs, ImportArgs, InfoArgs, SynthArgs};
+use crate::cli::{CultureArgs, ImageryArgs, ImportArgs, InfoArgs, SynthArgs};
 use crate::config::Config;
 use anyhow::Context;
 use cig_scene::lod::{error_range_m, LevelErrors, NodeLayout};
@@ -70,10 +70,11 @@ pub fn synthesize_database(
 
 pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
     check_output(&args.out, args.force)?;
-    // The feature file is read before the DEMs, so a broken one costs no import.
-    let features = match &args.features {
-        Some(path) => cig_terrain_io::features::read_features(path)?,
-        None => Vec::new(),
+    // The feature file (roads, rivers, lakes and culture) is read before the DEMs, so a broken
+    // one costs no import.
+    let file = match &args.features {
+        Some(path) => cig_terrain_io::features::read_feature_file(path)?,
+        None => cig_terrain_io::features::FeatureFile::default(),
     };
     let started = Instant::now();
     let bar = crate::output::bar(args.inputs.len() as u64, "read DEMs");
@@ -84,6 +85,11 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
     .context("cannot import")?;
     bar.finish_and_clear();
     let mut raster = area.raster;
+    // Culture outside the imported area is refused before anything is written.
+    if let Some(path) = &args.features {
+        cig_terrain_io::culture::check_culture_inside(path, &file.culture, &raster.grid)?;
+    }
+    let culture = cig_terrain_io::culture::placements(&file.culture);
     let sources = area
         .sources
         .iter()
@@ -103,8 +109,8 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
         sources,
         cig_bench::database::Drape {
             images: &args.imagery,
-            features: &features,
-            culture: &[],
+            features: &file.features,
+            culture: &culture,
             culture_rules: None,
         },
         &args.out,
@@ -127,7 +133,42 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
             imagery.tile_count
         );
     }
+    if let Some(culture) = &manifest.culture {
+        eprintln!("placed {}", culture_summary(culture));
+    }
     Ok(())
+}
+
+/// "1234 culture objects (1000 trees, 30 buildings) in 12 tiles".
+fn culture_summary(culture: &cig_terrain::CultureManifest) -> String {
+    format!(
+        "{} culture objects ({} trees, {} buildings) in {} tiles",
+        culture.total(),
+        culture.trees(),
+        culture.buildings(),
+        culture.tiles
+    )
+}
+
+/// `db info`'s culture section: always present, zeros without culture; every kind named.
+fn culture_json(culture: Option<&cig_terrain::CultureManifest>) -> serde_json::Value {
+    let empty = cig_terrain::CultureManifest::default();
+    let c = culture.unwrap_or(&empty);
+    let by_kind: serde_json::Map<String, serde_json::Value> = cig_terrain::CultureKind::ALL
+        .iter()
+        .map(|k| {
+            let n = c.counts.get(k.name()).copied().unwrap_or(0);
+            (k.name().to_string(), serde_json::Value::from(n))
+        })
+        .collect();
+    serde_json::json!({
+        "total": c.total(),
+        "trees": c.trees(),
+        "buildings": c.buildings(),
+        "by_kind": by_kind,
+        "tiles": c.tiles,
+        "max_per_tile": c.max_items_per_tile,
+    })
 }
 
 pub fn imagery(args: &ImageryArgs) -> anyhow::Result<()> {
@@ -148,6 +189,32 @@ pub fn imagery(args: &ImageryArgs) -> anyhow::Result<()> {
         started.elapsed().as_secs_f64(),
         args.db.display()
     );
+    Ok(())
+}
+
+pub fn culture(args: &CultureArgs) -> anyhow::Result<()> {
+    let file = cig_terrain_io::features::read_feature_file(&args.features)?;
+    let manifest = open_database(&args.db)?.manifest().clone();
+    cig_terrain_io::culture::check_culture_inside(
+        &args.features,
+        &file.culture,
+        &manifest.layout.grid,
+    )?;
+    if !file.features.is_empty() {
+        tracing::warn!(
+            "{} road, river and lake feature(s) of {} left out: they are laid only by `cig db \
+             import`",
+            file.features.len(),
+            args.features.display()
+        );
+    }
+    let placements = cig_terrain_io::culture::placements(&file.culture);
+    let manifest = cig_terrain_io::store::replace_culture(&args.db, &placements)
+        .with_context(|| format!("cannot replace the culture of {}", args.db.display()))?;
+    match &manifest.culture {
+        Some(culture) => eprintln!("placed {}: {}", culture_summary(culture), args.db.display()),
+        None => eprintln!("removed the culture: {}", args.db.display()),
+    }
     Ok(())
 }
 
@@ -189,6 +256,7 @@ pub fn info_json(manifest: &cig_terrain::Manifest) -> serde_json::Value {
             "tiles": i.tile_count,
             "sources": i.sources,
         })),
+        "culture": culture_json(manifest.culture.as_ref()),
     })
 }
 
@@ -330,6 +398,19 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<()> {
         for s in &imagery.sources {
             println!("image         {s}");
         }
+    }
+    match &m.culture {
+        Some(culture) if culture.total() > 0 => {
+            println!("culture       {}", culture_summary(culture));
+            let kinds: Vec<String> = culture
+                .counts
+                .iter()
+                .filter(|(_, n)| **n > 0)
+                .map(|(name, n)| format!("{name} {n}"))
+                .collect();
+            println!("  {}", kinds.join(", "));
+        }
+        _ => println!("culture       none"),
     }
     if let Some(report) = levels {
         let (width_px, height_px) = LOD_REFERENCE_SIZE;

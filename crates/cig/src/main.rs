@@ -63,6 +63,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Db(cli::DbCommand::Import(args)) => db::import(&args, &config),
         cli::Command::Db(cli::DbCommand::Info(args)) => db::info(&args),
         cli::Command::Db(cli::DbCommand::Imagery(args)) => db::imagery(&args),
+        cli::Command::Db(cli::DbCommand::Culture(args)) => db::culture(&args),
         cli::Command::Query(cli::QueryCommand::Hat(args)) => query::hat(&args, &config),
         cli::Command::Query(cli::QueryCommand::Los(args)) => query::los(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),

@@ -23,7 +23,8 @@ use cig_terrain::{ImageryManifest, Manifest};
 
 use crate::import::ImportError;
 use crate::store::{
-    imagery_tile_path, open_database, swap_into_place, write_manifest, DbError, MANIFEST_FILE,
+    imagery_tile_path, link_tree, open_database, staging_sibling, swap_into_place, write_manifest,
+    DbError, MANIFEST_FILE,
 };
 
 pub mod pyramid;
@@ -180,26 +181,9 @@ pub fn add_imagery(
     let database = open_database(db)?;
     let mut manifest = database.manifest().clone();
     drop(database);
-    let parent = match db.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = db
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .ok_or_else(|| ImageryError::Io {
-            reason: "database path has no directory name".into(),
-            path: db.to_path_buf(),
-        })?;
-    let staging = parent.join(format!(".{name}.imagery-{}", std::process::id()));
-    if staging.exists() {
-        std::fs::remove_dir_all(&staging).map_err(|e| ImageryError::Io {
-            reason: e.to_string(),
-            path: staging.clone(),
-        })?;
-    }
+    let staging = staging_sibling(db, "imagery")?;
     let result = (|| -> Result<(), ImageryError> {
-        link_tree(db, &staging, true)?;
+        link_tree(db, &staging, &["imagery", MANIFEST_FILE])?;
         // The database's own roads, rivers and lakes are painted over the new imagery too.
         let stored = stored_features(&staging)?;
         let mut all: Vec<&dyn OverlayLayer> = overlays.to_vec();
@@ -219,8 +203,6 @@ pub fn add_imagery(
     Ok(manifest)
 }
 
-/// Mirrors `from` into a new directory `to`, files hard-linked (copied where linking fails);
-/// at the top level the manifest and `imagery/` are left out when `top` is set.
 /// The feature layer of the features a database keeps
 /// ([`crate::features::DATABASE_FEATURES_FILE`]), when it has any.
 fn stored_features(
@@ -238,27 +220,4 @@ fn stored_features(
     let layer =
         cig_terrain::features::FeatureLayer::new(&features).map_err(|e| bad(e.to_string()))?;
     Ok((!layer.is_empty()).then_some(layer))
-}
-
-fn link_tree(from: &Path, to: &Path, top: bool) -> Result<(), ImageryError> {
-    let io = |path: &Path, e: std::io::Error| ImageryError::Io {
-        reason: e.to_string(),
-        path: path.to_path_buf(),
-    };
-    std::fs::create_dir(to).map_err(|e| io(to, e))?;
-    for entry in std::fs::read_dir(from).map_err(|e| io(from, e))? {
-        let entry = entry.map_err(|e| io(from, e))?;
-        let name = entry.file_name();
-        if top && (name == "imagery" || name == MANIFEST_FILE) {
-            continue;
-        }
-        let (src, dst) = (entry.path(), to.join(&name));
-        let kind = entry.file_type().map_err(|e| io(&src, e))?;
-        if kind.is_dir() {
-            link_tree(&src, &dst, false)?;
-        } else if std::fs::hard_link(&src, &dst).is_err() {
-            std::fs::copy(&src, &dst).map_err(|e| io(&src, e))?;
-        }
-    }
-    Ok(())
 }
