@@ -359,6 +359,16 @@ pub struct CultureManifest {
     pub tiles: u64,
     /// Objects in the fullest tile (the paging cache counts this many per finest tile).
     pub max_items_per_tile: u64,
+    /// Widest footprint radius of any object ([`CultureItem::footprint_radius_m`]), metres: how
+    /// far an object reaches from its centre, so how far past its tile's edge a query must look.
+    /// 0 in manifests written before it was recorded: read through
+    /// [`CultureManifest::footprint_bound_m`].
+    #[serde(default)]
+    pub max_footprint_radius_m: f32,
+    /// Tallest object (its top above its base), metres; 0 in manifests written before it was
+    /// recorded: read through [`CultureManifest::height_bound_m`].
+    #[serde(default)]
+    pub max_height_m: f32,
 }
 
 impl CultureManifest {
@@ -387,6 +397,34 @@ impl CultureManifest {
 
     pub fn total(&self) -> u64 {
         self.counts.values().sum()
+    }
+
+    /// How far any object of the database reaches from its centre, metres: the recorded
+    /// [`CultureManifest::max_footprint_radius_m`], or where it is not recorded (0, an old
+    /// manifest) the widest a valid placement allows (`crate::culture_hit::widest_footprint_m`,
+    /// 283 m). Never more than that.
+    pub fn footprint_bound_m(&self) -> f64 {
+        recorded_or(
+            self.max_footprint_radius_m,
+            crate::culture_hit::widest_footprint_m(),
+        )
+    }
+
+    /// How high any object of the database stands above its base, metres: the recorded
+    /// [`CultureManifest::max_height_m`], or where it is not recorded (0, an old manifest) the
+    /// tallest a valid placement allows (`crate::culture_hit::tallest_object_m`, 400 m).
+    pub fn height_bound_m(&self) -> f64 {
+        recorded_or(self.max_height_m, crate::culture_hit::tallest_object_m())
+    }
+}
+
+/// `recorded` where it is a positive number (at most `bound`), else `bound`.
+fn recorded_or(recorded: f32, bound: f64) -> f64 {
+    let v = f64::from(recorded);
+    if v.is_finite() && v > 0.0 {
+        v.min(bound)
+    } else {
+        bound
     }
 }
 
@@ -454,7 +492,7 @@ pub fn bin_placements(
         } else {
             (p.width_m, p.width_m)
         };
-        tiles.entry(key).or_default().push(CultureItem {
+        let item = CultureItem {
             kind: p.kind,
             variant: p.variant,
             heading: heading as u16,
@@ -465,7 +503,12 @@ pub fn bin_placements(
             length_m,
             base_m: 0.0,
             sink_m: 0.0,
-        });
+        };
+        manifest.max_footprint_radius_m = manifest
+            .max_footprint_radius_m
+            .max(item.footprint_radius_m());
+        manifest.max_height_m = manifest.max_height_m.max(item.height_m);
+        tiles.entry(key).or_default().push(item);
         *manifest
             .counts
             .entry(p.kind.name().to_string())
@@ -719,6 +762,39 @@ mod tests {
             .unwrap();
         assert!((house.heading_deg() - 270.0).abs() < 0.01);
         assert_eq!((house.length_m, house.width_m), (12.0, 8.0));
+    }
+
+    #[test]
+    fn the_manifest_records_the_widest_and_tallest_object() {
+        let house = CulturePlacement {
+            kind: CultureKind::House,
+            length_m: 12.0,
+            width_m: 8.0,
+            height_m: 7.5,
+            ..tree(45.02, 7.005)
+        };
+        let (_, manifest) = bin_placements(&layout(), &[tree(45.001, 7.001), house]).unwrap();
+        // The house's half diagonal; the tree's height.
+        assert_eq!(manifest.max_footprint_radius_m, 0.5 * 8f32.hypot(12.0));
+        assert_eq!(manifest.max_height_m, 20.0);
+        assert_eq!(
+            manifest.footprint_bound_m(),
+            f64::from(0.5 * 8f32.hypot(12.0))
+        );
+        assert_eq!(manifest.height_bound_m(), 20.0);
+        // A manifest from before the fields were recorded reads them as 0 (serde default): the
+        // bounds are the largest any valid placement allows.
+        let old = CultureManifest {
+            max_footprint_radius_m: 0.0,
+            max_height_m: 0.0,
+            ..manifest
+        };
+        assert_eq!(
+            old.footprint_bound_m(),
+            crate::culture_hit::widest_footprint_m()
+        );
+        assert!((old.footprint_bound_m() - 282.84).abs() < 0.01);
+        assert_eq!(old.height_bound_m(), 400.0);
     }
 
     #[test]

@@ -28,9 +28,11 @@
 //!
 //! Limits: the volumes are the culture module's simple shapes (a gable roof is its ridge height
 //! over the whole footprint, a crown an ellipsoid), not the drawn meshes. A segment that only
-//! touches a volume (tangent, or along a face) counts as entering it. Objects taller than any
-//! valid placement ([`tallest_object_m`]) or wider ([`widest_footprint_m`]) are tested only
-//! where the query already looks for their tile.
+//! touches a volume (tangent, or along a face) counts as entering it. The queries look for an
+//! object's tile only within the database's recorded widest footprint and tallest object (the
+//! culture manifest's bounds, at most [`widest_footprint_m`] and [`tallest_object_m`], the
+//! largest a valid placement allows): an object beyond them (a tile written without its
+//! manifest) is tested only where the query looks for its tile anyway.
 
 use crate::culture::{CultureItem, CultureKind, CultureTile, CultureVolume, CULTURE_BLOCK_CELLS};
 use crate::pyramid::{PyramidLayout, TileKey};

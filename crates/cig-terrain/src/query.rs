@@ -29,19 +29,23 @@
 //!
 //! Limits: a chord that leaves the database sees no terrain outside it; the geoid undulation is
 //! bilinear on the manifest's coarse grid (EGM96 varies by centimetres per kilometre). Culture
-//! is tested on the finest tiles the sightline passes over (the tiles the terrain walk loads;
-//! where the sightline stays above every post, those under it while it is within the tallest
-//! valid object of the highest post); an object overhanging from a tile the sightline does not
-//! pass over is seen only while that tile is at hand (resident in the paging cache or in the
-//! session), so no query loads a tile for culture alone. The culture index a session builds
-//! for each tile it uses (a few bytes per non-empty block) is outside the paging budget.
+//! is tested on every finest tile whose objects could reach the sightline: those it passes
+//! within the database's widest footprint radius of (the manifest's
+//! [`crate::culture::CultureManifest::footprint_bound_m`]) while below its highest top (the
+//! highest post plus the tallest object, [`crate::culture::CultureManifest::height_bound_m`]).
+//! Each is loaded through the session and the paging cache like the tiles under the sightline,
+//! whether or not it is resident, so the answer never depends on what is in memory (the same
+//! scenario gives the same answers on every IG). A tile whose objects overhang into the
+//! sightline's tile is thus loaded for its culture alone; with the recorded radius (a few
+//! metres for trees, tens for buildings) that is a sightline within that distance of a tile's
+//! edge. A database whose manifest predates the recorded bounds is searched with the largest
+//! any valid placement allows (283 m and 400 m), loading more tiles near its culture. The
+//! culture index a session builds for each tile it uses (a few bytes per non-empty block) is
+//! outside the paging budget.
 
 use crate::cache::TileCache;
 use crate::culture::CULTURE_BLOCK_CELLS;
-use crate::culture_hit::{
-    segment_entry, tallest_object_m, top_at, widest_footprint_m, CultureHit, CultureIndex,
-    CultureTest, ItemFrame,
-};
+use crate::culture_hit::{segment_entry, top_at, CultureHit, CultureIndex, CultureTest, ItemFrame};
 use crate::database::{GeoidLookup, LoadError, TerrainDatabase};
 use crate::material::Material;
 use crate::pyramid::{quadtree_index, PyramidLayout, TileKey};
@@ -142,8 +146,20 @@ pub struct QuerySession {
     /// Precomputed for the per-query path: no division, no search.
     fast: FastIndex,
     geoid: GeoidLookup,
-    /// Posts (east, north) that hold the widest valid footprint anywhere on the database.
-    footprint_bound_posts: (f64, f64),
+    /// The database's culture as the queries bound it; `None` without culture.
+    culture: Option<CultureBounds>,
+}
+
+/// How far the database's culture may reach: the culture queries load every finest tile
+/// within these bounds of a query, and only those.
+#[derive(Clone, Copy, Debug)]
+struct CultureBounds {
+    /// Posts (east, north) that hold the widest footprint radius
+    /// ([`crate::culture::CultureManifest::footprint_bound_m`]) anywhere on the database.
+    footprint_posts: (f64, f64),
+    /// Highest any object's top may be above mean sea level: the highest post plus the
+    /// tallest object ([`crate::culture::CultureManifest::height_bound_m`]), metres.
+    top_msl_m: f64,
 }
 
 /// What the per-query path needs to find a point's finest cell with multiplications and shifts.
@@ -226,13 +242,20 @@ impl QuerySession {
             min_m.0 = min_m.0.min(g.dlon_deg * east_m_per_deg);
             min_m.1 = min_m.1.min(g.dlat_deg * north_m_per_deg);
         }
-        let bound_m = widest_footprint_m();
+        let manifest = cache.database().manifest();
+        let culture = manifest.culture.as_ref().filter(|c| c.tiles > 0).map(|c| {
+            let bound_m = c.footprint_bound_m();
+            CultureBounds {
+                footprint_posts: (bound_m / min_m.0.max(1e-9), bound_m / min_m.1.max(1e-9)),
+                top_msl_m: f64::from(manifest.max_elevation_m) + c.height_bound_m(),
+            }
+        });
         QuerySession {
             geoid: GeoidLookup::new(&cache.database().manifest().geoid),
             db: Arc::clone(cache.database()),
             layout,
             fast,
-            footprint_bound_posts: (bound_m / min_m.0.max(1e-9), bound_m / min_m.1.max(1e-9)),
+            culture,
             tiles: TileSlots {
                 epoch: cache.eviction_epoch(),
                 cache,
@@ -595,7 +618,8 @@ impl QuerySession {
     /// Height of the highest surface at a point counting the culture objects' tops (a
     /// building's roof, as its box, a crown's top, a pole's top), with the bare terrain. Every
     /// object counts, fences included. Objects are taken from the point's finest tile and from
-    /// the tiles around it that are at hand (see the module's limits).
+    /// every tile within the widest footprint of it, loaded where not resident (see the
+    /// module's limits).
     pub fn hot_with_culture(
         &mut self,
         lat_deg: f64,
@@ -608,14 +632,17 @@ impl QuerySession {
             normal_enu: terrain.normal_enu,
             culture: None,
         };
-        if self.db.manifest().culture.is_none() {
+        let Some(bounds) = self.culture else {
+            return Ok(out);
+        };
+        if terrain.height_msl_m >= bounds.top_msl_m {
             return Ok(out);
         }
         let home = self.cell(lat_deg, lon_deg)?.key;
         let g = self.layout.grid;
         let col = (lon_deg - g.west_lon_deg) / g.dlon_deg;
         let row = (lat_deg - g.south_lat_deg) / g.dlat_deg;
-        let (bx, by) = self.footprint_bound_posts;
+        let (bx, by) = bounds.footprint_posts;
         let cells = f64::from(self.layout.tile_cells);
         let (tiles_r, tiles_c) = self.layout.tiles_at(0);
         let (c_lo, c_hi) = tile_span(col - bx, col + bx, cells, tiles_c);
@@ -627,12 +654,15 @@ impl QuerySession {
                     row: tr,
                     col: tc,
                 };
-                let tile = if key == home {
-                    Some(self.tiles.get_arc(key)?)
-                } else {
-                    self.tiles.at_hand(key)
+                // Every tile within the widest footprint is loaded, so the answer does not
+                // depend on what is resident; one that cannot be read beside the point's own
+                // holds no culture.
+                let tile = match self.tiles.get_arc(key) {
+                    Ok(tile) => tile,
+                    Err(e) if key == home => return Err(e),
+                    Err(_) => continue,
                 };
-                let Some(index) = tile.and_then(|t| self.tiles.culture_index(key, &t)) else {
+                let Some(index) = self.tiles.culture_index(key, &tile) else {
                     continue;
                 };
                 self.culture_top_in_tile(&index, key, col, row, &mut out);
@@ -730,23 +760,22 @@ impl QuerySession {
         s_hi: f64,
         test: CultureTest,
     ) -> Result<Option<(f64, CultureHit, Material)>, QueryError> {
-        if test == CultureTest::Ignore
-            || self.db.manifest().culture.is_none()
-            || s_hi.is_nan()
-            || s_hi < 0.0
-        {
+        let Some(bounds) = self.culture else {
+            return Ok(None);
+        };
+        if test == CultureTest::Ignore || s_hi.is_nan() || s_hi < 0.0 {
             return Ok(None);
         }
         let g = self.layout.grid;
         let (max_x, max_y) = ((g.cols - 1) as f64, (g.rows - 1) as f64);
         let (dx, dy) = (piece.x1 - piece.x0, piece.y1 - piece.y0);
-        let (bx, by) = self.footprint_bound_posts;
+        let (bx, by) = bounds.footprint_posts;
         let Some((s0, s1)) = clip(piece.x0, dx, -bx, max_x + bx, 0.0, s_hi)
             .and_then(|(a, b)| clip(piece.y0, dy, -by, max_y + by, a, b))
         else {
             return Ok(None);
         };
-        let highest_top = f64::from(self.db.manifest().max_elevation_m) + tallest_object_m();
+        let highest_top = bounds.top_msl_m;
         if piece.alt.min_on(s0, s1) > highest_top {
             return Ok(None);
         }
@@ -772,23 +801,33 @@ impl QuerySession {
                 let (x_lo, y_lo) = (f64::from(tc) * cells, f64::from(tr) * cells);
                 let (x_hi, y_hi) = ((x_lo + cells).min(max_x), (y_lo + cells).min(max_y));
                 let s_cap = best.map_or(s1, |(s, _, _)| s);
-                // Not within the widest footprint of the tile: nothing of it can be met.
-                if clip(piece.x0, dx, x_lo - bx, x_hi + bx, s0, s_cap)
+                // Not within the widest footprint of the tile, or above the highest top while
+                // within it: nothing of it can be met.
+                let Some((sa, sb)) = clip(piece.x0, dx, x_lo - bx, x_hi + bx, s0, s_cap)
                     .and_then(|(a, b)| clip(piece.y0, dy, y_lo - by, y_hi + by, a, b))
-                    .is_none()
-                {
+                else {
+                    continue;
+                };
+                if piece.alt.min_on(sa, sb) > highest_top {
                     continue;
                 }
-                let passes_over = over
-                    .and_then(|(a, b)| clip(piece.x0, dx, x_lo, x_hi, a, b.min(s_cap)))
-                    .and_then(|(a, b)| clip(piece.y0, dy, y_lo, y_hi, a, b))
-                    .is_some();
-                let tile = if passes_over {
-                    Some(self.tiles.get_arc(key)?)
-                } else {
-                    self.tiles.at_hand(key)
+                // Every other tile is loaded, whether or not it is resident, so that the answer
+                // does not depend on the paging cache's state. One the piece does not pass
+                // over that cannot be read (nor rebuilt from a coarser level) holds no culture.
+                let tile = match self.tiles.get_arc(key) {
+                    Ok(tile) => tile,
+                    Err(e) => {
+                        let passes_over = over
+                            .and_then(|(a, b)| clip(piece.x0, dx, x_lo, x_hi, a, b.min(s_cap)))
+                            .and_then(|(a, b)| clip(piece.y0, dy, y_lo, y_hi, a, b))
+                            .is_some();
+                        if passes_over {
+                            return Err(e);
+                        }
+                        continue;
+                    }
                 };
-                let Some(index) = tile.and_then(|t| self.tiles.culture_index(key, &t)) else {
+                let Some(index) = self.tiles.culture_index(key, &tile) else {
                     continue;
                 };
                 if let Some(hit) = self.culture_in_tile(&index, key, piece, s0, s_cap, test) {
@@ -954,28 +993,6 @@ impl TileSlots {
         self.culture.clear();
         self.uncached = 0;
         self.epoch = epoch;
-    }
-
-    /// The finest tile `key` if it is at hand without a load: in a slot or resident in the
-    /// cache.
-    fn at_hand(&mut self, key: TileKey) -> Option<Arc<Tile>> {
-        let epoch = self.cache.eviction_epoch();
-        if epoch != self.epoch {
-            self.forget(epoch);
-        }
-        let (rows, cols) = self.layout.tiles_at(0);
-        if key.level != 0 || key.row >= rows || key.col >= cols {
-            return None;
-        }
-        let entry = self
-            .slots
-            .get_mut(key.row as usize * self.tile_cols + key.col as usize)?;
-        if let Some(tile) = entry {
-            return Some(Arc::clone(tile));
-        }
-        let tile = self.cache.resident(key)?;
-        *entry = Some(Arc::clone(&tile));
-        Some(tile)
     }
 
     /// The culture index of `tile` (slotted as `key`), built on first use; `None` where the

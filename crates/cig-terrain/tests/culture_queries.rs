@@ -11,7 +11,8 @@ use cig_terrain::database::{GeoidGrid, Manifest, MemoryTileStore, TerrainDatabas
 use cig_terrain::raster::Raster;
 use cig_terrain::tile::tile_memory_bytes;
 use cig_terrain::{
-    CultureKind, CulturePlacement, CultureTest, PagingConfig, QuerySession, TileKey,
+    CultureKind, CultureManifest, CulturePlacement, CultureTest, PagingConfig, QuerySession,
+    TileKey,
 };
 use common::*;
 use std::collections::HashMap;
@@ -26,6 +27,16 @@ fn culture_database(
     tile_cells: u32,
     placements: &[CulturePlacement],
 ) -> (Arc<TerrainDatabase>, HashMap<TileKey, usize>) {
+    culture_database_with(raster, tile_cells, placements, |_| {})
+}
+
+/// [`culture_database`] with the culture manifest changed by `edit` before the database opens.
+fn culture_database_with(
+    raster: &Raster,
+    tile_cells: u32,
+    placements: &[CulturePlacement],
+    edit: impl FnOnce(&mut CultureManifest),
+) -> (Arc<TerrainDatabase>, HashMap<TileKey, usize>) {
     let store = Arc::new(MemoryTileStore::new());
     let summary = build_pyramid::<cig_terrain::build::BuildError>(raster, tile_cells, &mut |t| {
         store.insert(t.key, t.encode());
@@ -35,7 +46,8 @@ fn culture_database(
     let mut geoid = GeoidGrid::zero();
     geoid.undulation_m.iter_mut().for_each(|v| *v = GEOID_M);
     let mut manifest = Manifest::from_build(&summary, geoid, 0, vec!["test".into()]);
-    let (tiles, culture) = bin_placements(&manifest.layout, placements).expect("placements");
+    let (tiles, mut culture) = bin_placements(&manifest.layout, placements).expect("placements");
+    edit(&mut culture);
     let mut counts = HashMap::new();
     for tile in &tiles {
         store.insert_culture(tile.key, tile.encode());
@@ -409,7 +421,7 @@ fn a_sightline_meets_the_volumes_as_a_sampled_march_does() {
 }
 
 #[test]
-fn an_object_over_a_tile_edge_is_seen_from_the_next_tile_only_once_its_tile_is_at_hand() {
+fn an_object_over_a_tile_edge_is_seen_alike_by_a_cold_and_a_warm_cache() {
     // 32-cell tiles: column 64 is the edge between tile columns 1 and 2. A house 20 m long
     // east-west centred 4 m west of the edge overhangs 6 m into tile column 2.
     let g = grid(129, 129, 30.0);
@@ -423,30 +435,105 @@ fn an_object_over_a_tile_edge_is_seen_from_the_next_tile_only_once_its_tile_is_a
             [8.0, 10.0, 20.0],
         )
     };
-    let (db, _) = culture_database(&r, 32, &[house]);
-    let cache = cache(&db, PagingConfig::default());
-    let mut q = QuerySession::new(Arc::clone(&cache));
     let home = TileKey {
         level: 0,
         row: 1,
         col: 1,
     };
-    // A north-south line 3 m east of the edge: over tile column 2 only.
-    let from = above(&mut q, offset(edge, 3.0, -60.0), 2.0);
-    let to = above(&mut q, offset(edge, 3.0, 60.0), 2.0);
-    let r = q.los(from, to).expect("los");
+    // The manifest as written today (the house's half diagonal recorded) and as an older
+    // build wrote it (no bounds: the largest a valid placement allows are used).
+    let recorded = culture_database(&r, 32, &[house]).0;
+    let (old, _) = culture_database_with(&r, 32, &[house], |c| {
+        c.max_footprint_radius_m = 0.0;
+        c.max_height_m = 0.0;
+    });
+    let bound_m = recorded
+        .manifest()
+        .culture
+        .as_ref()
+        .map(|c| c.footprint_bound_m());
     assert!(
-        cache.resident(home).is_none(),
-        "the line of sight must not load the house's tile"
+        bound_m.is_some_and(|b| (b - 11.18).abs() < 0.01),
+        "{bound_m:?}"
     );
-    assert!(r.visible, "{r:?}");
-    // Once the house's tile is at hand (a HOT over it pages it in), the overhang is seen.
-    q.hot(edge.0, g.post_lat_lon_deg(48, 60).1).expect("inside");
-    assert!(cache.resident(home).is_some());
-    let r = q.los(from, to).expect("los");
-    let hit = r.hit.expect("the overhang stops it");
-    assert_eq!(hit.culture.map(|h| h.kind), Some(CultureKind::House));
-    assert!((hit.range_m - 55.0).abs() < 0.05, "{hit:?}");
+    let mut answers = Vec::new();
+    for db in [recorded, old] {
+        // A north-south line 3 m east of the edge: over tile column 2 only.
+        let line = |q: &mut QuerySession| {
+            let from = above(q, offset(edge, 3.0, -60.0), 2.0);
+            let to = above(q, offset(edge, 3.0, 60.0), 2.0);
+            (from, to)
+        };
+        // Cold: nothing resident, a fresh session.
+        let cold_cache = cache(&db, PagingConfig::default());
+        let mut cold = QuerySession::new(Arc::clone(&cold_cache));
+        let (from, to) = line(&mut cold);
+        assert!(cold_cache.resident(home).is_none());
+        let cold_hit = cold
+            .los(from, to)
+            .expect("los")
+            .hit
+            .expect("the overhang stops it");
+        // The house's tile was loaded for its culture, like the tiles under the line.
+        assert!(cold_cache.resident(home).is_some());
+        let cold_collision = cold_cache_collision(&db, from, to);
+        // Warm: the house's tile resident before the session's first query, and the same
+        // session again.
+        let warm_cache = cache(&db, PagingConfig::default());
+        warm_cache.load_now(home).expect("tile");
+        let mut warm = QuerySession::new(Arc::clone(&warm_cache));
+        let warm_hit = warm
+            .los(from, to)
+            .expect("los")
+            .hit
+            .expect("the overhang stops it");
+        let again = warm
+            .los(from, to)
+            .expect("los")
+            .hit
+            .expect("the overhang stops it");
+        for (name, hit) in [
+            ("cold", cold_hit),
+            ("warm", warm_hit),
+            ("again", again),
+            ("collision", cold_collision),
+        ] {
+            assert_eq!(
+                hit.culture.map(|h| h.kind),
+                Some(CultureKind::House),
+                "{name}"
+            );
+            assert!((hit.range_m - 55.0).abs() < 0.05, "{name}: {hit:?}");
+            let apart_m = (hit.point.to_ecef() - cold_hit.point.to_ecef()).length();
+            assert!(apart_m < 1e-3, "{name}: {apart_m} m from the cold answer");
+        }
+        // The highest surface over the overhang is its roof, cold or warm.
+        let over = offset(edge, 3.0, 0.0);
+        let cold_cache = cache(&db, PagingConfig::default());
+        let roof = QuerySession::new(cold_cache)
+            .hot_with_culture(over.0, over.1)
+            .expect("inside");
+        assert_eq!(roof.culture.map(|h| h.kind), Some(CultureKind::House));
+        let warm_roof = warm.hot_with_culture(over.0, over.1).expect("inside");
+        assert_eq!(roof.height_msl_m, warm_roof.height_msl_m);
+        answers.push(cold_hit);
+    }
+    // The old manifest's wider bound finds the same house at the same point.
+    let apart_m = (answers[0].point.to_ecef() - answers[1].point.to_ecef()).length();
+    assert!(apart_m < 1e-3, "{apart_m} m");
+}
+
+/// A collision segment from a cold cache and session.
+fn cold_cache_collision(
+    db: &Arc<TerrainDatabase>,
+    from: Geodetic,
+    to: Geodetic,
+) -> cig_terrain::LosHit {
+    QuerySession::new(cache(db, PagingConfig::default()))
+        .collision(from, to)
+        .expect("collision")
+        .hit
+        .expect("the overhang stops it")
 }
 
 #[test]

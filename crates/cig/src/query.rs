@@ -29,17 +29,41 @@ pub fn surface_json(s: &cig_terrain::SurfacePoint) -> serde_json::Value {
     })
 }
 
+/// A line of sight's answer; a hit on a culture object carries it as `culture` (its kind, its
+/// tile and index there, its sizes, heading and base, the normal where it was met), and
+/// `material` is then the terrain's under the object.
 pub fn los_json(r: &cig_terrain::LosResult) -> serde_json::Value {
     serde_json::json!({
         "visible": r.visible,
-        "hit": r.hit.map(|h| serde_json::json!({
-            "lat": h.point.lat_deg,
-            "lon": h.point.lon_deg,
-            "alt_m": h.point.alt_m,
-            "range_m": h.range_m,
-            "material": h.material.name(),
-            "level": h.level,
-        })),
+        "hit": r.hit.map(|h| {
+            let mut hit = serde_json::json!({
+                "lat": h.point.lat_deg,
+                "lon": h.point.lon_deg,
+                "alt_m": h.point.alt_m,
+                "range_m": h.range_m,
+                "material": h.material.name(),
+                "level": h.level,
+            });
+            if let Some(c) = &h.culture {
+                hit["culture"] = culture_hit_json(c);
+            }
+            hit
+        }),
+    })
+}
+
+/// A culture object met by a query.
+pub fn culture_hit_json(c: &cig_terrain::CultureHit) -> serde_json::Value {
+    serde_json::json!({
+        "kind": c.kind.name(),
+        "tile": {"row": c.tile.row, "col": c.tile.col},
+        "index": c.index,
+        "height_m": c.item.height_m,
+        "width_m": c.item.width_m,
+        "length_m": c.item.length_m,
+        "heading_deg": c.item.heading_deg(),
+        "base_m": c.item.base_m,
+        "normal": c.normal_enu,
     })
 }
 
@@ -90,10 +114,15 @@ pub fn los(args: &LosArgs, config: &Config) -> anyhow::Result<()> {
     } else {
         match r.hit {
             None => println!("visible"),
-            Some(h) => println!(
-                "blocked at {:.7}, {:.7}, {:.2} m, {:.1} m from the start ({})",
-                h.point.lat_deg, h.point.lon_deg, h.point.alt_m, h.range_m, h.material
-            ),
+            Some(h) => {
+                let by = h
+                    .culture
+                    .map_or(String::new(), |c| format!(" by a {}", c.kind));
+                println!(
+                    "blocked{by} at {:.7}, {:.7}, {:.2} m, {:.1} m from the start ({})",
+                    h.point.lat_deg, h.point.lon_deg, h.point.alt_m, h.range_m, h.material
+                )
+            }
         }
     }
     Ok(())

@@ -335,3 +335,95 @@ fn db_culture_replaces_the_culture_all_or_nothing() {
     assert_eq!(info_json(&db)["culture"]["total"], 0);
     assert!(!db.join("culture").exists());
 }
+
+/// `(lat, lon)` of a point `east_m`, `north_m` from 36.005 N, 120.995 W (as [`at`]).
+fn lat_lon(east_m: f64, north_m: f64) -> (f64, f64) {
+    let (lat0, lon0) = (36.005, -120.995);
+    let (m_north, m_east) = cig_geo::metres_per_degree(lat0);
+    (lat0 + north_m / m_north, lon0 + east_m / m_east)
+}
+
+/// `cig query los --json` from `from` to `to` (east, north metres), each `above_m` over the
+/// terrain there.
+fn los_json(db: &Path, from: (f64, f64), to: (f64, f64), above_m: f64) -> serde_json::Value {
+    let mut args = Vec::new();
+    for (e, n) in [from, to] {
+        let (lat, lon) = lat_lon(e, n);
+        let out = cig()
+            .args(["query", "hat", "--json"])
+            .arg(db)
+            .args([lat.to_string(), lon.to_string()])
+            .assert()
+            .success();
+        let hat: serde_json::Value =
+            serde_json::from_slice(&out.get_output().stdout).expect("json");
+        let ground = hat["height_ellipsoid_m"].as_f64().expect("height");
+        args.extend([
+            lat.to_string(),
+            lon.to_string(),
+            (ground + above_m).to_string(),
+        ]);
+    }
+    let out = cig()
+        .args(["query", "los", "--json"])
+        .arg(db)
+        .args(&args)
+        .assert()
+        .success();
+    serde_json::from_slice(&out.get_output().stdout).expect("json")
+}
+
+#[test]
+fn a_line_of_sight_stopped_by_a_house_names_it() {
+    // A house 8 m high (8 m wide east-west, 11 m long north-south as typical) 500 m east of
+    // the corner, and a line of sight 2 m above the ground from 50 m west of it to 50 m east.
+    let dir = tempfile::tempdir().expect("tmp");
+    let house = feature(
+        r#"{"type": "house", "height_m": 8}"#,
+        "Point",
+        &at(500.0, 200.0),
+    );
+    let (out, db) = import(dir.path(), &collection(&[house]));
+    out.success();
+    let los = los_json(&db, (450.0, 200.0), (550.0, 200.0), 2.0);
+    assert_eq!(los["visible"], false, "{los}");
+    let hit = &los["hit"];
+    let culture = &hit["culture"];
+    assert_eq!(culture["kind"], "house", "{los}");
+    assert_eq!(culture["height_m"].as_f64(), Some(8.0), "{los}");
+    // Its west wall, 4 m west of its centre; the wall faces west.
+    let range = hit["range_m"].as_f64().expect("range");
+    assert!((range - 46.0).abs() < 0.1, "{los}");
+    let normal: Vec<f64> = culture["normal"]
+        .as_array()
+        .expect("normal")
+        .iter()
+        .filter_map(serde_json::Value::as_f64)
+        .collect();
+    assert!((normal[0] + 1.0).abs() < 1e-3, "{los}");
+    // The hit's other keys stay: the terrain's material under the house among them.
+    for key in ["lat", "lon", "alt_m", "material", "level"] {
+        assert!(!hit[key].is_null(), "{key}: {los}");
+    }
+    // Beside the house: visible, no culture key anywhere.
+    let clear = los_json(&db, (450.0, 230.0), (550.0, 230.0), 2.0);
+    assert_eq!(clear, serde_json::json!({"visible": true, "hit": null}));
+    // A database whose manifest predates the recorded culture bounds answers the same.
+    let manifest_path = db.join("manifest.json");
+    let mut manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest_path).expect("manifest"))
+            .expect("json");
+    let culture_section = manifest["culture"].as_object_mut().expect("culture");
+    assert!(
+        culture_section["max_footprint_radius_m"]
+            .as_f64()
+            .expect("recorded")
+            > 6.0,
+        "{culture_section:?}"
+    );
+    culture_section.remove("max_footprint_radius_m");
+    culture_section.remove("max_height_m");
+    std::fs::write(&manifest_path, manifest.to_string()).expect("write");
+    let old = los_json(&db, (450.0, 200.0), (550.0, 200.0), 2.0);
+    assert_eq!(old, los);
+}
