@@ -2,8 +2,10 @@
 //! along a valley, a climb, views at dusk) and the environment after it (the full moon,
 //! cumulus from below and above, a thunderstorm), and a contact sheet of the frames.
 //!
-//! Algorithm: the valley is the heading from the database's centre whose first 10 km are
-//! lowest on average (24 headings, 20 samples each); the hilltop is the highest post within
+//! Algorithm: the low pass starts 1.2 km short of the database's densest village (the 8 x 8-
+//! cell block with the most buildings) when it has culture, else at its centre; its valley is
+//! the heading from there whose first 10 km are lowest on average (24 headings, 20 samples
+//! each); the hilltop is the highest post within
 //! 4 km of the centre (100 m steps), then climbed post by post; the legs follow the terrain
 //! ([`crate::flight`]). Limits: fixed times (June 2026) and frame size (480 x 270); a database
 //! smaller than the legs (about 10 km from the centre) ends the flight with an error.
@@ -13,6 +15,7 @@ use crate::BenchError;
 use cig_geo::Geodetic;
 use cig_scene::{FrameSnapshot, View};
 use cig_terrain::{GeoGrid, QuerySession};
+use std::sync::Arc;
 
 /// Seconds since 1970 of an ISO 8601 instant.
 fn unix_time(text: &str) -> Result<f64, BenchError> {
@@ -112,12 +115,30 @@ pub fn flight(q: &mut QuerySession, g: &GeoGrid) -> Result<Flight, BenchError> {
         0.5 * (g.west_lon_deg + g.east_lon_deg()),
         0.0,
     );
-    let heading = valley_heading(q, centre);
     let size = (480, 270);
+    // Through the village with the most buildings when the database has culture: the low pass
+    // starts 1.2 km short of it, heading along its valley; else along the centre's valley.
+    let village = {
+        let db = Arc::clone(q.cache().database());
+        crate::culture::densest_block_of(&db, cig_terrain::CultureKind::is_building).ok()
+    };
+    let (start, heading) = match village {
+        Some((lat, lon, _)) => {
+            let spot = Geodetic::new(lat, lon, 0.0);
+            let heading = valley_heading(q, spot);
+            let back = cig_geo::EnuFrame::new(spot).enu_to_geodetic(glam::DVec3::new(
+                -1200.0 * heading.to_radians().sin(),
+                -1200.0 * heading.to_radians().cos(),
+                0.0,
+            ));
+            (Geodetic::new(back.lat_deg, back.lon_deg, 0.0), heading)
+        }
+        None => (centre, valley_heading(q, centre)),
+    };
     let noon = unix_time("2026-06-21T19:30:00Z")?;
     let dusk = unix_time("2026-06-22T03:00:00Z")?;
     let low = Leg {
-        start: centre,
+        start,
         heading_deg: heading,
         speed_mps: 120.0,
         duration_s: 40.0,
@@ -126,7 +147,25 @@ pub fn flight(q: &mut QuerySession, g: &GeoGrid) -> Result<Flight, BenchError> {
         pitch_deg: -2.0,
     };
     let mut shots: Vec<(f64, cig_scene::View)> = Vec::new();
-    for v in views_along(q, &low, 40.0 / 10.0, 60.0, size)? {
+    // A pass that would leave the database falls back to the centre's valley.
+    let low_views = views_along(q, &low, 40.0 / 10.0, 60.0, size).or_else(|_| {
+        let heading = valley_heading(q, centre);
+        views_along(
+            q,
+            &Leg {
+                start: centre,
+                heading_deg: heading,
+                ..low
+            },
+            40.0 / 10.0,
+            60.0,
+            size,
+        )
+    })?;
+    let heading = low_views
+        .first()
+        .map_or(heading, |v| v.orientation.heading_deg);
+    for v in low_views {
         shots.push((noon, v));
     }
     let end = shots.last().map(|s| s.1.eye).unwrap_or(centre);

@@ -570,8 +570,9 @@ fn gabled(m: &mut ModelMesh, eave: f32, wall: [u8; 4], roof: [u8; 4]) {
     let v = Vec3::new;
     m.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, eave), wall);
     let (w, d, h, r) = (0.52, 0.53, eave, 1.0);
-    m.quad(v(-w, -d, h), v(-w, d, h), v(0.0, d, r), v(0.0, -d, r), roof);
-    m.quad(v(w, d, h), v(w, -d, h), v(0.0, -d, r), v(0.0, d, r), roof);
+    // Counter-clockwise seen from outside: the slopes face up and out.
+    m.quad(v(-w, d, h), v(-w, -d, h), v(0.0, -d, r), v(0.0, d, r), roof);
+    m.quad(v(w, -d, h), v(w, d, h), v(0.0, d, r), v(0.0, -d, r), roof);
     m.tri(v(-0.5, -0.5, h), v(0.5, -0.5, h), v(0.0, -0.5, r), wall);
     m.tri(v(0.5, 0.5, h), v(-0.5, 0.5, h), v(0.0, 0.5, r), wall);
 }
@@ -663,8 +664,37 @@ pub fn culture_model(kind: CultureKind) -> Model {
             }
             let mut l1 = ModelMesh::default();
             gabled(&mut l1, eave, wall, roof);
+            // The coarsest: four walls and the roof, no floor or ceiling.
             let mut l2 = ModelMesh::default();
-            l2.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 0.8), wall);
+            let p = |x: f32, y: f32, z: f32| v(x * 0.5, y * 0.5, z);
+            for (a, b) in [
+                ((-1.0, -1.0), (1.0, -1.0)),
+                ((1.0, -1.0), (1.0, 1.0)),
+                ((1.0, 1.0), (-1.0, 1.0)),
+                ((-1.0, 1.0), (-1.0, -1.0)),
+            ] {
+                l2.quad(
+                    p(a.0, a.1, 0.0),
+                    p(b.0, b.1, 0.0),
+                    p(b.0, b.1, eave),
+                    p(a.0, a.1, eave),
+                    wall,
+                );
+            }
+            l2.quad(
+                v(-0.5, 0.5, eave),
+                v(-0.5, -0.5, eave),
+                v(0.0, -0.5, 1.0),
+                v(0.0, 0.5, 1.0),
+                roof,
+            );
+            l2.quad(
+                v(0.5, -0.5, eave),
+                v(0.5, 0.5, eave),
+                v(0.0, 0.5, 1.0),
+                v(0.0, -0.5, 1.0),
+                roof,
+            );
             vec![l0, l1, l2]
         }
         CultureKind::LargeBuilding => {
@@ -867,6 +897,33 @@ mod tests {
             0.0,
         );
         assert_eq!(fogged, 0.0);
+    }
+
+    #[test]
+    fn every_roof_slope_faces_up_and_out() {
+        // A roof wound the wrong way is lit from inside: black in the picture.
+        for kind in [CultureKind::House, CultureKind::Shed] {
+            for (level, lod) in culture_model(kind).lods.iter().enumerate() {
+                let mut slopes = 0;
+                for tri in lod.indices.chunks_exact(3) {
+                    let p: Vec<Vec3> = tri
+                        .iter()
+                        .map(|&i| Vec3::from(lod.vertices[i as usize].position))
+                        .collect();
+                    let centroid = (p[0] + p[1] + p[2]) / 3.0;
+                    let normal = Vec3::from(lod.vertices[tri[0] as usize].normal);
+                    let sloped = normal.x.abs() > 0.1 && normal.z.abs() > 0.1;
+                    if centroid.z > 0.72 && sloped {
+                        slopes += 1;
+                        assert!(
+                            normal.z > 0.0 && normal.x * centroid.x > 0.0,
+                            "{kind} level {level}: roof at {centroid} has normal {normal}"
+                        );
+                    }
+                }
+                assert!(slopes >= 4, "{kind} level {level}: {slopes} roof triangles");
+            }
+        }
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! `cig demo`: builds the demo database when missing, shows the terrain answers and paging a
-//! trainer relies on, then flies a scripted flight over it — a low pass along a valley, a climb,
+//! trainer relies on, then flies a scripted flight over it — a low pass through a village and
+//! its woods, a climb with the overload control holding a triangle budget,
 //! a view at dusk, then the environment: the full moon at night, cumulus from below and above, a
 //! thunderstorm with rain — rendered off-screen to PNG frames and a contact sheet.
 
@@ -176,6 +177,11 @@ fn cigi_session(args: &DemoArgs, centre: Geodetic) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The demo's triangle budget for the overload control (a view's frame).
+const DEMO_TRIANGLE_BUDGET: f64 = 200_000.0;
+/// Frames flown from one climb shot to the next.
+const CLIMB_STEPS: u32 = 6;
+
 /// Renders the scripted flight to PNG frames and a contact sheet.
 fn fly(
     args: &DemoArgs,
@@ -230,13 +236,45 @@ fn fly(
     );
     let mut renderer = cig_render::Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
     config.configure_renderer(&mut renderer)?;
+    // The overload control at work: a triangle budget the low pass and the climb over the
+    // woods reach (source 004 Table 4); K_LOD falls a step a frame above 190 000 triangles and
+    // rises below 150 000.
+    let mut overload = renderer.overload().copied().unwrap_or_default();
+    overload.triangles = Some(cig_scene::overload::CounterLimits {
+        capacity: DEMO_TRIANGLE_BUDGET,
+        begin_decrement: 0.95 * DEMO_TRIANGLE_BUDGET,
+        begin_increment: 0.75 * DEMO_TRIANGLE_BUDGET,
+    });
+    renderer.set_overload(Some(overload))?;
+    println!(
+        "overload control: {DEMO_TRIANGLE_BUDGET:.0} triangles a frame; the climb is flown in {CLIMB_STEPS} frames between its shots"
+    );
     let started = Instant::now();
     let mut frames = Vec::new();
     let clear = cig_bench::demo::clear_skies(&shots);
+    let mut previous: Option<cig_scene::FrameSnapshot> = None;
     for (i, snapshot) in clear.into_iter().chain(weather).enumerate() {
-        let Some(view) = snapshot.views.first() else {
+        let Some(view) = snapshot.views.first().copied() else {
             continue;
         };
+        // The climb's shots (10 to 17) are reached through frames in between, so the overload
+        // control follows the growing view frame by frame as it would in flight.
+        if let (true, Some(before)) = ((10..18).contains(&i), &previous) {
+            let from = before.views[0].eye;
+            for step in 1..CLIMB_STEPS {
+                let t = f64::from(step) / f64::from(CLIMB_STEPS);
+                let mut between = snapshot.clone();
+                between.views[0].eye = Geodetic::new(
+                    from.lat_deg + t * (view.eye.lat_deg - from.lat_deg),
+                    from.lon_deg + t * (view.eye.lon_deg - from.lon_deg),
+                    from.alt_m + t * (view.eye.alt_m - from.alt_m),
+                );
+                cache.update(&[between.views[0].eye]);
+                cache.wait_idle();
+                cig_render::load_for_view(&mut renderer, &cache, &between, 0, 64)?;
+                cig_render::render_image(&mut renderer, &cache, &between, 0)?;
+            }
+        }
         cache.update(&[view.eye]);
         cache.wait_idle();
         cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;
@@ -244,13 +282,19 @@ fn fly(
         let path = out_dir.join(format!("frame_{i:03}.png"));
         crate::render::write_png(&image, &path)?;
         println!(
-            "  {}: {:>8} triangles, {:>4} nodes, gpu {:6.1} ms",
+            "  {}: {:>8} triangles ({:>7} of {:>6} culture objects), {:>4} nodes, K_LOD {:>4.0} of {:>4.0} ({}), gpu {:6.1} ms",
             path.display(),
             stats.triangles,
+            stats.culture_triangles,
+            stats.culture_drawn,
             stats.terrain_nodes,
+            stats.klod,
+            stats.klod_nominal,
+            stats.overload,
             stats.gpu_ms
         );
         frames.push(image);
+        previous = Some(snapshot);
     }
     let sheet = cig_bench::demo::contact_sheet(&frames, 6);
     let sheet_path = out_dir.join("contact-sheet.png");
