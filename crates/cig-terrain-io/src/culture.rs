@@ -146,7 +146,7 @@ struct Props {
 
 /// Tallest an object of `kind` may be, metres (as `bin_placements` checks it).
 fn max_height_m(kind: CultureKind) -> f64 {
-    f64::from(kind.max_extent_m().max(60.0))
+    f64::from(kind.max_height_m())
 }
 
 fn max_extent_m(kind: CultureKind) -> f64 {
@@ -498,23 +498,10 @@ fn positions(ps: &[Vec<f64>]) -> Result<Vec<(f64, f64)>, String> {
     ps.iter().map(|p| position(p)).collect()
 }
 
-/// The same bounds `bin_placements` checks, named by the placement's values.
+/// The bounds `bin_placements` checks ([`CulturePlacement::check`]), named by the placement's
+/// values.
 fn check_size(p: &CulturePlacement) -> Result<(), String> {
-    let max_extent = p.kind.max_extent_m();
-    for (what, value, max) in [
-        ("height", p.height_m, p.kind.max_extent_m().max(60.0)),
-        ("width", p.width_m, max_extent),
-        ("length", p.length_m, max_extent),
-    ] {
-        if !(value.is_finite() && value > 0.0 && value <= max) {
-            return Err(format!(
-                "the {} at {:.6}, {:.6} would be {value} m in {what}: not a positive size up \
-                 to {max} m",
-                p.kind, p.lat_deg, p.lon_deg
-            ));
-        }
-    }
-    Ok(())
+    p.check().map_err(|e| e.to_string())
 }
 
 /// A straight piece of a line: its start's frame, its east-north vector and its length.

@@ -169,6 +169,11 @@ impl CultureKind {
         }
     }
 
+    /// Tallest a valid object of this kind may be, metres.
+    pub fn max_height_m(self) -> f32 {
+        self.max_extent_m().max(60.0)
+    }
+
     /// Widest a valid object of this kind may be (a sanity bound on feature files), metres.
     pub fn max_extent_m(self) -> f32 {
         match self {
@@ -428,6 +433,15 @@ fn recorded_or(recorded: f32, bound: f64) -> f64 {
     }
 }
 
+impl CulturePlacement {
+    /// Checks the placement's sizes: each positive and at most the kind's bounds
+    /// ([`CultureKind::max_extent_m`], [`CultureKind::max_height_m`]); what
+    /// [`bin_placements`] checks.
+    pub fn check(&self) -> Result<(), CultureError> {
+        check_placement(self)
+    }
+}
+
 /// Checks one placement's sizes.
 fn check_placement(p: &CulturePlacement) -> Result<(), CultureError> {
     let max = p.kind.max_extent_m();
@@ -438,7 +452,7 @@ fn check_placement(p: &CulturePlacement) -> Result<(), CultureError> {
         p.width_m
     };
     for (what, value, max) in [
-        ("height", p.height_m, max.max(60.0)),
+        ("height", p.height_m, p.kind.max_height_m()),
         ("width", p.width_m, max),
         ("length", length_m, max),
     ] {

@@ -91,7 +91,7 @@ pub struct VolumeEntry {
 pub fn tallest_object_m() -> f64 {
     CultureKind::ALL
         .iter()
-        .map(|k| f64::from(k.max_extent_m().max(60.0)))
+        .map(|k| f64::from(k.max_height_m()))
         .fold(0.0, f64::max)
 }
 
