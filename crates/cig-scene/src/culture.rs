@@ -565,6 +565,26 @@ fn add_ellipsoid(
     }
 }
 
+/// A two-sided vertical panel along y in the plane x = 0, from `z0` to `z1` (a wall's or a
+/// fence's coarsest level).
+fn panel(m: &mut ModelMesh, z0: f32, z1: f32, colour: [u8; 4]) {
+    let v = Vec3::new;
+    m.quad(
+        v(0.0, -0.5, z0),
+        v(0.0, 0.5, z0),
+        v(0.0, 0.5, z1),
+        v(0.0, -0.5, z1),
+        colour,
+    );
+    m.quad(
+        v(0.0, 0.5, z0),
+        v(0.0, -0.5, z0),
+        v(0.0, -0.5, z1),
+        v(0.0, 0.5, z1),
+        colour,
+    );
+}
+
 /// A gable-roofed building in the unit box: walls to `eave` of the height, the ridge along y.
 fn gabled(m: &mut ModelMesh, eave: f32, wall: [u8; 4], roof: [u8; 4]) {
     let v = Vec3::new;
@@ -719,20 +739,7 @@ pub fn culture_model(kind: CultureKind) -> Model {
             let mut l1 = ModelMesh::default();
             l1.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 1.0), stone);
             let mut l2 = ModelMesh::default();
-            l2.quad(
-                v(0.0, -0.5, 0.0),
-                v(0.0, 0.5, 0.0),
-                v(0.0, 0.5, 1.0),
-                v(0.0, -0.5, 1.0),
-                stone,
-            );
-            l2.quad(
-                v(0.0, 0.5, 0.0),
-                v(0.0, -0.5, 0.0),
-                v(0.0, -0.5, 1.0),
-                v(0.0, 0.5, 1.0),
-                stone,
-            );
+            panel(&mut l2, 0.0, 1.0, stone);
             vec![l0, l1, l2]
         }
         CultureKind::Fence => {
@@ -751,20 +758,7 @@ pub fn culture_model(kind: CultureKind) -> Model {
             }
             l1.add_box(v(-0.2, -0.5, 0.8), v(0.2, 0.5, 0.86), wood);
             let mut l2 = ModelMesh::default();
-            l2.quad(
-                v(0.0, -0.5, 0.8),
-                v(0.0, 0.5, 0.8),
-                v(0.0, 0.5, 0.86),
-                v(0.0, -0.5, 0.86),
-                wood,
-            );
-            l2.quad(
-                v(0.0, 0.5, 0.8),
-                v(0.0, -0.5, 0.8),
-                v(0.0, -0.5, 0.86),
-                v(0.0, 0.5, 0.86),
-                wood,
-            );
+            panel(&mut l2, 0.8, 0.86, wood);
             vec![l0, l1, l2]
         }
         CultureKind::PowerPole => {

@@ -134,13 +134,29 @@ pub fn replace_culture(
     db: &Path,
     placements: &[cig_terrain::CulturePlacement],
 ) -> Result<Manifest, DbError> {
+    change_in_staging::<DbError>(db, "culture", &mut |staging, manifest| {
+        manifest.culture = write_culture(staging, &manifest.layout, placements)?;
+        Ok(())
+    })
+}
+
+/// Changes the database at `db` all-or-nothing: a staging sibling mirrors it (files
+/// hard-linked, or copied where links are refused) but for its manifest and the top-level
+/// entry `part`; `change(staging, manifest)` writes the new `part` there and updates the
+/// manifest, which is then written, and the staging directory is renamed over `db`. On any
+/// error the staging directory is removed and `db` is unchanged. Returns the new manifest.
+pub(crate) fn change_in_staging<E: From<DbError>>(
+    db: &Path,
+    part: &str,
+    change: &mut dyn FnMut(&Path, &mut Manifest) -> Result<(), E>,
+) -> Result<Manifest, E> {
     let database = open_database(db)?;
     let mut manifest = database.manifest().clone();
     drop(database);
-    let staging = staging_sibling(db, "culture")?;
-    let result = (|| -> Result<(), DbError> {
-        link_tree(db, &staging, &["culture", MANIFEST_FILE])?;
-        manifest.culture = write_culture(&staging, &manifest.layout, placements)?;
+    let staging = staging_sibling(db, part)?;
+    let result = (|| -> Result<(), E> {
+        link_tree(db, &staging, &[part, MANIFEST_FILE])?;
+        change(&staging, &mut manifest)?;
         write_manifest(&staging, &manifest)?;
         Ok(())
     })();

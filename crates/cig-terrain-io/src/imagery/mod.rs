@@ -22,10 +22,7 @@ use std::path::{Path, PathBuf};
 use cig_terrain::{ImageryManifest, Manifest};
 
 use crate::import::ImportError;
-use crate::store::{
-    imagery_tile_path, link_tree, open_database, staging_sibling, swap_into_place, write_manifest,
-    DbError, MANIFEST_FILE,
-};
+use crate::store::{imagery_tile_path, DbError};
 
 pub mod pyramid;
 pub mod reader;
@@ -178,29 +175,16 @@ pub fn add_imagery(
     overlays: &[&dyn OverlayLayer],
     progress: &mut dyn FnMut(ImageryProgress),
 ) -> Result<Manifest, ImageryError> {
-    let database = open_database(db)?;
-    let mut manifest = database.manifest().clone();
-    drop(database);
-    let staging = staging_sibling(db, "imagery")?;
-    let result = (|| -> Result<(), ImageryError> {
-        link_tree(db, &staging, &["imagery", MANIFEST_FILE])?;
+    crate::store::change_in_staging::<ImageryError>(db, "imagery", &mut |staging, manifest| {
         // The database's own roads, rivers and lakes are painted over the new imagery too.
-        let stored = stored_features(&staging)?;
+        let stored = stored_features(staging)?;
         let mut all: Vec<&dyn OverlayLayer> = overlays.to_vec();
         if let Some(layer) = &stored {
             all.push(layer);
         }
-        let imagery = write_imagery(&staging, &manifest, images, &all, progress)?;
-        manifest.imagery = Some(imagery);
-        write_manifest(&staging, &manifest)?;
+        manifest.imagery = Some(write_imagery(staging, manifest, images, &all, progress)?);
         Ok(())
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_dir_all(&staging);
-        return Err(e);
-    }
-    swap_into_place(&staging, db)?;
-    Ok(manifest)
+    })
 }
 
 /// The feature layer of the features a database keeps
