@@ -236,6 +236,11 @@ pub struct ImportArgs {
     /// a pole every "spacing_m" (default 50 m).
     #[arg(long, value_name = "FILE")]
     pub features: Option<PathBuf>,
+    /// Trees and bushes scattered by material: "default" (open woodland in forest, single
+    /// trees and bushes on grass) or a TOML file of rules per material (`[forest]
+    /// trees_per_ha`, `bushes_per_ha`, `conifer_fraction`, ...; unknown keys refused).
+    #[arg(long, value_name = "default|FILE.toml")]
+    pub culture_rules: Option<String>,
 }
 
 #[derive(Args)]

@@ -68,6 +68,27 @@ pub fn synthesize_database(
     )?)
 }
 
+/// `--culture-rules`: "default", or a TOML file of rules per material, checked.
+fn read_culture_rules(text: &str) -> anyhow::Result<cig_synth::culture::CultureRules> {
+    if text == "default" {
+        return Ok(cig_synth::culture::CultureRules::default());
+    }
+    let path = std::path::Path::new(text);
+    let source = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read culture rules {}", path.display()))?;
+    let rules: cig_synth::culture::CultureRules = toml::from_str(&source).map_err(|e| {
+        anyhow::anyhow!(
+            "bad culture rules: {}: {}",
+            e.message().trim(),
+            path.display()
+        )
+    })?;
+    rules
+        .validate()
+        .map_err(|e| anyhow::anyhow!("bad culture rules: {e}: {}", path.display()))?;
+    Ok(rules)
+}
+
 pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
     check_output(&args.out, args.force)?;
     // The feature file (roads, rivers, lakes and culture) is read before the DEMs, so a broken
@@ -76,6 +97,11 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
         Some(path) => cig_terrain_io::features::read_feature_file(path)?,
         None => cig_terrain_io::features::FeatureFile::default(),
     };
+    let culture_rules = args
+        .culture_rules
+        .as_deref()
+        .map(read_culture_rules)
+        .transpose()?;
     let started = Instant::now();
     let bar = crate::output::bar(args.inputs.len() as u64, "read DEMs");
     let area = cig_terrain_io::import::import_files(&args.inputs, &mut |done, total| {
@@ -111,7 +137,7 @@ pub fn import(args: &ImportArgs, config: &Config) -> anyhow::Result<()> {
             images: &args.imagery,
             features: &file.features,
             culture: &culture,
-            culture_rules: None,
+            culture_rules: culture_rules.as_ref(),
         },
         &args.out,
         args.force,

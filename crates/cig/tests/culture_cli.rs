@@ -427,3 +427,57 @@ fn a_line_of_sight_stopped_by_a_house_names_it() {
     let old = los_json(&db, (450.0, 200.0), (550.0, 200.0), 2.0);
     assert_eq!(old, los);
 }
+
+#[test]
+fn culture_rules_scatter_trees_by_material_and_bad_rules_are_named() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let dem = dem(dir.path());
+    let db = dir.path().join("db");
+    cig()
+        .args(["db", "import", "--culture-rules", "default", "--out"])
+        .arg(&db)
+        .arg(&dem)
+        .assert()
+        .success();
+    let culture = info_json(&db)["culture"].clone();
+    assert!(culture["total"].as_u64().expect("total") > 100, "{culture}");
+    assert_eq!(culture["buildings"], 0, "{culture}");
+    // Rules of 10 trees a hectare on every material stand about 13 000 trees on the
+    // DEM's 1300 ha (stands and clearings either side of the mean).
+    let dense = dir.path().join("dense.toml");
+    let mut text = String::new();
+    for material in ["forest", "grass", "sand", "dry_clay"] {
+        text.push_str(&format!("[{material}]\ntrees_per_ha = 10\n"));
+    }
+    std::fs::write(&dense, text).expect("write");
+    let dense_db = dir.path().join("dense");
+    cig()
+        .args(["db", "import", "--culture-rules"])
+        .arg(&dense)
+        .arg("--out")
+        .arg(&dense_db)
+        .arg(&dem)
+        .assert()
+        .success();
+    let culture = info_json(&dense_db)["culture"].clone();
+    let trees = culture["trees"].as_u64().expect("trees");
+    assert!((6_000..20_000).contains(&trees), "{culture}");
+    // A rule out of range names the key and the file; nothing is written.
+    let rules = dir.path().join("rules.toml");
+    std::fs::write(&rules, "[forest]\ntrees_per_ha = -4\n").expect("write");
+    let out = dir.path().join("bad");
+    let assert = cig()
+        .args(["db", "import", "--culture-rules"])
+        .arg(&rules)
+        .arg("--out")
+        .arg(&out)
+        .arg(&dem)
+        .assert()
+        .failure();
+    let line = one_line_error(&assert);
+    assert!(
+        line.contains("forest.trees_per_ha") && line.contains("rules.toml"),
+        "{line}"
+    );
+    assert!(!out.exists());
+}
