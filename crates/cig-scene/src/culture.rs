@@ -9,9 +9,11 @@
 //! block that survives its detail control parameter (source 004 Eq 16: `N_e = K_LOD r_c / R_s
 //! f(v)`, `r_c` the object's bounding radius, `f(v)` removing it at 98 % fade in the fog, the
 //! area-of-interest factor toward the periphery), which chooses its levels from the square-law
-//! table with the dithered blend of [`crate::models::Model::lod_blend`]. Below the table's
-//! first step an object dissolves away over one step (`N_e` from 1.5 down to 0.75, a radius
-//! of 1.5 to 0.75 resolution elements), so no object pops in or out at its farthest range.
+//! table with the dithered blend of [`crate::models::Model::lod_blend`]. As the study shows
+//! nothing below the table's first step, an object dissolves away over the doubling of `N_e`
+//! above it (from 3 to 1.5: a radius of 3 to 1.5 resolution elements), so no object pops in
+//! or out at its farthest range. Blocks far from the eye against their size take the fog and
+//! area-of-interest terms at their centre, so most objects cost one distance.
 //! Instances come out grouped by kind and level, one instanced draw each.
 //!
 //! Positions: a tile's objects are turned once (when the tile becomes resident) into offsets
@@ -36,9 +38,10 @@ use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 use std::sync::Arc;
 
-/// The lowest `N_e` an object is drawn at, as a fraction of the table's first step: between
-/// this and the first step it dissolves.
-const FADE_OUT_START: f64 = 0.5;
+/// Below the table's first step an object is gone; from there to twice it, it dissolves in
+/// (as multiples of the first step's `N_e`).
+const FADE_FROM: f64 = 1.0;
+const FADE_TO: f64 = 2.0;
 
 /// One instance for the GPU: the columns of its body-to-eye-relative-ECEF transform, scaled by
 /// its size; `col0.w..col1.w` the share of its pixels this draw covers (dither thresholds, for
@@ -116,6 +119,8 @@ struct RenderBlock {
     radius_m: f64,
     /// Largest critical radius in the block.
     max_critical_m: f32,
+    /// Mean height of the objects' middles above the anchor, metres.
+    mean_up_m: f32,
     items: std::ops::Range<usize>,
 }
 
@@ -183,7 +188,7 @@ impl CultureSelector {
         let mut frame = CultureFrame::default();
         let table = &select.detail.table;
         let first_step = table.value(1);
-        let min_ne = first_step * FADE_OUT_START;
+        let min_ne = first_step * FADE_FROM;
         // The farthest any object may be drawn: the largest radius at the lowest N_e.
         let max_radius_m = 40.0;
         let klod_most = select.klod.max(if select.cue_important.contains(&true) {
@@ -248,50 +253,72 @@ impl CultureSelector {
                 }
                 frame.blocks_drawn += 1;
                 let rel32 = rel.as_vec3();
+                // A block far from the eye against its size takes its fog and area-of-interest
+                // terms at its centre (within 1/4 of a radian of every object's), so each
+                // object costs a distance; near blocks are exact object by object.
+                let block_scale = (select.managed && distance > 4.0 * block.radius_m).then(|| {
+                    let centre = rel32 + block.up * block.mean_up_m;
+                    let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
+                    let fog = crate::detail::visibility_factor(fade(distance, altitude));
+                    let aoi = select.detail.aoi.as_ref().map_or(1.0, |aoi| {
+                        let angle_deg = select.aim.angle_between(centre.as_dvec3()).to_degrees();
+                        crate::detail::aoi_factor(angle_deg, aoi)
+                    });
+                    fog * aoi
+                });
                 for item in &render.items[block.items.clone()] {
                     frame.objects_considered += 1;
                     let o = item.offset_m;
                     let pos = rel32 + block.east * o[0] + block.north * o[1] + block.up * o[2];
-                    let d = f64::from(pos.length()).max(1.0);
-                    let blend = if select.managed {
-                        if d > range_m {
-                            continue;
-                        }
-                        let centre = pos + block.up * (0.5 * item.size_m[2]);
-                        let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
-                        let fog = fade(d, altitude);
-                        let angle_deg = select.aim.angle_between(centre.as_dvec3()).to_degrees();
-                        let klod = if select.cue_important[item.kind as usize] {
-                            select.klod_nominal
-                        } else {
-                            select.klod
-                        };
-                        let ne = if item.kind.is_linear() {
-                            // A wall or fence is a face: Eq 17 with the ellipse of its half
-                            // length and half height, seen from the eye's distance off its
-                            // plane (edge on, it dissolves).
-                            let [he, hn] = item.heading;
-                            let along = block.east * he + block.north * hn;
-                            let normal = block.east * hn - block.north * he;
-                            let face = Face {
-                                centre,
-                                along,
-                                normal,
-                                radii_m: [0.5 * item.size_m[1], 0.5 * item.size_m[2]],
-                            };
-                            ne_of_face(select, klod, &face, fog, angle_deg)
-                        } else {
-                            select.detail.ne(
-                                klod,
-                                f64::from(item.critical_radius_m),
-                                d,
-                                fog,
-                                angle_deg,
-                            )
-                        };
-                        culture_blend(ne, levels, table)
+                    let klod = if select.cue_important[item.kind as usize] {
+                        select.klod_nominal
                     } else {
-                        LodBlend::single(0)
+                        select.klod
+                    };
+                    let blend = match block_scale {
+                        Some(scale) if !item.kind.is_linear() => {
+                            // N_e = K r_c / R f(v) a: gone beyond K r_c f(v) a / N_e,min.
+                            let reach = klod * scale * f64::from(item.critical_radius_m);
+                            let d2 = f64::from(pos.length_squared());
+                            if d2 * min_ne * min_ne > reach * reach {
+                                continue;
+                            }
+                            culture_blend(reach / d2.sqrt().max(1.0), levels, table)
+                        }
+                        _ if select.managed => {
+                            let d = f64::from(pos.length()).max(1.0);
+                            if d > range_m {
+                                continue;
+                            }
+                            let centre = pos + block.up * (0.5 * item.size_m[2]);
+                            let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
+                            let fog = fade(d, altitude);
+                            let angle_deg =
+                                select.aim.angle_between(centre.as_dvec3()).to_degrees();
+                            let ne = if item.kind.is_linear() {
+                                // A wall or fence is a face: Eq 17 with the ellipse of its half
+                                // length and half height, seen from the eye's distance off its
+                                // plane (edge on, it dissolves).
+                                let [he, hn] = item.heading;
+                                let face = Face {
+                                    centre,
+                                    along: block.east * he + block.north * hn,
+                                    normal: block.east * hn - block.north * he,
+                                    radii_m: [0.5 * item.size_m[1], 0.5 * item.size_m[2]],
+                                };
+                                ne_of_face(select, klod, &face, fog, angle_deg)
+                            } else {
+                                select.detail.ne(
+                                    klod,
+                                    f64::from(item.critical_radius_m),
+                                    d,
+                                    fog,
+                                    angle_deg,
+                                )
+                            };
+                            culture_blend(ne, levels, table)
+                        }
+                        _ => LodBlend::single(0),
                     };
                     if blend.coverage <= 0.0 {
                         continue;
@@ -429,21 +456,21 @@ fn ne_of_face(
     }
 }
 
-/// The levels of a culture object at `ne`: the models' blend, with the fade below the table's
-/// first step over one step only (gone at half the first step's value).
+/// The levels of a culture object at `ne`: the models' blend, except that an object is gone
+/// below the table's first step (source 004 Table 3: nothing is shown below step 1) and
+/// dissolves in over one doubling of `N_e` above it, so it never pops at its farthest range.
 pub fn culture_blend(ne: f64, levels: usize, table: &DetailTable) -> LodBlend {
     let first = table.value(1);
-    if ne.is_nan() || ne < first * FADE_OUT_START {
+    if ne.is_nan() || ne < first * FADE_FROM {
         return LodBlend {
             coverage: 0.0,
             ..LodBlend::single(levels.saturating_sub(1))
         };
     }
     let mut blend = table.levels_for(ne, levels);
-    if ne < first {
-        blend.coverage = (((ne - first * FADE_OUT_START) / (first * (1.0 - FADE_OUT_START)))
-            as f32)
-            .clamp(0.0, 1.0);
+    if ne < first * FADE_TO {
+        blend.coverage =
+            (((ne - first * FADE_FROM) / (first * (FADE_TO - FADE_FROM))) as f32).clamp(0.0, 1.0);
     }
     blend
 }
@@ -503,6 +530,12 @@ fn make_render_tile(layout: &PyramidLayout, geoid: &GeoidLookup, tile: Arc<Tile>
                     )
                 });
             let vertical = low.abs().max(high.abs());
+            let count = (items.len() - start).max(1) as f32;
+            let mean_up_m = items[start..]
+                .iter()
+                .map(|it| it.offset_m[2] + 0.5 * it.size_m[2])
+                .sum::<f32>()
+                / count;
             blocks.push(RenderBlock {
                 anchor_ecef: anchor.to_ecef(),
                 east,
@@ -510,6 +543,7 @@ fn make_render_tile(layout: &PyramidLayout, geoid: &GeoidLookup, tile: Arc<Tile>
                 up,
                 radius_m: radius_m.hypot(vertical),
                 max_critical_m,
+                mean_up_m,
                 items: start..items.len(),
             });
         }
@@ -921,21 +955,22 @@ mod tests {
     }
 
     #[test]
-    fn culture_dissolves_over_one_step_below_the_first() {
+    fn culture_dissolves_over_one_doubling_above_the_first_step() {
         let table = DetailTable::default();
         let first = table.value(1);
-        assert_eq!(culture_blend(first * 0.49, 3, &table).coverage, 0.0);
+        assert_eq!(culture_blend(first * 0.99, 3, &table).coverage, 0.0);
         assert_eq!(culture_blend(f64::NAN, 3, &table).coverage, 0.0);
-        let mid = culture_blend(first * 0.75, 3, &table);
+        let mid = culture_blend(first * 1.5, 3, &table);
         assert!((mid.coverage - 0.5).abs() < 1e-5, "{mid:?}");
-        assert_eq!(culture_blend(first * 1.01, 3, &table).coverage, 1.0);
+        assert_eq!(mid.finer, 2, "the coarsest level dissolves");
+        assert_eq!(culture_blend(first * 2.01, 3, &table).coverage, 1.0);
         // Coverage never jumps as N_e falls slowly.
         let mut last = 1.0_f32;
-        for k in 0..400 {
-            let ne = first * 1.2 - f64::from(k) * first * 0.002;
+        for k in 0..600 {
+            let ne = first * 2.4 - f64::from(k) * first * 0.003;
             let c = culture_blend(ne, 3, &table).coverage;
             assert!(
-                last - c <= 0.02 && c <= last + 1e-6,
+                last - c <= 0.01 && c <= last + 1e-6,
                 "N_e {ne}: {last} -> {c}"
             );
             last = c;
