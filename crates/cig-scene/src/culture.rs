@@ -140,6 +140,10 @@ pub struct CultureSelector {
     /// Triangles of each kind's levels (for the counters).
     triangles: HashMap<(CultureKind, usize), u32>,
     levels: usize,
+    /// The cache's eviction count when the tiles were last checked against it.
+    eviction_epoch: u64,
+    /// Instances per kind and level, kept from frame to frame for their room.
+    buckets: Vec<Vec<CultureInstance>>,
 }
 
 impl CultureSelector {
@@ -159,6 +163,8 @@ impl CultureSelector {
             tiles: HashMap::new(),
             triangles,
             levels,
+            eviction_epoch: u64::MAX,
+            buckets: Vec::new(),
         }
     }
 
@@ -201,25 +207,25 @@ impl CultureSelector {
         } else {
             f64::INFINITY
         };
-        let keys = self.tiles_near(camera, range_m, cache);
-        // Forget tiles that left the cache.
-        self.tiles.retain(|key, t| {
-            cache
-                .resident(*key)
-                .is_some_and(|r| Arc::ptr_eq(&r, &t.source))
-        });
+        let near = self.tiles_near(camera, range_m, cache);
+        // Forget tiles that left the cache (only after it evicted something).
+        let epoch = cache.eviction_epoch();
+        if epoch != self.eviction_epoch {
+            self.eviction_epoch = epoch;
+            self.tiles.retain(|key, t| {
+                cache
+                    .resident(*key)
+                    .is_some_and(|r| Arc::ptr_eq(&r, &t.source))
+            });
+        }
         let levels = self.levels.max(1);
-        let mut buckets: Vec<Vec<CultureInstance>> =
-            vec![Vec::new(); CultureKind::ALL.len() * levels];
+        // Last frame's buckets, emptied: their room is kept.
+        let mut buckets = std::mem::take(&mut self.buckets);
+        buckets.resize_with(CultureKind::ALL.len() * levels, Vec::new);
+        buckets.iter_mut().for_each(Vec::clear);
         let eye = camera.eye_ecef;
         let local_up = camera.local_up.as_vec3();
-        for key in keys {
-            let Some(tile) = cache.resident(key) else {
-                continue;
-            };
-            if tile.culture.is_none() {
-                continue;
-            }
+        for (key, tile) in near {
             let render = match self.tiles.get(&key) {
                 Some(r) if Arc::ptr_eq(&r.source, &tile) => r,
                 _ => {
@@ -349,24 +355,33 @@ impl CultureSelector {
                 }
             }
         }
-        for (index, bucket) in buckets.into_iter().enumerate() {
+        frame
+            .instances
+            .reserve(buckets.iter().map(Vec::len).sum::<usize>());
+        for (index, bucket) in buckets.iter().enumerate() {
             if bucket.is_empty() {
                 continue;
             }
             let start = frame.instances.len();
-            frame.instances.extend(bucket);
+            frame.instances.extend_from_slice(bucket);
             frame.draws.push(CultureDraw {
                 kind: CultureKind::ALL[index / levels],
                 level: index % levels,
                 instances: start..frame.instances.len(),
             });
         }
+        self.buckets = buckets;
         frame
     }
 
     /// Resident finest tiles within `range_m` of the eye (every resident finest tile when the
     /// range is unbounded).
-    fn tiles_near(&self, camera: &Camera, range_m: f64, cache: &TileCache) -> Vec<TileKey> {
+    fn tiles_near(
+        &self,
+        camera: &Camera,
+        range_m: f64,
+        cache: &TileCache,
+    ) -> Vec<(TileKey, Arc<Tile>)> {
         let g = &self.layout.grid;
         let eye = camera.view.eye;
         let (m_lat, m_lon) = cig_geo::metres_per_degree(eye.lat_deg);
@@ -391,8 +406,8 @@ impl CultureSelector {
                     row: row as u32,
                     col: col as u32,
                 };
-                if cache.resident(key).is_some() {
-                    keys.push(key);
+                if let Some(tile) = cache.resident(key).filter(|t| t.culture.is_some()) {
+                    keys.push((key, tile));
                 }
             }
         }
