@@ -178,7 +178,7 @@ fn cigi_session(args: &DemoArgs, centre: Geodetic) -> anyhow::Result<()> {
 }
 
 /// The demo's triangle budget for the overload control (a view's frame).
-const DEMO_TRIANGLE_BUDGET: f64 = 200_000.0;
+const DEMO_TRIANGLE_BUDGET: f64 = 130_000.0;
 /// Frames flown from one climb shot to the next.
 const CLIMB_STEPS: u32 = 6;
 
@@ -237,8 +237,8 @@ fn fly(
     let mut renderer = cig_render::Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
     config.configure_renderer(&mut renderer)?;
     // The overload control at work: a triangle budget the low pass and the climb over the
-    // woods reach (source 004 Table 4); K_LOD falls a step a frame above 190 000 triangles and
-    // rises below 150 000.
+    // woods reach (source 004 Table 4); K_LOD falls a step a frame above 95 % of it and
+    // rises below 75 %.
     let mut overload = renderer.overload().copied().unwrap_or_default();
     overload.triangles = Some(cig_scene::overload::CounterLimits {
         capacity: DEMO_TRIANGLE_BUDGET,
