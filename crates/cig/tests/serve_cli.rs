@@ -574,6 +574,20 @@ fn serve_shows_its_views_in_a_window() {
 fn a_hosts_line_of_sight_through_the_scenarios_smoke_is_obscured() {
     let dir = tempfile::tempdir().expect("tempdir");
     let db = small_db(dir.path());
+    // Bare ground: the synthetic database's trees would stop the line before the smoke.
+    let empty = dir.path().join("no-culture.geojson");
+    std::fs::write(&empty, r#"{"type": "FeatureCollection", "features": []}"#).expect("write");
+    let cleared = std::process::Command::new(env!("CARGO_BIN_EXE_cig"))
+        .args(["db", "culture"])
+        .arg(&db)
+        .arg(&empty)
+        .output()
+        .expect("cig db culture");
+    assert!(
+        cleared.status.success(),
+        "{}",
+        String::from_utf8_lossy(&cleared.stderr)
+    );
     let (lat, lon) = (36.0, -121.21);
     let ground = query_height_msl(&db, lat, lon);
     let scenario = dir.path().join("smoke.toml");
