@@ -248,3 +248,48 @@ fn snapshot_at(eye: Geodetic, size: (u32, u32), culture: bool) -> FrameSnapshot 
     s.fog = cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, 200_000.0);
     s
 }
+
+#[test]
+fn cue_important_culture_keeps_its_detail_under_overload() {
+    let (db, raster) = wood();
+    let cache = cache(&db);
+    // Looking north across the street of houses from 600 m south of the wood, 12 m up.
+    let (m_lat, _) = cig_geo::metres_per_degree(WOOD.0);
+    let (lat, lon) = (WOOD.0 - 900.0 / m_lat, WOOD.1);
+    let eye = Geodetic::new(lat, lon, ground_m(&raster, lat, lon) + 12.0);
+    let loaded = snapshot(eye, -2.0, true, true);
+    // A budget every frame exceeds: K_LOD falls to its floor within a few frames.
+    let overload = cig_scene::overload::OverloadSettings {
+        triangles: Some(cig_scene::overload::CounterLimits {
+            capacity: 1000.0,
+            begin_decrement: 900.0,
+            begin_increment: 500.0,
+        }),
+        models: None,
+        gpu_ms: None,
+        decrement_step: 0.3,
+        ..Default::default()
+    };
+    let drawn_under_load = |cue: Vec<CultureKind>| {
+        let mut renderer = renderer(&cache);
+        renderer.set_overload(Some(overload)).expect("overload");
+        renderer.culture_cue_important = cue;
+        let mut last = None;
+        for _ in 0..6 {
+            last = Some(frame(&mut renderer, &cache, &loaded).1);
+        }
+        last.expect("frames")
+    };
+    let plain = drawn_under_load(Vec::new());
+    let cued = drawn_under_load(vec![CultureKind::House, CultureKind::Shed]);
+    assert!(plain.klod < 0.2 * plain.klod_nominal, "{plain:?}");
+    assert!(cued.klod < 0.2 * cued.klod_nominal, "{cued:?}");
+    // The street's buildings in view (11 of its 12), 480 m away, keep the nominal K_LOD and
+    // stay drawn; without the mark they are removed with the trees' detail.
+    assert!(
+        cued.culture_drawn >= plain.culture_drawn + 8,
+        "cue-important {} against {} objects",
+        cued.culture_drawn,
+        plain.culture_drawn
+    );
+}
