@@ -351,11 +351,6 @@ pub enum LoadError {
         error: ImageryDecodeError,
         location: String,
     },
-    #[error("{error}: {location}")]
-    CultureDecode {
-        error: crate::culture::CultureError,
-        location: String,
-    },
 }
 
 /// An open terrain database.
@@ -411,7 +406,8 @@ impl TerrainDatabase {
     }
 
     /// Reads a finest tile's culture and clamps it to `tile`'s surface; `Ok(None)` where the
-    /// database has none there. Blocks on the store.
+    /// database has none there, or where its file fails its checks (logged; the terrain tile
+    /// is still used). Blocks on the store.
     fn load_culture(&self, tile: &Tile) -> Result<Option<CultureTile>, LoadError> {
         if self.manifest.culture.is_none() {
             return Ok(None);
@@ -421,13 +417,16 @@ impl TerrainDatabase {
             Err(StoreError::Missing(_)) => return Ok(None),
             Err(e) => return Err(e.into()),
         };
+        // A damaged culture file costs its culture, not the terrain under it.
         let mut culture =
-            CultureTile::decode(&bytes, Some(tile.key), self.manifest.layout.tile_cells).map_err(
-                |error| LoadError::CultureDecode {
-                    error,
-                    location: self.store.culture_location(tile.key),
-                },
-            )?;
+            match CultureTile::decode(&bytes, Some(tile.key), self.manifest.layout.tile_cells) {
+                Ok(culture) => culture,
+                Err(error) => {
+                    let location = self.store.culture_location(tile.key);
+                    tracing::warn!("culture skipped, the terrain kept: {error}: {location}");
+                    return Ok(None);
+                }
+            };
         culture.clamp_to(tile, self.manifest.spacing_m);
         Ok(Some(culture))
     }

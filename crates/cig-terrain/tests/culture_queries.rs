@@ -656,3 +656,40 @@ fn culture_pages_with_its_tiles_inside_the_budget() {
         "lines of sight through the wood: {culture_hits}"
     );
 }
+
+#[test]
+fn a_damaged_culture_file_costs_its_culture_and_not_the_terrain() {
+    let g = grid(129, 129, 30.0);
+    let centre = centre();
+    let r = raster(g, |r, c| 100.0 + 0.2 * ((r + c) % 2) as f32);
+    let tree = place(CultureKind::ConiferTree, centre, [20.0, 6.0, 6.0]);
+    let (db, counts) = culture_database(&r, 32, &[tree]);
+    let (&key, _) = counts.iter().next().expect("the tree's tile");
+    assert!(db.load_tile(key).expect("tile").culture.is_some());
+    // The same database with that tile's culture file flipped in one byte.
+    let store = Arc::new(MemoryTileStore::new());
+    for level in 0..db.layout().levels {
+        for k in db.layout().keys_at(level) {
+            let tile = db.load_tile(k).expect("tile");
+            store.insert(k, tile.encode());
+        }
+    }
+    let (tiles, _) = bin_placements(db.layout(), &[tree]).expect("placements");
+    let mut bytes = tiles[0].encode();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 0x10;
+    store.insert_culture(key, bytes);
+    let damaged = TerrainDatabase::new(
+        db.manifest().clone(),
+        store as Arc<dyn cig_terrain::TileStore>,
+    )
+    .expect("db");
+    let tile = damaged
+        .load_tile(key)
+        .expect("the terrain tile still loads");
+    assert!(tile.culture.is_none());
+    assert_eq!(
+        tile.elevation_m,
+        db.load_tile(key).expect("tile").elevation_m
+    );
+}
