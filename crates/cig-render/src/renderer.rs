@@ -291,6 +291,9 @@ pub struct Renderer {
     model_bind: wgpu::BindGroup,
     /// The culture standing on the resident tiles, selected per view.
     culture: CultureSelector,
+    /// Each culture kind's levels in the model buffers (by the kind's byte), found again
+    /// whenever the models are uploaded.
+    culture_lods: Vec<Vec<LevelRange>>,
     /// Culture kinds that keep the nominal `K_LOD` under overload (cue-important, §4.6).
     pub culture_cue_important: Vec<CultureKind>,
     sky_bind: wgpu::BindGroup,
@@ -831,6 +834,7 @@ impl Renderer {
             terrain_bind,
             model_bind,
             culture_cue_important: Vec::new(),
+            culture_lods: Vec::new(),
             culture: CultureSelector::new(
                 *cache.database().layout(),
                 GeoidLookup::new(&cache.database().manifest().geoid),
@@ -934,6 +938,15 @@ impl Renderer {
             bytemuck::cast_slice(&indices),
             wgpu::BufferUsages::INDEX,
         );
+        self.culture_lods = CultureKind::ALL
+            .into_iter()
+            .map(|kind| {
+                let name = cig_scene::culture::culture_model_name(kind);
+                self.models
+                    .get(&name)
+                    .map_or(Vec::new(), |m| m.lods.clone())
+            })
+            .collect();
     }
 
     /// Names of the models the renderer can draw.
@@ -1097,7 +1110,7 @@ impl Renderer {
             .copied()
             .flatten();
         let draws = self.entity_draws(&camera, snapshot, klod_nominal, klod, point_of_interest);
-        let mut instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
+        let instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
         let culture_started = std::time::Instant::now();
         let culture = if snapshot.culture {
             self.culture_frame(
@@ -1112,40 +1125,42 @@ impl Renderer {
             CultureFrame::default()
         };
         let culture_cpu_ms = culture_started.elapsed().as_secs_f64() * 1e3;
-        // Culture draws: a level's range, first instance and instance count.
+        // Culture draws: a level's range, first instance and instance count; the culture's
+        // instances follow the entities' in the instance buffer, written as they are.
         let culture_first = instance_records.len();
-        let mut culture_draws: Vec<(LevelRange, u32, u32)> = Vec::new();
         let binding_records = self.gpu.device.limits().max_storage_buffer_binding_size as usize
             / std::mem::size_of::<InstanceRecord>();
         let room = MAX_CULTURE_INSTANCES
             .min(binding_records.saturating_sub(culture_first))
             .min(culture.instances.len());
-        for draw in &culture.draws {
-            let name = cig_scene::culture::culture_model_name(draw.kind);
-            let Some(range) = self.models.get(&name).and_then(|m| m.lods.get(draw.level)) else {
-                continue;
-            };
-            let end = draw.instances.end.min(room);
-            if draw.instances.start >= end {
-                continue;
-            }
-            culture_draws.push((
-                *range,
-                (culture_first + draw.instances.start) as u32,
-                (end - draw.instances.start) as u32,
-            ));
-        }
-        instance_records.extend(
-            culture.instances[..room]
-                .iter()
-                .map(|c| bytemuck::cast::<CultureInstance, InstanceRecord>(*c)),
-        );
-        self.reserve_instances(instance_records.len());
+        let culture_draws: Vec<(LevelRange, u32, u32)> = culture
+            .draws
+            .iter()
+            .filter_map(|draw| {
+                let range = self.culture_lods.get(draw.kind as usize)?.get(draw.level)?;
+                let end = draw.instances.end.min(room);
+                (draw.instances.start < end).then(|| {
+                    (
+                        *range,
+                        (culture_first + draw.instances.start) as u32,
+                        (end - draw.instances.start) as u32,
+                    )
+                })
+            })
+            .collect();
+        self.reserve_instances(culture_first + room);
         if !instance_records.is_empty() {
             self.gpu.queue.write_buffer(
                 &self.instances,
                 0,
                 bytemuck::cast_slice(&instance_records),
+            );
+        }
+        if room > 0 {
+            self.gpu.queue.write_buffer(
+                &self.instances,
+                (culture_first * std::mem::size_of::<InstanceRecord>()) as u64,
+                bytemuck::cast_slice::<CultureInstance, u8>(&culture.instances[..room]),
             );
         }
 
@@ -1262,37 +1277,29 @@ impl Renderer {
             }
             stats.terrain_triangles = terrain_frame.indices.len() as u64 / 3;
 
-            if !draws.is_empty() {
+            if !draws.is_empty() || !culture_draws.is_empty() {
                 pass.set_pipeline(&self.model_pipeline);
                 pass.set_bind_group(0, &self.model_bind, &[]);
                 pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
                 pass.set_vertex_buffer(0, self.model_vertices.slice(..));
                 pass.set_index_buffer(self.model_indices.slice(..), wgpu::IndexFormat::Uint32);
-                for (i, (range, _)) in draws.iter().enumerate() {
-                    let (first, count, base, tris) = *range;
-                    pass.draw_indexed(first..first + count, base, i as u32..i as u32 + 1);
-                    stats.model_triangles += u64::from(tris);
-                }
-                stats.draw_calls += draws.len() as u32;
-                // A model blending two levels is drawn twice; count it once.
-                stats.entities_drawn = draws.iter().filter(|d| d.1.col0[3] == 0.0).count() as u32;
             }
-            if !culture_draws.is_empty() {
-                pass.set_pipeline(&self.model_pipeline);
-                pass.set_bind_group(0, &self.model_bind, &[]);
-                pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
-                pass.set_vertex_buffer(0, self.model_vertices.slice(..));
-                pass.set_index_buffer(self.model_indices.slice(..), wgpu::IndexFormat::Uint32);
-                for &((first, count, base, tris), first_instance, instances) in &culture_draws {
-                    pass.draw_indexed(
-                        first..first + count,
-                        base,
-                        first_instance..first_instance + instances,
-                    );
-                    stats.culture_triangles += u64::from(tris) * u64::from(instances);
-                }
-                stats.draw_calls += culture_draws.len() as u32;
+            for (i, (range, _)) in draws.iter().enumerate() {
+                let (first, count, base, tris) = *range;
+                pass.draw_indexed(first..first + count, base, i as u32..i as u32 + 1);
+                stats.model_triangles += u64::from(tris);
             }
+            // A model blending two levels is drawn twice; count it once.
+            stats.entities_drawn = draws.iter().filter(|d| d.1.col0[3] == 0.0).count() as u32;
+            for &((first, count, base, tris), first_instance, instances) in &culture_draws {
+                pass.draw_indexed(
+                    first..first + count,
+                    base,
+                    first_instance..first_instance + instances,
+                );
+                stats.culture_triangles += u64::from(tris) * u64::from(instances);
+            }
+            stats.draw_calls += (draws.len() + culture_draws.len()) as u32;
             stats.culture_drawn = culture.objects_drawn as u32;
             stats.culture_cpu_ms = culture_cpu_ms;
             // The sky where no geometry was drawn (its depth test passes at the cleared far

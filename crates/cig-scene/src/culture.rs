@@ -137,8 +137,7 @@ pub struct CultureSelector {
     layout: PyramidLayout,
     geoid: GeoidLookup,
     tiles: HashMap<TileKey, RenderTile>,
-    /// Triangles of each kind's levels (for the counters).
-    triangles: HashMap<(CultureKind, usize), u32>,
+    /// Levels of the kinds' models.
     levels: usize,
     /// The cache's eviction count when the tiles were last checked against it.
     eviction_epoch: u64,
@@ -148,38 +147,19 @@ pub struct CultureSelector {
 
 impl CultureSelector {
     pub fn new(layout: PyramidLayout, geoid: GeoidLookup) -> CultureSelector {
-        let mut triangles = HashMap::new();
-        let mut levels = 0;
-        for kind in CultureKind::ALL {
-            let model = culture_model(kind);
-            levels = levels.max(model.lods.len());
-            for (level, mesh) in model.lods.iter().enumerate() {
-                triangles.insert((kind, level), mesh.triangle_count() as u32);
-            }
-        }
+        let levels = CultureKind::ALL
+            .into_iter()
+            .map(|kind| culture_model(kind).lods.len())
+            .max()
+            .unwrap_or(1);
         CultureSelector {
             layout,
             geoid,
             tiles: HashMap::new(),
-            triangles,
             levels,
             eviction_epoch: u64::MAX,
             buckets: Vec::new(),
         }
-    }
-
-    /// Triangles one instance of `kind` at `level` draws.
-    pub fn triangles_of(&self, kind: CultureKind, level: usize) -> u32 {
-        self.triangles.get(&(kind, level)).copied().unwrap_or(0)
-    }
-
-    /// Triangles a frame's draws add up to.
-    pub fn frame_triangles(&self, frame: &CultureFrame) -> u64 {
-        frame
-            .draws
-            .iter()
-            .map(|d| u64::from(self.triangles_of(d.kind, d.level)) * d.instances.len() as u64)
-            .sum()
     }
 
     /// Selects the culture `camera` draws this frame. `fade(distance_m, altitude_m)` is how far
