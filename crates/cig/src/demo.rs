@@ -253,6 +253,15 @@ fn fly(
     let mut frames = Vec::new();
     let clear = cig_bench::demo::clear_skies(&shots);
     let mut previous: Option<cig_scene::FrameSnapshot> = None;
+    // A complete frame: the eye's tiles paged in and its meshes built first.
+    let draw = |renderer: &mut cig_render::Renderer,
+                snapshot: &cig_scene::FrameSnapshot|
+     -> anyhow::Result<(cig_render::Image, cig_render::FrameStats)> {
+        cache.update(&[snapshot.views[0].eye]);
+        cache.wait_idle();
+        cig_render::load_for_view(renderer, &cache, snapshot, 0, 64)?;
+        Ok(cig_render::render_image(renderer, &cache, snapshot, 0)?)
+    };
     for (i, snapshot) in clear.into_iter().chain(weather).enumerate() {
         let Some(view) = snapshot.views.first().copied() else {
             continue;
@@ -269,16 +278,10 @@ fn fly(
                     from.lon_deg + t * (view.eye.lon_deg - from.lon_deg),
                     from.alt_m + t * (view.eye.alt_m - from.alt_m),
                 );
-                cache.update(&[between.views[0].eye]);
-                cache.wait_idle();
-                cig_render::load_for_view(&mut renderer, &cache, &between, 0, 64)?;
-                cig_render::render_image(&mut renderer, &cache, &between, 0)?;
+                draw(&mut renderer, &between)?;
             }
         }
-        cache.update(&[view.eye]);
-        cache.wait_idle();
-        cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;
-        let (image, stats) = cig_render::render_image(&mut renderer, &cache, &snapshot, 0)?;
+        let (image, stats) = draw(&mut renderer, &snapshot)?;
         let path = out_dir.join(format!("frame_{i:03}.png"));
         crate::render::write_png(&image, &path)?;
         println!(
