@@ -13,6 +13,9 @@
 //!    80 %): the share of frames over the budget after the first second and how often
 //!    `K_LOD` changes direction.
 //! 4. The CPU time of each view's culture selection and culling, from the frames' counters.
+//! 5. Terrain occlusion: eight eyes 5 m above the ground on a 2 km ring about the densest
+//!    block, each looking at it, drawn with and without culling behind ridges: blocks and
+//!    objects culled, the pixels that changed (none should), the selection's CPU time.
 
 use crate::report::{date_utc, machine, percentile};
 use crate::{require, BenchError, Report, Step};
@@ -276,6 +279,50 @@ pub fn run(options: &CultureOptions) -> Result<Report, BenchError> {
     // 4. Culture selection and culling per view (the first climb frames build the tiles'
     // blocks: reported apart).
     let cpu: Vec<f64> = managed_climb.iter().map(|s| s.culture_cpu_ms).collect();
+
+    // 5. Terrain occlusion: eight eyes 5 m above the ground on a 2 km ring about the densest
+    // block, each looking at it, drawn with and without the horizon.
+    renderer.set_overload(None).step("the overload control")?;
+    let (_, m_lon) = cig_geo::metres_per_degree(lat);
+    let mut rows = Vec::new();
+    let (mut cpu_on, mut cpu_off) = (Vec::new(), Vec::new());
+    let (mut occluded_total, mut culled_total, mut changed_max) = (0u64, 0i64, 0usize);
+    for k in 0..8 {
+        let bearing_deg = f64::from(k) * 45.0;
+        let (s, c) = bearing_deg.to_radians().sin_cos();
+        let (p_lat, p_lon) = (lat + 2000.0 * c / m_lat, lon + 2000.0 * s / m_lon);
+        let eye = Geodetic::new(p_lat, p_lon, ground(&mut session, p_lat, p_lon)? + 5.0);
+        let mut v = view(eye, 0.0);
+        v.orientation.heading_deg = (bearing_deg + 180.0) % 360.0;
+        let shot = snapshot(v, true);
+        cache.update(&[eye]);
+        cache.wait_idle();
+        cig_render::load_for_view(&mut renderer, &cache, &shot, 0, 64)?;
+        let draw = |renderer: &mut Renderer, occlusion: bool| {
+            renderer.culture_occlusion = occlusion;
+            // The second frame: the first builds the blocks of newly resident tiles.
+            cig_render::render_image(renderer, &cache, &shot, 0)?;
+            cig_render::render_image(renderer, &cache, &shot, 0)
+        };
+        let (on_image, on) = draw(&mut renderer, true)?;
+        let (off_image, off) = draw(&mut renderer, false)?;
+        let changed = on_image.pixels_differing(&off_image, 2);
+        occluded_total += u64::from(on.culture_blocks_occluded);
+        culled_total += i64::from(off.culture_drawn) - i64::from(on.culture_drawn);
+        changed_max = changed_max.max(changed);
+        cpu_on.push(on.culture_cpu_ms);
+        cpu_off.push(off.culture_cpu_ms);
+        rows.push(serde_json::json!({
+            "heading_deg": v.orientation.heading_deg,
+            "blocks_occluded": on.culture_blocks_occluded,
+            "culture_drawn": on.culture_drawn,
+            "culture_drawn_without": off.culture_drawn,
+            "culture_cpu_ms": on.culture_cpu_ms,
+            "culture_cpu_ms_without": off.culture_cpu_ms,
+            "pixels_changed": changed,
+        }));
+    }
+    renderer.culture_occlusion = true;
     let report = serde_json::json!({
         "machine": machine(),
         "date_utc": date_utc(),
@@ -326,6 +373,17 @@ pub fn run(options: &CultureOptions) -> Result<Report, BenchError> {
             "p99": percentile(&cpu, 0.99),
             "max": percentile(&cpu, 1.0),
         },
+        "occlusion": {
+            "views": rows.len(),
+            "ring_m": 2000.0,
+            "eye_agl_m": 5.0,
+            "blocks_occluded": occluded_total,
+            "objects_culled": culled_total,
+            "pixels_changed_max": changed_max,
+            "culture_cpu_ms_median": percentile(&cpu_on, 0.5),
+            "culture_cpu_ms_median_without": percentile(&cpu_off, 0.5),
+            "per_view": rows,
+        },
     });
     let summary = format!(
         "culture: {} trees, {} buildings; densest block {} objects\n\
@@ -333,7 +391,9 @@ pub fn run(options: &CultureOptions) -> Result<Report, BenchError> {
          frame_ratio {:.2}\n\
          climb 50 -> 3000 m: budget {:.0} triangles, {:.1} % of frames over after 1 s, \
          K_LOD changed direction {} times (lowest {:.0})\n\
-         culture selection per view: median {:.3} ms, p99 {:.3} ms",
+         culture selection per view: median {:.3} ms, p99 {:.3} ms\n\
+         terrain occlusion from 8 low eyes: {} blocks, {} objects culled, at most {} pixels \
+         changed; selection median {:.3} ms ({:.3} ms without)",
         manifest_culture.trees(),
         manifest_culture.buildings(),
         densest_objects,
@@ -348,6 +408,11 @@ pub fn run(options: &CultureOptions) -> Result<Report, BenchError> {
         klod_min,
         percentile(&cpu, 0.5),
         percentile(&cpu, 0.99),
+        occluded_total,
+        culled_total,
+        changed_max,
+        percentile(&cpu_on, 0.5),
+        percentile(&cpu_off, 0.5),
     );
     Ok(Report {
         json: report,

@@ -45,6 +45,21 @@ pub struct Image {
     pub rgba: Vec<u8>,
 }
 
+impl Image {
+    /// Pixels where any channel differs from `other`'s by more than `tolerance`.
+    pub fn pixels_differing(&self, other: &Image, tolerance: u8) -> usize {
+        self.rgba
+            .chunks_exact(4)
+            .zip(other.rgba.chunks_exact(4))
+            .filter(|(a, b)| {
+                a.iter()
+                    .zip(b.iter())
+                    .any(|(x, y)| x.abs_diff(*y) > tolerance)
+            })
+            .count()
+    }
+}
+
 /// Loads, in the calling thread, every tile the view's selection still wants, until the
 /// selection is complete (at most `max_rounds` rounds): what a one-off frame needs.
 pub fn load_for_view(

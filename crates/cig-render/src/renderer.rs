@@ -76,6 +76,8 @@ pub mod serde_like {
         /// the CPU time of their selection and culling, milliseconds.
         pub culture_drawn: u32,
         pub culture_triangles: u64,
+        /// Culture blocks (8 x 8 cells) in the view that the terrain hid.
+        pub culture_blocks_occluded: u32,
         pub culture_cpu_ms: f64,
         /// Obscurant puffs drawn (after culling to the view).
         pub puffs_drawn: u32,
@@ -296,6 +298,8 @@ pub struct Renderer {
     culture_lods: Vec<Vec<LevelRange>>,
     /// Culture kinds that keep the nominal `K_LOD` under overload (cue-important, §4.6).
     pub culture_cue_important: Vec<CultureKind>,
+    /// Cull culture blocks hidden behind the terrain (on by default).
+    pub culture_occlusion: bool,
     sky_bind: wgpu::BindGroup,
     terrain_pipelines: TerrainPipelines,
     /// East and north (ECEF unit vectors) of the database centre's tangent plane, the plane the
@@ -834,6 +838,7 @@ impl Renderer {
             terrain_bind,
             model_bind,
             culture_cue_important: Vec::new(),
+            culture_occlusion: true,
             culture_lods: Vec::new(),
             culture: CultureSelector::new(
                 *cache.database().layout(),
@@ -1117,9 +1122,9 @@ impl Renderer {
                 cache,
                 &camera,
                 snapshot,
-                klod,
-                klod_nominal,
+                [klod, klod_nominal],
                 point_of_interest,
+                options.mesh_budget == usize::MAX,
             )
         } else {
             CultureFrame::default()
@@ -1301,6 +1306,7 @@ impl Renderer {
             }
             stats.draw_calls += (draws.len() + culture_draws.len()) as u32;
             stats.culture_drawn = culture.objects_drawn as u32;
+            stats.culture_blocks_occluded = culture.blocks_occluded as u32;
             stats.culture_cpu_ms = culture_cpu_ms;
             // The sky where no geometry was drawn (its depth test passes at the cleared far
             // plane only).
@@ -1670,15 +1676,17 @@ impl Renderer {
 
     /// The culture view `camera` draws: by the detail control parameter at `klod` (removed at
     /// 98 % fade in the frame's fog and ground fog layer, lowered toward the periphery), or,
-    /// with `snapshot.culture_managed` off, everything resident at its finest level.
+    /// with `snapshot.culture_managed` off, everything resident at its finest level. `complete`
+    /// (one-off frames) makes every tile's culture ready first instead of on the selector's
+    /// thread.
     fn culture_frame(
         &mut self,
         cache: &TileCache,
         camera: &Camera,
         snapshot: &FrameSnapshot,
-        klod: f64,
-        klod_nominal: f64,
+        [klod, klod_nominal]: [f64; 2],
         point_of_interest_deg: Option<[f64; 2]>,
+        complete: bool,
     ) -> CultureFrame {
         let aim = aim_of(camera, point_of_interest_deg);
         let layer = drawn_ground_fog(snapshot);
@@ -1702,6 +1710,12 @@ impl Renderer {
                 cue_important,
                 aim,
                 managed: snapshot.culture_managed,
+                complete,
+                // The drawn terrain may stand its level of detail's pixel error off the finest
+                // surface the horizon is built from: one pixel more.
+                occlusion_margin_px: self
+                    .culture_occlusion
+                    .then_some(1.0 + snapshot.max_pixel_error.max(0.0)),
             },
             &fade,
         )

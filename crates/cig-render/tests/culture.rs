@@ -213,11 +213,7 @@ fn a_slowly_approached_tree_never_pops() {
         let off = snapshot_at(eye, size, false);
         let with = render(renderer, &cache, &on, false).0;
         let without = render(renderer, &cache, &off, false).0;
-        with.rgba
-            .chunks_exact(4)
-            .zip(without.rgba.chunks_exact(4))
-            .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
-            .count() as f64
+        with.pixels_differing(&without, 2) as f64
     };
     let mut ne = 0.6;
     let mut previous = coverage(&mut renderer, ne);
@@ -292,4 +288,133 @@ fn cue_important_culture_keeps_its_detail_under_overload() {
         cued.culture_drawn,
         plain.culture_drawn
     );
+}
+
+/// The plain with an east-west ridge 60 m high (a Gaussian of 250 m) 1.5 km north of its south
+/// edge, a wood in front of it and a wood behind it.
+fn ridge_and_woods() -> (Raster, Vec<CulturePlacement>) {
+    let mut raster = plain();
+    let g = raster.grid;
+    for i in 0..g.rows {
+        let north_m = i as f64 * 30.0;
+        let h = 100.0 + 60.0 * (-((north_m - 1500.0) / 250.0).powi(2)).exp();
+        for j in 0..g.cols {
+            raster.elevation_m[i * g.cols + j] = h as f32;
+        }
+    }
+    let (m_lat, m_lon) = cig_geo::metres_per_degree(g.south_lat_deg);
+    let mut trees = Vec::new();
+    // In front of the ridge (centre 1 km north, 700 m from the eye) and behind it (2.4 km).
+    for (centre_n, side_m) in [(1000.0, 200.0), (2400.0, 400.0)] {
+        let rows = (side_m / 10.0) as i32;
+        for r in 0..rows {
+            for c in 0..rows {
+                let n = centre_n - side_m / 2.0 + f64::from(r) * 10.0;
+                let e = 3000.0 - side_m / 2.0 + f64::from(c) * 10.0;
+                trees.push(CulturePlacement {
+                    kind: CultureKind::ConiferTree,
+                    lat_deg: g.south_lat_deg + n / m_lat,
+                    lon_deg: g.west_lon_deg + e / m_lon,
+                    height_m: 18.0,
+                    width_m: 6.0,
+                    length_m: 0.0,
+                    heading_deg: 0.0,
+                    variant: ((r * 7 + c * 13) % 256) as u8,
+                });
+            }
+        }
+    }
+    (raster, trees)
+}
+
+#[test]
+fn culture_behind_a_ridge_is_culled_without_changing_the_picture() {
+    let (raster, trees) = ridge_and_woods();
+    let g = raster.grid;
+    let db = database_with_culture(&raster, &trees);
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let (m_lat, m_lon) = cig_geo::metres_per_degree(g.south_lat_deg);
+    let at = |north_m: f64, up_m: f64| {
+        let lat = g.south_lat_deg + north_m / m_lat;
+        let lon = g.west_lon_deg + 3000.0 / m_lon;
+        Geodetic::new(lat, lon, ground_m(&raster, lat, lon) + up_m)
+    };
+    let shot = |renderer: &mut Renderer, eye: Geodetic, pitch_deg: f64, occlusion: bool| {
+        renderer.culture_occlusion = occlusion;
+        let mut s = FrameSnapshot::new(
+            MORNING_UNIX_S,
+            vec![view(eye, (0.0, pitch_deg, 0.0), 40.0, (640, 480))],
+        );
+        s.culture = true;
+        render(renderer, &cache, &s, false)
+    };
+    // From the foot of the ridge's south side, 2 m up: the far wood is behind the crest.
+    let low = at(300.0, 2.0);
+    let (culled, culled_stats) = shot(&mut renderer, low, 0.0, true);
+    let (all, all_stats) = shot(&mut renderer, low, 0.0, false);
+    write_png(&culled, &out_dir().join("culture-ridge-culled.png"));
+    write_png(&all, &out_dir().join("culture-ridge-all.png"));
+    assert!(
+        culled_stats.culture_blocks_occluded >= 4,
+        "{culled_stats:?}"
+    );
+    assert_eq!(all_stats.culture_blocks_occluded, 0);
+    // The far wood's trees are not drawn; the near wood's are.
+    assert!(
+        culled_stats.culture_drawn + 1000 <= all_stats.culture_drawn,
+        "{} drawn against {} without occlusion",
+        culled_stats.culture_drawn,
+        all_stats.culture_drawn
+    );
+    assert!(culled_stats.culture_drawn >= 300, "{culled_stats:?}");
+    eprintln!(
+        "occluded {} blocks: {} objects drawn against {}",
+        culled_stats.culture_blocks_occluded, culled_stats.culture_drawn, all_stats.culture_drawn
+    );
+    // Nothing the trainee sees changes.
+    let changed = culled.pixels_differing(&all, 2);
+    assert!(changed <= 4, "{changed} pixels changed by culling");
+    // From 400 m up the far wood shows over the ridge: nothing is culled.
+    let high = at(300.0, 400.0);
+    let (_, high_stats) = shot(&mut renderer, high, -8.0, true);
+    assert_eq!(high_stats.culture_blocks_occluded, 0, "{high_stats:?}");
+    assert!(high_stats.culture_drawn >= all_stats.culture_drawn / 2);
+}
+
+#[test]
+fn real_time_frames_get_their_culture_from_the_selector_thread_soon_after() {
+    let (db, raster) = wood();
+    let cache = cache(&db);
+    let (m_lat, _) = cig_geo::metres_per_degree(WOOD.0);
+    let (lat, lon) = (WOOD.0 - 600.0 / m_lat, WOOD.1);
+    let eye = Geodetic::new(lat, lon, ground_m(&raster, lat, lon) + 12.0);
+    let shot = snapshot(eye, -2.0, true, true);
+    // A one-off frame makes every tile's culture first.
+    let complete = frame(&mut renderer(&cache), &cache, &shot).1;
+    assert!(complete.culture_drawn > 1000, "{complete:?}");
+    // Real-time frames never wait: the tiles are made on the selector's thread and their
+    // culture shows a few frames later, the same objects as the one-off frame's.
+    let mut live = renderer(&cache);
+    let options = cig_render::FrameOptions {
+        fade_in_s: 0.0,
+        ..cig_render::FrameOptions::default()
+    };
+    let first = cig_render::render_image_with(&mut live, &cache, &shot, 0, options)
+        .expect("frame")
+        .1;
+    // The first frame asked for the tiles and did not wait for them.
+    assert_eq!(first.culture_drawn, 0, "{first:?}");
+    let mut drawn = first.culture_drawn;
+    for _ in 0..200 {
+        if drawn == complete.culture_drawn {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+        drawn = cig_render::render_image_with(&mut live, &cache, &shot, 0, options)
+            .expect("frame")
+            .1
+            .culture_drawn;
+    }
+    assert_eq!(drawn, complete.culture_drawn);
 }

@@ -22,16 +22,22 @@
 //! eye-relative position of an object is then the anchor's (an f64 subtraction) plus its
 //! offset, in f32, as the renderer wants it.
 //!
-//! Limits: no occlusion culling behind ridges (blocks hidden by terrain are drawn and depth
-//! tested); far culture is removed, not replaced by an area texture; one unit mesh per kind
-//! (variants differ in size, heading and tint only).
+//! Blocks hidden behind ridges are culled by an occlusion horizon built each frame from the
+//! min/max quadtree leaves of the resident finest tiles in range ([`crate::horizon`]): only
+//! where the terrain surely hides a whole block, with a margin for the drawn terrain's error.
+//!
+//! Limits: a partly hidden block is drawn whole (and depth tested); far culture is removed,
+//! not replaced by an area texture; one unit mesh per kind (variants differ in size, heading
+//! and tint only).
 
 use crate::detail::{DetailSettings, DetailTable, LodBlend};
+use crate::horizon::{GeoRect, OccluderGrid, OcclusionHorizon};
 use crate::models::{Model, ModelMesh};
 use crate::view::Camera;
 use cig_geo::Geodetic;
 use cig_terrain::culture::{CultureKind, CultureTile, CULTURE_BLOCK_CELLS};
 use cig_terrain::database::GeoidLookup;
+use cig_terrain::pyramid::quadtree_index;
 use cig_terrain::tile::Tile;
 use cig_terrain::{PyramidLayout, TileCache, TileKey};
 use glam::{DVec3, Vec3};
@@ -42,6 +48,10 @@ use std::sync::Arc;
 /// (as multiples of the first step's `N_e`).
 const FADE_FROM: f64 = 1.0;
 const FADE_TO: f64 = 2.0;
+
+/// Tiles nearer than this raise the occlusion horizon by their quadtree's leaves (240 m at
+/// 30 m posts), farther ones by the nodes a level up.
+const FINE_OCCLUDERS_M: f64 = 4000.0;
 
 /// One instance for the GPU: the columns of its body-to-eye-relative-ECEF transform, scaled by
 /// its size; `col0.w..col1.w` the share of its pixels this draw covers (dither thresholds, for
@@ -72,9 +82,10 @@ pub struct CultureFrame {
     pub objects_drawn: usize,
     /// Objects in the blocks that survived culling (each given an `N_e`).
     pub objects_considered: usize,
-    /// Blocks in range, and those the frustum kept.
+    /// Blocks in range, those the frustum kept, and those (of the kept) hidden by terrain.
     pub blocks_in_range: usize,
     pub blocks_drawn: usize,
+    pub blocks_occluded: usize,
 }
 
 /// How a view selects its culture.
@@ -93,6 +104,14 @@ pub struct CultureSelect<'a> {
     /// `false`: every object of the resident tiles in the frustum at its finest level, no
     /// removal (the unmanaged reference of `cig bench culture`).
     pub managed: bool,
+    /// Make the culture of every tile in range before selecting (one-off frames); otherwise
+    /// the tiles that became resident are made ready on a thread of the selector's own and
+    /// their culture shows from the frame after.
+    pub complete: bool,
+    /// Cull blocks the terrain hides, with this margin in pixels for the drawn terrain's
+    /// error (its level of detail's pixel error and one more); `None`: no occlusion culling.
+    /// Managed selection only.
+    pub occlusion_margin_px: Option<f64>,
 }
 
 /// An object ready for selection: its offset from its block's anchor and its look.
@@ -119,6 +138,10 @@ struct RenderBlock {
     radius_m: f64,
     /// Largest critical radius in the block.
     max_critical_m: f32,
+    /// The ground the block's objects stand on and overhang, and the ellipsoidal height of
+    /// its tallest top (for occlusion).
+    rect: GeoRect,
+    top_alt_m: f64,
     /// Mean height of the objects' middles above the anchor, metres.
     mean_up_m: f32,
     items: std::ops::Range<usize>,
@@ -143,10 +166,84 @@ pub struct CultureSelector {
     eviction_epoch: u64,
     /// Instances per kind and level, kept from frame to frame for their room.
     buckets: Vec<Vec<CultureInstance>>,
+    /// The terrain's occlusion horizon and the leaf grid it is built from, kept for their room.
+    horizon: OcclusionHorizon,
+    occluders: [OccluderGrid; 2],
+    /// This frame's blocks that survived the frustum and range (tile, block), kept for room.
+    candidates: Vec<(TileKey, usize)>,
+    /// The candidates' hiding floors ([`OcclusionHorizon::hiding_floor`]) by distance, each
+    /// lowered to the lowest at or beyond it.
+    floors: Vec<(f64, f64)>,
+    /// Makes newly resident tiles ready off the frame's thread (`None` where no thread could
+    /// be started: they are then made in the frame).
+    builder: Option<TileBuilder>,
+}
+
+/// Turns resident tiles into their render form on a thread of its own, so a frame never waits
+/// for a tile full of objects.
+struct TileBuilder {
+    requests: Option<std::sync::mpsc::Sender<(TileKey, Arc<Tile>)>>,
+    done: std::sync::mpsc::Receiver<(TileKey, RenderTile)>,
+    /// Tiles asked for and not yet back.
+    pending: std::collections::HashSet<TileKey>,
+    worker: Option<std::thread::JoinHandle<()>>,
+}
+
+impl TileBuilder {
+    fn start(layout: PyramidLayout, geoid: GeoidLookup) -> Option<TileBuilder> {
+        let (requests, inbox) = std::sync::mpsc::channel::<(TileKey, Arc<Tile>)>();
+        let (outbox, done) = std::sync::mpsc::channel();
+        let worker = std::thread::Builder::new()
+            .name("culture blocks".into())
+            .spawn(move || {
+                while let Ok((key, tile)) = inbox.recv() {
+                    if outbox
+                        .send((key, make_render_tile(&layout, &geoid, tile)))
+                        .is_err()
+                    {
+                        break;
+                    }
+                }
+            })
+            .ok()?;
+        Some(TileBuilder {
+            requests: Some(requests),
+            done,
+            pending: std::collections::HashSet::new(),
+            worker: Some(worker),
+        })
+    }
+
+    /// Asks for `tile` (once while it is pending); `false` when the worker is gone.
+    fn request(&mut self, key: TileKey, tile: &Arc<Tile>) -> bool {
+        if self.pending.contains(&key) {
+            return true;
+        }
+        let sent = self
+            .requests
+            .as_ref()
+            .is_some_and(|r| r.send((key, Arc::clone(tile))).is_ok());
+        if sent {
+            self.pending.insert(key);
+        }
+        sent
+    }
+}
+
+impl Drop for TileBuilder {
+    fn drop(&mut self) {
+        // Closing the requests ends the worker's loop.
+        self.requests = None;
+        if let Some(worker) = self.worker.take() {
+            // A worker that panicked has nothing left to give back.
+            let _ = worker.join();
+        }
+    }
 }
 
 impl CultureSelector {
     pub fn new(layout: PyramidLayout, geoid: GeoidLookup) -> CultureSelector {
+        let builder_geoid = geoid.clone();
         let levels = CultureKind::ALL
             .into_iter()
             .map(|kind| culture_model(kind).lods.len())
@@ -159,6 +256,11 @@ impl CultureSelector {
             levels,
             eviction_epoch: u64::MAX,
             buckets: Vec::new(),
+            horizon: OcclusionHorizon::default(),
+            occluders: Default::default(),
+            candidates: Vec::new(),
+            floors: Vec::new(),
+            builder: TileBuilder::start(layout, builder_geoid),
         }
     }
 
@@ -205,19 +307,42 @@ impl CultureSelector {
         buckets.iter_mut().for_each(Vec::clear);
         let eye = camera.eye_ecef;
         let local_up = camera.local_up.as_vec3();
-        for (key, tile) in near {
-            let render = match self.tiles.get(&key) {
-                Some(r) if Arc::ptr_eq(&r.source, &tile) => r,
-                _ => {
-                    let made = make_render_tile(&self.layout, &self.geoid, tile);
+        // Tiles made ready since the last frame (those still resident).
+        if let Some(builder) = &mut self.builder {
+            while let Ok((key, made)) = builder.done.try_recv() {
+                builder.pending.remove(&key);
+                if cache
+                    .resident(key)
+                    .is_some_and(|r| Arc::ptr_eq(&r, &made.source))
+                {
                     self.tiles.insert(key, made);
-                    match self.tiles.get(&key) {
+                }
+            }
+        }
+        // 1. The blocks in range, in the frustum and not too small to show anything.
+        let mut candidates = std::mem::take(&mut self.candidates);
+        candidates.clear();
+        for (key, tile) in &near {
+            if tile.culture.is_none() {
+                continue;
+            }
+            let render = match self.tiles.get(key) {
+                Some(r) if Arc::ptr_eq(&r.source, tile) => r,
+                _ if !select.complete
+                    && self.builder.as_mut().is_some_and(|b| b.request(*key, tile)) =>
+                {
+                    continue;
+                }
+                _ => {
+                    let made = make_render_tile(&self.layout, &self.geoid, Arc::clone(tile));
+                    self.tiles.insert(*key, made);
+                    match self.tiles.get(key) {
                         Some(r) => r,
                         None => continue,
                     }
                 }
             };
-            for block in &render.blocks {
+            for (index, block) in render.blocks.iter().enumerate() {
                 let rel = block.anchor_ecef - eye;
                 let distance = rel.length();
                 if distance - block.radius_m > range_m {
@@ -237,104 +362,197 @@ impl CultureSelector {
                         continue;
                     }
                 }
-                frame.blocks_drawn += 1;
-                let rel32 = rel.as_vec3();
-                // A block far from the eye against its size takes its fog and area-of-interest
-                // terms at its centre (within 1/4 of a radian of every object's), so each
-                // object costs a distance; near blocks are exact object by object.
-                let block_scale = (select.managed && distance > 4.0 * block.radius_m).then(|| {
-                    let centre = rel32 + block.up * block.mean_up_m;
-                    let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
-                    let fog = crate::detail::visibility_factor(fade(distance, altitude));
-                    let aoi = select.detail.aoi.as_ref().map_or(1.0, |aoi| {
-                        let angle_deg = select.aim.angle_between(centre.as_dvec3()).to_degrees();
-                        crate::detail::aoi_factor(angle_deg, aoi)
-                    });
-                    fog * aoi
+                candidates.push((*key, index));
+            }
+        }
+        // 2. The terrain's horizon over them, when it can hide any.
+        let occlusion = match select.occlusion_margin_px {
+            Some(margin_px) if select.managed && !candidates.is_empty() => {
+                let view = camera.view.eye;
+                self.horizon
+                    .begin(view.lat_deg, view.lon_deg, view.alt_m, 0.0);
+                let mut floors = std::mem::take(&mut self.floors);
+                floors.clear();
+                let mut reach_m = 0.0_f64;
+                for (key, index) in &candidates {
+                    if let Some(block) = self.tiles.get(key).and_then(|t| t.blocks.get(*index)) {
+                        let rel = block.anchor_ecef - eye;
+                        reach_m = reach_m.max(rel.length() + block.radius_m);
+                        if let Some(floor) = self.horizon.hiding_floor(&block.rect, block.top_alt_m)
+                        {
+                            floors.push(floor);
+                        }
+                    }
+                }
+                // By distance, each with the lowest floor at or beyond it.
+                floors.sort_by(|a, b| a.0.total_cmp(&b.0));
+                for k in (0..floors.len().saturating_sub(1)).rev() {
+                    floors[k].1 = floors[k].1.min(floors[k + 1].1);
+                }
+                self.floors = floors;
+                self.build_horizon(&near, camera, margin_px, reach_m)
+            }
+            _ => false,
+        };
+        // 3. Their objects.
+        let cos_inner = select
+            .detail
+            .aoi
+            .map_or(-1.0, |aoi| aoi.inner_deg.to_radians().cos());
+        let mut current: Option<(TileKey, &RenderTile)> = None;
+        for &(key, index) in &candidates {
+            let render = match current {
+                Some((k, r)) if k == key => r,
+                _ => match self.tiles.get(&key) {
+                    Some(r) => {
+                        current = Some((key, r));
+                        r
+                    }
+                    None => continue,
+                },
+            };
+            let Some(block) = render.blocks.get(index) else {
+                continue;
+            };
+            let rel = block.anchor_ecef - eye;
+            let distance = rel.length();
+            if occlusion && self.horizon.hides(&block.rect, block.top_alt_m) {
+                frame.blocks_occluded += 1;
+                continue;
+            }
+            frame.blocks_drawn += 1;
+            let rel32 = rel.as_vec3();
+            // A block far from the eye against its size takes its fog and area-of-interest
+            // terms at its centre (within 1/4 of a radian of every object's), so each
+            // object costs a distance; near blocks are exact object by object.
+            let block_scale = (select.managed && distance > 4.0 * block.radius_m).then(|| {
+                let centre = rel32 + block.up * block.mean_up_m;
+                let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
+                let fog = crate::detail::visibility_factor(fade(distance, altitude));
+                let aoi = select.detail.aoi.as_ref().map_or(1.0, |aoi| {
+                    let angle_deg = select.aim.angle_between(centre.as_dvec3()).to_degrees();
+                    crate::detail::aoi_factor(angle_deg, aoi)
                 });
-                for item in &render.items[block.items.clone()] {
-                    frame.objects_considered += 1;
-                    let o = item.offset_m;
-                    let pos = rel32 + block.east * o[0] + block.north * o[1] + block.up * o[2];
-                    let klod = if select.cue_important[item.kind as usize] {
-                        select.klod_nominal
-                    } else {
-                        select.klod
-                    };
-                    let blend = match block_scale {
-                        Some(scale) if !item.kind.is_linear() => {
-                            // N_e = K r_c / R f(v) a: gone beyond K r_c f(v) a / N_e,min.
-                            let reach = klod * scale * f64::from(item.critical_radius_m);
-                            let d2 = f64::from(pos.length_squared());
-                            if d2 * min_ne * min_ne > reach * reach {
-                                continue;
-                            }
-                            culture_blend(reach / d2.sqrt().max(1.0), levels, table)
+                fog * aoi
+            });
+            // A near block wholly short of the fog's removal fade (which grows with distance
+            // and with depth in a ground fog layer) needs no fog object by object.
+            let fog_free = select.managed && block_scale.is_none() && {
+                let far = distance + block.radius_m;
+                let anchor_alt = camera.view.eye.alt_m + f64::from(local_up.dot(rel32));
+                fade(far, anchor_alt - block.radius_m) < crate::detail::REMOVAL_FADE
+                    && fade(far, anchor_alt + block.radius_m) < crate::detail::REMOVAL_FADE
+            };
+            // Beyond this distance (metres times N_e) no far object of the block can show.
+            let gone_beyond = (distance - block.radius_m).max(1.0) * min_ne;
+            for item in &render.items[block.items.clone()] {
+                if let Some(scale) = block_scale {
+                    // The block's objects come largest first, walls and fences before all:
+                    // once one is too small to show from the block's nearest point, so is
+                    // every one after it.
+                    if !item.kind.is_linear()
+                        && klod_most * scale * f64::from(item.critical_radius_m) < gone_beyond
+                    {
+                        break;
+                    }
+                }
+                frame.objects_considered += 1;
+                let o = item.offset_m;
+                let pos = rel32 + block.east * o[0] + block.north * o[1] + block.up * o[2];
+                let klod = if select.cue_important[item.kind as usize] {
+                    select.klod_nominal
+                } else {
+                    select.klod
+                };
+                let blend = match block_scale {
+                    Some(scale) if !item.kind.is_linear() => {
+                        // N_e = K r_c / R f(v) a: gone beyond K r_c f(v) a / N_e,min.
+                        let reach = klod * scale * f64::from(item.critical_radius_m);
+                        let d2 = f64::from(pos.length_squared());
+                        if d2 * min_ne * min_ne > reach * reach {
+                            continue;
                         }
-                        _ if select.managed => {
-                            let d = f64::from(pos.length()).max(1.0);
-                            if d > range_m {
-                                continue;
-                            }
-                            let centre = pos + block.up * (0.5 * item.size_m[2]);
+                        culture_blend(reach / d2.sqrt().max(1.0), levels, table)
+                    }
+                    _ if select.managed => {
+                        let d = f64::from(pos.length()).max(1.0);
+                        if d > range_m {
+                            continue;
+                        }
+                        let centre = pos + block.up * (0.5 * item.size_m[2]);
+                        let fog = if fog_free {
+                            0.0
+                        } else {
                             let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
-                            let fog = fade(d, altitude);
-                            let angle_deg =
-                                select.aim.angle_between(centre.as_dvec3()).to_degrees();
-                            let ne = if item.kind.is_linear() {
-                                // A wall or fence is a face: Eq 17 with the ellipse of its half
-                                // length and half height, seen from the eye's distance off its
-                                // plane (edge on, it dissolves).
-                                let [he, hn] = item.heading;
-                                let face = Face {
-                                    centre,
-                                    along: block.east * he + block.north * hn,
-                                    normal: block.east * hn - block.north * he,
-                                    radii_m: [0.5 * item.size_m[1], 0.5 * item.size_m[2]],
-                                };
-                                ne_of_face(select, klod, &face, fog, angle_deg)
+                            fade(d, altitude)
+                        };
+                        // The angle from the area of interest's centre matters only outside
+                        // its inner cone.
+                        let angle_deg = if select.detail.aoi.is_some() {
+                            let c = centre.as_dvec3();
+                            let cos = select.aim.dot(c) / c.length().max(1e-6);
+                            if cos >= cos_inner {
+                                0.0
                             } else {
-                                select.detail.ne(
-                                    klod,
-                                    f64::from(item.critical_radius_m),
-                                    d,
-                                    fog,
-                                    angle_deg,
-                                )
+                                cos.clamp(-1.0, 1.0).acos().to_degrees()
+                            }
+                        } else {
+                            0.0
+                        };
+                        let ne = if item.kind.is_linear() {
+                            // A wall or fence is a face: Eq 17 with the ellipse of its half
+                            // length and half height, seen from the eye's distance off its
+                            // plane (edge on, it dissolves).
+                            let [he, hn] = item.heading;
+                            let face = Face {
+                                centre,
+                                along: block.east * he + block.north * hn,
+                                normal: block.east * hn - block.north * he,
+                                radii_m: [0.5 * item.size_m[1], 0.5 * item.size_m[2]],
                             };
-                            culture_blend(ne, levels, table)
-                        }
-                        _ => LodBlend::single(0),
-                    };
-                    if blend.coverage <= 0.0 {
-                        continue;
+                            ne_of_face(select, klod, &face, fog, angle_deg)
+                        } else {
+                            select.detail.ne(
+                                klod,
+                                f64::from(item.critical_radius_m),
+                                d,
+                                fog,
+                                angle_deg,
+                            )
+                        };
+                        culture_blend(ne, levels, table)
                     }
-                    frame.objects_drawn += 1;
-                    let [he, hn] = item.heading;
-                    let forward = block.east * he + block.north * hn;
-                    let right = block.east * hn - block.north * he;
-                    let [w, l, h] = item.size_m;
-                    let split = blend.finer_share * blend.coverage;
-                    let whole = |share: f32| if share >= 1.0 { 2.0 } else { share };
-                    let mut push = |level: usize, from: f32, to: f32| {
-                        let r = right * w;
-                        let f = forward * l;
-                        let u = block.up * h;
-                        let index = item.kind as usize * levels + level.min(levels - 1);
-                        buckets[index].push(CultureInstance {
-                            col0: [r.x, r.y, r.z, from],
-                            col1: [f.x, f.y, f.z, to],
-                            col2: [u.x, u.y, u.z, 0.0],
-                            origin: [pos.x, pos.y, pos.z, item.tint],
-                        });
-                    };
-                    push(blend.finer, 0.0, whole(split));
-                    if let Some(coarser) = blend.coarser {
-                        push(coarser, split, whole(blend.coverage));
-                    }
+                    _ => LodBlend::single(0),
+                };
+                if blend.coverage <= 0.0 {
+                    continue;
+                }
+                frame.objects_drawn += 1;
+                let [he, hn] = item.heading;
+                let forward = block.east * he + block.north * hn;
+                let right = block.east * hn - block.north * he;
+                let [w, l, h] = item.size_m;
+                let split = blend.finer_share * blend.coverage;
+                let whole = |share: f32| if share >= 1.0 { 2.0 } else { share };
+                let mut push = |level: usize, from: f32, to: f32| {
+                    let r = right * w;
+                    let f = forward * l;
+                    let u = block.up * h;
+                    let index = item.kind as usize * levels + level.min(levels - 1);
+                    buckets[index].push(CultureInstance {
+                        col0: [r.x, r.y, r.z, from],
+                        col1: [f.x, f.y, f.z, to],
+                        col2: [u.x, u.y, u.z, 0.0],
+                        origin: [pos.x, pos.y, pos.z, item.tint],
+                    });
+                };
+                push(blend.finer, 0.0, whole(split));
+                if let Some(coarser) = blend.coarser {
+                    push(coarser, split, whole(blend.coverage));
                 }
             }
         }
+        self.candidates = candidates;
         frame
             .instances
             .reserve(buckets.iter().map(Vec::len).sum::<usize>());
@@ -352,6 +570,154 @@ impl CultureSelector {
         }
         self.buckets = buckets;
         frame
+    }
+
+    /// Builds this frame's occlusion horizon from the resident finest tiles `near` out to
+    /// `reach_m` (the farthest block to test), limited to the view's azimuths: tiles within
+    /// [`FINE_OCCLUDERS_M`] by their quadtree's leaves, farther ones by the nodes a level up
+    /// (tiles rebuilt from coarser data are left out: their bounds are not the finest
+    /// surface's). Ground that cannot rise above the hiding floor of any block beyond it
+    /// (`self.floors`), judged by the quadtree's nodes of a quarter tile, is left out; returns
+    /// `false`, building nothing, when that is all of it.
+    fn build_horizon(
+        &mut self,
+        near: &[(TileKey, Arc<Tile>)],
+        camera: &Camera,
+        margin_px: f64,
+        reach_m: f64,
+    ) -> bool {
+        // The view's edge rays (where its side planes meet), on the ground's east and north.
+        let eye = camera.view.eye;
+        let enu = cig_geo::EnuFrame::new(eye);
+        let east = enu.enu_vector_to_ecef(DVec3::X);
+        let north = enu.enu_vector_to_ecef(DVec3::Y);
+        let p = &camera.planes;
+        let edges = [(0, 2), (0, 3), (1, 2), (1, 3)].map(|(a, b)| {
+            let ray = p[a].normal.cross(p[b].normal);
+            let ray = if ray.dot(camera.forward) < 0.0 {
+                -ray
+            } else {
+                ray
+            };
+            (ray.dot(east), ray.dot(north))
+        });
+        let holds = |v: DVec3| p[..4].iter().all(|plane| plane.normal.dot(v) > 0.0);
+        let all_round = holds(camera.local_up) || holds(-camera.local_up);
+        self.horizon.limit_to_view(&edges, all_round);
+
+        let g = self.layout.grid;
+        let tile_cells = self.layout.tile_cells as usize;
+        let depth = near
+            .iter()
+            .map(|(_, t)| t.quadtree_depth)
+            .min()
+            .unwrap_or(0);
+        let (row_lo, row_hi, col_lo, col_hi) = near
+            .iter()
+            .fold((u32::MAX, 0, u32::MAX, 0), |(rl, rh, cl, ch), (k, _)| {
+                (rl.min(k.row), rh.max(k.row), cl.min(k.col), ch.max(k.col))
+            });
+        let (tile_rows, tile_cols) = (
+            (row_hi - row_lo + 1) as usize,
+            (col_hi - col_lo + 1) as usize,
+        );
+        let levels = [depth, depth.saturating_sub(1)];
+        for (grid, d) in self.occluders.iter_mut().zip(levels) {
+            let per_tile = 1usize << d;
+            let cell = (tile_cells >> d) as f64;
+            grid.rows = tile_rows * per_tile;
+            grid.cols = tile_cols * per_tile;
+            grid.south_deg = g.south_lat_deg + (row_lo as usize * tile_cells) as f64 * g.dlat_deg;
+            grid.west_deg = g.west_lon_deg + (col_lo as usize * tile_cells) as f64 * g.dlon_deg;
+            grid.cell_dlat_deg = cell * g.dlat_deg;
+            grid.cell_dlon_deg = cell * g.dlon_deg;
+            grid.lowest_alt_m.clear();
+            grid.lowest_alt_m.resize(grid.rows * grid.cols, f32::NAN);
+        }
+        let floors = &self.floors;
+        // Whether ground nearest at `near_m` raising the horizon up to `tan` could hide a block.
+        let may_hide = |reach: Option<(f64, f64)>| match reach {
+            None => true,
+            Some((near_m, tan)) => {
+                let beyond = floors.partition_point(|f| f.0 <= near_m);
+                floors.get(beyond).is_some_and(|f| f.1 < tan)
+            }
+        };
+        let mut any = false;
+        for (key, tile) in near {
+            if tile.degraded_from_level.is_some() || tile.quadtree_depth != depth {
+                continue;
+            }
+            let (row0, col0) = (key.row as usize * tile_cells, key.col as usize * tile_cells);
+            let rect_of = |cells: usize, x: usize, y: usize, across: usize| GeoRect {
+                south_deg: g.south_lat_deg + (row0 + y * cells) as f64 * g.dlat_deg,
+                west_deg: g.west_lon_deg + (col0 + x * cells) as f64 * g.dlon_deg,
+                north_deg: g.south_lat_deg + (row0 + (y + across) * cells) as f64 * g.dlat_deg,
+                east_deg: g.west_lon_deg + (col0 + (x + across) * cells) as f64 * g.dlon_deg,
+            };
+            let rect = rect_of(tile_cells, 0, 0, 1);
+            let nearest_m = self.horizon.nearest_m(&rect);
+            if nearest_m > reach_m || !self.horizon.in_view(&rect) {
+                continue;
+            }
+            // Heights are above the geoid: lift them by its undulation at the tile's centre,
+            // less (more, for the highest) a quarter metre for its change across the tile.
+            let undulation = self.geoid.undulation_m(
+                0.5 * (rect.south_deg + rect.north_deg),
+                0.5 * (rect.west_deg + rect.east_deg),
+            );
+            let fine = nearest_m < FINE_OCCLUDERS_M;
+            let (grid, d) = if fine {
+                (&mut self.occluders[0], levels[0])
+            } else {
+                (&mut self.occluders[1], levels[1])
+            };
+            // Judged by the nodes of a quarter tile (or the tile's own, if coarser).
+            let judge = d.min(2);
+            let judged = 1usize << judge;
+            let judge_cells = tile_cells >> judge;
+            let per_judged = 1usize << (d - judge);
+            let per_tile = 1usize << d;
+            let node_cells = tile_cells >> d;
+            for jy in 0..judged {
+                for jx in 0..judged {
+                    let top = f64::from(tile.nodes[quadtree_index(judge, jx, jy)].max_m)
+                        + undulation
+                        + 0.5;
+                    let judged_rect = rect_of(judge_cells, jx, jy, 1);
+                    if !may_hide(self.horizon.raising_ceiling(&judged_rect, top)) {
+                        continue;
+                    }
+                    any = true;
+                    for y in jy * per_judged..(jy + 1) * per_judged {
+                        // Nodes reaching past the database's edge cover ground not drawn.
+                        if row0 + (y + 1) * node_cells > g.rows.saturating_sub(1) {
+                            break;
+                        }
+                        let grid_row = (key.row - row_lo) as usize * per_tile + y;
+                        for x in jx * per_judged..(jx + 1) * per_judged {
+                            if col0 + (x + 1) * node_cells > g.cols.saturating_sub(1) {
+                                break;
+                            }
+                            let grid_col = (key.col - col_lo) as usize * per_tile + x;
+                            let lowest = tile.nodes[quadtree_index(d, x, y)].min_m;
+                            grid.lowest_alt_m[grid_row * grid.cols + grid_col] =
+                                (f64::from(lowest) + undulation - 0.25) as f32;
+                        }
+                    }
+                }
+            }
+        }
+        if !any {
+            return false;
+        }
+        let margin_tan = margin_px.max(0.0) / camera.pixels_per_tangent.max(1.0);
+        self.horizon.set_margin(margin_tan);
+        for grid in &self.occluders {
+            self.horizon.add_grid(grid);
+        }
+        self.horizon.finish();
+        true
     }
 
     /// Resident finest tiles within `range_m` of the eye (every resident finest tile when the
@@ -386,7 +752,7 @@ impl CultureSelector {
                     row: row as u32,
                     col: col as u32,
                 };
-                if let Some(tile) = cache.resident(key).filter(|t| t.culture.is_some()) {
+                if let Some(tile) = cache.resident(key) {
                     keys.push((key, tile));
                 }
             }
@@ -495,6 +861,8 @@ fn make_render_tile(layout: &PyramidLayout, geoid: &GeoidLookup, tile: Arc<Tile>
             let start = items.len();
             let mut radius_m: f64 = 0.0;
             let mut max_critical_m: f32 = 0.0;
+            // East and north extent of the objects about the anchor, metres.
+            let mut reach = [f64::MAX, f64::MIN, f64::MAX, f64::MIN];
             for item in &culture.items[b.start..b.end] {
                 let e = (f64::from(item.fj) - fj0) * dlon * m_lon;
                 let n = (f64::from(item.fi) - fi0) * dlat * m_lat;
@@ -503,8 +871,14 @@ fn make_render_tile(layout: &PyramidLayout, geoid: &GeoidLookup, tile: Arc<Tile>
                 let up_m = f64::from(item.base_m - sink);
                 let heading = item.heading_deg().to_radians();
                 let critical = item.bounding_radius_m();
-                radius_m =
-                    radius_m.max((e * e + n * n).sqrt() + f64::from(item.footprint_radius_m()));
+                let footprint = f64::from(item.footprint_radius_m());
+                radius_m = radius_m.max((e * e + n * n).sqrt() + footprint);
+                reach = [
+                    reach[0].min(e - footprint),
+                    reach[1].max(e + footprint),
+                    reach[2].min(n - footprint),
+                    reach[3].max(n + footprint),
+                ];
                 max_critical_m = max_critical_m.max(critical);
                 items.push(RenderItem {
                     offset_m: [e as f32, n as f32, up_m as f32],
@@ -515,6 +889,13 @@ fn make_render_tile(layout: &PyramidLayout, geoid: &GeoidLookup, tile: Arc<Tile>
                     kind: item.kind,
                 });
             }
+            // Walls and fences first (their N_e depends on the view), then largest first: the
+            // selection stops at the first far object too small to show.
+            items[start..].sort_by(|a, b| {
+                (b.kind.is_linear(), b.critical_radius_m)
+                    .partial_cmp(&(a.kind.is_linear(), a.critical_radius_m))
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            });
             // The vertical extent: the anchor sits at sea level, objects from their base up.
             let (low, high) = items[start..]
                 .iter()
@@ -538,6 +919,13 @@ fn make_render_tile(layout: &PyramidLayout, geoid: &GeoidLookup, tile: Arc<Tile>
                 up,
                 radius_m: radius_m.hypot(vertical),
                 max_critical_m,
+                rect: GeoRect {
+                    south_deg: lat + reach[2] / m_lat,
+                    west_deg: lon + reach[0] / m_lon,
+                    north_deg: lat + reach[3] / m_lat,
+                    east_deg: lon + reach[1] / m_lon,
+                },
+                top_alt_m: undulation + high,
                 mean_up_m,
                 items: start..items.len(),
             });
@@ -857,6 +1245,8 @@ mod tests {
             cue_important: [false; 9],
             aim: DVec3::Y,
             managed: true,
+            complete: true,
+            occlusion_margin_px: None,
         };
         // A 20 m x 2 m wall along x, 100 m ahead (y), seen face on.
         let (along, normal) = (Vec3::X, Vec3::Y);

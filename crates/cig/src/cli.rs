@@ -624,6 +624,10 @@ pub struct RenderArgs {
     /// Draw the database's culture (trees, buildings, walls, fences, power poles): on or off.
     #[arg(long, value_name = "on|off", default_value = "on")]
     pub culture: String,
+    /// Cull the culture the terrain hides behind ridges: on or off (default: the
+    /// configuration's `culture.occlusion`, on).
+    #[arg(long, value_name = "on|off")]
+    pub culture_occlusion: Option<String>,
 }
 
 #[derive(Args)]

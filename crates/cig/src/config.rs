@@ -14,13 +14,24 @@ pub struct Config {
 }
 
 /// `[culture]`: how the database's culture is drawn.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CultureConfig {
     /// Kinds that keep their detail under overload (cue-important, source 004 §4.6), by name:
     /// conifer_tree, broadleaf_tree, bush, house, shed, large_building, wall, fence, power_pole
     /// (e.g. `["power_pole"]` for a helicopter trainer's wire-strike cues).
     pub cue_important: Vec<String>,
+    /// Cull culture the terrain hides behind ridges (the picture is the same either way).
+    pub occlusion: bool,
+}
+
+impl Default for CultureConfig {
+    fn default() -> Self {
+        CultureConfig {
+            cue_important: Vec::new(),
+            occlusion: true,
+        }
+    }
 }
 
 impl CultureConfig {
@@ -154,8 +165,17 @@ impl Config {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("cannot read configuration {}", path.display()))?;
         let config: Config = toml::from_str(&text).map_err(|e| {
+            // Where it is: the line and what it says.
+            let place = e
+                .span()
+                .and_then(|span| {
+                    let line = text.get(..span.start)?.matches('\n').count() + 1;
+                    let said = text.lines().nth(line - 1)?.trim();
+                    Some(format!("line {line} (`{said}`): "))
+                })
+                .unwrap_or_default();
             anyhow::anyhow!(
-                "bad configuration: {}: {}",
+                "bad configuration: {place}{}: {}",
                 e.message().trim(),
                 path.display()
             )
@@ -192,6 +212,7 @@ impl Config {
             .culture
             .cue_important_kinds()
             .map_err(|e| anyhow::anyhow!("bad configuration: {e}"))?;
+        renderer.culture_occlusion = self.culture.occlusion;
         renderer
             .set_overload(self.overload()?)
             .map_err(|e| anyhow::anyhow!("bad configuration: overload.{e}"))

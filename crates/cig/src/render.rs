@@ -234,6 +234,7 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "model_triangles": stats.model_triangles,
         "culture_triangles": stats.culture_triangles,
         "culture_drawn": stats.culture_drawn,
+        "culture_blocks_occluded": stats.culture_blocks_occluded,
         "culture_cpu_ms": stats.culture_cpu_ms,
         "tiles_resident": stats.tiles_resident,
         "draw_calls": stats.draw_calls,
@@ -388,13 +389,17 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .klod
         .map(|k| cig_scene::detail::validate_klod(k).map_err(|e| anyhow::anyhow!("--klod: {e}")))
         .transpose()?;
-    let culture = match args.culture.to_ascii_lowercase().as_str() {
-        "on" => true,
-        "off" => false,
-        other => bail!("--culture \"{other}\" is not on or off"),
-    };
+    let culture = on_or_off("--culture", &args.culture)?;
+    let culture_occlusion = args
+        .culture_occlusion
+        .as_deref()
+        .map(|v| on_or_off("--culture-occlusion", v))
+        .transpose()?;
     let (cache, mut renderer) = open(&args.db, config)?;
     renderer.detail.klod = klod;
+    if let Some(occlusion) = culture_occlusion {
+        renderer.culture_occlusion = occlusion;
+    }
     let mut session = QuerySession::new(Arc::clone(&cache));
     // An eye inside the terrain is drawn from its surface, with a word.
     let mut views = [view];
@@ -497,4 +502,13 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         renderer.gpu().describe()
     );
     Ok(())
+}
+
+/// `true` for "on", `false` for "off" (any case); otherwise a one-line error naming `option`.
+fn on_or_off(option: &str, value: &str) -> anyhow::Result<bool> {
+    match value.to_ascii_lowercase().as_str() {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        other => bail!("{option} \"{other}\" is not on or off"),
+    }
 }

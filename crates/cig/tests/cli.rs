@@ -321,15 +321,16 @@ fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
     let line = error_line(argv!["--config", conf, "db", "info", db]);
     assert!(line.contains("\"pylon\" is not a culture kind"), "{line}");
     // Bad render switches.
-    let mut args = argv!["render", "--db", db, "--eye", "35.99,-121.22,900"];
-    args.extend(argv![
-        "--out",
-        dir.path().join("x.png"),
-        "--culture",
-        "maybe"
-    ]);
-    let line = error_line(args);
-    assert!(line.contains("--culture \"maybe\""), "{line}");
+    for (switch, value) in [("--culture", "maybe"), ("--culture-occlusion", "sometimes")] {
+        let mut args = argv!["render", "--db", db, "--eye", "35.99,-121.22,900"];
+        args.extend(argv!["--out", dir.path().join("x.png"), switch, value]);
+        let line = error_line(args);
+        assert!(line.contains(&format!("{switch} \"{value}\"")), "{line}");
+    }
+    // The configuration's occlusion switch is a boolean.
+    std::fs::write(&conf, "[culture]\nocclusion = \"yes\"\n").expect("write");
+    let line = error_line(argv!["--config", conf, "db", "info", db]);
+    assert!(line.contains("occlusion"), "{line}");
 }
 
 #[test]

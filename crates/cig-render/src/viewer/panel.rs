@@ -636,8 +636,11 @@ fn stats_ui(ui: &mut egui::Ui, info: &FrameInfo) {
             row(
                 "culture",
                 format!(
-                    "{} objects, {} triangles, {:.2} ms",
-                    s.culture_drawn, s.culture_triangles, s.culture_cpu_ms
+                    "{} objects, {} triangles, {} blocks behind terrain, {:.2} ms",
+                    s.culture_drawn,
+                    s.culture_triangles,
+                    s.culture_blocks_occluded,
+                    s.culture_cpu_ms
                 ),
             );
             // The overload control's K_LOD (source 004 Table 4) against the view's nominal.
