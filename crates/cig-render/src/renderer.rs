@@ -40,6 +40,10 @@ use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainFrame, TerrainGpu};
 use cig_geo::Geodetic;
 use cig_scene::culture::{CultureFrame, CultureInstance, CultureSelect, CultureSelector};
+
+// Culture instances are read by the model pass as instance records, from the same buffer.
+const _: () =
+    assert!(std::mem::size_of::<CultureInstance>() == std::mem::size_of::<InstanceRecord>());
 use cig_scene::detail::DetailSettings;
 use cig_scene::lighting::{FogMode, Lighting, SkyModel};
 use cig_scene::lod::{LodSettings, NodeLayout, TerrainLod};
@@ -1137,7 +1141,7 @@ impl Renderer {
             / std::mem::size_of::<InstanceRecord>();
         let room = MAX_CULTURE_INSTANCES
             .min(binding_records.saturating_sub(culture_first))
-            .min(culture.instances.len());
+            .min(culture.instance_count());
         let culture_draws: Vec<(LevelRange, u32, u32)> = culture
             .draws
             .iter()
@@ -1161,13 +1165,23 @@ impl Renderer {
                 bytemuck::cast_slice(&instance_records),
             );
         }
-        if room > 0 {
+        // Each draw's instances straight from their bucket, as far as there is room.
+        for draw in &culture.draws {
+            let end = draw.instances.end.min(room);
+            if draw.instances.start >= end {
+                break;
+            }
+            let instances = &culture.instances_of(draw)[..end - draw.instances.start];
             self.gpu.queue.write_buffer(
                 &self.instances,
-                (culture_first * std::mem::size_of::<InstanceRecord>()) as u64,
-                bytemuck::cast_slice::<CultureInstance, u8>(&culture.instances[..room]),
+                ((culture_first + draw.instances.start) * std::mem::size_of::<InstanceRecord>())
+                    as u64,
+                bytemuck::cast_slice::<CultureInstance, u8>(instances),
             );
         }
+        let (culture_drawn, culture_occluded) = (culture.objects_drawn, culture.blocks_occluded);
+        // Its room serves the next frame.
+        self.culture.recycle(culture);
 
         let puff_count = self.puffs.prepare(&self.gpu, &camera, snapshot);
         let cloud_count = self.clouds.prepare(&self.gpu, &camera, snapshot);
@@ -1305,8 +1319,8 @@ impl Renderer {
                 stats.culture_triangles += u64::from(tris) * u64::from(instances);
             }
             stats.draw_calls += (draws.len() + culture_draws.len()) as u32;
-            stats.culture_drawn = culture.objects_drawn as u32;
-            stats.culture_blocks_occluded = culture.blocks_occluded as u32;
+            stats.culture_drawn = culture_drawn as u32;
+            stats.culture_blocks_occluded = culture_occluded as u32;
             stats.culture_cpu_ms = culture_cpu_ms;
             // The sky where no geometry was drawn (its depth test passes at the cleared far
             // plane only).

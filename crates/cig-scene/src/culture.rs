@@ -65,18 +65,23 @@ pub struct CultureInstance {
     pub origin: [f32; 4],
 }
 
-/// One instanced draw: a kind's level, a range of [`CultureFrame::instances`].
+/// One instanced draw: a kind's level and where its instances lie among the frame's (the
+/// draws' instances one after the other; [`CultureFrame::instances_of`] gives them).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CultureDraw {
     pub kind: CultureKind,
     pub level: usize,
     pub instances: std::ops::Range<usize>,
+    /// Index of its instances' bucket in the frame.
+    bucket: usize,
 }
 
 /// What a view draws of the culture this frame.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CultureFrame {
-    pub instances: Vec<CultureInstance>,
+    /// The instances by kind and level (the draws say which bucket is which), kept apart so
+    /// they are written once, where they are drawn from.
+    buckets: Vec<Vec<CultureInstance>>,
     pub draws: Vec<CultureDraw>,
     /// Objects drawn (an object blending two levels counts once).
     pub objects_drawn: usize,
@@ -86,6 +91,18 @@ pub struct CultureFrame {
     pub blocks_in_range: usize,
     pub blocks_drawn: usize,
     pub blocks_occluded: usize,
+}
+
+impl CultureFrame {
+    /// Instances of all the draws together.
+    pub fn instance_count(&self) -> usize {
+        self.draws.last().map_or(0, |d| d.instances.end)
+    }
+
+    /// The instances of `draw` (one of this frame's draws).
+    pub fn instances_of(&self, draw: &CultureDraw) -> &[CultureInstance] {
+        self.buckets.get(draw.bucket).map_or(&[], Vec::as_slice)
+    }
 }
 
 /// How a view selects its culture.
@@ -553,23 +570,27 @@ impl CultureSelector {
             }
         }
         self.candidates = candidates;
-        frame
-            .instances
-            .reserve(buckets.iter().map(Vec::len).sum::<usize>());
+        let mut start = 0;
         for (index, bucket) in buckets.iter().enumerate() {
             if bucket.is_empty() {
                 continue;
             }
-            let start = frame.instances.len();
-            frame.instances.extend_from_slice(bucket);
             frame.draws.push(CultureDraw {
                 kind: CultureKind::ALL[index / levels],
                 level: index % levels,
-                instances: start..frame.instances.len(),
+                instances: start..start + bucket.len(),
+                bucket: index,
             });
+            start += bucket.len();
         }
-        self.buckets = buckets;
+        frame.buckets = buckets;
         frame
+    }
+
+    /// Takes back a frame's buckets: their room serves the next frame (instances are not
+    /// written into newly mapped memory every frame).
+    pub fn recycle(&mut self, frame: CultureFrame) {
+        self.buckets = frame.buckets;
     }
 
     /// Builds this frame's occlusion horizon from the resident finest tiles `near` out to
