@@ -285,7 +285,7 @@ fn fly(
         let path = out_dir.join(format!("frame_{i:03}.png"));
         crate::render::write_png(&image, &path)?;
         println!(
-            "  {}: {:>8} triangles ({:>7} of {:>6} culture objects), {:>4} nodes, K_LOD {:>4.0} of {:>4.0} ({}), gpu {:6.1} ms",
+            "  {}: {:>8} triangles ({:>7} in {:>6} culture objects), {:>4} nodes, K_LOD {:>4.0} of {:>4.0} ({}), gpu {:6.1} ms",
             path.display(),
             stats.triangles,
             stats.culture_triangles,
