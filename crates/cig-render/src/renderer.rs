@@ -1121,6 +1121,21 @@ impl Renderer {
         let draws = self.entity_draws(&camera, snapshot, klod_nominal, klod, point_of_interest);
         let instance_records: Vec<InstanceRecord> = draws.iter().map(|d| d.1).collect();
         let culture_started = std::time::Instant::now();
+        // Culture is culled behind the terrain only where the terrain is drawn as the horizon
+        // takes it: every wanted node at its own mesh. The drawn surface may stand its level of
+        // detail's pixel error off the finest one, or (while nodes morph in from their
+        // parent's shape) about twice that: a pixel more.
+        let terrain_settled = mesh_stats.deferred == 0
+            && mesh_stats.stand_ins == 0
+            && mesh_stats.dropped == 0
+            && nodes.len() == selection.nodes.len();
+        let pixel_error = snapshot.max_pixel_error.max(0.0);
+        let margin_px = if options.fade_in_s > 0.0 {
+            1.0 + 2.0 * pixel_error
+        } else {
+            1.0 + pixel_error
+        };
+        let occlusion_margin_px = (self.culture_occlusion && terrain_settled).then_some(margin_px);
         let culture = if snapshot.culture {
             self.culture_frame(
                 cache,
@@ -1128,7 +1143,7 @@ impl Renderer {
                 snapshot,
                 [klod, klod_nominal],
                 point_of_interest,
-                options.mesh_budget == usize::MAX,
+                (options.mesh_budget == usize::MAX, occlusion_margin_px),
             )
         } else {
             CultureFrame::default()
@@ -1692,7 +1707,7 @@ impl Renderer {
     /// 98 % fade in the frame's fog and ground fog layer, lowered toward the periphery), or,
     /// with `snapshot.culture_managed` off, everything resident at its finest level. `complete`
     /// (one-off frames) makes every tile's culture ready first instead of on the selector's
-    /// thread.
+    /// thread. `occlusion_margin_px`: cull behind the terrain with this margin (`None`: not).
     fn culture_frame(
         &mut self,
         cache: &TileCache,
@@ -1700,7 +1715,7 @@ impl Renderer {
         snapshot: &FrameSnapshot,
         [klod, klod_nominal]: [f64; 2],
         point_of_interest_deg: Option<[f64; 2]>,
-        complete: bool,
+        (complete, occlusion_margin_px): (bool, Option<f64>),
     ) -> CultureFrame {
         let aim = aim_of(camera, point_of_interest_deg);
         let layer = drawn_ground_fog(snapshot);
@@ -1725,11 +1740,7 @@ impl Renderer {
                 aim,
                 managed: snapshot.culture_managed,
                 complete,
-                // The drawn terrain may stand its level of detail's pixel error off the finest
-                // surface the horizon is built from: one pixel more.
-                occlusion_margin_px: self
-                    .culture_occlusion
-                    .then_some(1.0 + snapshot.max_pixel_error.max(0.0)),
+                occlusion_margin_px,
             },
             &fade,
         )

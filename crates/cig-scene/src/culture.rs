@@ -116,7 +116,8 @@ pub struct CultureSelect<'a> {
     /// Kinds marked cue-important (indexed by the kind's byte), e.g. power poles for a
     /// helicopter trainer: they keep the nominal `K_LOD`.
     pub cue_important: [bool; 9],
-    /// Where the trainee looks (unit vector, ECEF): the area of interest's centre.
+    /// Where the trainee looks (a unit vector, ECEF: the selection takes it as one): the area
+    /// of interest's centre.
     pub aim: DVec3,
     /// `false`: every object of the resident tiles in the frustum at its finest level, no
     /// removal (the unmanaged reference of `cig bench culture`).
@@ -326,13 +327,23 @@ impl CultureSelector {
         let local_up = camera.local_up.as_vec3();
         // Tiles made ready since the last frame (those still resident).
         if let Some(builder) = &mut self.builder {
-            while let Ok((key, made)) = builder.done.try_recv() {
-                builder.pending.remove(&key);
-                if cache
-                    .resident(key)
-                    .is_some_and(|r| Arc::ptr_eq(&r, &made.source))
-                {
-                    self.tiles.insert(key, made);
+            loop {
+                match builder.done.try_recv() {
+                    Ok((key, made)) => {
+                        builder.pending.remove(&key);
+                        if cache
+                            .resident(key)
+                            .is_some_and(|r| Arc::ptr_eq(&r, &made.source))
+                        {
+                            self.tiles.insert(key, made);
+                        }
+                    }
+                    Err(std::sync::mpsc::TryRecvError::Empty) => break,
+                    Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                        // The thread is gone: tiles are made in the frame from now on.
+                        self.builder = None;
+                        break;
+                    }
                 }
             }
         }
@@ -913,9 +924,10 @@ fn make_render_tile(layout: &PyramidLayout, geoid: &GeoidLookup, tile: Arc<Tile>
             // Walls and fences first (their N_e depends on the view), then largest first: the
             // selection stops at the first far object too small to show.
             items[start..].sort_by(|a, b| {
-                (b.kind.is_linear(), b.critical_radius_m)
-                    .partial_cmp(&(a.kind.is_linear(), a.critical_radius_m))
-                    .unwrap_or(std::cmp::Ordering::Equal)
+                b.kind
+                    .is_linear()
+                    .cmp(&a.kind.is_linear())
+                    .then(b.critical_radius_m.total_cmp(&a.critical_radius_m))
             });
             // The vertical extent: the anchor sits at sea level, objects from their base up.
             let (low, high) = items[start..]

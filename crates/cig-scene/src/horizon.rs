@@ -20,8 +20,9 @@
 //! Positions are east and north metres about the eye on the eye's meridian and parallel
 //! (equirectangular), heights ellipsoidal with the earth's drop `d^2 / 2R`; elevations are kept
 //! as tangents and azimuth as a pseudo-angle (both monotonic), so no trigonometry is done. The
-//! projection's horizontal error (a few metres at 6 km) is covered by widening each block's span
-//! by a bin on either side.
+//! projection's horizontal error (an east-west sight line of length `D` bends by about
+//! `D tan(lat) / 2R` radians) is covered by widening each block's span by as many bins as that
+//! and one more on either side.
 //!
 //! Limits: conservative by construction, so partly hidden blocks are drawn; a rectangle must
 //! wholly cover a bin (0.35 degrees) to count, so far small ridges hide nothing; only terrain
@@ -86,6 +87,8 @@ pub struct OcclusionHorizon {
     eye_lon_deg: f64,
     eye_alt_m: f64,
     metres_per_deg: (f64, f64),
+    /// `|tan(latitude)|` at the eye: how far the projection bends east-west sight lines.
+    tan_lat: f64,
     /// Tangent of the vertical margin.
     margin_tan: f64,
     /// `[ring * BINS + bin]`: the elevation tangent the terrain nearer than the ring's outer
@@ -103,6 +106,7 @@ impl Default for OcclusionHorizon {
             eye_lon_deg: 0.0,
             eye_alt_m: 0.0,
             metres_per_deg: (1.0, 1.0),
+            tan_lat: 0.0,
             margin_tan: 0.0,
             table: vec![f32::NEG_INFINITY; RINGS * BINS],
             occluders: 0,
@@ -129,6 +133,7 @@ impl OcclusionHorizon {
         self.eye_lon_deg = eye_lon_deg;
         self.eye_alt_m = eye_alt_m;
         self.metres_per_deg = cig_geo::metres_per_degree(eye_lat_deg);
+        self.tan_lat = eye_lat_deg.to_radians().tan().abs().min(1e3);
         self.margin_tan = margin_tan.max(0.0);
         self.table.fill(f32::NEG_INFINITY);
         self.occluders = 0;
@@ -367,9 +372,17 @@ impl OcclusionHorizon {
         let tan = self.top_tangent(&seen, top_alt_m) - seen.near_m / (2.0 * OCCLUDEE_RADIUS_M)
             + self.margin_tan;
         let width = 4.0 / BINS as f64;
-        // A bin more on either side for the projection's horizontal error.
-        let first = (seen.lo / width).floor() as usize + BINS - 1;
-        let last = (seen.hi / width).floor() as usize + BINS + 1;
+        // Bins more on either side for the projection's horizontal error: on the eye's
+        // meridian and parallel an east-west sight line of length D bends by about
+        // D tan(lat) / 2R radians, and a bin is at least `width` radians wide (the pseudo-
+        // angle grows at most one per radian).
+        let bend_rad = seen.far_m * self.tan_lat / (2.0 * OCCLUDER_RADIUS_M);
+        let extra = (bend_rad / width).ceil() as usize + 1;
+        if 2 * extra + 2 >= BINS / 2 {
+            return false;
+        }
+        let first = (seen.lo / width).floor() as usize + BINS - extra;
+        let last = (seen.hi / width).floor() as usize + BINS + extra;
         let row = &self.table[ring * BINS..(ring + 1) * BINS];
         let tan = tan as f32;
         (first..=last).all(|bin| row[bin % BINS] > tan)
@@ -648,7 +661,7 @@ mod tests {
             waves in proptest::collection::vec(
                 (10.0..120.0_f64, -0.004..0.004_f64, -0.004..0.004_f64, 0.0..6.3_f64), 2..5),
             eye_up in 1.5..60.0_f64,
-            lat0 in -60.0..60.0_f64,
+            lat0 in -75.0..75.0_f64,
             blocks in proptest::collection::vec((-5000.0..5000.0_f64, -5000.0..5000.0_f64,
                 0.0..40.0_f64), 40),
         ) {
