@@ -692,12 +692,22 @@ impl CultureSelector {
             if nearest_m > reach_m || !self.horizon.in_view(&rect) {
                 continue;
             }
-            // Heights are above the geoid: lift them by its undulation at the tile's centre,
-            // less (more, for the highest) a quarter metre for its change across the tile.
-            let undulation = self.geoid.undulation_m(
-                0.5 * (rect.south_deg + rect.north_deg),
-                0.5 * (rect.west_deg + rect.east_deg),
-            );
+            // Heights are above the geoid: lift the lowest by its least undulation over the
+            // tile and the highest by its greatest (at the corners and the centre, the geoid
+            // grid being far coarser than a tile; a tenth of a metre for what lies between).
+            let (undulation_low, undulation_high) = [
+                (rect.south_deg, rect.west_deg),
+                (rect.south_deg, rect.east_deg),
+                (rect.north_deg, rect.west_deg),
+                (rect.north_deg, rect.east_deg),
+                (
+                    0.5 * (rect.south_deg + rect.north_deg),
+                    0.5 * (rect.west_deg + rect.east_deg),
+                ),
+            ]
+            .iter()
+            .map(|&(lat, lon)| self.geoid.undulation_m(lat, lon))
+            .fold((f64::MAX, f64::MIN), |(lo, hi), u| (lo.min(u), hi.max(u)));
             let fine = nearest_m < FINE_OCCLUDERS_M;
             let (grid, d) = if fine {
                 (&mut self.occluders[0], levels[0])
@@ -714,8 +724,8 @@ impl CultureSelector {
             for jy in 0..judged {
                 for jx in 0..judged {
                     let top = f64::from(tile.nodes[quadtree_index(judge, jx, jy)].max_m)
-                        + undulation
-                        + 0.5;
+                        + undulation_high
+                        + 0.1;
                     let judged_rect = rect_of(judge_cells, jx, jy, 1);
                     if !may_hide(self.horizon.raising_ceiling(&judged_rect, top)) {
                         continue;
@@ -734,7 +744,7 @@ impl CultureSelector {
                             let grid_col = (key.col - col_lo) as usize * per_tile + x;
                             let lowest = tile.nodes[quadtree_index(d, x, y)].min_m;
                             grid.lowest_alt_m[grid_row * grid.cols + grid_col] =
-                                (f64::from(lowest) + undulation - 0.25) as f32;
+                                (f64::from(lowest) + undulation_low - 0.1) as f32;
                         }
                     }
                 }
