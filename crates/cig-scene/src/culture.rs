@@ -190,7 +190,7 @@ pub struct CultureSelector {
     /// This frame's blocks that survived the frustum and range (tile, block), kept for room.
     candidates: Vec<(TileKey, usize)>,
     /// The candidates' hiding floors ([`OcclusionHorizon::hiding_floor`]) by distance, each
-    /// lowered to the lowest at or beyond it.
+    /// lowered to the lowest at or beyond it (kept for their room).
     floors: Vec<(f64, f64)>,
     /// Makes newly resident tiles ready off the frame's thread (`None` where no thread could
     /// be started: they are then made in the frame).
@@ -245,6 +245,28 @@ impl TileBuilder {
             self.pending.insert(key);
         }
         sent
+    }
+}
+
+impl TileBuilder {
+    /// Moves the tiles made since the last call (those still resident) into `tiles`; `false`
+    /// when the thread is gone.
+    fn collect(&mut self, cache: &TileCache, tiles: &mut HashMap<TileKey, RenderTile>) -> bool {
+        loop {
+            match self.done.try_recv() {
+                Ok((key, made)) => {
+                    self.pending.remove(&key);
+                    if cache
+                        .resident(key)
+                        .is_some_and(|r| Arc::ptr_eq(&r, &made.source))
+                    {
+                        tiles.insert(key, made);
+                    }
+                }
+                Err(std::sync::mpsc::TryRecvError::Empty) => return true,
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => return false,
+            }
+        }
     }
 }
 
@@ -325,26 +347,11 @@ impl CultureSelector {
         buckets.iter_mut().for_each(Vec::clear);
         let eye = camera.eye_ecef;
         let local_up = camera.local_up.as_vec3();
-        // Tiles made ready since the last frame (those still resident).
+        // Tiles made ready since the last frame; without the thread, tiles are made in the
+        // frame from now on.
         if let Some(builder) = &mut self.builder {
-            loop {
-                match builder.done.try_recv() {
-                    Ok((key, made)) => {
-                        builder.pending.remove(&key);
-                        if cache
-                            .resident(key)
-                            .is_some_and(|r| Arc::ptr_eq(&r, &made.source))
-                        {
-                            self.tiles.insert(key, made);
-                        }
-                    }
-                    Err(std::sync::mpsc::TryRecvError::Empty) => break,
-                    Err(std::sync::mpsc::TryRecvError::Disconnected) => {
-                        // The thread is gone: tiles are made in the frame from now on.
-                        self.builder = None;
-                        break;
-                    }
-                }
+            if !builder.collect(cache, &mut self.tiles) {
+                self.builder = None;
             }
         }
         // 1. The blocks in range, in the frustum and not too small to show anything.
@@ -396,29 +403,7 @@ impl CultureSelector {
         // 2. The terrain's horizon over them, when it can hide any.
         let occlusion = match select.occlusion_margin_px {
             Some(margin_px) if select.managed && !candidates.is_empty() => {
-                let view = camera.view.eye;
-                self.horizon
-                    .begin(view.lat_deg, view.lon_deg, view.alt_m, 0.0);
-                let mut floors = std::mem::take(&mut self.floors);
-                floors.clear();
-                let mut reach_m = 0.0_f64;
-                for (key, index) in &candidates {
-                    if let Some(block) = self.tiles.get(key).and_then(|t| t.blocks.get(*index)) {
-                        let rel = block.anchor_ecef - eye;
-                        reach_m = reach_m.max(rel.length() + block.radius_m);
-                        if let Some(floor) = self.horizon.hiding_floor(&block.rect, block.top_alt_m)
-                        {
-                            floors.push(floor);
-                        }
-                    }
-                }
-                // By distance, each with the lowest floor at or beyond it.
-                floors.sort_by(|a, b| a.0.total_cmp(&b.0));
-                for k in (0..floors.len().saturating_sub(1)).rev() {
-                    floors[k].1 = floors[k].1.min(floors[k + 1].1);
-                }
-                self.floors = floors;
-                self.build_horizon(&near, camera, margin_px, reach_m)
+                self.build_horizon(&near, &candidates, camera, margin_px)
             }
             _ => false,
         };
@@ -604,8 +589,8 @@ impl CultureSelector {
         self.buckets = frame.buckets;
     }
 
-    /// Builds this frame's occlusion horizon from the resident finest tiles `near` out to
-    /// `reach_m` (the farthest block to test), limited to the view's azimuths: tiles within
+    /// Builds this frame's occlusion horizon for the blocks `candidates` from the resident
+    /// finest tiles `near` out to the farthest of them, limited to the view's azimuths: tiles within
     /// [`FINE_OCCLUDERS_M`] by their quadtree's leaves, farther ones by the nodes a level up
     /// (tiles rebuilt from coarser data are left out: their bounds are not the finest
     /// surface's). Ground that cannot rise above the hiding floor of any block beyond it
@@ -614,12 +599,34 @@ impl CultureSelector {
     fn build_horizon(
         &mut self,
         near: &[(TileKey, Arc<Tile>)],
+        candidates: &[(TileKey, usize)],
         camera: &Camera,
         margin_px: f64,
-        reach_m: f64,
     ) -> bool {
-        // The view's edge rays (where its side planes meet), on the ground's east and north.
         let eye = camera.view.eye;
+        self.horizon.begin(
+            eye.lat_deg,
+            eye.lon_deg,
+            eye.alt_m,
+            margin_px.max(0.0) / camera.pixels_per_tangent.max(1.0),
+        );
+        // The blocks' hiding floors by distance, each lowered to the lowest at or beyond it,
+        // and the farthest block's reach.
+        self.floors.clear();
+        let mut reach_m = 0.0_f64;
+        for (key, index) in candidates {
+            if let Some(block) = self.tiles.get(key).and_then(|t| t.blocks.get(*index)) {
+                reach_m =
+                    reach_m.max((block.anchor_ecef - camera.eye_ecef).length() + block.radius_m);
+                self.floors
+                    .extend(self.horizon.hiding_floor(&block.rect, block.top_alt_m));
+            }
+        }
+        self.floors.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for k in (0..self.floors.len().saturating_sub(1)).rev() {
+            self.floors[k].1 = self.floors[k].1.min(self.floors[k + 1].1);
+        }
+        // The view's edge rays (where its side planes meet), on the ground's east and north.
         let enu = cig_geo::EnuFrame::new(eye);
         let east = enu.enu_vector_to_ecef(DVec3::X);
         let north = enu.enu_vector_to_ecef(DVec3::Y);
@@ -753,8 +760,6 @@ impl CultureSelector {
         if !any {
             return false;
         }
-        let margin_tan = margin_px.max(0.0) / camera.pixels_per_tangent.max(1.0);
-        self.horizon.set_margin(margin_tan);
         for grid in &self.occluders {
             self.horizon.add_grid(grid);
         }

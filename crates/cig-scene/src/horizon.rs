@@ -187,11 +187,6 @@ impl OcclusionHorizon {
             .any(|shift| seen.lo + shift <= hi && seen.hi + shift >= lo)
     }
 
-    /// Sets the margin a block must sink below the horizon by (see [`OcclusionHorizon::begin`]).
-    pub fn set_margin(&mut self, margin_tan: f64) {
-        self.margin_tan = margin_tan.max(0.0);
-    }
-
     /// What the horizon must rise above (an elevation tangent, margin aside) to hide what
     /// stands on `rect` up to `top_alt_m`, and the nearest distance of `rect`, metres; `None`
     /// when the eye stands over it (it cannot be hidden).
