@@ -30,7 +30,7 @@
 //! not replaced by an area texture; one unit mesh per kind (variants differ in size, heading
 //! and tint only).
 
-use crate::detail::{DetailSettings, DetailTable, LodBlend};
+use crate::detail::{AoiByCosine, DetailSettings, LevelLookup, LodBlend};
 use crate::horizon::{GeoRect, OccluderGrid, OcclusionHorizon};
 use crate::models::{Model, ModelMesh};
 use crate::view::Camera;
@@ -48,6 +48,27 @@ use std::sync::Arc;
 /// (as multiples of the first step's `N_e`).
 const FADE_FROM: f64 = 1.0;
 const FADE_TO: f64 = 2.0;
+
+/// How many candidate blocks ahead of its turn a block's record, and its first objects, are
+/// prefetched.
+const PREFETCH_BLOCKS_AHEAD: usize = 8;
+const PREFETCH_ITEMS_AHEAD: usize = 4;
+
+/// Asks the CPU to bring the cache line holding the start of `value` in ahead of its use (a
+/// hint only; nothing on targets without one).
+#[inline(always)]
+fn prefetch<T>(value: &T) {
+    // SAFETY: a prefetch reads nothing into the program and never faults (on any address);
+    // SSE, which it needs, is part of every x86-64 CPU.
+    #[cfg(target_arch = "x86_64")]
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+            std::ptr::from_ref(value).cast::<i8>(),
+        );
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = value;
+}
 
 /// Tiles nearer than this raise the occlusion horizon by their quadtree's leaves (240 m at
 /// 30 m posts), farther ones by the nodes a level up.
@@ -346,7 +367,6 @@ impl CultureSelector {
         buckets.resize_with(CultureKind::ALL.len() * levels, Vec::new);
         buckets.iter_mut().for_each(Vec::clear);
         let eye = camera.eye_ecef;
-        let local_up = camera.local_up.as_vec3();
         // Tiles made ready since the last frame; without the thread, tiles are made in the
         // frame from now on.
         if let Some(builder) = &mut self.builder {
@@ -408,163 +428,24 @@ impl CultureSelector {
             _ => false,
         };
         // 3. Their objects.
-        let cos_inner = select
-            .detail
-            .aoi
-            .map_or(-1.0, |aoi| aoi.inner_deg.to_radians().cos());
-        let mut current: Option<(TileKey, &RenderTile)> = None;
-        for &(key, index) in &candidates {
-            let render = match current {
-                Some((k, r)) if k == key => r,
-                _ => match self.tiles.get(&key) {
-                    Some(r) => {
-                        current = Some((key, r));
-                        r
-                    }
-                    None => continue,
-                },
-            };
-            let Some(block) = render.blocks.get(index) else {
-                continue;
-            };
-            let rel = block.anchor_ecef - eye;
-            let distance = rel.length();
-            if occlusion && self.horizon.hides(&block.rect, block.top_alt_m) {
-                frame.blocks_occluded += 1;
-                continue;
-            }
-            frame.blocks_drawn += 1;
-            let rel32 = rel.as_vec3();
-            // A block far from the eye against its size takes its fog and area-of-interest
-            // terms at its centre (within 1/4 of a radian of every object's), so each
-            // object costs a distance; near blocks are exact object by object.
-            let block_scale = (select.managed && distance > 4.0 * block.radius_m).then(|| {
-                let centre = rel32 + block.up * block.mean_up_m;
-                let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
-                let fog = crate::detail::visibility_factor(fade(distance, altitude));
-                let aoi = select.detail.aoi.as_ref().map_or(1.0, |aoi| {
-                    let angle_deg = select.aim.angle_between(centre.as_dvec3()).to_degrees();
-                    crate::detail::aoi_factor(angle_deg, aoi)
-                });
-                fog * aoi
-            });
-            // A near block wholly short of the fog's removal fade (which grows with distance
-            // and with depth in a ground fog layer) needs no fog object by object.
-            let fog_free = select.managed && block_scale.is_none() && {
-                let far = distance + block.radius_m;
-                let anchor_alt = camera.view.eye.alt_m + f64::from(local_up.dot(rel32));
-                fade(far, anchor_alt - block.radius_m) < crate::detail::REMOVAL_FADE
-                    && fade(far, anchor_alt + block.radius_m) < crate::detail::REMOVAL_FADE
-            };
-            // Beyond this distance (metres times N_e) no far object of the block can show.
-            let gone_beyond = (distance - block.radius_m).max(1.0) * min_ne;
-            for item in &render.items[block.items.clone()] {
-                if let Some(scale) = block_scale {
-                    // The block's objects come largest first, walls and fences before all:
-                    // once one is too small to show from the block's nearest point, so is
-                    // every one after it.
-                    if !item.kind.is_linear()
-                        && klod_most * scale * f64::from(item.critical_radius_m) < gone_beyond
-                    {
-                        break;
-                    }
-                }
-                frame.objects_considered += 1;
-                let o = item.offset_m;
-                let pos = rel32 + block.east * o[0] + block.north * o[1] + block.up * o[2];
-                let klod = if select.cue_important[item.kind as usize] {
-                    select.klod_nominal
-                } else {
-                    select.klod
-                };
-                let blend = match block_scale {
-                    Some(scale) if !item.kind.is_linear() => {
-                        // N_e = K r_c / R f(v) a: gone beyond K r_c f(v) a / N_e,min.
-                        let reach = klod * scale * f64::from(item.critical_radius_m);
-                        let d2 = f64::from(pos.length_squared());
-                        if d2 * min_ne * min_ne > reach * reach {
-                            continue;
-                        }
-                        culture_blend(reach / d2.sqrt().max(1.0), levels, table)
-                    }
-                    _ if select.managed => {
-                        let d = f64::from(pos.length()).max(1.0);
-                        if d > range_m {
-                            continue;
-                        }
-                        let centre = pos + block.up * (0.5 * item.size_m[2]);
-                        let fog = if fog_free {
-                            0.0
-                        } else {
-                            let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
-                            fade(d, altitude)
-                        };
-                        // The angle from the area of interest's centre matters only outside
-                        // its inner cone.
-                        let angle_deg = if select.detail.aoi.is_some() {
-                            let c = centre.as_dvec3();
-                            let cos = select.aim.dot(c) / c.length().max(1e-6);
-                            if cos >= cos_inner {
-                                0.0
-                            } else {
-                                cos.clamp(-1.0, 1.0).acos().to_degrees()
-                            }
-                        } else {
-                            0.0
-                        };
-                        let ne = if item.kind.is_linear() {
-                            // A wall or fence is a face: Eq 17 with the ellipse of its half
-                            // length and half height, seen from the eye's distance off its
-                            // plane (edge on, it dissolves).
-                            let [he, hn] = item.heading;
-                            let face = Face {
-                                centre,
-                                along: block.east * he + block.north * hn,
-                                normal: block.east * hn - block.north * he,
-                                radii_m: [0.5 * item.size_m[1], 0.5 * item.size_m[2]],
-                            };
-                            ne_of_face(select, klod, &face, fog, angle_deg)
-                        } else {
-                            select.detail.ne(
-                                klod,
-                                f64::from(item.critical_radius_m),
-                                d,
-                                fog,
-                                angle_deg,
-                            )
-                        };
-                        culture_blend(ne, levels, table)
-                    }
-                    _ => LodBlend::single(0),
-                };
-                if blend.coverage <= 0.0 {
-                    continue;
-                }
-                frame.objects_drawn += 1;
-                let [he, hn] = item.heading;
-                let forward = block.east * he + block.north * hn;
-                let right = block.east * hn - block.north * he;
-                let [w, l, h] = item.size_m;
-                let split = blend.finer_share * blend.coverage;
-                let whole = |share: f32| if share >= 1.0 { 2.0 } else { share };
-                let mut push = |level: usize, from: f32, to: f32| {
-                    let r = right * w;
-                    let f = forward * l;
-                    let u = block.up * h;
-                    let index = item.kind as usize * levels + level.min(levels - 1);
-                    buckets[index].push(CultureInstance {
-                        col0: [r.x, r.y, r.z, from],
-                        col1: [f.x, f.y, f.z, to],
-                        col2: [u.x, u.y, u.z, 0.0],
-                        origin: [pos.x, pos.y, pos.z, item.tint],
-                    });
-                };
-                push(blend.finer, 0.0, whole(split));
-                if let Some(coarser) = blend.coarser {
-                    push(coarser, split, whole(blend.coverage));
-                }
-            }
-        }
+        let pass = ObjectPass {
+            tiles: &self.tiles,
+            horizon: occlusion.then_some(&self.horizon),
+            camera,
+            select,
+            fade,
+            lookup: LevelLookup::new(table, levels),
+            aoi_by_cosine: select.detail.aoi.as_ref().map(AoiByCosine::new),
+            klod_most,
+            min_ne,
+            range_m,
+            levels,
+        };
+        let counts = pass.run(&candidates, &mut buckets);
+        frame.objects_drawn = counts.objects_drawn;
+        frame.objects_considered = counts.objects_considered;
+        frame.blocks_drawn = counts.blocks_drawn;
+        frame.blocks_occluded = counts.blocks_occluded;
         self.candidates = candidates;
         let mut start = 0;
         for (index, bucket) in buckets.iter().enumerate() {
@@ -822,13 +703,234 @@ struct Face {
 /// `along` and its normal `normal` (unit vectors), of half length and half height `radii_m`:
 /// source 004 Eq 17 with Eq 15's effective radius toward the eye's foot in the face's plane,
 /// times the area-of-interest factor.
-fn ne_of_face(
-    select: &CultureSelect<'_>,
-    klod: f64,
-    face: &Face,
-    fade: f64,
-    angle_deg: f64,
-) -> f64 {
+/// The tile `key`, kept in `last` for the blocks after it (a selection's blocks come tile by
+/// tile).
+fn tile_of<'t>(
+    tiles: &'t HashMap<TileKey, RenderTile>,
+    last: &mut Option<(TileKey, &'t RenderTile)>,
+    key: TileKey,
+) -> Option<&'t RenderTile> {
+    match *last {
+        Some((k, r)) if k == key => Some(r),
+        _ => {
+            let r = tiles.get(&key)?;
+            *last = Some((key, r));
+            Some(r)
+        }
+    }
+}
+
+/// What the objects' pass of a selection reads.
+struct ObjectPass<'a> {
+    tiles: &'a HashMap<TileKey, RenderTile>,
+    /// The terrain's horizon, where it culls.
+    horizon: Option<&'a OcclusionHorizon>,
+    camera: &'a Camera,
+    select: &'a CultureSelect<'a>,
+    fade: &'a dyn Fn(f64, f64) -> f64,
+    lookup: LevelLookup,
+    aoi_by_cosine: Option<AoiByCosine>,
+    klod_most: f64,
+    min_ne: f64,
+    range_m: f64,
+    levels: usize,
+}
+
+/// What a pass over objects counted.
+#[derive(Clone, Copy, Debug, Default)]
+struct PassCounts {
+    objects_drawn: usize,
+    objects_considered: usize,
+    blocks_drawn: usize,
+    blocks_occluded: usize,
+}
+
+impl ObjectPass<'_> {
+    /// Levels and instances of the objects of `candidates` into `buckets` (by kind and level).
+    fn run(
+        &self,
+        candidates: &[(TileKey, usize)],
+        buckets: &mut [Vec<CultureInstance>],
+    ) -> PassCounts {
+        let ObjectPass {
+            tiles,
+            horizon,
+            camera,
+            select,
+            fade,
+            ref lookup,
+            ref aoi_by_cosine,
+            klod_most,
+            min_ne,
+            range_m,
+            levels,
+        } = *self;
+        let mut counts = PassCounts::default();
+        let eye = camera.eye_ecef;
+        let local_up = camera.local_up.as_vec3();
+        let aim32 = select.aim.as_vec3();
+        let mut current: Option<(TileKey, &RenderTile)> = None;
+        let mut ahead: Option<(TileKey, &RenderTile)> = None;
+        for (position, &(key, index)) in candidates.iter().enumerate() {
+            // The blocks come from all over the tiles' memory: each block's record is asked
+            // for eight blocks ahead of its turn and its first objects four ahead, so their
+            // cache misses overlap the work on the blocks before them.
+            for (lead, objects) in [(PREFETCH_BLOCKS_AHEAD, false), (PREFETCH_ITEMS_AHEAD, true)] {
+                let Some(&(ahead_key, ahead_index)) = candidates.get(position + lead) else {
+                    continue;
+                };
+                let Some(render) = tile_of(tiles, &mut ahead, ahead_key) else {
+                    continue;
+                };
+                let Some(block) = render.blocks.get(ahead_index) else {
+                    continue;
+                };
+                if objects {
+                    for item in render.items[block.items.clone()].iter().take(2) {
+                        prefetch(item);
+                    }
+                } else {
+                    prefetch(block);
+                }
+            }
+            let Some(render) = tile_of(tiles, &mut current, key) else {
+                continue;
+            };
+            let Some(block) = render.blocks.get(index) else {
+                continue;
+            };
+            let rel = block.anchor_ecef - eye;
+            let distance = rel.length();
+            if horizon.is_some_and(|h| h.hides(&block.rect, block.top_alt_m)) {
+                counts.blocks_occluded += 1;
+                continue;
+            }
+            counts.blocks_drawn += 1;
+            let rel32 = rel.as_vec3();
+            // A block far from the eye against its size takes its fog and area-of-interest
+            // terms at its centre (within 1/4 of a radian of every object's), so each
+            // object costs a distance; near blocks are exact object by object.
+            let block_scale = (select.managed && distance > 4.0 * block.radius_m).then(|| {
+                let centre = rel32 + block.up * block.mean_up_m;
+                let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
+                let fog = crate::detail::visibility_factor(fade(distance, altitude));
+                let aoi = select.detail.aoi.as_ref().map_or(1.0, |aoi| {
+                    let angle_deg = select.aim.angle_between(centre.as_dvec3()).to_degrees();
+                    crate::detail::aoi_factor(angle_deg, aoi)
+                });
+                fog * aoi
+            });
+            // A near block wholly short of the fog's removal fade (which grows with distance
+            // and with depth in a ground fog layer) needs no fog object by object.
+            let fog_free = select.managed && block_scale.is_none() && {
+                let far = distance + block.radius_m;
+                let anchor_alt = camera.view.eye.alt_m + f64::from(local_up.dot(rel32));
+                fade(far, anchor_alt - block.radius_m) < crate::detail::REMOVAL_FADE
+                    && fade(far, anchor_alt + block.radius_m) < crate::detail::REMOVAL_FADE
+            };
+            // Beyond this distance (metres times N_e) no far object of the block can show.
+            let gone_beyond = (distance - block.radius_m).max(1.0) * min_ne;
+            for item in &render.items[block.items.clone()] {
+                if let Some(scale) = block_scale {
+                    // The block's objects come largest first, walls and fences before all:
+                    // once one is too small to show from the block's nearest point, so is
+                    // every one after it.
+                    if !item.kind.is_linear()
+                        && klod_most * scale * f64::from(item.critical_radius_m) < gone_beyond
+                    {
+                        break;
+                    }
+                }
+                counts.objects_considered += 1;
+                let o = item.offset_m;
+                let pos = rel32 + block.east * o[0] + block.north * o[1] + block.up * o[2];
+                let klod = if select.cue_important[item.kind as usize] {
+                    select.klod_nominal
+                } else {
+                    select.klod
+                };
+                let blend = match block_scale {
+                    Some(scale) if !item.kind.is_linear() => {
+                        // N_e = K r_c / R f(v) a: gone beyond K r_c f(v) a / N_e,min.
+                        let reach = klod * scale * f64::from(item.critical_radius_m);
+                        let d2 = f64::from(pos.length_squared());
+                        if d2 * min_ne * min_ne > reach * reach {
+                            continue;
+                        }
+                        culture_blend(reach / d2.sqrt().max(1.0), lookup)
+                    }
+                    _ if select.managed => {
+                        let d = f64::from(pos.length()).max(1.0);
+                        if d > range_m {
+                            continue;
+                        }
+                        let centre = pos + block.up * (0.5 * item.size_m[2]);
+                        let fog = if fog_free {
+                            0.0
+                        } else {
+                            let altitude = camera.view.eye.alt_m + f64::from(local_up.dot(centre));
+                            fade(d, altitude)
+                        };
+                        let aoi = aoi_by_cosine.as_ref().map_or(1.0, |table| {
+                            table.factor(f64::from(aim32.dot(centre) / centre.length().max(1e-6)))
+                        });
+                        let ne = if item.kind.is_linear() {
+                            // A wall or fence is a face: Eq 17 with the ellipse of its half
+                            // length and half height, seen from the eye's distance off its
+                            // plane (edge on, it dissolves).
+                            let [he, hn] = item.heading;
+                            let face = Face {
+                                centre,
+                                along: block.east * he + block.north * hn,
+                                normal: block.east * hn - block.north * he,
+                                radii_m: [0.5 * item.size_m[1], 0.5 * item.size_m[2]],
+                            };
+                            ne_of_face(klod, &face, fog, aoi)
+                        } else {
+                            crate::detail::ne_3d(
+                                klod,
+                                f64::from(item.critical_radius_m),
+                                d,
+                                crate::detail::visibility_factor(fog),
+                            ) * aoi
+                        };
+                        culture_blend(ne, lookup)
+                    }
+                    _ => LodBlend::single(0),
+                };
+                if blend.coverage <= 0.0 {
+                    continue;
+                }
+                counts.objects_drawn += 1;
+                let [he, hn] = item.heading;
+                let forward = block.east * he + block.north * hn;
+                let right = block.east * hn - block.north * he;
+                let [w, l, h] = item.size_m;
+                let split = blend.finer_share * blend.coverage;
+                let whole = |share: f32| if share >= 1.0 { 2.0 } else { share };
+                let mut push = |level: usize, from: f32, to: f32| {
+                    let r = right * w;
+                    let f = forward * l;
+                    let u = block.up * h;
+                    let index = item.kind as usize * levels + level.min(levels - 1);
+                    buckets[index].push(CultureInstance {
+                        col0: [r.x, r.y, r.z, from],
+                        col1: [f.x, f.y, f.z, to],
+                        col2: [u.x, u.y, u.z, 0.0],
+                        origin: [pos.x, pos.y, pos.z, item.tint],
+                    });
+                };
+                push(blend.finer, 0.0, whole(split));
+                if let Some(coarser) = blend.coarser {
+                    push(coarser, split, whole(blend.coverage));
+                }
+            }
+        }
+        counts
+    }
+}
+
+fn ne_of_face(klod: f64, face: &Face, fade: f64, aoi_factor: f64) -> f64 {
     let Face {
         centre,
         along,
@@ -850,32 +952,28 @@ fn ne_of_face(
     };
     let effective =
         crate::detail::effective_radius_m(f64::from(radii_m[0]), f64::from(radii_m[1]), theta_deg);
-    let ne = crate::detail::ne_2d(
+    crate::detail::ne_2d(
         klod,
         effective,
         off_plane_m,
         rel.length().max(1.0),
         ground_range_m,
         crate::detail::visibility_factor(fade),
-    );
-    match &select.detail.aoi {
-        Some(aoi) => ne * crate::detail::aoi_factor(angle_deg, aoi),
-        None => ne,
-    }
+    ) * aoi_factor
 }
 
 /// The levels of a culture object at `ne`: the models' blend, except that an object is gone
 /// below the table's first step (source 004 Table 3: nothing is shown below step 1) and
 /// dissolves in over one doubling of `N_e` above it, so it never pops at its farthest range.
-pub fn culture_blend(ne: f64, levels: usize, table: &DetailTable) -> LodBlend {
-    let first = table.value(1);
+pub fn culture_blend(ne: f64, levels: &LevelLookup) -> LodBlend {
+    let first = levels.table().value(1);
     if ne.is_nan() || ne < first * FADE_FROM {
         return LodBlend {
             coverage: 0.0,
-            ..LodBlend::single(levels.saturating_sub(1))
+            ..LodBlend::single(levels.coarsest())
         };
     }
-    let mut blend = table.levels_for(ne, levels);
+    let mut blend = levels.levels_for(ne);
     if ne < first * FADE_TO {
         blend.coverage =
             (((ne - first * FADE_FROM) / (first * (FADE_TO - FADE_FROM))) as f32).clamp(0.0, 1.0);
@@ -1282,24 +1380,9 @@ mod tests {
 
     #[test]
     fn a_wall_is_a_face_of_eq_17_seen_face_on_and_dissolving_edge_on() {
-        let detail = DetailSettings {
-            aoi: None,
-            ..DetailSettings::standard()
-        };
-        let select = CultureSelect {
-            detail: &detail,
-            klod: 1467.0,
-            klod_nominal: 1467.0,
-            cue_important: [false; 9],
-            aim: DVec3::Y,
-            managed: true,
-            complete: true,
-            occlusion_margin_px: None,
-        };
         // A 20 m x 2 m wall along x, 100 m ahead (y), seen face on.
         let (along, normal) = (Vec3::X, Vec3::Y);
         let face_on = ne_of_face(
-            &select,
             1467.0,
             &Face {
                 centre: Vec3::new(0.0, 100.0, 0.0),
@@ -1308,13 +1391,12 @@ mod tests {
                 radii_m: [10.0, 1.0],
             },
             0.0,
-            0.0,
+            1.0,
         );
         // Eq 17 with R_g = 0: K r_e H / R_s^2 = K r_e / R_s, r_e the short radius.
         assert!((face_on - 1467.0 * 1.0 / 100.0).abs() < 1e-6, "{face_on}");
         // Edge on (the eye in its plane) it has no size; obliquely, between.
         let edge_on = ne_of_face(
-            &select,
             1467.0,
             &Face {
                 centre: Vec3::new(100.0, 0.0, 0.0),
@@ -1323,11 +1405,10 @@ mod tests {
                 radii_m: [10.0, 1.0],
             },
             0.0,
-            0.0,
+            1.0,
         );
         assert_eq!(edge_on, 0.0);
         let oblique = ne_of_face(
-            &select,
             1467.0,
             &Face {
                 centre: Vec3::new(70.7, 70.7, 0.0),
@@ -1336,7 +1417,7 @@ mod tests {
                 radii_m: [10.0, 1.0],
             },
             0.0,
-            0.0,
+            1.0,
         );
         // Obliquely its long radius faces the eye's foot (Eq 15): more than face on, at most
         // the long radius's N_e of a 3-D model.
@@ -1346,7 +1427,6 @@ mod tests {
         );
         // Removed in the fog at 98 % fade.
         let fogged = ne_of_face(
-            &select,
             1467.0,
             &Face {
                 centre: Vec3::new(0.0, 100.0, 0.0),
@@ -1355,7 +1435,7 @@ mod tests {
                 radii_m: [10.0, 1.0],
             },
             0.985,
-            0.0,
+            1.0,
         );
         assert_eq!(fogged, 0.0);
     }
@@ -1389,19 +1469,20 @@ mod tests {
 
     #[test]
     fn culture_dissolves_over_one_doubling_above_the_first_step() {
-        let table = DetailTable::default();
+        let table = crate::detail::DetailTable::default();
+        let lookup = LevelLookup::new(&table, 3);
         let first = table.value(1);
-        assert_eq!(culture_blend(first * 0.99, 3, &table).coverage, 0.0);
-        assert_eq!(culture_blend(f64::NAN, 3, &table).coverage, 0.0);
-        let mid = culture_blend(first * 1.5, 3, &table);
+        assert_eq!(culture_blend(first * 0.99, &lookup).coverage, 0.0);
+        assert_eq!(culture_blend(f64::NAN, &lookup).coverage, 0.0);
+        let mid = culture_blend(first * 1.5, &lookup);
         assert!((mid.coverage - 0.5).abs() < 1e-5, "{mid:?}");
         assert_eq!(mid.finer, 2, "the coarsest level dissolves");
-        assert_eq!(culture_blend(first * 2.01, 3, &table).coverage, 1.0);
+        assert_eq!(culture_blend(first * 2.01, &lookup).coverage, 1.0);
         // Coverage never jumps as N_e falls slowly.
         let mut last = 1.0_f32;
         for k in 0..600 {
             let ne = first * 2.4 - f64::from(k) * first * 0.003;
-            let c = culture_blend(ne, 3, &table).coverage;
+            let c = culture_blend(ne, &lookup).coverage;
             assert!(
                 last - c <= 0.01 && c <= last + 1e-6,
                 "N_e {ne}: {last} -> {c}"
