@@ -14,6 +14,13 @@ use std::sync::{Arc, OnceLock};
 /// Centre of the wood and village, 4 km into the hills database.
 const WOOD: (f64, f64) = (36.016, -121.186);
 
+/// An eye `south_m` south of the wood's centre, `up_m` above the ground there.
+fn south_of_wood(raster: &Raster, south_m: f64, up_m: f64) -> Geodetic {
+    let (m_lat, _) = cig_geo::metres_per_degree(WOOD.0);
+    let (lat, lon) = (WOOD.0 - south_m / m_lat, WOOD.1);
+    Geodetic::new(lat, lon, ground_m(raster, lat, lon) + up_m)
+}
+
 fn ground_m(raster: &Raster, lat_deg: f64, lon_deg: f64) -> f64 {
     let g = &raster.grid;
     let i = ((lat_deg - g.south_lat_deg) / g.dlat_deg).round() as usize;
@@ -108,9 +115,7 @@ fn a_wood_and_a_street_are_drawn_on_the_ground() {
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
     // 600 m south of the wood's centre, 12 m above the street, looking north.
-    let (m_lat, _) = cig_geo::metres_per_degree(WOOD.0);
-    let (lat, lon) = (WOOD.0 - 600.0 / m_lat, WOOD.1);
-    let eye = Geodetic::new(lat, lon, ground_m(&raster, lat, lon) + 12.0);
+    let eye = south_of_wood(&raster, 600.0, 12.0);
     let (with, stats) = frame(&mut renderer, &cache, &snapshot(eye, -2.0, true, true));
     let (without, bare) = frame(&mut renderer, &cache, &snapshot(eye, -2.0, false, true));
     write_png(&with, &out_dir().join("culture-wood.png"));
@@ -133,9 +138,7 @@ fn managed_culture_draws_far_fewer_triangles_than_full_detail() {
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
     // Over the wood's south edge at 150 m, looking down across it.
-    let (m_lat, _) = cig_geo::metres_per_degree(WOOD.0);
-    let (lat, lon) = (WOOD.0 - 380.0 / m_lat, WOOD.1);
-    let eye = Geodetic::new(lat, lon, ground_m(&raster, lat, lon) + 150.0);
+    let eye = south_of_wood(&raster, 380.0, 150.0);
     let (managed_image, managed) = frame(&mut renderer, &cache, &snapshot(eye, -20.0, true, true));
     let (full_image, full) = frame(&mut renderer, &cache, &snapshot(eye, -20.0, true, false));
     write_png(&managed_image, &out_dir().join("culture-managed.png"));
@@ -250,9 +253,7 @@ fn cue_important_culture_keeps_its_detail_under_overload() {
     let (db, raster) = wood();
     let cache = cache(&db);
     // Looking north across the street of houses from 600 m south of the wood, 12 m up.
-    let (m_lat, _) = cig_geo::metres_per_degree(WOOD.0);
-    let (lat, lon) = (WOOD.0 - 900.0 / m_lat, WOOD.1);
-    let eye = Geodetic::new(lat, lon, ground_m(&raster, lat, lon) + 12.0);
+    let eye = south_of_wood(&raster, 900.0, 12.0);
     let loaded = snapshot(eye, -2.0, true, true);
     // A budget every frame exceeds: K_LOD falls to its floor within a few frames.
     let overload = cig_scene::overload::OverloadSettings {
@@ -386,9 +387,7 @@ fn culture_behind_a_ridge_is_culled_without_changing_the_picture() {
 fn real_time_frames_get_their_culture_from_the_selector_thread_soon_after() {
     let (db, raster) = wood();
     let cache = cache(&db);
-    let (m_lat, _) = cig_geo::metres_per_degree(WOOD.0);
-    let (lat, lon) = (WOOD.0 - 600.0 / m_lat, WOOD.1);
-    let eye = Geodetic::new(lat, lon, ground_m(&raster, lat, lon) + 12.0);
+    let eye = south_of_wood(&raster, 600.0, 12.0);
     let shot = snapshot(eye, -2.0, true, true);
     // A one-off frame makes every tile's culture first.
     let complete = frame(&mut renderer(&cache), &cache, &shot).1;
