@@ -429,12 +429,19 @@ pub fn aoi_factor(angle_from_point_of_interest_deg: f64, aoi: &AreaOfInterest) -
 /// [`aoi_factor`] tabulated against the cosine of the angle from the point of interest, for a
 /// factor per object of a dense scene without an arc cosine: linear between 257 samples even
 /// in the cosine from the inner cone's edge to the outer's (within 1e-3 of the exact factor).
+///
+/// The angle is not smooth in its cosine at 0° and 180° (it goes as the square root of the
+/// cosine's distance from ±1), so within four samples of either end the factor is worked out
+/// exactly, with the arc cosine: there a straight line between samples would be degrees off.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AoiByCosine {
     cos_inner: f64,
     cos_outer: f64,
     samples_per_unit: f64,
-    periphery_factor: f64,
+    /// Cosines below or above these are within four samples of ±1: worked out exactly.
+    exact_below: f64,
+    exact_above: f64,
+    aoi: AreaOfInterest,
     samples: [f64; AOI_SAMPLES + 1],
 }
 
@@ -457,11 +464,14 @@ impl AoiByCosine {
                 *sample = aoi_factor(cos.acos().to_degrees(), aoi);
             }
         }
+        let near_an_end = 4.0 * span / AOI_SAMPLES as f64;
         AoiByCosine {
             cos_inner,
             cos_outer,
             samples_per_unit,
-            periphery_factor: aoi.periphery_factor,
+            exact_below: -1.0 + near_an_end,
+            exact_above: 1.0 - near_an_end,
+            aoi: *aoi,
             samples,
         }
     }
@@ -472,8 +482,11 @@ impl AoiByCosine {
         if cos.is_nan() || cos >= self.cos_inner {
             return 1.0;
         }
-        if cos <= self.cos_outer {
-            return self.periphery_factor;
+        if cos <= self.cos_outer && self.aoi.outer_deg <= 180.0 {
+            return self.aoi.periphery_factor;
+        }
+        if cos < self.exact_below || cos > self.exact_above {
+            return aoi_factor(cos.clamp(-1.0, 1.0).acos().to_degrees(), &self.aoi);
         }
         let x = (cos - self.cos_outer) * self.samples_per_unit;
         let i = (x as usize).min(AOI_SAMPLES - 1);
@@ -552,16 +565,45 @@ mod tests {
     proptest! {
         #[test]
         fn aoi_by_cosine_is_within_1e3_of_the_exact_factor(
-            inner in 0.0f64..200.0,
-            width in 0.0f64..120.0,
+            inner in prop_oneof![0.0f64..200.0, Just(0.0), 170.0f64..180.0],
+            width in prop_oneof![0.0f64..120.0, 0.0f64..2.0],
             periphery in 0.0f64..=1.0,
-            angle in 0.0f64..180.0,
+            angle in prop_oneof![0.0f64..180.0, 179.0f64..=180.0, 0.0f64..1.0],
         ) {
             let aoi = AreaOfInterest { inner_deg: inner, outer_deg: inner + width, periphery_factor: periphery };
             let table = AoiByCosine::new(&aoi);
             let cos = angle.to_radians().cos();
             let exact = aoi_factor(cos.clamp(-1.0, 1.0).acos().to_degrees(), &aoi);
             prop_assert!((table.factor(cos) - exact).abs() < 1e-3, "{} against {exact}", table.factor(cos));
+        }
+    }
+
+    #[test]
+    fn aoi_by_cosine_is_exact_enough_next_to_the_back_of_the_sphere() {
+        // Found by the property above when the table stopped at the cosine's -1: there the angle
+        // is the square root of the cosine's distance from -1, no straight line.
+        let aoi = AreaOfInterest {
+            inner_deg: 116.533_446_208_583_8,
+            outer_deg: 116.533_446_208_583_8 + 108.913_939_432_155_27,
+            periphery_factor: 0.0,
+        };
+        let table = AoiByCosine::new(&aoi);
+        for angle in [
+            170.0,
+            175.0,
+            178.0,
+            179.0,
+            179.590_727_812_212_92,
+            179.9,
+            180.0,
+        ] {
+            let cos = f64::to_radians(angle).cos();
+            let exact = aoi_factor(angle, &aoi);
+            assert!(
+                (table.factor(cos) - exact).abs() < 1e-3,
+                "{angle}°: {} against {exact}",
+                table.factor(cos)
+            );
         }
     }
 
