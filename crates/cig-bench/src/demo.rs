@@ -337,6 +337,50 @@ pub fn environment_shots(
 
 /// Frames side by side, `columns` to a row, each halved.
 #[must_use]
+/// Three display channels of one eyepoint: `view`'s eye and orientation, a 90° horizontal
+/// field split into equal thirds of its tangent (left, centre, right), each `view`'s size
+/// (so each channel has the same pixels per unit of tangent, as one wide view's).
+pub fn three_channels(view: &cig_scene::View) -> [cig_scene::View; 3] {
+    let third_deg = (1.0f64 / 3.0).atan().to_degrees();
+    let half_up_deg = (f64::from(view.height_px) / (3.0 * f64::from(view.width_px)))
+        .atan()
+        .to_degrees();
+    [
+        (45.0, -third_deg),
+        (third_deg, third_deg),
+        (-third_deg, 45.0),
+    ]
+    .map(|(left, right)| cig_scene::View {
+        fov: cig_scene::FovDeg {
+            left_deg: left,
+            right_deg: right,
+            down_deg: half_up_deg,
+            up_deg: half_up_deg,
+        },
+        ..*view
+    })
+}
+
+/// Frames of equal height side by side, left to right.
+pub fn side_by_side(frames: &[cig_render::Image]) -> cig_render::Image {
+    let height = frames.iter().map(|f| f.height).min().unwrap_or(1);
+    let width: u32 = frames.iter().map(|f| f.width).sum();
+    let mut rgba = Vec::with_capacity((width * height * 4) as usize);
+    for y in 0..height {
+        for frame in frames {
+            let row = (y * frame.width * 4) as usize;
+            if let Some(pixels) = frame.rgba.get(row..row + (frame.width * 4) as usize) {
+                rgba.extend_from_slice(pixels);
+            }
+        }
+    }
+    cig_render::Image {
+        width,
+        height,
+        rgba,
+    }
+}
+
 pub fn contact_sheet(frames: &[cig_render::Image], columns: usize) -> cig_render::Image {
     let (fw, fh) = frames
         .first()

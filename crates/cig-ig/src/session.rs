@@ -552,6 +552,8 @@ struct Pending<T> {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SessionCounters {
     pub messages_applied: u64,
+    /// IG Control packets applied: host frames.
+    pub host_frames: u64,
     pub packets_applied: u64,
     pub packets_ignored: u64,
     pub hat_hot_answered: u64,
@@ -583,6 +585,10 @@ pub struct SessionConfig {
     pub database_number: i8,
     /// Visibility where the host sets none, metres.
     pub default_visibility_m: f64,
+    /// Whether this IG answers the host (a multi-channel IG's master does; its slaves keep
+    /// the host's state to draw it but answer nothing: no HAT/HOT, LOS, position, environment,
+    /// collision or sensor answers and no IG messages, only the Start of Frame they never send).
+    pub answers_host: bool,
 }
 
 impl Default for SessionConfig {
@@ -590,6 +596,7 @@ impl Default for SessionConfig {
         SessionConfig {
             database_number: 1,
             default_visibility_m: 40_000.0,
+            answers_host: true,
         }
     }
 }
@@ -619,6 +626,8 @@ pub struct IgSession {
     ig_mode: u8,
     ig_frame_number: u32,
     last_host_frame_number: u32,
+    /// The host's clock from its IG Control timestamps, unwrapped: (last ticks, seconds).
+    host_clock: Option<(u32, f64)>,
     requested_database: i8,
     time_set: Option<UtcTime>,
     poses: BTreeMap<u16, Pose>,
@@ -681,6 +690,7 @@ impl IgSession {
             ig_mode: 1,
             ig_frame_number: 0,
             last_host_frame_number: 0,
+            host_clock: None,
             time_set: None,
             poses: BTreeMap::new(),
             counters: SessionCounters::default(),
@@ -710,6 +720,12 @@ impl IgSession {
     }
     pub fn last_host_frame_number(&self) -> u32 {
         self.last_host_frame_number
+    }
+    /// The host's clock, seconds, from the valid timestamps of its IG Control packets,
+    /// unwrapped across the 32-bit field's wrap (every 11.9 h) from the first one heard: an IG
+    /// that starts after a wrap counts from there (channels started together agree).
+    pub fn host_clock_s(&self) -> Option<f64> {
+        self.host_clock.map(|(_, s)| s)
     }
     pub fn ig_mode(&self) -> u8 {
         self.ig_mode
@@ -1061,11 +1077,21 @@ impl IgSession {
     }
 
     fn apply_ig_control(&mut self, c: &IgControl) -> bool {
+        self.counters.host_frames += 1;
         if c.ig_mode == 0 && self.ig_mode != 0 {
             self.reset();
         }
         self.ig_mode = c.ig_mode;
         self.last_host_frame_number = c.host_frame_number;
+        if c.timestamp_valid {
+            let ticks = c.timestamp_10us;
+            let seconds = match self.host_clock {
+                // The signed difference: a host whose clock went back goes back.
+                Some((last, s)) => s + f64::from(ticks.wrapping_sub(last) as i32) * 1e-5,
+                None => f64::from(ticks) * 1e-5,
+            };
+            self.host_clock = Some((ticks, seconds));
+        }
         if c.database_number != 0 {
             self.requested_database = c.database_number;
             if c.database_number != self.config.database_number {
@@ -1513,6 +1539,18 @@ impl IgSession {
             paging: false,
             excessive_variable_length_data: false,
         })];
+        if !self.config.answers_host {
+            // A slave channel: requests are heard (and dropped when due) but never answered.
+            self.deferred.clear();
+            self.ig_messages.clear();
+            let lsn_now = self.host_frame_lsn();
+            let _ = due(&mut self.hat_hot, lsn_now);
+            let _ = due(&mut self.los_segment, lsn_now);
+            let _ = due(&mut self.los_vector, lsn_now);
+            let _ = due(&mut self.position, lsn_now);
+            self.environment_requests.clear();
+            return Message::new(version, byte_order, packets);
+        }
         let mut answers: Vec<Packet> = self.deferred.drain(..).collect();
         self.answer_hat_hot(query, &mut answers);
         self.answer_los(query, obscurants, &mut answers);

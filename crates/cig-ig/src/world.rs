@@ -50,7 +50,7 @@ use cig_scene::snapshot::EntityInstance;
 use cig_scene::{FovDeg, FrameSnapshot, Hpr, View};
 use cig_terrain::QuerySession;
 use glam::DVec3;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 /// Why a world cannot be built.
 #[derive(Debug, thiserror::Error)]
@@ -171,6 +171,10 @@ pub struct IgWorld {
     last_process_publish_s: f64,
     /// Seconds of scripted motion since the start (forward only, at the clock's rate).
     script_time_s: f64,
+    /// The host's clock at the last [`IgWorld::step_to_host_clock`].
+    host_clock_stepped_s: Option<f64>,
+    /// The host's views this IG draws (a display channel's); `None`: all of them.
+    channel_views: Option<BTreeSet<u16>>,
     /// Appearance effects of the scenario's entities, by (entity, effect).
     owned_effects: BTreeMap<(u16, cig_dis::EntityEffect), cig_effects::EffectHandle>,
     /// The first view's eye after the last step, and the geoid undulation there.
@@ -303,6 +307,8 @@ impl IgWorld {
             smoke,
             last_process_publish_s: f64::NEG_INFINITY,
             script_time_s: 0.0,
+            host_clock_stepped_s: None,
+            channel_views: None,
             owned_effects: BTreeMap::new(),
             first_eye: None,
             points_of_interest: BTreeMap::new(),
@@ -425,6 +431,83 @@ impl IgWorld {
                 Err(e)
             }
         }
+    }
+
+    /// Advances the world to the host's clock (CIGI synchronous mode: the host's IG Control
+    /// timestamps, [`IgSession::host_clock_s`]), so every channel stepped with the same host
+    /// messages reaches the same state whatever its own timing. The first time, and after a jump
+    /// of the host's clock (back, or more than 10 s on: a channel that started late or
+    /// restarted, a host that restarted), the world is placed on the host's clock: the time of
+    /// day the start plus the host's clock at the clock's rate, the scripts at that time (the
+    /// host's next time of day, and the exercise's time, override it as usual). Without a host
+    /// clock it advances by `fallback_dt_s` (a host that sends no timestamp: one frame period).
+    pub fn step_to_host_clock(&mut self, fallback_dt_s: f64, query: &mut QuerySession) {
+        let Some(host_s) = self.session.host_clock_s() else {
+            self.step(fallback_dt_s, query);
+            return;
+        };
+        match self.host_clock_stepped_s {
+            Some(last) if (0.0..=10.0).contains(&(host_s - last)) => {
+                self.host_clock_stepped_s = Some(host_s);
+                self.step(host_s - last, query);
+            }
+            _ => {
+                self.host_clock_stepped_s = Some(host_s);
+                let rate = self.clock.rate();
+                // Out of the supported years (a host clock of centuries): the clock stays.
+                if let Ok(t) = UtcTime::from_unix_seconds(self.start_unix_s + host_s * rate) {
+                    self.clock.set_time(t);
+                }
+                self.script_time_s = host_s.max(0.0) * rate.max(0.0);
+                self.step(0.0, query);
+            }
+        }
+    }
+
+    /// Draws only the host's views with these identifiers (a display channel of a
+    /// multi-channel IG); `None` draws every view the host defines. The world is the same in
+    /// every channel: only what is drawn differs.
+    pub fn set_channel_views(&mut self, views: Option<BTreeSet<u16>>) {
+        self.channel_views = views;
+    }
+
+    /// The channel's view identifiers the host has not defined (with a pose) yet.
+    pub fn channel_views_missing(&self) -> Vec<u16> {
+        self.channel_views.as_ref().map_or_else(Vec::new, |ids| {
+            ids.iter()
+                .copied()
+                .filter(|id| {
+                    self.session
+                        .views()
+                        .get(id)
+                        .is_none_or(|v| self.session.view_pose(v).is_none())
+                })
+                .collect()
+        })
+    }
+
+    /// The host's identifiers of the views [`IgWorld::snapshot`] draws, in its order (`None`
+    /// for the scenario's or the fallback view, drawn when the host gives none).
+    pub fn drawn_view_ids(&self) -> Vec<Option<u16>> {
+        let ids: Vec<Option<u16>> = self
+            .session
+            .views()
+            .values()
+            .filter(|v| self.draws_view(v.id) && self.session.view_pose(v).is_some())
+            .map(|v| Some(v.id))
+            .collect();
+        if ids.is_empty() {
+            vec![None]
+        } else {
+            ids
+        }
+    }
+
+    /// Whether the channel draws the host's view `id`.
+    fn draws_view(&self, id: u16) -> bool {
+        self.channel_views
+            .as_ref()
+            .is_none_or(|ids| ids.contains(&id))
     }
 
     /// Applies one DIS datagram.
@@ -1149,6 +1232,7 @@ impl IgWorld {
             .session
             .views()
             .values()
+            .filter(|v| self.draws_view(v.id))
             .filter_map(|v| {
                 let pose = self.session.view_pose(v)?;
                 Some(View {
@@ -1204,16 +1288,11 @@ impl IgWorld {
         let views = self.views(width_px, height_px, fallback);
         let mut snapshot = FrameSnapshot::new(self.unix_time_s(), views.clone());
         // The host's views are drawn in identifier order, those with a pose (as `world_views`).
-        let host_views: Vec<u16> = self
-            .session
-            .views()
-            .values()
-            .filter(|v| self.session.view_pose(v).is_some())
-            .map(|v| v.id)
-            .collect();
-        if host_views.len() == views.len() {
+        let host_views = self.drawn_view_ids();
+        if host_views.len() == views.len() && host_views.iter().all(Option::is_some) {
             snapshot.points_of_interest_deg = host_views
                 .iter()
+                .flatten()
                 .map(|id| {
                     self.points_of_interest
                         .get(id)

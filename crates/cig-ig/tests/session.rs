@@ -1431,3 +1431,103 @@ fn a_views_point_of_interest_follows_the_hosts_component_control_with_a_lag() {
     }
     assert_eq!(drawn(&w), None, "back at the view's centre");
 }
+
+/// A host frame with its clock (10 µs ticks) and a HAT request, as bytes.
+fn clocked_frame(frame: u32, ticks: u32) -> Vec<u8> {
+    let packets = vec![
+        Packet::IgControl(IgControl {
+            ig_mode: 1,
+            host_frame_number: frame,
+            timestamp_valid: true,
+            timestamp_10us: ticks,
+            ..IgControl::default()
+        }),
+        Packet::HatHotRequest(HatHotRequest {
+            hat_hot_id: 5,
+            request_type: 0,
+            lat_deg_or_x_m: lat_of_row(10.0),
+            lon_deg_or_y_m: lon_of_col(20.0),
+            alt_m_or_z_m: 500.0,
+            ..HatHotRequest::default()
+        }),
+    ];
+    let mut bytes = Vec::new();
+    encode_message(
+        &Message::new(Version::V3_3, ByteOrder::LittleEndian, packets),
+        &mut bytes,
+    )
+    .expect("encode");
+    bytes
+}
+
+#[test]
+fn channels_on_the_hosts_clock_agree_and_a_slave_answers_nothing() {
+    let mut q = query();
+    let mut master = world("");
+    let mut slave = IgWorld::new(
+        Scenario::from_toml("").expect("scenario"),
+        WorldConfig {
+            session: SessionConfig {
+                answers_host: false,
+                ..SessionConfig::default()
+            },
+            start: UtcTime::from_calendar(2026, 6, 21, 12, 0, 0.0).expect("time"),
+            fog_mode: FogMode::Exponential,
+            effects: EffectsConfig::default(),
+            join_exercise: true,
+        },
+    )
+    .expect("world");
+    // A channel that joins at host frame 200 (a restart) and one there from the start.
+    let mut late = world("");
+    for frame in 0..400u32 {
+        let ticks = frame * 1667;
+        let bytes = clocked_frame(frame, ticks);
+        master.receive_cigi(&bytes).expect("host frame");
+        slave.receive_cigi(&bytes).expect("host frame");
+        // The channels' own frame periods differ; the host's clock steps them.
+        master.step_to_host_clock(0.016, &mut q);
+        slave.step_to_host_clock(0.033, &mut q);
+        let answered = master.host_message(&mut q, frame);
+        assert!(
+            answered.packets.len() >= 2,
+            "the master answers the HAT request"
+        );
+        let silent = slave.host_message(&mut q, frame);
+        assert_eq!(
+            silent.packets.len(),
+            1,
+            "a slave's message is its Start of Frame only"
+        );
+        if frame >= 200 {
+            late.receive_cigi(&bytes).expect("host frame");
+            late.step_to_host_clock(0.5, &mut q);
+            assert!(
+                (late.unix_time_s() - master.unix_time_s()).abs() < 1e-6,
+                "frame {frame}: {} against {}",
+                late.unix_time_s(),
+                master.unix_time_s()
+            );
+        }
+        assert!(
+            (slave.unix_time_s() - master.unix_time_s()).abs() < 1e-6,
+            "frame {frame}"
+        );
+    }
+    assert_eq!(slave.session().counters().hat_hot_answered, 0);
+    assert!(master.session().counters().hat_hot_answered >= 399);
+    // The host's clock is unwrapped across the 32-bit field's wrap (every 11.9 h of ticks).
+    let mut wrapping = world("");
+    let first_ticks = u32::MAX - 1000;
+    wrapping
+        .receive_cigi(&clocked_frame(0, first_ticks))
+        .expect("host frame");
+    wrapping
+        .receive_cigi(&clocked_frame(1, first_ticks.wrapping_add(2000)))
+        .expect("host frame");
+    let host_s = wrapping.session().host_clock_s().expect("a host clock");
+    assert!(
+        (host_s - (f64::from(first_ticks) + 2000.0) * 1e-5).abs() < 1e-6,
+        "{host_s}"
+    );
+}

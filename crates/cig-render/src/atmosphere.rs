@@ -440,21 +440,7 @@ impl ToneMap {
         target: &wgpu::TextureView,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("tone map"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes,
-            ..Default::default()
-        });
+        let mut pass = crate::pass::cleared_pass(encoder, "tone map", target, timestamp_writes);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, globals_bind, &[]);
         pass.set_bind_group(1, scene_bind, &[]);

@@ -12,6 +12,7 @@ pub mod atmosphere;
 pub mod bolts;
 pub mod celestial;
 pub mod clouds;
+pub mod display;
 pub mod gltf_model;
 pub mod gpu;
 pub mod imagery;

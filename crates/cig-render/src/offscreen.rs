@@ -126,19 +126,52 @@ pub fn render_image_with(
     crate::gpu::check_frame_size(renderer.gpu(), view.width_px, view.height_px)?;
     let (width, height) = (view.width_px, view.height_px);
     let gpu = renderer.gpu().clone();
+    let plain = [crate::display::DISPLAY_VIEW_FORMAT];
     let texture = crate::gpu::render_target(
         &gpu.device,
         "frame",
         (width, height),
         FRAME_FORMAT,
         1,
-        wgpu::TextureUsages::COPY_SRC,
-        &[],
+        wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
+        &plain,
     );
     let target = texture.create_view(&Default::default());
     let stats = renderer.render(cache, snapshot, view_index, &target, options)?;
-    let image = read_rgba(&gpu, &texture)?;
-    Ok((image, stats))
+    let Some(display) = renderer.display_pass() else {
+        return Ok((read_rgba(&gpu, &texture)?, stats));
+    };
+    // The display correction: the frame, warped and blended, into the display's frame.
+    let shown = crate::gpu::render_target(
+        &gpu.device,
+        "display frame",
+        (width, height),
+        FRAME_FORMAT,
+        1,
+        wgpu::TextureUsages::COPY_SRC,
+        &plain,
+    );
+    let as_plain = |t: &wgpu::Texture| {
+        t.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(crate::display::DISPLAY_VIEW_FORMAT),
+            ..Default::default()
+        })
+    };
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("display correction"),
+        });
+    display.record(
+        &gpu,
+        &mut encoder,
+        &as_plain(&texture),
+        (width, height),
+        &as_plain(&shown),
+        (width, height),
+    );
+    gpu.queue.submit([encoder.finish()]);
+    Ok((read_rgba(&gpu, &shown)?, stats))
 }
 
 /// Reads an 8-bit RGBA or BGRA texture back as RGBA rows from the top.

@@ -327,6 +327,8 @@ pub struct Renderer {
     /// The overload control's settings (source 004 Table 4; `None`: off) and each view's
     /// state, fed each frame's counters after the frame, for the next one.
     overload: Option<OverloadSettings>,
+    /// The channel's display correction (warp and blend), the frame's last pass.
+    display: Option<crate::display::DisplayPass>,
     overload_controls: Vec<OverloadControl>,
     /// When each drawn node of each view first appeared, and the frame it was last drawn.
     node_first_seen: HashMap<(usize, cig_scene::NodeKey), (std::time::Instant, u64)>,
@@ -860,6 +862,7 @@ impl Renderer {
             models: HashMap::new(),
             detail: DetailSettings::standard(),
             overload: Some(OverloadSettings::default()),
+            display: None,
             overload_controls: Vec::new(),
             node_first_seen: HashMap::new(),
             targets: None,
@@ -1809,6 +1812,23 @@ impl Renderer {
         self.node_first_seen
             .retain(|(v, _), (_, last)| *v != view_index || *last == frame);
         out
+    }
+
+    /// Sets the channel's display correction (`cig_scene::display`: warp grid and edge-blend
+    /// ramps), applied by [`crate::render_image_with`] as the frame's last pass; `None` or an
+    /// empty correction draws the frame as it is.
+    pub fn set_display_correction(
+        &mut self,
+        correction: Option<cig_scene::display::DisplayCorrection>,
+    ) {
+        self.display = correction
+            .filter(|c| !c.is_none())
+            .map(|c| crate::display::DisplayPass::new(&self.gpu, c));
+    }
+
+    /// The display correction pass, when one is set.
+    pub fn display_pass(&self) -> Option<&crate::display::DisplayPass> {
+        self.display.as_ref()
     }
 
     /// Sets the overload control (source 004 Table 4, [`cig_scene::overload`]); `None` turns

@@ -11,6 +11,7 @@
 pub mod bolt;
 pub mod culture;
 pub mod detail;
+pub mod display;
 pub mod horizon;
 pub mod lighting;
 pub mod lod;

@@ -1,9 +1,12 @@
 //! The scripted CIGI host of `cig host` (for demos and tests), without its socket.
 //!
 //! Each host frame (at `rate_hz`) it sends one message: IG Control (operate, host frame number,
-//! the last IG frame number it received), the script's entities moved along their paths,
-//! the view attached to its entity, and the requests due (HAT/HOT and LOS every frame or once);
-//! the first frame also sets the time of day and the visibility when the script gives them.
+//! the host's clock as a valid 10 µs timestamp, the last IG frame number it received), the
+//! script's entities moved along their paths, the views attached to its entity, and the
+//! requests due (HAT/HOT and LOS every frame or once). The first frame and then one frame a
+//! second also set the time of day (the script's time plus the host's clock), the visibility
+//! and the views' frusta when the script gives them, so an IG channel that starts late or
+//! restarts has the whole state within a second.
 //! Between frames it reads what the IG sent ([`Replies`]): Start of Frame counters and every
 //! answer, each described as one JSON object with the latency in host frames (from the 4-bit
 //! host frame number the answers carry), and a summary at the end. The `cig` binary sends,
@@ -24,7 +27,7 @@
 //! alt_m = 300                  # MSL, or above the terrain when clamped
 //! speed_mps = 50
 //! path = [[51.0, -1.5], [51.02, -1.5]]
-//! [view]
+//! [view]                       # view 0; or [[views]] tables, each with its `id`
 //! entity = 0
 //! offset_m = [0, 0, -2]
 //! hpr_deg = [0, -5, 0]
@@ -42,8 +45,11 @@
 //! alpha_threshold = 0          # least alpha (surface or smoke) that stops the line
 //! ```
 //!
-//! Limits: one view (view 0); requests go out every frame or once (frame 0); answers are
-//! matched to requests by nothing but their id.
+//! Three channels of one eyepoint are three `[[views]]` with ids 0, 1, 2 on the same entity
+//! and adjacent frusta (`fov_deg = [-45, -15, -20, 20]`, `[-15, 15, -20, 20]`, `[15, 45, -20, 20]`).
+//!
+//! Limits: requests go out every frame or once (frame 0); answers are matched to requests by
+//! nothing but their id.
 
 use crate::ToolError;
 use cig_cigi::{
@@ -74,6 +80,8 @@ struct ScriptFile {
     entities: Vec<HostEntity>,
     #[serde(default)]
     view: Option<HostView>,
+    #[serde(default)]
+    views: Vec<HostView>,
     #[serde(default)]
     hat: Vec<HostHat>,
     #[serde(default)]
@@ -115,6 +123,8 @@ fn no_clamp() -> String {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct HostView {
+    #[serde(default)]
+    id: u16,
     #[serde(default)]
     entity: u16,
     #[serde(default)]
@@ -186,6 +196,12 @@ fn check(script: &ScriptFile) -> Result<(Version, ByteOrder), ToolError> {
             "rate_hz {} must lie between 1 and 1000",
             script.rate_hz
         )));
+    }
+    let mut view_ids = std::collections::BTreeSet::new();
+    for v in script.view.iter().chain(&script.views) {
+        if !view_ids.insert(v.id) {
+            return Err(ToolError::Script(format!("view {} is given twice", v.id)));
+        }
     }
     for (i, e) in script.entities.iter().enumerate() {
         if e.path.is_empty() {
@@ -333,13 +349,18 @@ fn build_frame(
         ig_mode: 1,
         host_frame_number: frame,
         last_ig_frame_number: last_ig_frame,
+        timestamp_valid: true,
+        // The host's clock in 10 µs ticks, wrapping as the field does.
+        timestamp_10us: ((t_s * 1e5).round() as u64 & u64::from(u32::MAX)) as u32,
         ..IgControl::default()
     })];
-    if frame == 0 {
+    // The state an IG keeps (time of day, visibility, frusta) is told at the start and again
+    // once a second, for channels that join late.
+    let restate = frame.is_multiple_of(script.rate_hz.round().max(1.0) as u32);
+    if restate {
         if let Some(t) = &script.time {
-            let c = UtcTime::parse_iso8601(t)
-                .map_err(|e| ToolError::Time(e.to_string()))?
-                .to_calendar();
+            let start = UtcTime::parse_iso8601(t).map_err(|e| ToolError::Time(e.to_string()))?;
+            let c = start.plus_seconds(t_s).to_calendar();
             packets.push(Packet::CelestialSphereControl(CelestialSphereControl {
                 hour: c.hour as u8,
                 minute: c.minute as u8,
@@ -402,9 +423,9 @@ fn build_frame(
             }));
         }
     }
-    if let Some(v) = &script.view {
+    for v in script.view.iter().chain(&script.views) {
         packets.push(Packet::ViewControl(ViewControl {
-            view_id: 0,
+            view_id: v.id,
             entity_id: v.entity,
             x_offset_enable: true,
             y_offset_enable: true,
@@ -420,9 +441,9 @@ fn build_frame(
             roll_deg: v.hpr_deg[2],
             ..ViewControl::default()
         }));
-        if let (0, Some(f)) = (frame, v.fov_deg) {
+        if let (true, Some(f)) = (restate, v.fov_deg) {
             packets.push(Packet::ViewDefinition(ViewDefinition {
-                view_id: 0,
+                view_id: v.id,
                 left_enable: true,
                 right_enable: true,
                 bottom_enable: true,

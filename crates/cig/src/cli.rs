@@ -142,6 +142,52 @@ pub struct ServeArgs {
     /// Print the run's counters as one JSON line at the end.
     #[arg(long)]
     pub json: bool,
+    /// Draw only the host's views with these identifiers: this process is the display
+    /// channel (or channels) of those views; the world runs the same in every channel.
+    #[arg(long = "view", value_delimiter = ',', value_name = "ID[,ID...]")]
+    pub views: Vec<u16>,
+    /// A channel's role: the master answers the host (Start of Frame, HAT/HOT, LOS,
+    /// position, environment, collision) and publishes to the exercise; a slave only draws.
+    #[arg(long, value_enum, default_value_t = ChannelRole::Master)]
+    pub role: ChannelRole,
+    /// Forward every datagram of the host to these slave channels, HOST:PORT[,...] (master
+    /// only; a slave listens on its --cigi-port).
+    #[arg(long, value_delimiter = ',', value_name = "HOST:PORT")]
+    pub relay: Vec<String>,
+    /// CIGI synchronous mode: draw one frame per host frame, the world on the host's clock
+    /// (its IG Control timestamps), so every channel draws frame n from the host's frame n;
+    /// a channel behind skips to the newest frame.
+    #[arg(long)]
+    pub sync: bool,
+    /// Stop when no host frame has come for this many seconds since the last one (after the
+    /// first; synchronous mode), so tests and soak runs end with their host.
+    #[arg(long, value_name = "SECONDS")]
+    pub idle_exit_s: Option<f64>,
+    /// Exposure: `view` adapts to what the view shows; `natural` keeps the natural
+    /// illuminance's, the same in every channel (so no seam). Default: natural when --view
+    /// is given or the role is slave, else view.
+    #[arg(long, value_enum)]
+    pub exposure: Option<ExposureMode>,
+    /// Geometric warp of the channel (a mesh of display positions; docs/channels.md).
+    #[arg(long, value_name = "FILE")]
+    pub warp: Option<PathBuf>,
+    /// Edge-blend ramps of the channel (docs/channels.md).
+    #[arg(long, value_name = "FILE")]
+    pub blend: Option<PathBuf>,
+}
+
+/// What a `cig serve` process is among the channels of one IG.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ChannelRole {
+    Master,
+    Slave,
+}
+
+/// How a channel's exposure is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExposureMode {
+    View,
+    Natural,
 }
 
 #[derive(Args)]
@@ -628,6 +674,12 @@ pub struct RenderArgs {
     /// configuration's `culture.occlusion`, on).
     #[arg(long, value_name = "on|off")]
     pub culture_occlusion: Option<String>,
+    /// Geometric warp of the frame, as a projected channel's (docs/channels.md).
+    #[arg(long, value_name = "FILE")]
+    pub warp: Option<PathBuf>,
+    /// Edge-blend ramps of the frame, as a projected channel's (docs/channels.md).
+    #[arg(long, value_name = "FILE")]
+    pub blend: Option<PathBuf>,
 }
 
 #[derive(Args)]

@@ -299,6 +299,39 @@ fn fly(
         frames.push(image);
         previous = Some(snapshot);
     }
+    // Three channels of the low pass's eyepoint (left, centre, right) side by side: the
+    // picture runs on across the seams. Their exposure is the natural light's, the same in
+    // every channel, as `cig serve --view` channels have it.
+    if let Some(low_pass) = cig_bench::demo::clear_skies(&shots).into_iter().nth(2) {
+        // One detail for the three (the overload control would step K_LOD between them).
+        renderer.set_overload(None)?;
+        let mut channels = Vec::new();
+        for view in cig_bench::demo::three_channels(&low_pass.views[0]) {
+            let mut snapshot = low_pass.clone();
+            snapshot.views = vec![view];
+            cache.update(&[view.eye]);
+            cache.wait_idle();
+            cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;
+            let (image, _) = cig_render::render_image_with(
+                &mut renderer,
+                &cache,
+                &snapshot,
+                0,
+                cig_render::FrameOptions {
+                    mesh_budget: usize::MAX,
+                    adaptation: cig_render::Adaptation::Off,
+                    ..cig_render::FrameOptions::default()
+                },
+            )?;
+            channels.push(image);
+        }
+        let path = out_dir.join("channels.png");
+        crate::render::write_png(&cig_bench::demo::side_by_side(&channels), &path)?;
+        println!(
+            "  three channels of one eyepoint side by side: {}",
+            path.display()
+        );
+    }
     let sheet = cig_bench::demo::contact_sheet(&frames, 6);
     let sheet_path = out_dir.join("contact-sheet.png");
     crate::render::write_png(&sheet, &sheet_path)?;

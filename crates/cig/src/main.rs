@@ -9,6 +9,7 @@ mod config;
 mod db;
 mod demo;
 mod dis;
+mod display;
 mod ephem;
 mod host;
 mod lod;

@@ -395,7 +395,10 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .as_deref()
         .map(|v| on_or_off("--culture-occlusion", v))
         .transpose()?;
+    let correction =
+        crate::display::read_display_correction(args.warp.as_deref(), args.blend.as_deref())?;
     let (cache, mut renderer) = open(&args.db, config)?;
+    renderer.set_display_correction(Some(correction));
     renderer.detail.klod = klod;
     if let Some(occlusion) = culture_occlusion {
         renderer.culture_occlusion = occlusion;

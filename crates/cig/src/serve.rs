@@ -5,8 +5,15 @@
 //! host's and the exercise's datagrams into the world, step it, send the frame's message
 //! (Start of Frame and the answers) and the exercise's PDUs, and draw. Bad datagrams are
 //! counted and logged at a limited rate; the loop keeps going.
+//!
+//! Channels (docs/channels.md): a process draws the host's views `--view` names; the master
+//! answers the host, publishes to the exercise and forwards the host's datagrams to its
+//! slaves (`--relay`); a slave draws only and never sends a datagram. In synchronous mode
+//! (`--sync`) each channel draws one frame per host frame, its world stepped on the host's
+//! clock, so every channel draws frame n from the host's frame n; a channel behind applies
+//! every queued host message and draws only the newest.
 
-use crate::cli::ServeArgs;
+use crate::cli::{ChannelRole, ExposureMode, ServeArgs};
 use crate::config::Config;
 use crate::render::{parse_size, parse_time, write_png};
 use anyhow::{bail, Context};
@@ -93,6 +100,18 @@ struct Totals {
     puffs_drawn: u32,
     /// User-defined CIGI packets received (no extension handles them yet: counted, dropped).
     user_defined_packets: u64,
+    /// Synchronous mode: host frames applied without being drawn (the channel was behind),
+    /// the most in one frame, and the latency from a host frame's arrival to its frame drawn.
+    host_frames_skipped: u64,
+    lag_frames_max: u64,
+    latency_ms_sum: f64,
+    latency_ms_max: f64,
+    /// The host frame number the last frame drew.
+    drawn_host_frame: Option<u32>,
+    /// From the start of serving to the first frame drawn from the host's data, ms.
+    joined_after_ms: Option<f64>,
+    /// Host datagrams forwarded to slave channels.
+    relayed: u64,
 }
 
 pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
@@ -108,6 +127,12 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
     }
     if args.json && !args.headless && !args.no_render {
         bail!("--json needs --headless or --no-render (a window's run ends with a summary line)");
+    }
+    let channel = Channel::from_args(args)?;
+    let correction =
+        crate::display::read_display_correction(args.warp.as_deref(), args.blend.as_deref())?;
+    if !correction.is_none() && !args.headless {
+        bail!("--warp and --blend apply to --headless frames (a window shows the frame as drawn)");
     }
     let scenario = match &args.scenario {
         Some(path) => read_scenario(path)?,
@@ -174,12 +199,21 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         destination: host,
         queue_limit: 256,
         reuse_port: false,
+    })
+    .with_context(|| match channel.role {
+        ChannelRole::Master => format!(
+            "one master per host port: another channel of this IG runs as --role slave on a \
+             --cigi-port of its own, fed by the master's --relay (port {})",
+            args.cigi_port
+        ),
+        ChannelRole::Slave => format!("the slave's --cigi-port {}", args.cigi_port),
     })?;
     let mut world = IgWorld::new(
         scenario,
         WorldConfig {
             session: SessionConfig {
                 database_number: args.database_number,
+                answers_host: channel.role == ChannelRole::Master,
                 ..SessionConfig::default()
             },
             start,
@@ -193,6 +227,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
             join_exercise: dis.is_some(),
         },
     )?;
+    world.set_channel_views(channel.views.clone());
     let eye = crate::view::default_eye(&cache);
     let fallback = View {
         eye,
@@ -219,6 +254,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
     if !args.headless && !args.no_render {
         return run_windowed(
             args,
+            channel,
             cache,
             world,
             query,
@@ -235,6 +271,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         let gpu = cig_render::Gpu::headless()?;
         let mut renderer = cig_render::Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
         config.configure_renderer(&mut renderer)?;
+        renderer.set_display_correction(Some(correction));
         if !models.is_empty() {
             renderer.set_models(models);
         }
@@ -247,21 +284,34 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
             out_dir: args.out_dir.clone(),
         }
     };
-    let mut loop_state = LoopState::new(args.rate_hz, !args.no_render);
+    let adaptation = channel.adaptation(1.0 / args.rate_hz as f32);
+    let mut loop_state = LoopState::new(args.rate_hz, !args.no_render, channel);
     let mut totals = Totals::default();
+    // Since the last host frame drawn (none before the first).
+    let mut idle_since: Option<Instant> = None;
     loop {
         if args.frames.is_some_and(|n| totals.frames >= n) {
             break;
         }
+        if let (Some(limit_s), Some(since)) = (args.idle_exit_s, idle_since) {
+            if since.elapsed().as_secs_f64() > limit_s {
+                tracing::info!("no host frame for {limit_s} s: stopping");
+                break;
+            }
+        }
         let began = Instant::now();
-        let snapshot = loop_state.tick(
+        let Some(snapshot) = loop_state.tick(
             &mut world,
             &mut query,
             &cigi,
             dis.as_ref(),
             &mut totals,
             (width_px, height_px, &fallback),
-        );
+        ) else {
+            // Synchronous mode and no host frame within a period: nothing new to draw.
+            continue;
+        };
+        let snapshot_view_ids = loop_state.view_ids.clone();
         if let Output::Offscreen { renderer, out_dir } = &mut output {
             let eyes: Vec<Geodetic> = snapshot.views.iter().map(|v| v.eye).collect();
             cache.update(&eyes);
@@ -272,22 +322,31 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
                     &snapshot,
                     index,
                     cig_render::FrameOptions {
-                        // The eye adapts over the frame period.
-                        adaptation: cig_render::Adaptation::Step(1.0 / args.rate_hz as f32),
+                        adaptation,
                         ..cig_render::FrameOptions::default()
                     },
                 )?;
                 totals.entities_drawn = stats.entities_drawn;
                 totals.puffs_drawn = stats.puffs_drawn;
                 if let Some(dir) = out_dir {
-                    let name = if snapshot.views.len() == 1 {
-                        format!("frame_{:05}.png", totals.frames)
-                    } else {
-                        format!("frame_{:05}_view{index}.png", totals.frames)
+                    // In synchronous mode frames are named by the host frame they draw, so the
+                    // channels' files of one frame have the same number.
+                    let number = match (loop_state.channel.sync, totals.drawn_host_frame) {
+                        (true, Some(n)) => u64::from(n),
+                        _ => totals.frames,
+                    };
+                    let name = match (snapshot.views.len(), snapshot_view_ids.get(index)) {
+                        (1, _) => format!("frame_{number:05}.png"),
+                        (_, Some(Some(id))) => format!("frame_{number:05}_view{id}.png"),
+                        _ => format!("frame_{number:05}_view{index}.png"),
                     };
                     write_png(&image, &dir.join(name))?;
                 }
             }
+        }
+        loop_state.frame_drawn(&mut totals);
+        if loop_state.host_frames_in_tick > 0 {
+            idle_since = Some(Instant::now());
         }
         let frame_ms = began.elapsed().as_secs_f64() * 1000.0;
         totals.frames += 1;
@@ -295,14 +354,91 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         totals.frame_ms_max = totals.frame_ms_max.max(frame_ms);
         let period = Duration::from_secs_f64(1.0 / args.rate_hz);
         match period.checked_sub(began.elapsed()) {
-            Some(rest) => std::thread::sleep(rest),
+            // In synchronous mode the host's next frame paces the loop.
+            Some(rest) if !loop_state.channel.sync => std::thread::sleep(rest),
+            Some(_) => {}
             None => {
                 totals.overframes += 1;
                 loop_state.overframing = true;
             }
         }
     }
-    report(&totals, &world, &cigi, dis.as_ref(), args.json)
+    report(
+        &totals,
+        &world,
+        &cigi,
+        dis.as_ref(),
+        &loop_state.channel,
+        args.json,
+    )
+}
+
+/// What this process is among the channels of one IG.
+#[derive(Clone, Debug)]
+struct Channel {
+    role: ChannelRole,
+    /// The host's views drawn here (`None`: all).
+    views: Option<std::collections::BTreeSet<u16>>,
+    relay: Vec<SocketAddr>,
+    sync: bool,
+    exposure: ExposureMode,
+}
+
+impl Channel {
+    fn from_args(args: &ServeArgs) -> anyhow::Result<Channel> {
+        let mut views = std::collections::BTreeSet::new();
+        for id in &args.views {
+            if !views.insert(*id) {
+                bail!("--view {id} is given twice");
+            }
+        }
+        if args.role == ChannelRole::Slave {
+            if !args.relay.is_empty() {
+                bail!("--relay is the master's (a slave forwards nothing)");
+            }
+            if args.cigi_host.is_some() {
+                bail!("--cigi-host: a slave never sends to the host");
+            }
+        }
+        let relay = args
+            .relay
+            .iter()
+            .map(|r| resolve(r, "--relay"))
+            .collect::<Result<Vec<_>, _>>()?;
+        let exposure =
+            args.exposure
+                .unwrap_or(if !views.is_empty() || args.role == ChannelRole::Slave {
+                    ExposureMode::Natural
+                } else {
+                    ExposureMode::View
+                });
+        Ok(Channel {
+            role: args.role,
+            views: (!views.is_empty()).then_some(views),
+            relay,
+            sync: args.sync,
+            exposure,
+        })
+    }
+
+    /// The renderer's adaptation for frames `frame_s` apart.
+    fn adaptation(&self, frame_s: f32) -> cig_render::Adaptation {
+        match self.exposure {
+            // The eye adapts over the frame period.
+            ExposureMode::View => cig_render::Adaptation::Step(frame_s),
+            ExposureMode::Natural => cig_render::Adaptation::Off,
+        }
+    }
+
+    fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "role": match self.role { ChannelRole::Master => "master", ChannelRole::Slave => "slave" },
+            "views": self.views.as_ref().map(|v| v.iter().copied().collect::<Vec<_>>()),
+            "sync": self.sync,
+            "relay": self.relay.iter().map(ToString::to_string).collect::<Vec<_>>(),
+            "exposure": match self.exposure { ExposureMode::View => "view", ExposureMode::Natural => "natural" },
+        })
+    }
 }
 
 /// Per-frame work shared by the headless and windowed loops.
@@ -320,10 +456,19 @@ struct LoopState {
     below_terrain: std::collections::BTreeSet<usize>,
     /// Whether the snapshots are drawn (eyes inside the terrain are lifted only for drawing).
     drawn: bool,
+    channel: Channel,
+    /// The host's view identifiers of the last snapshot's views.
+    view_ids: Vec<Option<u16>>,
+    /// The arrival of the oldest host datagram the frame being drawn applies.
+    frame_data_arrived: Option<Instant>,
+    /// The channel views the host has not defined, as last warned.
+    warned_missing: Vec<u16>,
+    /// Host frames (IG Control packets) the last tick applied.
+    host_frames_in_tick: u64,
 }
 
 impl LoopState {
-    fn new(rate_hz: f64, drawn: bool) -> LoopState {
+    fn new(rate_hz: f64, drawn: bool, channel: Channel) -> LoopState {
         let now = Instant::now();
         LoopState {
             started: now,
@@ -336,10 +481,37 @@ impl LoopState {
             outgoing: Vec::with_capacity(4096),
             below_terrain: std::collections::BTreeSet::new(),
             drawn,
+            channel,
+            view_ids: Vec::new(),
+            frame_data_arrived: None,
+            warned_missing: Vec::new(),
+            host_frames_in_tick: 0,
         }
     }
 
-    /// One frame of the world; returns what to draw.
+    /// Starts the frame clock now.
+    fn start_clock(&mut self) {
+        let now = Instant::now();
+        self.started = now;
+        self.last = now;
+    }
+
+    /// Notes a frame drawn: in synchronous mode, its latency from the host's data.
+    fn frame_drawn(&mut self, totals: &mut Totals) {
+        if let Some(arrived) = self.frame_data_arrived.take() {
+            let ms = arrived.elapsed().as_secs_f64() * 1000.0;
+            totals.latency_ms_sum += ms;
+            totals.latency_ms_max = totals.latency_ms_max.max(ms);
+        }
+        if totals.joined_after_ms.is_none() && totals.drawn_host_frame.is_some() {
+            let ms = self.started.elapsed().as_secs_f64() * 1000.0;
+            totals.joined_after_ms = Some(ms);
+            tracing::info!("drawing the host's frames {ms:.0} ms after starting");
+        }
+    }
+
+    /// One frame of the world; returns what to draw (in synchronous mode `None` when no host
+    /// frame came within a frame period: nothing new to draw).
     fn tick(
         &mut self,
         world: &mut IgWorld,
@@ -348,15 +520,31 @@ impl LoopState {
         dis: Option<&UdpEndpoint>,
         totals: &mut Totals,
         (width_px, height_px, fallback): (u32, u32, &View),
-    ) -> cig_scene::FrameSnapshot {
+    ) -> Option<cig_scene::FrameSnapshot> {
+        self.inbox.clear();
+        if self.channel.sync {
+            // The host's next frame paces the channel.
+            let period = Duration::from_secs_f64(self.period_s);
+            if let Some(d) = cigi.recv_timeout(period) {
+                self.inbox.push(d);
+            }
+        }
+        cigi.drain(&mut self.inbox);
         let now = Instant::now();
         let dt_s = (now - self.last).as_secs_f64();
         self.overframing |= dt_s > self.period_s * 1.5;
-        self.last = now;
-        self.inbox.clear();
-        cigi.drain(&mut self.inbox);
+        let mut host_frames = 0u64;
         for d in &self.inbox {
             totals.cigi_datagrams += 1;
+            for to in &self.channel.relay {
+                match cigi.send_to(&d.bytes, *to) {
+                    Ok(()) => totals.relayed += 1,
+                    Err(e) => {
+                        self.bad_cigi.note(now, "relay", &format!("{to}: {e}"));
+                    }
+                }
+            }
+            let frames_before = world.session().counters().host_frames;
             match world.receive_cigi(&d.bytes) {
                 Ok(()) => self.reply_to = Some(d.from),
                 Err(e) => {
@@ -364,6 +552,28 @@ impl LoopState {
                     self.bad_cigi.note(now, &d.from.to_string(), &e.to_string());
                 }
             }
+            if world.session().counters().host_frames > frames_before {
+                host_frames += 1;
+                self.frame_data_arrived.get_or_insert(d.received);
+            }
+        }
+        self.host_frames_in_tick = host_frames;
+        if self.channel.sync && host_frames == 0 {
+            if self.channel.role == ChannelRole::Master && dt_s >= self.period_s {
+                // No host frame: the master still tells the host it runs (Start of Frame), as
+                // a synchronous host waits for it.
+                self.last = now;
+                self.send_frame_message(world, query, cigi, totals, now);
+            }
+            return None;
+        }
+        self.last = now;
+        if host_frames > 1 {
+            totals.host_frames_skipped += host_frames - 1;
+            totals.lag_frames_max = totals.lag_frames_max.max(host_frames - 1);
+        }
+        if host_frames > 0 {
+            totals.drawn_host_frame = Some(world.session().last_host_frame_number());
         }
         if let Some(dis) = dis {
             self.inbox.clear();
@@ -374,9 +584,80 @@ impl LoopState {
             }
         }
         totals.user_defined_packets += world.session_mut().take_user_packets().len() as u64;
-        world.step(dt_s, query);
+        if self.channel.sync {
+            world.step_to_host_clock(self.period_s, query);
+        } else {
+            world.step(dt_s, query);
+        }
+        self.send_frame_message(world, query, cigi, totals, now);
+        if let Some(dis) = dis {
+            let outgoing = world.take_dis_outgoing();
+            // A slave publishes nothing: the master speaks for the IG.
+            if self.channel.role == ChannelRole::Master {
+                for pdu in outgoing {
+                    if let Err(e) = dis.send(&pdu) {
+                        self.bad_cigi.note(now, "DIS send", &e.to_string());
+                    }
+                }
+            }
+        }
+        let missing = world.channel_views_missing();
+        if missing != self.warned_missing {
+            if !missing.is_empty() && !world.session().views().is_empty() {
+                let defined: Vec<String> = world
+                    .session()
+                    .views()
+                    .keys()
+                    .map(ToString::to_string)
+                    .collect();
+                tracing::warn!(
+                    "the host defines no view {} (its views: {}): drawing the default view",
+                    missing
+                        .iter()
+                        .map(ToString::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    defined.join(", ")
+                );
+                self.warned_missing = missing;
+            } else if missing.is_empty() {
+                self.warned_missing = missing;
+            }
+        }
+        totals.problems_noted = self.bad_cigi.count();
+        totals.warnings_logged = self.bad_cigi.lines_logged();
+        let mut snapshot = world.snapshot(width_px, height_px, fallback);
+        self.view_ids = world.drawn_view_ids();
+        if !self.drawn {
+            return Some(snapshot);
+        }
+        // An eye inside the terrain is drawn from its surface, with one warning.
+        let lifted = cig_scene::lift_eyes_above_terrain(query, &mut snapshot.views);
+        for below in &lifted {
+            if self.below_terrain.insert(below.view) {
+                tracing::warn!("{below}");
+            }
+        }
+        self.below_terrain
+            .retain(|view| lifted.iter().any(|b| b.view == *view));
+        Some(snapshot)
+    }
+
+    /// Ends the IG's frame with the host: Start of Frame and the answers (a master's; a slave
+    /// sends nothing, and its session answers nothing).
+    fn send_frame_message(
+        &mut self,
+        world: &mut IgWorld,
+        query: &mut QuerySession,
+        cigi: &UdpEndpoint,
+        totals: &mut Totals,
+        now: Instant,
+    ) {
         let ticks = ((now - self.started).as_micros() / 10) as u32;
         let mut message = world.host_message(query, ticks);
+        if self.channel.role == ChannelRole::Slave {
+            return;
+        }
         if let Some(cig_cigi::Packet::StartOfFrame(sof)) = message.packets.first_mut() {
             sof.overframing = std::mem::take(&mut self.overframing);
         }
@@ -400,29 +681,6 @@ impl LoopState {
             }
             Err(e) => tracing::error!("CIGI: the frame's message cannot be encoded: {e}"),
         }
-        if let Some(dis) = dis {
-            for pdu in world.take_dis_outgoing() {
-                if let Err(e) = dis.send(&pdu) {
-                    self.bad_cigi.note(now, "DIS send", &e.to_string());
-                }
-            }
-        }
-        totals.problems_noted = self.bad_cigi.count();
-        totals.warnings_logged = self.bad_cigi.lines_logged();
-        let mut snapshot = world.snapshot(width_px, height_px, fallback);
-        if !self.drawn {
-            return snapshot;
-        }
-        // An eye inside the terrain is drawn from its surface, with one warning.
-        let lifted = cig_scene::lift_eyes_above_terrain(query, &mut snapshot.views);
-        for below in &lifted {
-            if self.below_terrain.insert(below.view) {
-                tracing::warn!("{below}");
-            }
-        }
-        self.below_terrain
-            .retain(|view| lifted.iter().any(|b| b.view == *view));
-        snapshot
     }
 }
 
@@ -432,6 +690,7 @@ impl LoopState {
 )]
 fn run_windowed(
     args: &ServeArgs,
+    channel: Channel,
     cache: Arc<TileCache>,
     mut world: IgWorld,
     mut query: QuerySession,
@@ -448,13 +707,16 @@ fn run_windowed(
     options.height_px = fallback.height_px;
     options.exit_after_frames = args.frames;
     options.models = models;
+    options.natural_exposure = channel.exposure == ExposureMode::Natural;
     let shared = Arc::new(std::sync::Mutex::new(Totals::default()));
     let totals = Arc::clone(&shared);
-    // Made at the first frame, so the window's opening is not counted as a late frame.
-    let mut loop_state: Option<LoopState> = None;
-    let rate_hz = args.rate_hz;
+    // Its clock starts at the first frame, so the window's opening is not a late frame.
+    let mut loop_state = LoopState::new(args.rate_hz, true, channel);
+    let mut clock_started = false;
     let dis_out = dis.as_ref().map(UdpEndpoint::local_addr);
     let mut operator_strikes: u64 = 0;
+    // In synchronous mode a frame without a new host frame shows the last one again.
+    let mut last_snapshot: Option<cig_scene::FrameSnapshot> = None;
     let driver: cig_render::FrameDriver = Box::new(move |tick: &cig_render::ViewerTick| {
         let (width_px, height_px) = (tick.width_px, tick.height_px);
         for order in &tick.orders {
@@ -504,18 +766,30 @@ fn run_windowed(
         let mut t = totals
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
-        let snapshot = loop_state
-            .get_or_insert_with(|| LoopState::new(rate_hz, true))
-            .tick(
-                &mut world,
-                &mut query,
-                &cigi,
-                dis.as_ref(),
-                &mut t,
-                (width_px, height_px, &fallback),
-            );
-        t.frames += 1;
-        snapshot
+        if !clock_started {
+            clock_started = true;
+            loop_state.start_clock();
+        }
+        let state = &mut loop_state;
+        let snapshot = state.tick(
+            &mut world,
+            &mut query,
+            &cigi,
+            dis.as_ref(),
+            &mut t,
+            (width_px, height_px, &fallback),
+        );
+        match snapshot {
+            Some(snapshot) => {
+                state.frame_drawn(&mut t);
+                t.frames += 1;
+                last_snapshot = Some(snapshot.clone());
+                snapshot
+            }
+            None => last_snapshot.clone().unwrap_or_else(|| {
+                cig_scene::FrameSnapshot::new(world.unix_time_s(), vec![fallback])
+            }),
+        }
     });
     let report = match cig_render::run_viewer_driven(cache, options, Some(driver)) {
         Ok(report) => report,
@@ -543,6 +817,7 @@ fn report(
     world: &IgWorld,
     cigi: &UdpEndpoint,
     dis: Option<&UdpEndpoint>,
+    channel: &Channel,
     json: bool,
 ) -> anyhow::Result<()> {
     let c = world.session().counters();
@@ -599,6 +874,17 @@ fn report(
         "last_frame": {
             "entities_drawn": totals.entities_drawn,
             "puffs_drawn": totals.puffs_drawn,
+        },
+        "channel": {
+            "setup": channel.json(),
+            "host_frame_drawn": totals.drawn_host_frame,
+            "host_frames_skipped": totals.host_frames_skipped,
+            "lag_frames_max": totals.lag_frames_max,
+            "latency_ms_mean": totals.latency_ms_sum / (totals.frames.max(1) as f64),
+            "latency_ms_max": totals.latency_ms_max,
+            "joined_after_ms": totals.joined_after_ms,
+            "relayed": totals.relayed,
+            "views_missing": world.channel_views_missing(),
         },
         "sim_time": UtcTime::from_unix_seconds(world.unix_time_s()).map(|t| t.to_iso8601_seconds()).unwrap_or_default(),
     });

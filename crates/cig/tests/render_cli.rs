@@ -131,14 +131,7 @@ fn bad_render_input_gives_one_line_errors() {
 }
 
 fn read_rgba(path: &Path) -> Vec<u8> {
-    let decoder = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(path).expect("png"),
-    ));
-    let mut reader = decoder.read_info().expect("png header");
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).expect("png data");
-    buf.truncate(info.buffer_size());
-    buf
+    common::read_png_rgba(path).2
 }
 
 #[test]

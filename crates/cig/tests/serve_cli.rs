@@ -4,76 +4,12 @@
 
 mod common;
 
-use common::{cig, one_line_error, small_db};
+use common::{cig, free_udp_port, one_line_error, run_host, small_db, start_serve};
 use serde_json::Value;
-use std::io::{BufRead, BufReader};
 use std::net::UdpSocket;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn free_udp_port() -> u16 {
-    UdpSocket::bind("127.0.0.1:0")
-        .and_then(|s| s.local_addr())
-        .map(|a| a.port())
-        .expect("a free port")
-}
-
-/// A running `cig serve` and what it has written to stderr so far.
-struct Serving {
-    child: Child,
-    stderr: std::sync::Arc<std::sync::Mutex<String>>,
-}
-
-impl Serving {
-    fn kill(mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-
-    /// Waits for the end; (status, stdout, stderr).
-    fn finish(self) -> (std::process::ExitStatus, Vec<u8>, String) {
-        let out = self.child.wait_with_output().expect("serve ends");
-        // Give the reader thread a moment to take the last lines.
-        std::thread::sleep(Duration::from_millis(100));
-        let stderr = self.stderr.lock().map(|s| s.clone()).unwrap_or_default();
-        (out.status, out.stdout, stderr)
-    }
-}
-
-/// Starts `cig serve` with `-v` and waits until it says it is serving.
-fn start_serve(args: &[String]) -> Serving {
-    let mut child = Command::new(assert_cmd::cargo::cargo_bin("cig"))
-        .arg("-v")
-        .arg("serve")
-        .args(args)
-        .env_remove("CIG_LOG")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("cig serve starts");
-    let stderr = child.stderr.take().expect("stderr");
-    let (tx, rx) = std::sync::mpsc::channel();
-    let log = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
-    let sink = std::sync::Arc::clone(&log);
-    std::thread::spawn(move || {
-        let mut ready = Some(tx);
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            if let Ok(mut all) = sink.lock() {
-                all.push_str(&line);
-                all.push('\n');
-            }
-            if line.contains("serving") {
-                if let Some(tx) = ready.take() {
-                    let _ = tx.send(());
-                }
-            }
-        }
-    });
-    rx.recv_timeout(Duration::from_secs(60))
-        .expect("cig serve says it is serving within a minute");
-    Serving { child, stderr: log }
-}
 
 /// Runs `cig serve --headless` on a scenario for `frames` frames of `size`, writing them to
 /// `out_dir`.
@@ -100,23 +36,6 @@ fn serve_headless(
         .timeout(Duration::from_secs(300))
         .output()
         .expect("serve")
-}
-
-/// Runs `cig host --json` with a script against the IG's port, listening on `host_port`.
-fn run_host(script: &Path, ig_port: u16, host_port: u16) -> std::process::Output {
-    cig()
-        .args(["host", "--script"])
-        .arg(script)
-        .args([
-            "--ig".into(),
-            format!("127.0.0.1:{ig_port}"),
-            "--port".into(),
-            host_port.to_string(),
-            "--json".into(),
-        ])
-        .timeout(Duration::from_secs(120))
-        .output()
-        .expect("cig host")
 }
 
 fn query_height_msl(db: &Path, lat: f64, lon: f64) -> f64 {

@@ -76,6 +76,9 @@ pub struct ViewerOptions {
     pub models: Vec<cig_scene::models::Model>,
     /// The renderer's overload control (`None`: off; see [`Renderer::set_overload`]).
     pub overload: Option<cig_scene::overload::OverloadSettings>,
+    /// Keep the natural illuminance's exposure instead of adapting to the view (the channels
+    /// of one eyepoint then match at their seams).
+    pub natural_exposure: bool,
 }
 
 /// Supplies each frame's world when the viewer is driven from outside (an IG serving a host):
@@ -259,6 +262,7 @@ impl ViewerOptions {
             script: Vec::new(),
             models: Vec::new(),
             overload: Some(cig_scene::overload::OverloadSettings::default()),
+            natural_exposure: false,
         }
     }
 
@@ -411,6 +415,7 @@ struct Running {
     /// session for the window's life.
     query: cig_terrain::QuerySession,
     mesh_budget: usize,
+    natural_exposure: bool,
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
@@ -603,6 +608,7 @@ impl App {
             cache: Arc::clone(&self.cache),
             query: cig_terrain::QuerySession::new(Arc::clone(&self.cache)),
             mesh_budget: self.options.mesh_budget,
+            natural_exposure: self.options.natural_exposure,
             egui_ctx,
             egui_state,
             egui_renderer,
@@ -913,7 +919,11 @@ impl Running {
             FrameOptions {
                 mesh_budget: self.mesh_budget,
                 key_background: false,
-                adaptation: crate::adaptation::Adaptation::Step(frame.dt_s as f32),
+                adaptation: if self.natural_exposure {
+                    crate::adaptation::Adaptation::Off
+                } else {
+                    crate::adaptation::Adaptation::Step(frame.dt_s as f32)
+                },
                 ..FrameOptions::default()
             },
         )?;
