@@ -311,7 +311,6 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
             // Synchronous mode and no host frame within a period: nothing new to draw.
             continue;
         };
-        let snapshot_view_ids = loop_state.view_ids.clone();
         if let Output::Offscreen { renderer, out_dir } = &mut output {
             let eyes: Vec<Geodetic> = snapshot.views.iter().map(|v| v.eye).collect();
             cache.update(&eyes);
@@ -335,7 +334,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
                         (true, Some(n)) => u64::from(n),
                         _ => totals.frames,
                     };
-                    let name = match (snapshot.views.len(), snapshot_view_ids.get(index)) {
+                    let name = match (snapshot.views.len(), loop_state.view_ids.get(index)) {
                         (1, _) => format!("frame_{number:05}.png"),
                         (_, Some(Some(id))) => format!("frame_{number:05}_view{id}.png"),
                         _ => format!("frame_{number:05}_view{index}.png"),
