@@ -329,7 +329,7 @@ pub fn open_session(db: &Path, paging: &PagingConfig) -> Result<QuerySession, Be
 
 /// `db`, or when none is given the demo database "demo-db" (built there first when missing,
 /// logged with `label`).
-pub(crate) fn demo_or(
+pub fn demo_or(
     db: Option<&Path>,
     label: &str,
     tile_cells: u32,

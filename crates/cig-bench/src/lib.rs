@@ -15,6 +15,10 @@
 //!   detail against plain colour texels, plumes in view.
 //! - [`net`]: DIS decoding, 10,000 dead-reckoned remote entities, HAT/HOT requests, CIGI
 //!   decoding and applying, and a flood of a loopback endpoint.
+//! - [`channels`]: three display channels (`cig serve` processes) frame-locked to a host: the
+//!   spread of their frames, a slave's cost against a master's, a restarted slave's rejoining.
+//! - [`soak`]: a long run of `cig serve` under load, its memory, frame time, descriptors and
+//!   threads watched for drift.
 //! - [`env`]: the ephemeris and light per update, and the physical sky, fog and clouds' share
 //!   of the frame.
 //!
@@ -27,6 +31,7 @@
 //! each module). The GPU benchmarks need a device (lavapipe does). Nothing here prints: the
 //! caller prints the reports, and draws the progress the callbacks report.
 
+pub mod channels;
 pub mod culture;
 pub mod database;
 pub mod db;
@@ -38,6 +43,7 @@ pub mod net;
 pub mod particles;
 pub mod render;
 mod report;
+pub mod soak;
 
 /// A report with a human summary: `cig bench` prints the JSON with `--json`, else the summary.
 #[derive(Clone, Debug)]

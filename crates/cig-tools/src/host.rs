@@ -27,6 +27,7 @@
 //! alt_m = 300                  # MSL, or above the terrain when clamped
 //! speed_mps = 50
 //! path = [[51.0, -1.5], [51.02, -1.5]]
+//! repeat = false               # true: round the path again and again (a racetrack)
 //! [view]                       # view 0; or [[views]] tables, each with its `id`
 //! entity = 0
 //! offset_m = [0, 0, -2]
@@ -114,6 +115,10 @@ struct HostEntity {
     #[serde(default)]
     speed_mps: f64,
     path: Vec<[f64; 2]>,
+    /// Fly the path round and round: back to its first point after the last, then again
+    /// (a racetrack), instead of stopping at its end.
+    #[serde(default)]
+    repeat: bool,
 }
 
 fn no_clamp() -> String {
@@ -251,12 +256,23 @@ fn check(script: &ScriptFile) -> Result<(Version, ByteOrder), ToolError> {
 fn entity_at(e: &HostEntity, t_s: f64) -> (f64, f64, f64) {
     let first = e.path[0];
     let frame = EnuFrame::new(Geodetic::new(first[0], first[1], 0.0));
-    let pts: Vec<glam::DVec3> = e
+    let mut pts: Vec<glam::DVec3> = e
         .path
         .iter()
         .map(|p| frame.geodetic_to_enu(Geodetic::new(p[0], p[1], 0.0)))
         .collect();
     let mut s = e.speed_mps * t_s;
+    if e.repeat {
+        // Closed: the last point back to the first, and the distance round the loop.
+        pts.push(pts[0]);
+        let loop_m: f64 = pts
+            .windows(2)
+            .map(|w| (w[1] - w[0]).truncate().length())
+            .sum();
+        if loop_m > 0.0 {
+            s = s.rem_euclid(loop_m);
+        }
+    }
     let mut last_heading = 0.0;
     for w in pts.windows(2) {
         let d = w[1] - w[0];
@@ -642,6 +658,7 @@ mod tests {
             alt_m: 0.0,
             speed_mps: 100.0,
             path: vec![[0.0, 0.0], [0.0, 0.1], [0.1, 0.1]],
+            repeat: false,
         };
         let (lat, lon, heading) = entity_at(&e, 10.0);
         assert!(
@@ -656,6 +673,35 @@ mod tests {
         );
         let (lat, lon, _) = entity_at(&e, 1.0e6);
         assert_eq!((lat, lon), (0.1, 0.1));
+    }
+
+    #[test]
+    fn a_repeated_path_is_flown_round_and_round() {
+        let e = HostEntity {
+            id: 0,
+            entity_type: 0,
+            clamp: "none".into(),
+            alt_m: 0.0,
+            speed_mps: 100.0,
+            path: vec![[0.0, 0.0], [0.0, 0.01], [0.01, 0.01], [0.01, 0.0]],
+            repeat: true,
+        };
+        // Two sides of 0.01° of longitude and two of latitude on the equator: one lap in
+        // about 44.4 s.
+        let lap_s = 2.0 * 0.01 * (111_319.5 + 110_574.3) / 100.0;
+        let (lat, lon, heading) = entity_at(&e, 10.0);
+        let (lat2, lon2, heading2) = entity_at(&e, 10.0 + 7.0 * lap_s);
+        assert!(
+            (lat - lat2).abs() < 1e-4 && (lon - lon2).abs() < 1e-4,
+            "{lat},{lon} {lat2},{lon2}"
+        );
+        assert!((heading - heading2).abs() < 1e-3);
+        // The closing side, from the last point back to the first, flies south.
+        let (_, _, closing) = entity_at(&e, 3.5 * lap_s / 4.0);
+        assert!((closing - 180.0).abs() < 1.0, "{closing}");
+        // Not repeated, the same path ends at its last point.
+        let once = HostEntity { repeat: false, ..e };
+        assert_eq!(entity_at(&once, 7.0 * lap_s).0, 0.01);
     }
 
     #[test]

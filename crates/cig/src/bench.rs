@@ -1,13 +1,14 @@
-//! `cig bench db|imagery|particles|render|net|env`: the arguments mapped onto `cig-bench`'s options,
+//! `cig bench db|imagery|particles|render|culture|net|env|channels|soak`: the arguments mapped onto `cig-bench`'s options,
 //! the reports printed (figures as JSON, or the benchmark's summary).
 
 use crate::cli::{
-    BenchCultureArgs, BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs,
-    BenchParticlesArgs, BenchRenderArgs,
+    BenchChannelsArgs, BenchCultureArgs, BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs,
+    BenchParticlesArgs, BenchRenderArgs, BenchSoakArgs,
 };
 use crate::config::Config;
 use crate::output::build_progress;
 use crate::render::parse_size;
+use anyhow::Context;
 
 /// The commit this binary was built from, for the reports.
 fn commit() -> String {
@@ -122,4 +123,69 @@ pub fn env(args: &BenchEnvArgs, config: &Config) -> anyhow::Result<()> {
     };
     let report = cig_bench::env::run(&options, &mut build_progress())?;
     print_report(&report, args.json)
+}
+
+/// This binary: the channels and the soak run it as `cig serve`.
+fn this_binary() -> anyhow::Result<std::path::PathBuf> {
+    std::env::current_exe().context("cannot find the cig binary to run its channels")
+}
+
+/// `--db`, or the demo database (built when missing).
+fn database_or_demo(
+    db: Option<&std::path::Path>,
+    label: &str,
+    config: &Config,
+) -> anyhow::Result<std::path::PathBuf> {
+    Ok(cig_bench::database::demo_or(
+        db,
+        label,
+        config.database.tile_cells,
+        &mut build_progress(),
+    )?)
+}
+
+pub fn channels(args: &BenchChannelsArgs, config: &Config) -> anyhow::Result<()> {
+    let report = cig_bench::channels::run(&cig_bench::channels::ChannelsOptions {
+        cig_exe: this_binary()?,
+        db: database_or_demo(args.db.as_deref(), "bench channels", config)?,
+        size: parse_size(&args.size)?,
+        rate_hz: args.rate_hz,
+        warmup_s: args.warmup_s,
+        seconds: args.seconds,
+        commit: commit(),
+    })?;
+    print_report(&report, args.json)
+}
+
+pub fn soak(args: &BenchSoakArgs, config: &Config) -> anyhow::Result<()> {
+    let options = cig_bench::soak::SoakOptions {
+        cig_exe: this_binary()?,
+        db: database_or_demo(args.db.as_deref(), "bench soak", config)?,
+        minutes: args.minutes,
+        size: parse_size(&args.size)?,
+        rate_hz: args.rate_hz,
+        remote_entities: args.entities,
+        speed_mps: args.speed_mps,
+        sample_s: args.sample_s,
+        rss_growth_max_pct: args.rss_growth_max_pct,
+        commit: commit(),
+    };
+    let mut last_minute = -1.0;
+    let report = cig_bench::soak::run(&options, &mut |sample| {
+        let minute = (sample.t_s / 60.0).floor();
+        if minute > last_minute {
+            last_minute = minute;
+            tracing::info!(
+                "soak minute {minute}: {:.1} MiB resident, {} threads, {} descriptors",
+                sample.rss_kib as f64 / 1024.0,
+                sample.threads,
+                sample.fds
+            );
+        }
+    })?;
+    print_report(&report, args.json)?;
+    if report.json["passed"] != serde_json::Value::Bool(true) {
+        anyhow::bail!("the soak drifted: {}", report.summary);
+    }
+    Ok(())
 }

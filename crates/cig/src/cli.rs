@@ -174,6 +174,10 @@ pub struct ServeArgs {
     /// Edge-blend ramps of the channel (docs/channels.md).
     #[arg(long, value_name = "FILE")]
     pub blend: Option<PathBuf>,
+    /// Write one JSON line per frame drawn to this file (frame, host frame, wall-clock time,
+    /// frame time, host frames applied): the channel's timeline for operators and benchmarks.
+    #[arg(long, value_name = "FILE")]
+    pub frame_log: Option<PathBuf>,
 }
 
 /// What a `cig serve` process is among the channels of one IG.
@@ -380,6 +384,67 @@ pub enum BenchCommand {
     /// Environment: ephemeris cost per update, and the physical sky, aerial perspective and fog
     /// against a flat sky in the same run (share of the frame).
     Env(BenchEnvArgs),
+    /// Display channels: three `cig serve` processes (a master and two slaves) frame-locked
+    /// to a host; the spread of their frames, a slave's frame cost against a master's, and a
+    /// killed slave's time back on the current frame.
+    Channels(BenchChannelsArgs),
+    /// Soak: `cig serve` for MINUTES under a host flying at 300 m/s, 200 dead-reckoned DIS
+    /// entities, smoke, clouds and a storm; resident memory, frame time, descriptors and
+    /// threads watched for drift (exits 1 when they drift).
+    Soak(BenchSoakArgs),
+}
+
+#[derive(Args)]
+pub struct BenchChannelsArgs {
+    /// Terrain database; default: the demo database "demo-db", built when missing.
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Each channel's frame size.
+    #[arg(long, default_value = "320x240")]
+    pub size: String,
+    /// Host frames a second.
+    #[arg(long, default_value_t = 30.0)]
+    pub rate_hz: f64,
+    /// Seconds of warm-up before measuring.
+    #[arg(long, default_value_t = 5.0, value_name = "S")]
+    pub warmup_s: f64,
+    /// Seconds measured.
+    #[arg(long, default_value_t = 20.0, value_name = "S")]
+    pub seconds: f64,
+}
+
+#[derive(Args)]
+pub struct BenchSoakArgs {
+    /// Terrain database; default: the demo database "demo-db", built when missing.
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Length of the run.
+    #[arg(long, default_value_t = 60.0)]
+    pub minutes: f64,
+    /// Frame size.
+    #[arg(long, default_value = "320x240")]
+    pub size: String,
+    /// Host frames (and IG frames) a second.
+    #[arg(long, default_value_t = 60.0)]
+    pub rate_hz: f64,
+    /// Dead-reckoned DIS entities of the exercise.
+    #[arg(long, default_value_t = 200)]
+    pub entities: u32,
+    /// The eyepoint's speed, m/s.
+    #[arg(long, default_value_t = 300.0)]
+    pub speed_mps: f64,
+    /// Seconds between looks at the process.
+    #[arg(long, default_value_t = 10.0, value_name = "S")]
+    pub sample_s: f64,
+    /// The most resident memory may grow after the warm-up, percent.
+    #[arg(long, default_value_t = 2.0)]
+    pub rss_growth_max_pct: f64,
 }
 
 #[derive(Args)]

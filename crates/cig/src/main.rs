@@ -76,6 +76,8 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Bench(cli::BenchCommand::Culture(args)) => bench::culture(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Net(args)) => bench::net(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Env(args)) => bench::env(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Channels(args)) => bench::channels(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Soak(args)) => bench::soak(&args, &config),
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),

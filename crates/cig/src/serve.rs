@@ -128,6 +128,9 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
     if args.json && !args.headless && !args.no_render {
         bail!("--json needs --headless or --no-render (a window's run ends with a summary line)");
     }
+    if args.frame_log.is_some() && !args.headless && !args.no_render {
+        bail!("--frame-log needs --headless or --no-render (a window paces its own frames)");
+    }
     let channel = Channel::from_args(args)?;
     let correction =
         crate::display::read_display_correction(args.warp.as_deref(), args.blend.as_deref())?;
@@ -286,6 +289,11 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
     };
     let adaptation = channel.adaptation(1.0 / args.rate_hz as f32);
     let mut loop_state = LoopState::new(args.rate_hz, !args.no_render, channel);
+    let mut frame_log = args
+        .frame_log
+        .as_deref()
+        .map(FrameLog::create)
+        .transpose()?;
     let mut totals = Totals::default();
     // Since the last host frame drawn (none before the first).
     let mut idle_since: Option<Instant> = None;
@@ -347,7 +355,17 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         if loop_state.host_frames_in_tick > 0 {
             idle_since = Some(Instant::now());
         }
-        let frame_ms = began.elapsed().as_secs_f64() * 1000.0;
+        // The frame's cost: from the end of the wait for the host's frame (synchronous mode)
+        // to the frame drawn.
+        let frame_ms = loop_state.work_began.elapsed().as_secs_f64() * 1000.0;
+        if let Some(log) = &mut frame_log {
+            log.write(&FrameLogLine {
+                frame: totals.frames,
+                host_frame: totals.drawn_host_frame,
+                host_frames_applied: loop_state.host_frames_in_tick,
+                frame_ms,
+            })?;
+        }
         totals.frames += 1;
         totals.frame_ms_sum += frame_ms;
         totals.frame_ms_max = totals.frame_ms_max.max(frame_ms);
@@ -464,6 +482,9 @@ struct LoopState {
     warned_missing: Vec<u16>,
     /// Host frames (IG Control packets) the last tick applied.
     host_frames_in_tick: u64,
+    /// When the last tick's work began (after the wait for the host's frame in synchronous
+    /// mode).
+    work_began: Instant,
 }
 
 impl LoopState {
@@ -485,6 +506,7 @@ impl LoopState {
             frame_data_arrived: None,
             warned_missing: Vec::new(),
             host_frames_in_tick: 0,
+            work_began: now,
         }
     }
 
@@ -530,6 +552,7 @@ impl LoopState {
         }
         cigi.drain(&mut self.inbox);
         let now = Instant::now();
+        self.work_began = now;
         let dt_s = (now - self.last).as_secs_f64();
         self.overframing |= dt_s > self.period_s * 1.5;
         let mut host_frames = 0u64;
@@ -809,6 +832,49 @@ fn run_windowed(
         dis_out.map(|a| format!(", DIS on {a}")).unwrap_or_default()
     );
     Ok(())
+}
+
+/// One frame of `--frame-log`.
+struct FrameLogLine {
+    frame: u64,
+    host_frame: Option<u32>,
+    host_frames_applied: u64,
+    frame_ms: f64,
+}
+
+/// `--frame-log`: one JSON line per frame, flushed as written (a channel killed keeps its
+/// timeline).
+struct FrameLog {
+    file: std::io::BufWriter<std::fs::File>,
+    path: PathBuf,
+}
+
+impl FrameLog {
+    fn create(path: &Path) -> anyhow::Result<FrameLog> {
+        let file = std::fs::File::create(path)
+            .with_context(|| format!("cannot create the frame log {}", path.display()))?;
+        Ok(FrameLog {
+            file: std::io::BufWriter::new(file),
+            path: path.to_path_buf(),
+        })
+    }
+
+    fn write(&mut self, line: &FrameLogLine) -> anyhow::Result<()> {
+        use std::io::Write;
+        let unix_s = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64());
+        let value = serde_json::json!({
+            "frame": line.frame,
+            "host_frame": line.host_frame,
+            "host_frames_applied": line.host_frames_applied,
+            "unix_s": unix_s,
+            "frame_ms": line.frame_ms,
+        });
+        writeln!(self.file, "{value}")
+            .and_then(|()| self.file.flush())
+            .with_context(|| format!("cannot write the frame log {}", self.path.display()))
+    }
 }
 
 fn report(

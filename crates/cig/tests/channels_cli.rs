@@ -539,3 +539,44 @@ fn bad_channel_input_gives_one_line_errors() {
     assert!(line.contains("one master per host port"), "{line}");
     first.kill();
 }
+
+#[test]
+fn three_channel_processes_are_measured_and_a_killed_slave_rejoins() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let out = cig()
+        .args(["bench", "channels", "--db"])
+        .arg(&db)
+        .args([
+            "--size",
+            "64x48",
+            "--warmup-s",
+            "3",
+            "--seconds",
+            "3",
+            "--json",
+        ])
+        .timeout(Duration::from_secs(240))
+        .output()
+        .expect("run");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let report: Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert!(
+        report["frame_spread_instants"].as_u64().unwrap_or(0) > 10,
+        "{report}"
+    );
+    assert!(report["frame_spread_max"].as_u64().is_some(), "{report}");
+    let rejoin = report["restart"]["rejoin_s"].as_f64();
+    assert!(rejoin.is_some_and(|s| s > 0.0 && s < 10.0), "{report}");
+    let ratio = report["slave_cost"]["slave_over_master"]
+        .as_f64()
+        .unwrap_or(0.0);
+    assert!(ratio > 0.3 && ratio < 3.0, "{report}");
+    for channel in report["channels"].as_array().expect("channels") {
+        assert!(
+            channel["frames_measured"].as_u64().unwrap_or(0) >= 5,
+            "{report}"
+        );
+    }
+}
