@@ -5,13 +5,14 @@
 //! takes to show the current frame again.
 //!
 //! Method. The channels are real processes (the `cig` binary the caller names) with real
-//! sockets: the master (centre view) answers the host and relays its datagrams to two slaves
-//! (left and right views); each writes its timeline with `--frame-log` (wall-clock time and
-//! host frame of every frame drawn). The host runs here as a synchronous CIGI host: it sends
-//! frame n + 1 when the master's Start of Frame for frame n arrives (never faster than
-//! `rate_hz`; after a second without one, anyway), flying the eyepoint round the database's
-//! middle with a HAT request every frame, over a scenario with a cloud layer and a smoke plume.
-//! After a warm-up (processes started, terrain paged in):
+//! sockets: the master (centre view) answers the host, relays its datagrams to two slaves
+//! (left and right views) and holds them in its frame lock (`--lock-port`, `--lock`); each
+//! writes its timeline with `--frame-log` (wall-clock time and host frame of every frame
+//! drawn). The host runs here as a synchronous CIGI host: it sends frame n + 1 when the
+//! master's Start of Frame for frame n arrives (never faster than `rate_hz`; after a second
+//! without one, anyway), flying the eyepoint round the database's middle with a HAT request
+//! every frame, over a scenario with a cloud layer and a smoke plume. After a warm-up (every
+//! channel has drawn a host frame, then `warmup_s` more):
 //! - *spread*: at every frame drawn by any channel, the newest host frame each channel has
 //!   drawn; the spread is the largest minus the smallest. A channel drawing frame n while the
 //!   others show n - 1 is a spread of 1, the least any set of processes can do;
@@ -48,6 +49,9 @@ pub struct ChannelsOptions {
     pub warmup_s: f64,
     /// Seconds measured (the spread; then as much again for the slave cost).
     pub seconds: f64,
+    /// Keep the channels' frame logs, output and scenario in this folder (else a scratch
+    /// folder, removed).
+    pub keep_dir: Option<PathBuf>,
     pub commit: String,
 }
 
@@ -315,6 +319,33 @@ pub(crate) fn synchronous(host: &mut Host, rate_hz: f64, seconds: f64) -> Result
     Ok(sent)
 }
 
+/// Runs the host until every channel has drawn a host frame (started, paged in, its first
+/// frame done), at most a minute.
+fn until_drawing(
+    host: &mut Host,
+    rate_hz: f64,
+    channels: &[&ServeProcess],
+) -> Result<(), BenchError> {
+    let began = Instant::now();
+    loop {
+        synchronous(host, rate_hz, 0.25)?;
+        let mut all = true;
+        for channel in channels {
+            all &= read_frame_log(&channel.frame_log)
+                .map(|log| log.iter().any(|r| r.host_frame.is_some()))
+                .unwrap_or(false);
+        }
+        if all {
+            return Ok(());
+        }
+        if began.elapsed() > Duration::from_secs(60) {
+            return Err(BenchError::Scene(
+                "a channel drew no host frame within a minute of starting".into(),
+            ));
+        }
+    }
+}
+
 /// Paces `each` at `rate_hz` for `seconds` (frames late are sent at once, not dropped).
 pub(crate) fn paced(
     rate_hz: f64,
@@ -443,6 +474,34 @@ fn costs(log: &[FrameRecord], from_s: f64, to_s: f64) -> Vec<f64> {
         .collect()
 }
 
+/// A folder for the run's files: a scratch one removed at the end, or one kept.
+pub(crate) enum Scratch {
+    Temporary(tempfile::TempDir),
+    Kept(PathBuf),
+}
+
+impl Scratch {
+    pub fn new(keep: Option<&Path>) -> Result<Scratch, BenchError> {
+        match keep {
+            Some(dir) => {
+                std::fs::create_dir_all(dir)
+                    .step_with(|| format!("cannot create {}", dir.display()))?;
+                Ok(Scratch::Kept(dir.to_path_buf()))
+            }
+            None => Ok(Scratch::Temporary(
+                tempfile::tempdir().step("a scratch folder")?,
+            )),
+        }
+    }
+
+    pub fn path(&self) -> &Path {
+        match self {
+            Scratch::Temporary(t) => t.path(),
+            Scratch::Kept(p) => p,
+        }
+    }
+}
+
 /// Arguments every channel of the benchmark shares.
 fn channel_args(options: &ChannelsOptions, scenario: &Path, port: u16) -> Vec<String> {
     let (w, h) = options.size;
@@ -490,14 +549,17 @@ pub fn run(options: &ChannelsOptions) -> Result<Report, BenchError> {
         format!("--size {w}x{h} must be 16 to 4096 pixels a side")
     })?;
     let bx = database_box(&options.db)?;
-    let dir = tempfile::tempdir().step("a scratch folder")?;
+    let dir = Scratch::new(options.keep_dir.as_deref())?;
     let scenario = dir.path().join("scenario.toml");
     std::fs::write(&scenario, scenario_toml(bx)).step("writing the scenario")?;
     let script = flight_script(bx, options.rate_hz, u32::MAX, 120.0, 150.0, &THREE_VIEWS);
     let exe = &options.cig_exe;
 
-    // Three channels: slaves left and right, the master in the centre relaying to them.
+    // Three channels: slaves left and right, the master in the centre relaying to them and
+    // holding them in its frame lock.
     let ports = [free_port()?, free_port()?, free_port()?];
+    let lock_port = free_port()?;
+    let lock_to = format!("127.0.0.1:{lock_port}");
     let relay = format!("127.0.0.1:{},127.0.0.1:{}", ports[0], ports[2]);
     let slave = |view: u16, port: u16, label: &str| {
         ServeProcess::spawn(
@@ -506,7 +568,14 @@ pub fn run(options: &ChannelsOptions) -> Result<Report, BenchError> {
             label,
             &with(
                 channel_args(options, &scenario, port),
-                &["--role", "slave", "--view", &view.to_string()],
+                &[
+                    "--role",
+                    "slave",
+                    "--view",
+                    &view.to_string(),
+                    "--lock",
+                    &lock_to,
+                ],
             ),
         )
     };
@@ -518,15 +587,25 @@ pub fn run(options: &ChannelsOptions) -> Result<Report, BenchError> {
         "centre",
         &with(
             channel_args(options, &scenario, ports[1]),
-            &["--view", "1", "--relay", &relay],
+            &[
+                "--view",
+                "1",
+                "--relay",
+                &relay,
+                "--lock-port",
+                &lock_port.to_string(),
+            ],
         ),
     )?;
     let mut host = Host::new(&script, ports[1])?;
+    until_drawing(&mut host, options.rate_hz, &[&left, &master, &right])?;
     synchronous(&mut host, options.rate_hz, options.warmup_s)?;
     let measure_from = unix_now_s();
     synchronous(&mut host, options.rate_hz, options.seconds)?;
     let measure_to = unix_now_s();
-    // The right slave crashes and starts again; the host goes on.
+    // Half a second later (so that no frame of the window is cut from its log), the right
+    // slave crashes and starts again; the host goes on.
+    synchronous(&mut host, options.rate_hz, 0.5)?;
     right.kill();
     let killed_log = right.frame_log.clone();
     let right = slave(2, ports[2], "right-restarted")?;
@@ -577,7 +656,8 @@ pub fn run(options: &ChannelsOptions) -> Result<Report, BenchError> {
             })
         };
 
-    // The slave's cost: a master and a slave drawing the same (centre) view.
+    // The slave's cost: a master and a slave drawing the same (centre) view (the slave reports
+    // to the first run's lock port, which the new master takes over).
     let ports = [free_port()?, free_port()?];
     let same_slave = slave(1, ports[1], "same-view-slave")?;
     let same_master = ServeProcess::spawn(
@@ -586,10 +666,18 @@ pub fn run(options: &ChannelsOptions) -> Result<Report, BenchError> {
         "same-view-master",
         &with(
             channel_args(options, &scenario, ports[0]),
-            &["--view", "1", "--relay", &format!("127.0.0.1:{}", ports[1])],
+            &[
+                "--view",
+                "1",
+                "--relay",
+                &format!("127.0.0.1:{}", ports[1]),
+                "--lock-port",
+                &lock_port.to_string(),
+            ],
         ),
     )?;
     let mut host = Host::new(&script, ports[0])?;
+    until_drawing(&mut host, options.rate_hz, &[&same_master, &same_slave])?;
     synchronous(&mut host, options.rate_hz, options.warmup_s)?;
     let cost_from = unix_now_s();
     synchronous(&mut host, options.rate_hz, options.seconds)?;
@@ -638,6 +726,7 @@ pub fn run(options: &ChannelsOptions) -> Result<Report, BenchError> {
             "joined_after_ms": restarted_summary["channel"]["joined_after_ms"],
         },
         "host": { "frames_sent": host_frames, "start_of_frames_received": start_of_frames },
+        "lock": centre_summary["channel"]["lock"],
         "targets": {
             "frame_spread_max": 1,
             "slave_over_master_max": 1.05,

@@ -25,7 +25,7 @@
 
 use crate::channels::{
     database_box, flight_script, free_port, inside, paced, read_frame_log, unix_now_s, Host,
-    ServeProcess,
+    Scratch, ServeProcess,
 };
 use crate::report::{date_utc, machine, median, percentile};
 use crate::{require, BenchError, Report, Step};
@@ -55,6 +55,8 @@ pub struct SoakOptions {
     pub sample_s: f64,
     /// The largest growth of resident memory allowed after the warm-up, percent.
     pub rss_growth_max_pct: f64,
+    /// Keep the process's frame log, output and scenario in this folder.
+    pub keep_dir: Option<PathBuf>,
     pub commit: String,
 }
 
@@ -233,7 +235,7 @@ pub fn run(
     })?;
     let (w, h) = options.size;
     let bx = database_box(&options.db)?;
-    let dir = tempfile::tempdir().step("a scratch folder")?;
+    let dir = Scratch::new(options.keep_dir.as_deref())?;
     let (cigi_port, dis_port) = (free_port()?, free_port()?);
     // The exercise's other side: sends the remote entities, takes the IG's PDUs.
     let exercise = UdpEndpoint::open(EndpointConfig {

@@ -13,6 +13,8 @@
 //!   detonation and appearance effects, shared world time.
 //! - [`world`]: the per-frame step that ties them to the clock and the effects and produces
 //!   the renderer's snapshot.
+//! - [`frame_lock`]: the display channels' frame lock (a slave's "frame drawn" datagram, the
+//!   master's wait for its slaves, with a timeout that drops a dead channel).
 //! - [`weather`]: lightning storms (a Poisson strike schedule that is a function of seed and
 //!   world time), the bolts lit now and their flash.
 //! - [`scenes`]: the fires and the lightning bolt a single frame asks for (`cig render --smoke`,
@@ -21,6 +23,7 @@
 //! Limits: see each module.
 
 pub mod exercise;
+pub mod frame_lock;
 pub mod model_table;
 pub mod pose;
 pub mod scenario;

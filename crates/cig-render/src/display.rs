@@ -38,10 +38,27 @@ pub struct DisplayPass {
     indices: wgpu::Buffer,
     index_count: u32,
     params: wgpu::Buffer,
+    /// The target is viewed with sRGB encoding (a window that offers no plain view): the
+    /// pass writes linear values so that the store encodes them back to the frame's.
+    target_encodes: bool,
+    /// The frame is read through an sRGB view (decoded to linear): the pass encodes it first.
+    source_decodes: bool,
 }
 
 impl DisplayPass {
+    /// The pass into [`DISPLAY_VIEW_FORMAT`] targets (off-screen frames).
     pub fn new(gpu: &Gpu, correction: DisplayCorrection) -> DisplayPass {
+        DisplayPass::with_formats(gpu, correction, DISPLAY_VIEW_FORMAT, DISPLAY_VIEW_FORMAT)
+    }
+
+    /// The pass from frames viewed as `source_format` into targets viewed as `target_format`
+    /// (a window's surface: BGRA or RGBA, plain or, where it offers no plain view, sRGB).
+    pub fn with_formats(
+        gpu: &Gpu,
+        correction: DisplayCorrection,
+        source_format: wgpu::TextureFormat,
+        target_format: wgpu::TextureFormat,
+    ) -> DisplayPass {
         let device = &gpu.device;
         let identity;
         let mesh = match &correction.warp {
@@ -119,7 +136,7 @@ impl DisplayPass {
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
                 targets: &[Some(wgpu::ColorTargetState {
-                    format: DISPLAY_VIEW_FORMAT,
+                    format: target_format,
                     blend: None,
                     write_mask: wgpu::ColorWrites::ALL,
                 })],
@@ -142,6 +159,8 @@ impl DisplayPass {
             index_count: indices.len() as u32,
             indices: index_buffer,
             params,
+            target_encodes: target_format.is_srgb(),
+            source_decodes: source_format.is_srgb(),
         }
     }
 
@@ -149,8 +168,9 @@ impl DisplayPass {
         &self.correction
     }
 
-    /// Records the pass: `frame` (the finished view, `source_size` pixels, viewed as
-    /// [`DISPLAY_VIEW_FORMAT`]) into `display` (`target_size` pixels, the same format).
+    /// Records the pass: `frame` (the finished view, `source_size` pixels, viewed in the
+    /// pass's source format) into `display` (`target_size` pixels, viewed in its target
+    /// format).
     pub fn record(
         &self,
         gpu: &Gpu,
@@ -171,7 +191,12 @@ impl DisplayPass {
             ramps: blend.map_or([0.0; 4], |b| {
                 [b.left as f32, b.right as f32, b.top as f32, b.bottom as f32]
             }),
-            gamma: [blend.map_or(1.0, |b| (1.0 / b.gamma) as f32), 0.0, 0.0, 0.0],
+            gamma: [
+                blend.map_or(1.0, |b| (1.0 / b.gamma) as f32),
+                if self.target_encodes { 1.0 } else { 0.0 },
+                if self.source_decodes { 1.0 } else { 0.0 },
+                0.0,
+            ],
         };
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));

@@ -152,6 +152,7 @@ pub fn channels(args: &BenchChannelsArgs, config: &Config) -> anyhow::Result<()>
         rate_hz: args.rate_hz,
         warmup_s: args.warmup_s,
         seconds: args.seconds,
+        keep_dir: args.keep_dir.clone(),
         commit: commit(),
     })?;
     print_report(&report, args.json)
@@ -168,6 +169,7 @@ pub fn soak(args: &BenchSoakArgs, config: &Config) -> anyhow::Result<()> {
         speed_mps: args.speed_mps,
         sample_s: args.sample_s,
         rss_growth_max_pct: args.rss_growth_max_pct,
+        keep_dir: args.keep_dir.clone(),
         commit: commit(),
     };
     let mut last_minute = -1.0;

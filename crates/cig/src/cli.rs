@@ -174,6 +174,19 @@ pub struct ServeArgs {
     /// Edge-blend ramps of the channel (docs/channels.md).
     #[arg(long, value_name = "FILE")]
     pub blend: Option<PathBuf>,
+    /// Frame lock, master: take the slaves' "frame drawn" reports on this UDP port and start
+    /// no frame while a slave still draws an older one (with --sync; docs/channels.md).
+    #[arg(long, value_name = "PORT")]
+    pub lock_port: Option<u16>,
+    /// Frame lock, slave: report each frame drawn to the master's --lock-port, HOST:PORT
+    /// (with --sync).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub lock: Option<String>,
+    /// Frame lock: the longest a master waits for a slave before taking it out of the lock
+    /// (it comes back with its next frame); the wait is eight of the IG's frames, at least
+    /// 250 ms, up to this.
+    #[arg(long, default_value_t = 1000, value_name = "MS")]
+    pub lock_timeout_ms: u64,
     /// Write one JSON line per frame drawn to this file (frame, host frame, wall-clock time,
     /// frame time, host frames applied): the channel's timeline for operators and benchmarks.
     #[arg(long, value_name = "FILE")]
@@ -414,6 +427,9 @@ pub struct BenchChannelsArgs {
     /// Seconds measured.
     #[arg(long, default_value_t = 20.0, value_name = "S")]
     pub seconds: f64,
+    /// Keep the processes' frame logs, output and scenario in this folder.
+    #[arg(long, value_name = "DIR")]
+    pub keep_dir: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -445,6 +461,9 @@ pub struct BenchSoakArgs {
     /// The most resident memory may grow after the warm-up, percent.
     #[arg(long, default_value_t = 2.0)]
     pub rss_growth_max_pct: f64,
+    /// Keep the processes' frame logs, output and scenario in this folder.
+    #[arg(long, value_name = "DIR")]
+    pub keep_dir: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -794,6 +813,12 @@ pub struct ViewArgs {
     /// Save the last frame (terrain and panel, drawn again off-screen) as PNG on exit.
     #[arg(long, value_name = "FILE.png")]
     pub screenshot: Option<PathBuf>,
+    /// A projected channel's geometric warp, drawn last (docs/channels.md).
+    #[arg(long, value_name = "FILE")]
+    pub warp: Option<PathBuf>,
+    /// A projected channel's edge-blend ramps, drawn last (docs/channels.md).
+    #[arg(long, value_name = "FILE")]
+    pub blend: Option<PathBuf>,
 }
 
 #[derive(Args)]

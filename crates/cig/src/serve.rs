@@ -21,6 +21,7 @@ use cig_cigi::encode_message;
 use cig_effects::EffectsConfig;
 use cig_environment::UtcTime;
 use cig_geo::Geodetic;
+use cig_ig::frame_lock::{FrameDrawn, FrameLock, LockEvent};
 use cig_ig::{IgWorld, Scenario, SessionConfig, WorldConfig};
 use cig_net::{
     parse_delivery, resolve, BindTarget, Delivery, EndpointConfig, RateLimitedLog, UdpEndpoint,
@@ -134,8 +135,8 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
     let channel = Channel::from_args(args)?;
     let correction =
         crate::display::read_display_correction(args.warp.as_deref(), args.blend.as_deref())?;
-    if !correction.is_none() && !args.headless {
-        bail!("--warp and --blend apply to --headless frames (a window shows the frame as drawn)");
+    if !correction.is_none() && args.no_render {
+        bail!("--warp and --blend correct drawn frames (not with --no-render)");
     }
     let scenario = match &args.scenario {
         Some(path) => read_scenario(path)?,
@@ -211,6 +212,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         ),
         ChannelRole::Slave => format!("the slave's --cigi-port {}", args.cigi_port),
     })?;
+    let lock = FrameLockSide::open(args, &channel)?;
     let mut world = IgWorld::new(
         scenario,
         WorldConfig {
@@ -257,14 +259,14 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
     if !args.headless && !args.no_render {
         return run_windowed(
             args,
-            channel,
+            (channel, lock),
             cache,
             world,
             query,
             cigi,
             dis,
             fallback,
-            models,
+            (models, correction),
             config.overload()?,
         );
     }
@@ -288,7 +290,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         }
     };
     let adaptation = channel.adaptation(1.0 / args.rate_hz as f32);
-    let mut loop_state = LoopState::new(args.rate_hz, !args.no_render, channel);
+    let mut loop_state = LoopState::new(args.rate_hz, !args.no_render, channel, lock);
     let mut frame_log = args
         .frame_log
         .as_deref()
@@ -351,6 +353,9 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
                 }
             }
         }
+        // The frame is done: its time for the log, before the frame lock's report (which lets
+        // the master go on).
+        let drawn_unix_s = unix_now_s();
         loop_state.frame_drawn(&mut totals);
         if loop_state.host_frames_in_tick > 0 {
             idle_since = Some(Instant::now());
@@ -360,6 +365,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         let frame_ms = loop_state.work_began.elapsed().as_secs_f64() * 1000.0;
         if let Some(log) = &mut frame_log {
             log.write(&FrameLogLine {
+                unix_s: drawn_unix_s,
                 frame: totals.frames,
                 host_frame: totals.drawn_host_frame,
                 host_frames_applied: loop_state.host_frames_in_tick,
@@ -385,7 +391,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         &world,
         &cigi,
         dis.as_ref(),
-        &loop_state.channel,
+        (&loop_state.channel, loop_state.lock.as_ref()),
         args.json,
     )
 }
@@ -422,6 +428,21 @@ impl Channel {
             .iter()
             .map(|r| resolve(r, "--relay"))
             .collect::<Result<Vec<_>, _>>()?;
+        if (args.lock_port.is_some() || args.lock.is_some()) && !args.sync {
+            bail!("--lock-port and --lock need --sync (the frame lock is synchronous mode's)");
+        }
+        if args.lock_port.is_some() && args.role == ChannelRole::Slave {
+            bail!("--lock-port is the master's (a slave reports to it with --lock)");
+        }
+        if args.lock.is_some() && args.role == ChannelRole::Master {
+            bail!("--lock is a slave's (the master takes the reports on --lock-port)");
+        }
+        if !(1..=60_000).contains(&args.lock_timeout_ms) {
+            bail!(
+                "--lock-timeout-ms {} must lie between 1 and 60000",
+                args.lock_timeout_ms
+            );
+        }
         let exposure =
             args.exposure
                 .unwrap_or(if !views.is_empty() || args.role == ChannelRole::Slave {
@@ -485,10 +506,12 @@ struct LoopState {
     /// When the last tick's work began (after the wait for the host's frame in synchronous
     /// mode).
     work_began: Instant,
+    /// The frame lock: a master's wait for its slaves, or a slave's reports.
+    lock: Option<FrameLockSide>,
 }
 
 impl LoopState {
-    fn new(rate_hz: f64, drawn: bool, channel: Channel) -> LoopState {
+    fn new(rate_hz: f64, drawn: bool, channel: Channel, lock: Option<FrameLockSide>) -> LoopState {
         let now = Instant::now();
         LoopState {
             started: now,
@@ -507,6 +530,7 @@ impl LoopState {
             warned_missing: Vec::new(),
             host_frames_in_tick: 0,
             work_began: now,
+            lock,
         }
     }
 
@@ -519,6 +543,11 @@ impl LoopState {
 
     /// Notes a frame drawn: in synchronous mode, its latency from the host's data.
     fn frame_drawn(&mut self, totals: &mut Totals) {
+        match (&mut self.lock, totals.drawn_host_frame) {
+            (Some(FrameLockSide::Slave(slave)), Some(host_frame)) => slave.report(host_frame),
+            (Some(FrameLockSide::Master(master)), Some(_)) => master.frame_done(),
+            _ => {}
+        }
         if let Some(arrived) = self.frame_data_arrived.take() {
             let ms = arrived.elapsed().as_secs_f64() * 1000.0;
             totals.latency_ms_sum += ms;
@@ -543,6 +572,11 @@ impl LoopState {
         (width_px, height_px, fallback): (u32, u32, &View),
     ) -> Option<cig_scene::FrameSnapshot> {
         self.inbox.clear();
+        if let Some(FrameLockSide::Master(master)) = &mut self.lock {
+            // No frame starts (and no Start of Frame lets the host go on) while a slave still
+            // draws an older one.
+            master.wait_for_slaves(totals.drawn_host_frame);
+        }
         if self.channel.sync {
             // The host's next frame paces the channel.
             let period = Duration::from_secs_f64(self.period_s);
@@ -712,14 +746,17 @@ impl LoopState {
 )]
 fn run_windowed(
     args: &ServeArgs,
-    channel: Channel,
+    (channel, lock): (Channel, Option<FrameLockSide>),
     cache: Arc<TileCache>,
     mut world: IgWorld,
     mut query: QuerySession,
     cigi: UdpEndpoint,
     dis: Option<UdpEndpoint>,
     fallback: View,
-    models: Vec<cig_scene::models::Model>,
+    (models, correction): (
+        Vec<cig_scene::models::Model>,
+        cig_scene::display::DisplayCorrection,
+    ),
     overload: Option<cig_scene::overload::OverloadSettings>,
 ) -> anyhow::Result<()> {
     let mut options = cig_render::ViewerOptions::new(fallback.eye, fallback.orientation);
@@ -730,10 +767,11 @@ fn run_windowed(
     options.exit_after_frames = args.frames;
     options.models = models;
     options.natural_exposure = channel.exposure == ExposureMode::Natural;
+    options.display_correction = Some(correction);
     let shared = Arc::new(std::sync::Mutex::new(Totals::default()));
     let totals = Arc::clone(&shared);
     // Its clock starts at the first frame, so the window's opening is not a late frame.
-    let mut loop_state = LoopState::new(args.rate_hz, true, channel);
+    let mut loop_state = LoopState::new(args.rate_hz, true, channel, lock);
     let mut clock_started = false;
     let dis_out = dis.as_ref().map(UdpEndpoint::local_addr);
     let mut operator_strikes: u64 = 0;
@@ -834,8 +872,225 @@ fn run_windowed(
     Ok(())
 }
 
+/// This channel's side of the frame lock (`cig_ig::frame_lock`).
+enum FrameLockSide {
+    Master(LockMaster),
+    Slave(LockSlave),
+}
+
+/// The master's: the slaves' reports and the wait for them.
+struct LockMaster {
+    endpoint: UdpEndpoint,
+    lock: FrameLock,
+    timeout: Duration,
+    inbox: Vec<cig_net::Datagram>,
+    bad: RateLimitedLog,
+    waits: u64,
+    wait_ms_sum: f64,
+    wait_ms_max: f64,
+    timeouts: u64,
+    /// The master's frames: when the last was done, and the smoothed time between them.
+    last_frame_done: Option<Instant>,
+    frame_interval_s: Option<f64>,
+}
+
+/// A slave's: one report a frame drawn.
+struct LockSlave {
+    endpoint: UdpEndpoint,
+    channel: u32,
+    sent: u64,
+    failures: u64,
+}
+
+impl FrameLockSide {
+    fn open(args: &ServeArgs, channel: &Channel) -> anyhow::Result<Option<FrameLockSide>> {
+        let bind: BindTarget = args.cigi_bind.parse().context("--cigi-bind")?;
+        if let Some(port) = args.lock_port {
+            let endpoint = UdpEndpoint::open(EndpointConfig {
+                label: "frame lock",
+                bind,
+                port,
+                delivery: Delivery::Unicast,
+                destination: None,
+                queue_limit: 1024,
+                reuse_port: false,
+            })
+            .with_context(|| format!("--lock-port {port}"))?;
+            return Ok(Some(FrameLockSide::Master(LockMaster {
+                endpoint,
+                lock: FrameLock::new(),
+                timeout: Duration::from_millis(args.lock_timeout_ms),
+                inbox: Vec::new(),
+                bad: RateLimitedLog::new("frame lock"),
+                waits: 0,
+                wait_ms_sum: 0.0,
+                wait_ms_max: 0.0,
+                timeouts: 0,
+                last_frame_done: None,
+                frame_interval_s: None,
+            })));
+        }
+        let Some(master) = &args.lock else {
+            return Ok(None);
+        };
+        let to = resolve(master, "--lock")?;
+        let endpoint = UdpEndpoint::open(EndpointConfig {
+            label: "frame lock",
+            bind,
+            port: 0,
+            delivery: Delivery::Unicast,
+            destination: Some(to),
+            queue_limit: 16,
+            reuse_port: false,
+        })
+        .context("the frame lock's socket")?;
+        let first_view = channel
+            .views
+            .as_ref()
+            .and_then(|v| v.first().copied())
+            .unwrap_or(0);
+        Ok(Some(FrameLockSide::Slave(LockSlave {
+            endpoint,
+            channel: u32::from(first_view),
+            sent: 0,
+            failures: 0,
+        })))
+    }
+
+    fn json(&self) -> serde_json::Value {
+        match self {
+            FrameLockSide::Master(m) => serde_json::json!({
+                "side": "master",
+                "address": m.endpoint.local_addr().to_string(),
+                "slaves_known": m.lock.slaves().len(),
+                "slaves_in_lock": m.lock.in_lock(),
+                "waits": m.waits,
+                "wait_ms_mean": m.wait_ms_sum / (m.waits.max(1) as f64),
+                "wait_ms_max": m.wait_ms_max,
+                "timeouts": m.timeouts,
+                "bad_datagrams": m.bad.count(),
+            }),
+            FrameLockSide::Slave(s) => serde_json::json!({
+                "side": "slave",
+                "to": s.endpoint.destination().map(|a| a.to_string()),
+                "reports_sent": s.sent,
+                "send_failures": s.failures,
+            }),
+        }
+    }
+}
+
+impl LockMaster {
+    /// Notes a frame of its own done (the lock's timeout follows the IG's frame rate).
+    fn frame_done(&mut self) {
+        let now = Instant::now();
+        if let Some(last) = self.last_frame_done.replace(now) {
+            let dt = (now - last).as_secs_f64();
+            self.frame_interval_s = Some(match self.frame_interval_s {
+                Some(s) => 0.9 * s + 0.1 * dt,
+                None => dt,
+            });
+        }
+    }
+
+    /// How long to wait for a late slave: eight of the IG's frames, at least 250 ms, at most
+    /// `--lock-timeout-ms` (a dead channel stalls the others that long, once).
+    fn timeout(&self) -> Duration {
+        let frames = self
+            .frame_interval_s
+            .map_or(self.timeout, |s| Duration::from_secs_f64(8.0 * s));
+        frames.clamp(Duration::from_millis(250).min(self.timeout), self.timeout)
+    }
+
+    fn read(&mut self) {
+        let now = Instant::now();
+        for d in self.inbox.drain(..) {
+            match FrameDrawn::decode(&d.bytes) {
+                Ok(drawn) => match self.lock.note(d.from, drawn) {
+                    Some(LockEvent::Joined(from, drawn)) => tracing::info!(
+                        "frame lock: channel {} at {from} joins on host frame {}",
+                        drawn.channel,
+                        drawn.host_frame
+                    ),
+                    Some(LockEvent::Dropped(..)) | None => {}
+                },
+                Err(e) => {
+                    self.bad.note(now, &d.from.to_string(), &e.to_string());
+                }
+            }
+        }
+    }
+
+    /// Reads the reports, then waits until every slave in the lock has drawn `master_frame`,
+    /// or the timeout has passed (the late are taken out).
+    fn wait_for_slaves(&mut self, master_frame: Option<u32>) {
+        self.endpoint.drain(&mut self.inbox);
+        self.read();
+        let Some(frame) = master_frame else {
+            return;
+        };
+        if self.lock.all_drawn(frame) {
+            return;
+        }
+        let began = Instant::now();
+        let timeout = self.timeout();
+        let deadline = began + timeout;
+        while !self.lock.all_drawn(frame) {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.endpoint.recv_timeout(left) {
+                Some(d) => {
+                    self.inbox.push(d);
+                    self.read();
+                }
+                None => {
+                    self.timeouts += 1;
+                    for event in self.lock.drop_late(frame) {
+                        if let LockEvent::Dropped(from, drawn) = event {
+                            tracing::warn!(
+                                "frame lock: channel {} at {from} is still on host frame {} after {} ms: going on without it until it catches up",
+                                drawn.channel,
+                                drawn.host_frame,
+                                timeout.as_millis()
+                            );
+                        }
+                    }
+                    break;
+                }
+            }
+        }
+        let ms = began.elapsed().as_secs_f64() * 1000.0;
+        self.waits += 1;
+        self.wait_ms_sum += ms;
+        self.wait_ms_max = self.wait_ms_max.max(ms);
+    }
+}
+
+impl LockSlave {
+    fn report(&mut self, host_frame: u32) {
+        let datagram = FrameDrawn {
+            host_frame,
+            channel: self.channel,
+        }
+        .encode();
+        match self.endpoint.send(&datagram) {
+            Ok(()) => self.sent += 1,
+            // The master is not up yet, or gone: the lock is its business.
+            Err(_) => self.failures += 1,
+        }
+    }
+}
+
+/// The seconds since 1970 now.
+fn unix_now_s() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
 /// One frame of `--frame-log`.
 struct FrameLogLine {
+    /// When the frame was done, seconds since 1970.
+    unix_s: f64,
     frame: u64,
     host_frame: Option<u32>,
     host_frames_applied: u64,
@@ -861,14 +1116,11 @@ impl FrameLog {
 
     fn write(&mut self, line: &FrameLogLine) -> anyhow::Result<()> {
         use std::io::Write;
-        let unix_s = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0.0, |d| d.as_secs_f64());
         let value = serde_json::json!({
             "frame": line.frame,
             "host_frame": line.host_frame,
             "host_frames_applied": line.host_frames_applied,
-            "unix_s": unix_s,
+            "unix_s": line.unix_s,
             "frame_ms": line.frame_ms,
         });
         writeln!(self.file, "{value}")
@@ -882,7 +1134,7 @@ fn report(
     world: &IgWorld,
     cigi: &UdpEndpoint,
     dis: Option<&UdpEndpoint>,
-    channel: &Channel,
+    (channel, lock): (&Channel, Option<&FrameLockSide>),
     json: bool,
 ) -> anyhow::Result<()> {
     let c = world.session().counters();
@@ -950,6 +1202,7 @@ fn report(
             "joined_after_ms": totals.joined_after_ms,
             "relayed": totals.relayed,
             "views_missing": world.channel_views_missing(),
+            "lock": lock.map(FrameLockSide::json),
         },
         "sim_time": UtcTime::from_unix_seconds(world.unix_time_s()).map(|t| t.to_iso8601_seconds()).unwrap_or_default(),
     });

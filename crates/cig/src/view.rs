@@ -58,6 +58,8 @@ pub fn run(args: &ViewArgs, config: &Config) -> anyhow::Result<()> {
     }
     let fog_mode = FogMode::parse(&args.fog)
         .with_context(|| format!("--fog \"{}\" is not off, linear, exp or exp2", args.fog))?;
+    let correction =
+        crate::display::read_display_correction(args.warp.as_deref(), args.blend.as_deref())?;
     let database = Arc::new(open_database(&args.db)?);
     let cache = Arc::new(TileCache::new(database, config.paging.clone())?);
     let eye = eye.unwrap_or_else(|| default_eye(&cache));
@@ -75,6 +77,7 @@ pub fn run(args: &ViewArgs, config: &Config) -> anyhow::Result<()> {
     options.exit_after_frames = args.frames;
     options.capture_last_frame = args.screenshot.is_some();
     options.overload = config.overload()?;
+    options.display_correction = Some(correction);
     let report = match cig_render::run_viewer(cache, options) {
         Ok(report) => report,
         Err(ViewerError::NoDisplay(reason)) => {

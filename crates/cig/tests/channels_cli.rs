@@ -506,6 +506,26 @@ fn bad_channel_input_gives_one_line_errors() {
         (vec!["--role", "slave", "--relay", "127.0.0.1:9"], "--relay"),
         (vec!["--role", "boss"], "boss"),
         (vec!["--view", "70000"], "70000"),
+        (
+            vec!["--lock-port", "9"],
+            "--lock-port and --lock need --sync",
+        ),
+        (
+            vec!["--sync", "--role", "slave", "--lock-port", "9"],
+            "--lock-port is the master's",
+        ),
+        (
+            vec!["--sync", "--lock", "127.0.0.1:9"],
+            "--lock is a slave's",
+        ),
+        (
+            vec!["--sync", "--lock-port", "9", "--lock-timeout-ms", "0"],
+            "--lock-timeout-ms 0",
+        ),
+        (
+            vec!["--sync", "--role", "slave", "--lock", "nowhere.invalid:9"],
+            "--lock",
+        ),
     ];
     for (extra, needle) in cases {
         let assert = cig()
@@ -579,4 +599,93 @@ fn three_channel_processes_are_measured_and_a_killed_slave_rejoins() {
             "{report}"
         );
     }
+}
+
+#[test]
+fn a_window_shows_the_channels_warp_and_blend() {
+    if std::process::Command::new("xvfb-run")
+        .arg("--help")
+        .output()
+        .is_err()
+    {
+        eprintln!("SKIPPED: xvfb-run is not installed (scripts/setup.sh --test installs xvfb)");
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    // A warp that moves the view a quarter of the display to the right, and a right ramp.
+    let (c, r) = (5, 4);
+    let nodes: Vec<String> = (0..r)
+        .flat_map(|j| (0..c).map(move |i| (f64::from(i) / 4.0 + 0.25, f64::from(j) / 3.0)))
+        .map(|(x, y)| format!("[{x}, {y}]"))
+        .collect();
+    let shift = dir.path().join("shift.toml");
+    std::fs::write(
+        &shift,
+        format!(
+            "columns = {c}\nrows = {r}\ndisplay = [{}]\n",
+            nodes.join(", ")
+        ),
+    )
+    .expect("write");
+    let blend = dir.path().join("blend.toml");
+    std::fs::write(&blend, "right = 0.25\ngamma = 2.2\n").expect("write");
+    let screenshot = |name: &str, extra: &[&std::ffi::OsStr]| {
+        let out = dir.path().join(name);
+        let run = std::process::Command::new("xvfb-run")
+            .args(["-a", "-s", "-screen 0 1280x800x24"])
+            .arg(assert_cmd::cargo::cargo_bin("cig"))
+            .args(["view", "--db"])
+            .arg(&db)
+            .args(["--size", "800x500", "--frames", "3", "--screenshot"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .expect("xvfb-run");
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        png(&out)
+    };
+    let plain = screenshot("plain.png", &[]);
+    let shifted = screenshot("shift.png", &["--warp".as_ref(), shift.as_os_str()]);
+    let blended = screenshot("blend.png", &["--blend".as_ref(), blend.as_os_str()]);
+    assert_eq!((plain.width, plain.height), (800, 500));
+    // Below the panels (their bottom rows stay clear): the scene moved by 200 pixels, black
+    // where no warp cell reaches; the blend black at the right edge, untouched left of its
+    // ramp. (Each run is a window of its own, its clock a moment later: a level or two apart.)
+    let near = |a: [u8; 4], b: [u8; 4]| a.iter().zip(b).all(|(p, q)| p.abs_diff(q) <= 3);
+    for y in [466, 480, 495] {
+        for x in (0..600).step_by(25) {
+            let (moved, was) = (shifted.pixel(x + 200, y), plain.pixel(x, y));
+            assert!(near(moved, was), "{x},{y}: {moved:?} {was:?}");
+        }
+        assert_eq!(shifted.pixel(100, y), [0, 0, 0, 255]);
+        let edge = blended.pixel(799, y);
+        assert!(edge[..3].iter().all(|v| *v <= 2), "{edge:?}");
+        assert!(plain.pixel(799, y)[..3].iter().any(|v| *v > 20));
+        assert!(near(blended.pixel(400, y), plain.pixel(400, y)));
+    }
+    // The shift is exact to the pixel: one pixel off, the scene's edges no longer agree.
+    let off: u32 = (0..599)
+        .map(|x| {
+            let (a, b) = (shifted.pixel(x + 201, 480), plain.pixel(x, 480));
+            a.iter()
+                .zip(b)
+                .map(|(p, q)| u32::from(p.abs_diff(q)))
+                .sum::<u32>()
+        })
+        .sum();
+    let on: u32 = (0..599)
+        .map(|x| {
+            let (a, b) = (shifted.pixel(x + 200, 480), plain.pixel(x, 480));
+            a.iter()
+                .zip(b)
+                .map(|(p, q)| u32::from(p.abs_diff(q)))
+                .sum::<u32>()
+        })
+        .sum();
+    assert!(off > 4 * on.max(1), "{off} against {on}");
 }

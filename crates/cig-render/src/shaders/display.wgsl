@@ -7,7 +7,9 @@ struct DisplayParams {
     sizes: vec4<f32>,
     // Ramp widths as fractions of the display: left, right, top, bottom.
     ramps: vec4<f32>,
-    // x: 1 / gamma.
+    // x: 1 / gamma; y: 1 when the target is viewed with sRGB encoding (write linear values,
+    // which its store encodes back to the frame's); z: 1 when the frame is read through an
+    // sRGB view (its values arrive decoded: encode them first).
     gamma: vec4<f32>,
 };
 
@@ -53,5 +55,25 @@ fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
     let p = in.clip.xy / params.sizes.zw;
     let weight = ramp(p.x, params.ramps.x) * ramp(1.0 - p.x, params.ramps.y)
         * ramp(p.y, params.ramps.z) * ramp(1.0 - p.y, params.ramps.w);
-    return vec4<f32>(colour.rgb * pow(weight, params.gamma.x), 1.0);
+    var encoded = colour.rgb;
+    if params.gamma.z > 0.5 {
+        encoded = linear_to_srgb(colour.rgb);
+    }
+    let shown = encoded * pow(weight, params.gamma.x);
+    if params.gamma.y > 0.5 {
+        return vec4<f32>(srgb_to_linear(shown), 1.0);
+    }
+    return vec4<f32>(shown, 1.0);
+}
+
+fn linear_to_srgb(c: vec3<f32>) -> vec3<f32> {
+    let low = c * 12.92;
+    let high = 1.055 * pow(c, vec3<f32>(1.0 / 2.4)) - 0.055;
+    return select(high, low, c <= vec3<f32>(0.0031308));
+}
+
+fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    let low = c / 12.92;
+    let high = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
+    return select(high, low, c <= vec3<f32>(0.04045));
 }

@@ -79,6 +79,9 @@ pub struct ViewerOptions {
     /// Keep the natural illuminance's exposure instead of adapting to the view (the channels
     /// of one eyepoint then match at their seams).
     pub natural_exposure: bool,
+    /// The channel's display correction (warp grid, edge blend), drawn last into the window
+    /// (under the panel).
+    pub display_correction: Option<cig_scene::display::DisplayCorrection>,
 }
 
 /// Supplies each frame's world when the viewer is driven from outside (an IG serving a host):
@@ -263,6 +266,7 @@ impl ViewerOptions {
             models: Vec::new(),
             overload: Some(cig_scene::overload::OverloadSettings::default()),
             natural_exposure: false,
+            display_correction: None,
         }
     }
 
@@ -416,6 +420,10 @@ struct Running {
     query: cig_terrain::QuerySession,
     mesh_budget: usize,
     natural_exposure: bool,
+    /// The display correction into the window's panel view, and the frame it reads (remade
+    /// at the window's size).
+    display: Option<crate::display::DisplayPass>,
+    corrected_frame: Option<wgpu::Texture>,
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
@@ -598,6 +606,15 @@ impl App {
             "viewer window ready"
         );
         let now = Instant::now();
+        let display = self
+            .options
+            .display_correction
+            .clone()
+            .filter(|c| !c.is_none())
+            .map(|c| {
+                // The frame is drawn through the scene's view and read through the plain one.
+                crate::display::DisplayPass::with_formats(&gpu, c, formats.panel, formats.panel)
+            });
         Ok(Running {
             window,
             surface,
@@ -609,6 +626,8 @@ impl App {
             query: cig_terrain::QuerySession::new(Arc::clone(&self.cache)),
             mesh_budget: self.options.mesh_budget,
             natural_exposure: self.options.natural_exposure,
+            display,
+            corrected_frame: None,
             egui_ctx,
             egui_state,
             egui_renderer,
@@ -911,11 +930,35 @@ impl Running {
         frame: &LastFrame,
         targets: &(wgpu::TextureView, wgpu::TextureView),
     ) -> Result<FrameStats, ViewerError> {
+        let view = frame.snapshot.views.first().copied();
+        // With a display correction the view is drawn off-screen first, then warped and
+        // blended into the window.
+        let size = view.map_or((1, 1), |v| (v.width_px, v.height_px));
+        if self.display.is_some()
+            && self
+                .corrected_frame
+                .as_ref()
+                .is_none_or(|t| (t.width(), t.height()) != size)
+        {
+            self.corrected_frame = Some(crate::gpu::render_target(
+                &self.gpu.device,
+                "frame before the display correction",
+                size,
+                self.formats.surface,
+                1,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+                &self.formats.extra_view_formats(),
+            ));
+        }
+        let offscreen = match (&self.display, &self.corrected_frame) {
+            (Some(_), Some(texture)) => Some(self.formats.views(texture)),
+            _ => None,
+        };
         let stats = self.renderer.render(
             &self.cache,
             &frame.snapshot,
             0,
-            &targets.0,
+            offscreen.as_ref().map_or(&targets.0, |views| &views.0),
             FrameOptions {
                 mesh_budget: self.mesh_budget,
                 key_background: false,
@@ -927,7 +970,6 @@ impl Running {
                 ..FrameOptions::default()
             },
         )?;
-        let view = frame.snapshot.views.first().copied();
         let screen = egui_wgpu::ScreenDescriptor {
             size_in_pixels: view.map_or([1, 1], |v| [v.width_px, v.height_px]),
             pixels_per_point: frame.pixels_per_point,
@@ -936,6 +978,9 @@ impl Running {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("panel"),
         });
+        if let (Some(display), Some(views)) = (&self.display, &offscreen) {
+            display.record(&self.gpu, &mut encoder, &views.1, size, &targets.1, size);
+        }
         let mut commands = self.egui_renderer.update_buffers(
             device,
             &self.gpu.queue,
