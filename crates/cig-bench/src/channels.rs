@@ -502,20 +502,25 @@ impl Scratch {
     }
 }
 
-/// Arguments every channel of the benchmark shares.
-fn channel_args(options: &ChannelsOptions, scenario: &Path, port: u16) -> Vec<String> {
-    let (w, h) = options.size;
+/// `cig serve` off-screen over `db` and `scenario`, frames of `size` at `rate_hz`, the host on
+/// `port`, ending three seconds after the host's last frame.
+pub(crate) fn serve_args(
+    db: &Path,
+    scenario: &Path,
+    (w, h): (u32, u32),
+    rate_hz: f64,
+    port: u16,
+) -> Vec<String> {
     [
         "--db",
-        &options.db.display().to_string(),
+        &db.display().to_string(),
         "--scenario",
         &scenario.display().to_string(),
         "--headless",
         "--size",
         &format!("{w}x{h}"),
-        "--sync",
         "--rate-hz",
-        &options.rate_hz.to_string(),
+        &rate_hz.to_string(),
         "--idle-exit-s",
         "3",
         "--cigi-port",
@@ -524,6 +529,14 @@ fn channel_args(options: &ChannelsOptions, scenario: &Path, port: u16) -> Vec<St
     .iter()
     .map(ToString::to_string)
     .collect()
+}
+
+/// Arguments every channel of the benchmark shares: synchronous mode.
+fn channel_args(options: &ChannelsOptions, scenario: &Path, port: u16) -> Vec<String> {
+    with(
+        serve_args(&options.db, scenario, options.size, options.rate_hz, port),
+        &["--sync"],
+    )
 }
 
 fn with(mut args: Vec<String>, more: &[&str]) -> Vec<String> {

@@ -50,19 +50,33 @@ pub(crate) fn percentile(v: &[f64], q: f64) -> f64 {
     s.get(i).copied().unwrap_or(f64::NAN)
 }
 
-/// VmRSS and VmHWM of this process, kB (Linux; `None` elsewhere).
-pub(crate) fn memory_kb() -> (Option<u64>, Option<u64>) {
-    let Ok(status) = std::fs::read_to_string("/proc/self/status") else {
-        return (None, None);
-    };
-    let field = |name: &str| {
-        status
+/// A process's `/proc/PROCESS/status` (`PROCESS`: a pid, or `self`), read as its numeric
+/// fields (Linux; `None` elsewhere, or when the process has ended).
+pub(crate) struct ProcStatus(String);
+
+impl ProcStatus {
+    pub fn read(process: &str) -> Option<ProcStatus> {
+        std::fs::read_to_string(format!("/proc/{process}/status"))
+            .ok()
+            .map(ProcStatus)
+    }
+
+    /// The first number of the line that starts with `name` ("VmRSS:" → kB).
+    pub fn field(&self, name: &str) -> Option<u64> {
+        self.0
             .lines()
             .find(|l| l.starts_with(name))
             .and_then(|l| l.split_whitespace().nth(1))
             .and_then(|v| v.parse::<u64>().ok())
-    };
-    (field("VmRSS:"), field("VmHWM:"))
+    }
+}
+
+/// VmRSS and VmHWM of this process, kB (Linux; `None` elsewhere).
+pub(crate) fn memory_kb() -> (Option<u64>, Option<u64>) {
+    match ProcStatus::read("self") {
+        Some(status) => (status.field("VmRSS:"), status.field("VmHWM:")),
+        None => (None, None),
+    }
 }
 
 #[cfg(test)]

@@ -24,10 +24,10 @@
 //! this machine's, overframing included); the host's clock is this process's.
 
 use crate::channels::{
-    database_box, flight_script, free_port, inside, paced, read_frame_log, unix_now_s, Host,
-    Scratch, ServeProcess,
+    database_box, flight_script, free_port, inside, paced, read_frame_log, serve_args, unix_now_s,
+    Host, Scratch, ServeProcess,
 };
-use crate::report::{date_utc, machine, median, percentile};
+use crate::report::{date_utc, machine, median, percentile, ProcStatus};
 use crate::{require, BenchError, Report, Step};
 use cig_net::{BindTarget, Delivery, EndpointConfig, UdpEndpoint};
 use cig_tools::dis::{EntitySender, SendSpec};
@@ -73,19 +73,12 @@ pub struct SoakSample {
 /// The process's resident memory, threads and open descriptors (`None` off Linux or when it
 /// has ended).
 fn sample_process(pid: u32, t_s: f64) -> Option<SoakSample> {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
-    let field = |name: &str| {
-        status
-            .lines()
-            .find(|l| l.starts_with(name))
-            .and_then(|l| l.split_whitespace().nth(1))
-            .and_then(|v| v.parse::<u64>().ok())
-    };
+    let status = ProcStatus::read(&pid.to_string())?;
     let fds = std::fs::read_dir(format!("/proc/{pid}/fd")).ok()?.count() as u64;
     Some(SoakSample {
         t_s,
-        rss_kib: field("VmRSS:")?,
-        threads: field("Threads:")?,
+        rss_kib: status.field("VmRSS:")?,
+        threads: status.field("Threads:")?,
         fds,
     })
 }
@@ -262,24 +255,13 @@ pub fn run(
         150.0,
         &[(0, [-30.0, 30.0, -22.5, 22.5])],
     );
-    let args: Vec<String> = [
-        "--db",
-        &options.db.display().to_string(),
-        "--scenario",
-        &scenario.display().to_string(),
-        "--headless",
-        "--size",
-        &format!("{w}x{h}"),
-        "--rate-hz",
-        &options.rate_hz.to_string(),
-        "--cigi-port",
-        &cigi_port.to_string(),
-        "--idle-exit-s",
-        "3",
-    ]
-    .iter()
-    .map(ToString::to_string)
-    .collect();
+    let args = serve_args(
+        &options.db,
+        &scenario,
+        options.size,
+        options.rate_hz,
+        cigi_port,
+    );
     let serve = ServeProcess::spawn(&options.cig_exe, dir.path(), "soak", &args)?;
     let pid = serve.pid();
     let mut host = Host::new(&script, cigi_port)?;

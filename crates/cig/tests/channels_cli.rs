@@ -669,23 +669,17 @@ fn a_window_shows_the_channels_warp_and_blend() {
         assert!(near(blended.pixel(400, y), plain.pixel(400, y)));
     }
     // The shift is exact to the pixel: one pixel off, the scene's edges no longer agree.
-    let off: u32 = (0..599)
-        .map(|x| {
-            let (a, b) = (shifted.pixel(x + 201, 480), plain.pixel(x, 480));
-            a.iter()
-                .zip(b)
-                .map(|(p, q)| u32::from(p.abs_diff(q)))
-                .sum::<u32>()
-        })
-        .sum();
-    let on: u32 = (0..599)
-        .map(|x| {
-            let (a, b) = (shifted.pixel(x + 200, 480), plain.pixel(x, 480));
-            a.iter()
-                .zip(b)
-                .map(|(p, q)| u32::from(p.abs_diff(q)))
-                .sum::<u32>()
-        })
-        .sum();
+    let difference_at = |dx: u32| -> u32 {
+        (0..599)
+            .map(|x| {
+                let (a, b) = (shifted.pixel(x + dx, 480), plain.pixel(x, 480));
+                a.iter()
+                    .zip(b)
+                    .map(|(p, q)| u32::from(p.abs_diff(q)))
+                    .sum::<u32>()
+            })
+            .sum()
+    };
+    let (on, off) = (difference_at(200), difference_at(201));
     assert!(off > 4 * on.max(1), "{off} against {on}");
 }
