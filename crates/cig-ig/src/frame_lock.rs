@@ -3,19 +3,23 @@
 //! host frames (a network swap lock, as multi-channel IGs keep projectors on one frame).
 //!
 //! Protocol (docs/channels.md). After each frame drawn, a slave sends its master one
-//! datagram of 16 octets, neither CIGI nor DIS: the magic `CIGLOCK1`, then the host frame it drew
-//! (u32, little-endian), then its channel number (u32, the first view it draws; for logs). The
-//! master keeps each slave's newest report ([`FrameLock`]), slaves told apart by their address. Before it starts frame n + 1 (and so
-//! before its Start of Frame lets a synchronous host send frame n + 2) it waits until every
-//! slave *in the lock* has drawn frame n, for at most the lock timeout. A slave that misses the
-//! timeout is taken out of the lock (the IG must not stall on a dead or slow channel) and comes
-//! back in when it reports a frame no more than one behind the master's, as a restarted slave
-//! does once it has caught up.
+//! datagram of 16 octets, neither CIGI nor DIS: the magic `CIGLOCK1`, then the host frame it
+//! drew (u32, little-endian), then its channel number (u32, the first view it draws; for logs).
+//! The master keeps each slave's newest report ([`FrameLock`]), slaves told apart by their
+//! address. Before it starts frame n + 1 (and so before its Start of Frame lets a synchronous
+//! host send frame n + 2) it waits until every slave *in the lock* has drawn frame n, for at
+//! most the lock timeout. A slave is in the lock from its first report. One that misses the
+//! timeout is taken out (the IG must not stall on a dead channel) and comes back in with a
+//! report of another frame no more than [`REJOIN_WITHIN_FRAMES`] from the master's: it is
+//! alive and on the same host, and the master waits for it again (a slave skips to the newest
+//! host frame, so one frame brings it level).
 //!
 //! Limits: slaves join by reporting (a slave that has never reported is not waited for); a
-//! slave slower than the timeout each frame costs the IG the timeout each frame; host
-//! frame numbers are compared with wrapping arithmetic (a half-range apart is "behind"); the
-//! lock bounds which frames are drawn, not when each display shows them (no genlock).
+//! slave slower than the timeout every frame costs the IG a wait every frame, until the timeout
+//! (a number of the IG's frames, which then include the waits) outgrows the slave's frame: the
+//! IG runs at its slowest channel's rate; host frame numbers are compared with wrapping
+//! arithmetic (a half-range apart is "behind"); the lock bounds which frames are drawn, not
+//! when each display shows them (no genlock).
 
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
@@ -24,6 +28,9 @@ use std::net::SocketAddr;
 pub const LOCK_MAGIC: &[u8; 8] = b"CIGLOCK1";
 /// The lock datagram's length, octets.
 pub const LOCK_DATAGRAM_LEN: usize = 16;
+/// How far from the master's frame (behind or ahead) a dropped slave's report may be for it to
+/// come back.
+pub const REJOIN_WITHIN_FRAMES: u32 = 8;
 
 /// A slave's report: it has drawn `host_frame`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -110,8 +117,13 @@ impl FrameLock {
         FrameLock::default()
     }
 
-    /// Notes a report from `from`.
-    pub fn note(&mut self, from: SocketAddr, drawn: FrameDrawn) -> Option<LockEvent> {
+    /// Notes a report from `from`; `master_frame` is the newest host frame the master drew.
+    pub fn note(
+        &mut self,
+        from: SocketAddr,
+        drawn: FrameDrawn,
+        master_frame: Option<u32>,
+    ) -> Option<LockEvent> {
         let slave = self.slaves.entry(from).or_insert(SlaveState {
             last: drawn,
             in_lock: false,
@@ -120,8 +132,19 @@ impl FrameLock {
         // The newest arrival (a restarted slave, or a restarted host, counts again from its
         // own numbers; a reordered datagram at worst makes the master wait for the next).
         slave.last = drawn;
-        let alive = slave.dropped_on != Some(drawn.host_frame);
-        if !slave.in_lock && alive {
+        let rejoins = match slave.dropped_on {
+            // New: in from its first report.
+            None => true,
+            Some(dropped_on) => {
+                dropped_on != drawn.host_frame
+                    && master_frame.is_none_or(|m| {
+                        let f = drawn.host_frame;
+                        at_or_after(f.wrapping_add(REJOIN_WITHIN_FRAMES), m)
+                            && at_or_after(m.wrapping_add(REJOIN_WITHIN_FRAMES), f)
+                    })
+            }
+        };
+        if !slave.in_lock && rejoins {
             slave.dropped_on = None;
             slave.in_lock = true;
             return Some(LockEvent::Joined(from, slave.last));
@@ -224,20 +247,20 @@ mod tests {
         assert!(lock.all_drawn(10));
         // Two slaves join with their first reports, one still behind.
         assert!(matches!(
-            lock.note(addr(1), drawn(10)),
+            lock.note(addr(1), drawn(10), Some(10)),
             Some(LockEvent::Joined(..))
         ));
         assert!(matches!(
-            lock.note(addr(2), drawn(7)),
+            lock.note(addr(2), drawn(7), Some(10)),
             Some(LockEvent::Joined(..))
         ));
         assert_eq!(lock.in_lock(), 2);
         assert!(!lock.all_drawn(10), "slave 2 is still on 7");
-        assert_eq!(lock.note(addr(2), drawn(10)), None);
+        assert_eq!(lock.note(addr(2), drawn(10), Some(10)), None);
         assert!(lock.all_drawn(10));
         // Slave 1 dies on 10: the master, on 11, times out and drops it, then waits for
         // slave 2 only.
-        lock.note(addr(2), drawn(11));
+        lock.note(addr(2), drawn(11), Some(11));
         assert!(!lock.all_drawn(11));
         assert_eq!(
             lock.drop_late(11),
@@ -245,19 +268,21 @@ mod tests {
         );
         assert!(lock.all_drawn(11) && lock.in_lock() == 1);
         assert!(lock.drop_late(11).is_empty());
-        // A late datagram of the frame it was dropped on does not bring it back; another
-        // frame (it lives, or it restarted on the same address) does, and the master waits
-        // for it again.
-        assert_eq!(lock.note(addr(1), drawn(10)), None);
+        // A late datagram of the frame it was dropped on does not bring it back, nor one far
+        // behind the master's (a slave of another host, or one still catching up); another
+        // frame near the master's does, and the master waits for it again.
+        assert_eq!(lock.note(addr(1), drawn(10), Some(20)), None);
+        assert_eq!(lock.note(addr(1), drawn(11), Some(20)), None);
+        assert_eq!(lock.note(addr(1), drawn(4_000_000), Some(20)), None);
         assert_eq!(lock.in_lock(), 1);
         assert!(matches!(
-            lock.note(addr(1), drawn(19)),
+            lock.note(addr(1), drawn(19), Some(20)),
             Some(LockEvent::Joined(..))
         ));
         assert_eq!(lock.in_lock(), 2);
         assert!(!lock.all_drawn(20));
-        lock.note(addr(1), drawn(20));
-        lock.note(addr(2), drawn(20));
+        lock.note(addr(1), drawn(20), Some(20));
+        lock.note(addr(2), drawn(20), Some(20));
         assert!(lock.all_drawn(20));
     }
 }

@@ -5,8 +5,11 @@
 //! The grid's nodes are a vertex buffer (display position, view point) drawn as indexed
 //! triangles over a black target; the fragment reads the frame (a texel's own value when the
 //! point falls on its centre, so the identity grid copies the frame exactly; bilinear
-//! elsewhere) and multiplies it by the blend's factor at the display pixel. Both textures are
-//! viewed as plain `Rgba8Unorm`: the pass works on the encoded values a projector receives.
+//! elsewhere) and multiplies it by the blend's factor at the display pixel. The pass works on
+//! the encoded values a projector receives: off-screen both textures are viewed as plain
+//! `Rgba8Unorm`; a window's are viewed through the surface's plain format where it has one,
+//! and where it offers only an sRGB view the frame's values are encoded after reading and
+//! decoded before the store (which encodes them again).
 
 use crate::gpu::Gpu;
 use cig_scene::display::{DisplayCorrection, WarpMesh};

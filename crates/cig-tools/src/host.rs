@@ -295,8 +295,13 @@ fn entity_at(e: &HostEntity, t_s: f64) -> (f64, f64, f64) {
         }
         s -= len;
     }
-    // Past the end: at the last point, facing along the last segment.
-    let last = e.path[e.path.len() - 1];
+    // Past the end: at the last point, facing along the last segment (a repeated path's last
+    // point is its first: only rounding gets here).
+    let last = if e.repeat {
+        e.path[0]
+    } else {
+        e.path[e.path.len() - 1]
+    };
     (last[0], last[1], last_heading)
 }
 

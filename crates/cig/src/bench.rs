@@ -148,7 +148,7 @@ pub fn channels(args: &BenchChannelsArgs, config: &Config) -> anyhow::Result<()>
     let report = cig_bench::channels::run(&cig_bench::channels::ChannelsOptions {
         cig_exe: this_binary()?,
         db: database_or_demo(args.db.as_deref(), "bench channels", config)?,
-        size: parse_size(&args.size)?,
+        size_px: parse_size(&args.size)?,
         rate_hz: args.rate_hz,
         warmup_s: args.warmup_s,
         seconds: args.seconds,
@@ -163,7 +163,7 @@ pub fn soak(args: &BenchSoakArgs, config: &Config) -> anyhow::Result<()> {
         cig_exe: this_binary()?,
         db: database_or_demo(args.db.as_deref(), "bench soak", config)?,
         minutes: args.minutes,
-        size: parse_size(&args.size)?,
+        size_px: parse_size(&args.size)?,
         rate_hz: args.rate_hz,
         remote_entities: args.entities,
         speed_mps: args.speed_mps,

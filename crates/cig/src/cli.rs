@@ -159,8 +159,8 @@ pub struct ServeArgs {
     /// a channel behind skips to the newest frame.
     #[arg(long)]
     pub sync: bool,
-    /// Stop when no host frame has come for this many seconds since the last one (after the
-    /// first; synchronous mode), so tests and soak runs end with their host.
+    /// Stop when no host frame has come for this many seconds (since the last one, or since
+    /// serving began), so tests and soak runs end with their host.
     #[arg(long, value_name = "SECONDS")]
     pub idle_exit_s: Option<f64>,
     /// Exposure: `view` adapts to what the view shows; `natural` keeps the natural

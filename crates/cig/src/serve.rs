@@ -297,14 +297,14 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         .map(FrameLog::create)
         .transpose()?;
     let mut totals = Totals::default();
-    // Since the last host frame drawn (none before the first).
-    let mut idle_since: Option<Instant> = None;
+    // Since the last host frame drawn, or the loop's start.
+    let mut idle_since = Instant::now();
     loop {
         if args.frames.is_some_and(|n| totals.frames >= n) {
             break;
         }
-        if let (Some(limit_s), Some(since)) = (args.idle_exit_s, idle_since) {
-            if since.elapsed().as_secs_f64() > limit_s {
+        if let Some(limit_s) = args.idle_exit_s {
+            if idle_since.elapsed().as_secs_f64() > limit_s {
                 tracing::info!("no host frame for {limit_s} s: stopping");
                 break;
             }
@@ -358,7 +358,7 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         let drawn_unix_s = unix_now_s();
         loop_state.frame_drawn(&mut totals);
         if loop_state.host_frames_in_tick > 0 {
-            idle_since = Some(Instant::now());
+            idle_since = Instant::now();
         }
         // The frame's cost: from the end of the wait for the host's frame (synchronous mode)
         // to the frame drawn.
@@ -544,7 +544,9 @@ impl LoopState {
     /// Notes a frame drawn: in synchronous mode, its latency from the host's data.
     fn frame_drawn(&mut self, totals: &mut Totals) {
         match (&mut self.lock, totals.drawn_host_frame) {
-            (Some(FrameLockSide::Slave(slave)), Some(host_frame)) => slave.report(host_frame),
+            (Some(FrameLockSide::Slave(slave)), Some(host_frame)) => {
+                slave.frame_drawn(host_frame);
+            }
             (Some(FrameLockSide::Master(master)), Some(_)) => master.frame_done(),
             _ => {}
         }
@@ -572,10 +574,13 @@ impl LoopState {
         (width_px, height_px, fallback): (u32, u32, &View),
     ) -> Option<cig_scene::FrameSnapshot> {
         self.inbox.clear();
-        if let Some(FrameLockSide::Master(master)) = &mut self.lock {
+        match &mut self.lock {
             // No frame starts (and no Start of Frame lets the host go on) while a slave still
             // draws an older one.
-            master.wait_for_slaves(totals.drawn_host_frame);
+            Some(FrameLockSide::Master(master)) => master.wait_for_slaves(totals.drawn_host_frame),
+            // A window's last frame has been shown by now.
+            Some(FrameLockSide::Slave(slave)) => slave.frame_starts(),
+            None => {}
         }
         if self.channel.sync {
             // The host's next frame paces the channel.
@@ -874,7 +879,7 @@ fn run_windowed(
 
 /// This channel's side of the frame lock (`cig_ig::frame_lock`).
 enum FrameLockSide {
-    Master(LockMaster),
+    Master(Box<LockMaster>),
     Slave(LockSlave),
 }
 
@@ -885,6 +890,8 @@ struct LockMaster {
     timeout: Duration,
     inbox: Vec<cig_net::Datagram>,
     bad: RateLimitedLog,
+    /// Slaves taken out of the lock, logged at a limited rate.
+    drops: RateLimitedLog,
     waits: u64,
     wait_ms_sum: f64,
     wait_ms_max: f64,
@@ -900,6 +907,10 @@ struct LockSlave {
     channel: u32,
     sent: u64,
     failures: u64,
+    /// In a window the frame is drawn and shown after the driver returns: its report waits
+    /// for the next frame's start.
+    deferred: Option<u32>,
+    defer: bool,
 }
 
 impl FrameLockSide {
@@ -916,19 +927,20 @@ impl FrameLockSide {
                 reuse_port: false,
             })
             .with_context(|| format!("--lock-port {port}"))?;
-            return Ok(Some(FrameLockSide::Master(LockMaster {
+            return Ok(Some(FrameLockSide::Master(Box::new(LockMaster {
                 endpoint,
                 lock: FrameLock::new(),
                 timeout: Duration::from_millis(args.lock_timeout_ms),
                 inbox: Vec::new(),
                 bad: RateLimitedLog::new("frame lock"),
+                drops: RateLimitedLog::new("frame lock"),
                 waits: 0,
                 wait_ms_sum: 0.0,
                 wait_ms_max: 0.0,
                 timeouts: 0,
                 last_frame_done: None,
                 frame_interval_s: None,
-            })));
+            }))));
         }
         let Some(master) = &args.lock else {
             return Ok(None);
@@ -954,6 +966,8 @@ impl FrameLockSide {
             channel: u32::from(first_view),
             sent: 0,
             failures: 0,
+            deferred: None,
+            defer: !args.headless && !args.no_render,
         })))
     }
 
@@ -1002,11 +1016,11 @@ impl LockMaster {
         frames.clamp(Duration::from_millis(250).min(self.timeout), self.timeout)
     }
 
-    fn read(&mut self) {
+    fn read(&mut self, master_frame: Option<u32>) {
         let now = Instant::now();
         for d in self.inbox.drain(..) {
             match FrameDrawn::decode(&d.bytes) {
-                Ok(drawn) => match self.lock.note(d.from, drawn) {
+                Ok(drawn) => match self.lock.note(d.from, drawn, master_frame) {
                     Some(LockEvent::Joined(from, drawn)) => tracing::info!(
                         "frame lock: channel {} at {from} joins on host frame {}",
                         drawn.channel,
@@ -1025,7 +1039,7 @@ impl LockMaster {
     /// or the timeout has passed (the late are taken out).
     fn wait_for_slaves(&mut self, master_frame: Option<u32>) {
         self.endpoint.drain(&mut self.inbox);
-        self.read();
+        self.read(master_frame);
         let Some(frame) = master_frame else {
             return;
         };
@@ -1037,20 +1051,29 @@ impl LockMaster {
         let deadline = began + timeout;
         while !self.lock.all_drawn(frame) {
             let left = deadline.saturating_duration_since(Instant::now());
-            match self.endpoint.recv_timeout(left) {
+            // Datagrams still queued come back after the deadline too: a flood of the lock's
+            // port must not hold the master.
+            match self.endpoint.recv_timeout(left).filter(|_| !left.is_zero()) {
                 Some(d) => {
                     self.inbox.push(d);
-                    self.read();
+                    self.read(master_frame);
                 }
                 None => {
                     self.timeouts += 1;
+                    let now = Instant::now();
                     for event in self.lock.drop_late(frame) {
                         if let LockEvent::Dropped(from, drawn) = event {
-                            tracing::warn!(
-                                "frame lock: channel {} at {from} is still on host frame {} after {} ms: going on without it until it catches up",
-                                drawn.channel,
-                                drawn.host_frame,
-                                timeout.as_millis()
+                            // At a limited rate: a slave slower than the timeout every frame
+                            // is dropped every frame.
+                            self.drops.note(
+                                now,
+                                &from.to_string(),
+                                &format!(
+                                    "channel {} is still on host frame {} after {} ms: going on without it until it draws another",
+                                    drawn.channel,
+                                    drawn.host_frame,
+                                    timeout.as_millis()
+                                ),
                             );
                         }
                     }
@@ -1066,6 +1089,22 @@ impl LockMaster {
 }
 
 impl LockSlave {
+    /// Notes a frame drawn: reported now, or (in a window) at the next frame's start.
+    fn frame_drawn(&mut self, host_frame: u32) {
+        if self.defer {
+            self.deferred = Some(host_frame);
+        } else {
+            self.report(host_frame);
+        }
+    }
+
+    /// At a frame's start: the last frame's deferred report.
+    fn frame_starts(&mut self) {
+        if let Some(host_frame) = self.deferred.take() {
+            self.report(host_frame);
+        }
+    }
+
     fn report(&mut self, host_frame: u32) {
         let datagram = FrameDrawn {
             host_frame,

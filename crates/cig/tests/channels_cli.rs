@@ -586,7 +586,12 @@ fn three_channel_processes_are_measured_and_a_killed_slave_rejoins() {
         report["frame_spread_instants"].as_u64().unwrap_or(0) > 10,
         "{report}"
     );
-    assert!(report["frame_spread_max"].as_u64().is_some(), "{report}");
+    // Frame-locked, the channels are never more than one host frame apart, unless the lock
+    // dropped a slave starved of the CPU for longer than its timeout (beyond the killed one).
+    let spread = report["frame_spread_max"].as_u64().expect("spread");
+    if report["lock"]["timeouts"] == 1 {
+        assert!(spread <= 1, "{report}");
+    }
     let rejoin = report["restart"]["rejoin_s"].as_f64();
     assert!(rejoin.is_some_and(|s| s > 0.0 && s < 10.0), "{report}");
     let ratio = report["slave_cost"]["slave_over_master"]

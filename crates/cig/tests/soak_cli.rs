@@ -16,7 +16,17 @@ fn a_minute_of_serving_under_load_keeps_memory_frame_time_and_descriptors_flat()
     let out = cig()
         .args(["bench", "soak", "--db"])
         .arg(&db)
-        .args(["--minutes", "1", "--sample-s", "2", "--json"])
+        // A minute's first third still pages and grows its plumes: 5 % (the hour's verdict is
+        // 2 % after minute 5).
+        .args([
+            "--minutes",
+            "1",
+            "--sample-s",
+            "2",
+            "--rss-growth-max-pct",
+            "5",
+            "--json",
+        ])
         .timeout(Duration::from_secs(240))
         .output()
         .expect("run");
@@ -48,7 +58,7 @@ fn a_minute_of_serving_under_load_keeps_memory_frame_time_and_descriptors_flat()
     assert!(serve["frames"].as_u64().unwrap_or(0) > 100, "{}", show());
     // The figures the verdict reads.
     let growth = report["rss_growth_pct"].as_f64().expect("growth");
-    assert!(growth.abs() <= 2.0, "{growth}");
+    assert!(growth.abs() <= 5.0, "{growth}");
     let ratio = report["frame_time_ratio"].as_f64().expect("ratio");
     assert!(ratio > 0.5 && ratio <= 1.25, "{ratio}");
     assert!(report["fds_leaked"].as_i64().expect("fds") <= 0);
