@@ -9,10 +9,11 @@
 //! (left and right views) and holds them in its frame lock (`--lock-port`, `--lock`); each
 //! writes its timeline with `--frame-log` (wall-clock time and host frame of every frame
 //! drawn). The host runs here as a synchronous CIGI host: it sends frame n + 1 when the
-//! master's Start of Frame for frame n arrives (never faster than `rate_hz`; after a second
-//! without one, anyway), flying the eyepoint round the database's middle with a HAT request
-//! every frame, over a scenario with a cloud layer and a smoke plume. After a warm-up (every
-//! channel has drawn a host frame, then `warmup_s` more):
+//! master's Start of Frame for frame n arrives (never faster than `rate_hz`; four a second
+//! until the master first answers; after five seconds without an answer, anyway), flying the
+//! eyepoint round the database's middle with a HAT request every frame, over a scenario with a
+//! cloud layer and a smoke plume. After a warm-up (every channel has drawn a host frame, then
+//! `warmup_s` more):
 //! - *spread*: at every frame drawn by any channel, the newest host frame each channel has
 //!   drawn; the spread is the largest minus the smallest. A channel drawing frame n while the
 //!   others show n - 1 is a spread of 1, the least any set of processes can do;
@@ -314,8 +315,9 @@ impl Host {
 }
 
 /// A synchronous host for `seconds`: each frame sent when the IG's Start of Frame for the last
-/// arrives (its frame starts the host's next), never faster than `rate_hz`, and after a second
-/// without one (the IG is starting, or gone) anyway. Host frames sent.
+/// arrives (its frame starts the host's next), never faster than `rate_hz`; before the IG first
+/// answers, four frames a second; after five seconds without an answer (the IG is gone),
+/// anyway. Host frames sent.
 pub(crate) fn synchronous(host: &mut Host, rate_hz: f64, seconds: f64) -> Result<u32, BenchError> {
     let period = Duration::from_secs_f64(1.0 / rate_hz);
     let start = Instant::now();
@@ -325,7 +327,16 @@ pub(crate) fn synchronous(host: &mut Host, rate_hz: f64, seconds: f64) -> Result
         let frame_began = Instant::now();
         host.send_frame()?;
         sent += 1;
-        host.wait_start_of_frame(Duration::from_secs(1));
+        // A synchronous host waits for the IG, once it has heard it: five seconds without a
+        // Start of Frame (the IG is gone) and it sends anyway. (A shorter wait sends frames the
+        // IG then skips when its frames are slow, and a skip is a spread of two.) Until the IG
+        // first answers, it sends a frame a quarter of a second.
+        let wait = if host.start_of_frames() == 0 {
+            Duration::from_millis(250)
+        } else {
+            Duration::from_secs(5)
+        };
+        host.wait_start_of_frame(wait);
         if let Some(rest) = period.checked_sub(frame_began.elapsed()) {
             std::thread::sleep(rest);
         }
