@@ -344,33 +344,58 @@ pub(crate) fn synchronous(host: &mut Host, rate_hz: f64, seconds: f64) -> Result
     Ok(sent)
 }
 
-/// Runs the host until every channel has drawn a host frame (started, paged in, its first
-/// frame done), at most a minute.
+/// Runs the host in quarter seconds until `done` holds (true) or `limit` has passed (false);
+/// a channel that ends on the way is an error with its reason.
+fn host_until(
+    host: &mut Host,
+    rate_hz: f64,
+    limit: Duration,
+    channels: &mut [&mut ServeProcess],
+    mut done: impl FnMut(&[&mut ServeProcess]) -> bool,
+) -> Result<bool, BenchError> {
+    let began = Instant::now();
+    loop {
+        synchronous(host, rate_hz, 0.25)?;
+        for channel in channels.iter_mut() {
+            if let Some(why) = channel.ended() {
+                return Err(BenchError::Scene(why));
+            }
+        }
+        if done(channels) {
+            return Ok(true);
+        }
+        if began.elapsed() > limit {
+            return Ok(false);
+        }
+    }
+}
+
+/// Whether every channel has drawn a host frame (started, paged in, its first frame done).
+fn all_drawing(channels: &[&mut ServeProcess]) -> bool {
+    channels.iter().all(|channel| {
+        read_frame_log(&channel.frame_log)
+            .is_ok_and(|log| log.iter().any(|r| r.host_frame.is_some()))
+    })
+}
+
+/// Runs the host until every channel draws (at most a minute).
 fn until_drawing(
     host: &mut Host,
     rate_hz: f64,
     channels: &mut [&mut ServeProcess],
 ) -> Result<(), BenchError> {
-    let began = Instant::now();
-    loop {
-        synchronous(host, rate_hz, 0.25)?;
-        let mut all = true;
-        for channel in channels.iter_mut() {
-            if let Some(why) = channel.ended() {
-                return Err(BenchError::Scene(why));
-            }
-            all &= read_frame_log(&channel.frame_log)
-                .map(|log| log.iter().any(|r| r.host_frame.is_some()))
-                .unwrap_or(false);
-        }
-        if all {
-            return Ok(());
-        }
-        if began.elapsed() > Duration::from_secs(60) {
-            return Err(BenchError::Scene(
-                "a channel drew no host frame within a minute of starting".into(),
-            ));
-        }
+    if host_until(
+        host,
+        rate_hz,
+        Duration::from_secs(60),
+        channels,
+        all_drawing,
+    )? {
+        Ok(())
+    } else {
+        Err(BenchError::Scene(
+            "a channel drew no host frame within a minute of starting".into(),
+        ))
     }
 }
 
@@ -494,8 +519,8 @@ fn rejoined_at(log: &[FrameRecord], reference: &[FrameRecord]) -> Option<f64> {
     })
 }
 
-/// Frame costs of a log in `[from_s, to_s]`.
-fn costs(log: &[FrameRecord], from_s: f64, to_s: f64) -> Vec<f64> {
+/// Frame costs of a log's host frames drawn in `[from_s, to_s]` (seconds since 1970).
+pub(crate) fn costs(log: &[FrameRecord], from_s: f64, to_s: f64) -> Vec<f64> {
     log.iter()
         .filter(|r| r.unix_s >= from_s && r.unix_s <= to_s && r.host_frame.is_some())
         .map(|r| r.frame_ms)
@@ -665,35 +690,37 @@ pub fn run(options: &ChannelsOptions) -> Result<Report, BenchError> {
     let restarted_at = right.spawned_unix_s;
     // The host goes on until the restarted slave is back on the master's frame (at most half a
     // minute), and a second more.
-    let restart_began = Instant::now();
-    loop {
-        synchronous(&mut host, options.rate_hz, 0.25)?;
-        if let Some(why) = right.ended() {
-            return Err(BenchError::Scene(why));
-        }
-        let back = rejoined_at(
-            &read_frame_log(&right.frame_log).unwrap_or_default(),
-            &read_frame_log(&master.frame_log).unwrap_or_default(),
-        );
-        if back.is_some() || restart_began.elapsed() > Duration::from_secs(30) {
-            break;
-        }
-    }
+    host_until(
+        &mut host,
+        options.rate_hz,
+        Duration::from_secs(30),
+        &mut [&mut right, &mut master],
+        |c| {
+            let log = |i: usize| read_frame_log(&c[i].frame_log).unwrap_or_default();
+            rejoined_at(&log(0), &log(1)).is_some()
+        },
+    )?;
     synchronous(&mut host, options.rate_hz, 1.0)?;
     let host_frames = host.frame;
     let start_of_frames = host.start_of_frames();
     drop(host);
     let timeout = Duration::from_secs(30);
+    let frame_logs = [
+        left.frame_log.clone(),
+        master.frame_log.clone(),
+        killed_log,
+        right.frame_log.clone(),
+    ];
     let centre_summary = master.finish(timeout)?;
     let left_summary = left.finish(timeout)?;
     let restarted_summary = right.finish(timeout)?;
 
     let logs = [
-        read_frame_log(&dir.path().join("left.frames.jsonl"))?,
-        read_frame_log(&dir.path().join("centre.frames.jsonl"))?,
-        read_frame_log(&killed_log)?,
+        read_frame_log(&frame_logs[0])?,
+        read_frame_log(&frame_logs[1])?,
+        read_frame_log(&frame_logs[2])?,
     ];
-    let restarted_log = read_frame_log(&dir.path().join("right-restarted.frames.jsonl"))?;
+    let restarted_log = read_frame_log(&frame_logs[3])?;
     let (spread_max, instants) =
         frame_spread(&[&logs[0], &logs[1], &logs[2]], measure_from, measure_to);
     if instants == 0 {
@@ -761,18 +788,11 @@ pub fn run(options: &ChannelsOptions) -> Result<Report, BenchError> {
     let cost_to = unix_now_s();
     let cpu_to = (cpu(&same_master), cpu(&same_slave));
     drop(host);
+    let same_logs = [same_master.frame_log.clone(), same_slave.frame_log.clone()];
     same_master.finish(timeout)?;
     same_slave.finish(timeout)?;
-    let master_ms = costs(
-        &read_frame_log(&dir.path().join("same-view-master.frames.jsonl"))?,
-        cost_from,
-        cost_to,
-    );
-    let slave_ms = costs(
-        &read_frame_log(&dir.path().join("same-view-slave.frames.jsonl"))?,
-        cost_from,
-        cost_to,
-    );
+    let master_ms = costs(&read_frame_log(&same_logs[0])?, cost_from, cost_to);
+    let slave_ms = costs(&read_frame_log(&same_logs[1])?, cost_from, cost_to);
     if master_ms.is_empty() || slave_ms.is_empty() {
         return Err(BenchError::Scene(format!(
             "the master and slave of one view drew {} and {} frames in {} s: no cost to compare",

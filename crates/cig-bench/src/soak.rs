@@ -26,8 +26,8 @@
 //! this machine's, overframing included); the host's clock is this process's.
 
 use crate::channels::{
-    database_box, flight_script, free_port, inside, paced, read_frame_log, serve_args, unix_now_s,
-    Host, Scratch, ServeProcess,
+    costs, database_box, flight_script, free_port, inside, paced, read_frame_log, serve_args,
+    unix_now_s, Host, Scratch, ServeProcess,
 };
 use crate::report::{date_utc, machine, median, percentile, ProcStatus};
 use crate::{require, BenchError, Report, Step};
@@ -313,16 +313,9 @@ pub fn run(
     } else {
         total_s / 3.0
     };
-    let frame_ms_between = |from_s: f64, to_s: f64| -> Vec<f64> {
-        frames
-            .iter()
-            .filter(|r| {
-                let t = r.unix_s - started_unix_s;
-                t >= from_s && t < to_s
-            })
-            .map(|r| r.frame_ms)
-            .collect()
-    };
+    // Frame costs between two times of the run (seconds from the host's first frame).
+    let frame_ms_between =
+        |from_s: f64, to_s: f64| costs(&frames, started_unix_s + from_s, started_unix_s + to_s);
     let samples_between = |from_s: f64, to_s: f64| -> Vec<SoakSample> {
         samples
             .iter()
