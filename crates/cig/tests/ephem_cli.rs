@@ -6,17 +6,9 @@ use common::cig;
 use serde_json::Value;
 
 fn ephem_json(args: &[&str]) -> Value {
-    let out = cig()
-        .arg("ephem")
-        .args(args)
-        .arg("--json")
-        .assert()
-        .success()
-        .get_output()
-        .stdout
-        .clone();
-    serde_json::from_slice(&out)
-        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out)))
+    let mut all = vec!["ephem"];
+    all.extend_from_slice(args);
+    common::json_output(&all)
 }
 
 fn keys(v: &Value) -> Vec<String> {

@@ -15,6 +15,20 @@ pub fn cig() -> Command {
     c
 }
 
+/// Runs `cig ARGS... --json`, asserting success, and parses its standard output.
+pub fn json_output(args: &[&str]) -> serde_json::Value {
+    let out = cig()
+        .args(args)
+        .arg("--json")
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    serde_json::from_slice(&out)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out)))
+}
+
 /// The one `error:` line a failed command printed (asserting there is exactly one and no
 /// panic). Mesa's Vulkan drivers print their own complaint when there is no Wayland session; it
 /// is not cig's error line.
