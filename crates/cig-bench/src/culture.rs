@@ -152,12 +152,7 @@ pub fn run(options: &CultureOptions) -> Result<Report, BenchError> {
         options.paging.clone(),
     )?);
     let mut session = QuerySession::new(Arc::clone(&cache));
-    let ground = |session: &mut QuerySession, lat: f64, lon: f64| {
-        session
-            .hot(lat, lon)
-            .map(|h| h.height_ellipsoid_m())
-            .step("the terrain under the benchmark's eye")
-    };
+    let ground = crate::ground_m;
     let view = |eye: Geodetic, pitch_deg: f64| View {
         eye,
         orientation: Hpr {

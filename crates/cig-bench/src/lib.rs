@@ -43,6 +43,7 @@ pub mod net;
 pub mod particles;
 pub mod render;
 mod report;
+pub mod sensor;
 pub mod soak;
 
 /// A report with a human summary: `cig bench` prints the JSON with `--json`, else the summary.
@@ -100,6 +101,19 @@ pub enum BenchError {
     Io(#[from] std::io::Error),
     #[error(transparent)]
     Integer(#[from] std::num::TryFromIntError),
+}
+
+/// The terrain's height above the ellipsoid at a point, for placing a benchmark's eye and
+/// objects.
+pub(crate) fn ground_m(
+    session: &mut cig_terrain::QuerySession,
+    lat_deg: f64,
+    lon_deg: f64,
+) -> Result<f64, BenchError> {
+    session
+        .hot(lat_deg, lon_deg)
+        .map(|h| h.height_ellipsoid_m())
+        .step("the terrain under the benchmark's scene")
 }
 
 /// Adds what was being done to an error, as `anyhow`'s context would: "what: reason: cause".

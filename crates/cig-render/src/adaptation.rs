@@ -51,6 +51,8 @@ struct AdaptParams {
     key: [f32; 4],
     slot: [f32; 4],
     shares: [f32; 4],
+    /// x: 1 for a thermal sensor view.
+    mode: [f32; 4],
 }
 
 /// How a frame's adaptation advances.
@@ -78,6 +80,34 @@ pub(crate) struct AdaptRequest {
     pub hold: bool,
 }
 
+/// The tone map's uniform: the slot's state (16 bytes), then for sensor views the histogram's
+/// range and the equalisation's weight (16) and the equalised grey at each of the 64 bins' tops
+/// (256).
+const TONE_BYTES: u64 = 16 + 16 + 256;
+/// How much of a sensor view's grey comes from plateau histogram equalisation (the rest is the
+/// linear window): large uniform areas (sky, a fire) do not take grey levels from the scene.
+const SENSOR_EQUALISATION: f32 = 0.5;
+
+/// What a thermal sensor view's automatic gain asks of the pass.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SensorAdaptRequest {
+    pub slot: usize,
+    /// The histogram's radiance range (low, high).
+    pub range: (f32, f32),
+    /// The narrowest window, radiance (about 2 K: the noise stays below a grey level's worth
+    /// of a flat scene).
+    pub min_span: f32,
+    /// The manual window (radiance), replacing the automatic gain.
+    pub manual: Option<(f32, f32)>,
+    pub adaptation: Adaptation,
+}
+
+/// Shares of the sensor histogram the automatic gain spans (0.5 % of the pixels may saturate
+/// at each end: a hot flash or the sun's glint does not darken the rest of the frame).
+const SENSOR_SHARES: [f32; 2] = [0.005, 0.995];
+/// Time constant of the automatic gain, seconds (short: a flash leaves within a second).
+pub const SENSOR_GAIN_TAU_S: f32 = 0.25;
+
 /// The histogram and adaptation passes, and the factor the tone map reads.
 pub(crate) struct AdaptationPass {
     /// `None` where the backend has no compute shaders.
@@ -93,9 +123,12 @@ struct Compute {
     layout: wgpu::BindGroupLayout,
     histogram: wgpu::ComputePipeline,
     adapt: wgpu::ComputePipeline,
+    sensor_adapt: wgpu::ComputePipeline,
     bins: wgpu::Buffer,
     params: wgpu::Buffer,
     state: wgpu::Buffer,
+    /// A sensor view's histogram range and equalised grey levels (the tone map's tail).
+    equalised: wgpu::Buffer,
     /// Bound to the current scene target (rebuilt with the targets).
     bind: Option<wgpu::BindGroup>,
 }
@@ -105,7 +138,7 @@ impl AdaptationPass {
         let device = &gpu.device;
         let tone_exposure = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tone exposure"),
-            size: 16,
+            size: TONE_BYTES,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -151,6 +184,10 @@ impl AdaptationPass {
                     wgpu::BindGroupEntry {
                         binding: 3,
                         resource: c.state.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: c.equalised.as_entire_binding(),
                     },
                 ],
             }));
@@ -208,6 +245,7 @@ impl AdaptationPass {
                 SHARES[2],
                 f32::from(u8::from(self.valid[slot])),
             ],
+            mode: [0.0; 4],
         };
         gpu.queue
             .write_buffer(&c.params, 0, bytemuck::bytes_of(&params));
@@ -225,6 +263,74 @@ impl AdaptationPass {
             pass.dispatch_workgroups(1, 1, 1);
         }
         publish(encoder);
+        self.valid[slot] = true;
+        true
+    }
+
+    /// Records a thermal sensor view's automatic gain (or writes its manual window) where the
+    /// tone map reads it: `(low, high)` radiance. Returns whether the GPU computed it.
+    pub fn encode_sensor(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        size: (u32, u32),
+        request: SensorAdaptRequest,
+    ) -> bool {
+        let slot = request.slot % ADAPTATION_SLOTS;
+        // A linear window only: [low, high, 0, 2], then the range with no equalisation.
+        let fixed = |window: (f32, f32)| {
+            [
+                window.0,
+                window.1,
+                0.0,
+                2.0,
+                request.range.0,
+                request.range.1,
+                0.0,
+                0.0,
+            ]
+        };
+        let compute = self.compute.as_ref().filter(|_| request.manual.is_none());
+        let (Some(c), Some(bind)) = (compute, self.compute.as_ref().and_then(|c| c.bind.as_ref()))
+        else {
+            let window = request.manual.unwrap_or(request.range);
+            gpu.queue
+                .write_buffer(&self.tone_exposure, 0, bytemuck::bytes_of(&fixed(window)));
+            return false;
+        };
+        let dt_s = match request.adaptation {
+            Adaptation::Step(dt) if dt.is_finite() && dt >= 0.0 => dt,
+            _ => -1.0,
+        };
+        let params = AdaptParams {
+            key: [request.range.0, request.range.1, dt_s, request.min_span],
+            slot: [slot as f32, SENSOR_GAIN_TAU_S, SENSOR_EQUALISATION, 0.0],
+            shares: [
+                SENSOR_SHARES[0],
+                SENSOR_SHARES[1],
+                0.0,
+                f32::from(u8::from(self.valid[slot])),
+            ],
+            mode: [1.0, 0.0, 0.0, 0.0],
+        };
+        gpu.queue
+            .write_buffer(&c.params, 0, bytemuck::bytes_of(&params));
+        encoder.clear_buffer(&c.bins, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("sensor gain"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, bind, &[]);
+            pass.set_pipeline(&c.histogram);
+            pass.dispatch_workgroups(size.0.div_ceil(32), size.1.div_ceil(32), 1);
+            pass.set_pipeline(&c.sensor_adapt);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        let offset = (slot * 16) as u64;
+        encoder.copy_buffer_to_buffer(&c.state, offset, &self.tone_exposure, 0, 16);
+        encoder.copy_buffer_to_buffer(&c.equalised, 0, &self.tone_exposure, 16, TONE_BYTES - 16);
+        encoder.copy_buffer_to_buffer(&c.state, offset, &self.readback, 0, 16);
         self.valid[slot] = true;
         true
     }
@@ -272,6 +378,7 @@ impl Compute {
                     ..crate::pass::uniform_entry(2)
                 },
                 storage(3),
+                storage(4),
             ],
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -305,13 +412,23 @@ impl Compute {
         Compute {
             histogram: pipeline("histogram"),
             adapt: pipeline("adapt"),
+            sensor_adapt: pipeline("sensor_adapt"),
             layout,
             bins: buffer("adaptation bins", 64 * 4, U::STORAGE | U::COPY_DST),
-            params: buffer("adaptation params", 48, U::UNIFORM | U::COPY_DST),
+            params: buffer(
+                "adaptation params",
+                std::mem::size_of::<AdaptParams>() as u64,
+                U::UNIFORM | U::COPY_DST,
+            ),
             state: buffer(
                 "adaptation state",
                 (ADAPTATION_SLOTS * 16) as u64,
                 U::STORAGE | U::COPY_SRC | U::COPY_DST,
+            ),
+            equalised: buffer(
+                "sensor equalisation",
+                TONE_BYTES - 16,
+                U::STORAGE | U::COPY_SRC,
             ),
             bind: None,
         }

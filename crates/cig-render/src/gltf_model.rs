@@ -90,6 +90,11 @@ pub fn load_gltf_model(path: &Path, name: &str) -> Result<Model, ModelError> {
                     .material()
                     .pbr_metallic_roughness()
                     .base_color_factor();
+                // The thermal code of the primitive's material (its name, or else the node's,
+                // docs/models.md): a hot part or a thermal material; 255 the model's default.
+                let code = thermal_code(primitive.material().name())
+                    .or_else(|| thermal_code(node.name()))
+                    .unwrap_or(cig_scene::thermal::DEFAULT_CODE);
                 let colours: Vec<[f32; 4]> = match reader.read_colors(0) {
                     Some(c) => c.into_rgba_f32().collect(),
                     None => vec![[1.0; 4]; positions.len()],
@@ -120,7 +125,7 @@ pub fn load_gltf_model(path: &Path, name: &str) -> Result<Model, ModelError> {
                         srgb(base[0] * k[0]),
                         srgb(base[1] * k[1]),
                         srgb(base[2] * k[2]),
-                        255,
+                        code,
                     ];
                     // A mirroring transform reverses the winding: restore it.
                     let (b, c) = if mirrored { (c, b) } else { (b, c) };
@@ -146,4 +151,38 @@ pub fn load_gltf_model(path: &Path, name: &str) -> Result<Model, ModelError> {
         return Err(ModelError::Empty { path: shown });
     }
     Ok(model_with_generated_lods(name, mesh))
+}
+
+/// The thermal code a glTF name asks for: `cig_hot=PART` (engine_deck, exhaust, running_gear,
+/// crew, burning_hull) or `cig_thermal=MATERIAL` (a `cig_thermal::ThermalMaterial` name)
+/// anywhere in the name, e.g. "grille cig_hot=engine_deck"; `None` when it asks for neither or
+/// names an unknown one.
+pub fn thermal_code(name: Option<&str>) -> Option<u8> {
+    let name = name?;
+    for word in name.split(|c: char| c.is_whitespace() || c == ';' || c == ',') {
+        if let Some(part) = word.strip_prefix("cig_hot=") {
+            return cig_thermal::HotPart::from_name(part).map(cig_scene::thermal::hot_code);
+        }
+        if let Some(material) = word.strip_prefix("cig_thermal=") {
+            return cig_thermal::ThermalMaterial::from_name(material)
+                .ok()
+                .map(cig_scene::thermal::material_code);
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod thermal_name_tests {
+    use super::thermal_code;
+
+    #[test]
+    fn names_mark_hot_parts_and_materials() {
+        assert_eq!(thermal_code(Some("grille cig_hot=engine_deck")), Some(32));
+        assert_eq!(thermal_code(Some("cig_hot=exhaust")), Some(33));
+        assert_eq!(thermal_code(Some("windscreen;cig_thermal=glass")), Some(12));
+        assert_eq!(thermal_code(Some("cig_hot=warp_core")), None);
+        assert_eq!(thermal_code(Some("hull")), None);
+        assert_eq!(thermal_code(None), None);
+    }
 }

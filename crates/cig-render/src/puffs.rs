@@ -269,6 +269,10 @@ impl PuffPass {
         gpu: &Gpu,
         camera: &Camera,
         snapshot: &FrameSnapshot,
+        sensor: Option<(
+            cig_scene::thermal::SensorView,
+            &cig_scene::thermal::ThermalScene,
+        )>,
     ) -> usize {
         self.staging.clear();
         if snapshot.puffs.is_empty() || !self.usable {
@@ -321,6 +325,9 @@ impl PuffPass {
                 },
                 ..*puff
             });
+            if let (Some((view, scene)), Some(last)) = (sensor, self.staging.last_mut()) {
+                *last = infrared_puff(last, view.band, scene.air_k);
+            }
         }
         let count = self.staging.len();
         if count > self.capacity {
@@ -521,5 +528,31 @@ impl PuffPass {
         pass.set_bind_group(0, &targets.composite_bind, &[]);
         pass.draw(0..3, 0..1);
         2
+    }
+}
+
+/// A puff as a thermal sensor sees it (puffs.wgsl's sensor branch): its optical depth scaled by
+/// its kind's infrared ratio (`cig_scene::thermal::obscurant_ir_ratio`), its colour the band
+/// radiance of its gas (smoke and dust at their temperature, near the air's; flames glowing at
+/// theirs, as emission).
+fn infrared_puff(puff: &PuffInstance, band: cig_thermal::IrBand, air_k: f64) -> PuffInstance {
+    let kind = cig_effects::ObscurantKind::ALL
+        .get(puff.kind as usize)
+        .copied()
+        .unwrap_or(cig_effects::ObscurantKind::Smoke);
+    let ratio = cig_scene::thermal::obscurant_ir_ratio(kind, band);
+    let tau = -(1.0 - puff.opacity.min(0.9999)).ln() * ratio;
+    let temperature_k = if puff.temperature_k.is_finite() && puff.temperature_k > 100.0 {
+        f64::from(puff.temperature_k)
+    } else {
+        air_k
+    };
+    let radiance = cig_thermal::planck::band_radiance_unchecked(band.band(), temperature_k) as f32;
+    let flame = kind == cig_effects::ObscurantKind::Flame;
+    PuffInstance {
+        opacity: 1.0 - (-tau).exp(),
+        colour_rgb: [radiance; 3],
+        emissive: if flame { 1.0 } else { 0.0 },
+        ..*puff
     }
 }

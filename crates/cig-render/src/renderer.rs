@@ -40,6 +40,7 @@ use crate::puffs::PuffPass;
 use crate::terrain::{MeshStats, NodeRecord, TerrainFrame, TerrainGpu};
 use cig_geo::Geodetic;
 use cig_scene::culture::{CultureFrame, CultureInstance, CultureSelect, CultureSelector};
+use cig_scene::thermal::{DisplayColour, Polarity, SensorView};
 
 // Culture instances are read by the model pass as instance records, from the same buffer.
 const _: () =
@@ -177,6 +178,11 @@ struct Globals {
     sky_frame_y: [f32; 4],
     detail_east: [f32; 4],
     detail_north: [f32; 4],
+    sensor: [f32; 4],
+    sensor_sky0: [f32; 4],
+    sensor_sky1: [f32; 4],
+    sensor_display: [f32; 4],
+    sensor_display2: [f32; 4],
 }
 
 /// The sky-view table's frame for the frame's up and sun (single precision, as the shaders
@@ -288,6 +294,8 @@ pub struct Renderer {
     terrain_frame: TerrainFrame,
     colour_format: wgpu::TextureFormat,
     globals: wgpu::Buffer,
+    /// The thermal sensor views' tables (sensor.rs).
+    thermal: wgpu::Buffer,
     node_records: wgpu::Buffer,
     instances: wgpu::Buffer,
     /// Instance records the instance buffer holds (entities first, then culture).
@@ -432,7 +440,12 @@ fn sky_pipeline(
     let module = atmosphere_shader(
         gpu,
         "sky",
-        &[crate::celestial::WGSL, include_str!("shaders/sky.wgsl")].concat(),
+        &[
+            crate::celestial::WGSL,
+            include_str!("shaders/thermal_common.wgsl"),
+            include_str!("shaders/sky.wgsl"),
+        ]
+        .concat(),
     );
     pipeline(
         gpu,
@@ -576,6 +589,32 @@ impl TerrainPipelines {
     }
 }
 
+/// The models' bind group: the globals, the instance records and the thermal tables.
+fn model_bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    [globals, instances, thermal]: [&wgpu::Buffer; 3],
+) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("model"),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: instances.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 9,
+                resource: thermal.as_entire_binding(),
+            },
+        ],
+    })
+}
+
 /// Options of one frame.
 #[derive(Clone, Copy, Debug)]
 pub struct FrameOptions {
@@ -674,11 +713,19 @@ impl Renderer {
                 texture_array_entry(6),
                 uint_texture_array_entry(7),
                 sampler_entry(8),
+                storage_entry(9),
             ],
         });
         let model_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("model"),
-            entries: &[uniform_entry(0), storage_entry(1)],
+            entries: &[uniform_entry(0), storage_entry(1), storage_entry(9)],
+        });
+        // The thermal sensor views' tables (sensor.rs), at binding 9 of the terrain and models.
+        let thermal = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("thermal"),
+            size: (crate::sensor::THERMAL_LEN * 4) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
         });
         let sky_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("sky"),
@@ -726,22 +773,13 @@ impl Renderer {
                     binding: 8,
                     resource: wgpu::BindingResource::Sampler(&imagery_sampler),
                 },
-            ],
-        });
-        let model_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("model"),
-            layout: &model_layout,
-            entries: &[
                 wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: globals.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: instances.as_entire_binding(),
+                    binding: 9,
+                    resource: thermal.as_entire_binding(),
                 },
             ],
         });
+        let model_bind = model_bind_group(device, &model_layout, [&globals, &instances, &thermal]);
         let sky_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("sky"),
             layout: &sky_layout,
@@ -753,9 +791,26 @@ impl Renderer {
         let atmosphere = AtmosphereGpu::new(&gpu, &sky_layout, sky_bind.clone());
         let tone_map = ToneMap::new(&gpu, &sky_layout, colour_format);
         let adaptation = AdaptationPass::new(&gpu);
-        let terrain_module =
-            atmosphere_shader(&gpu, "terrain", include_str!("shaders/terrain.wgsl"));
-        let model_module = atmosphere_shader(&gpu, "model", include_str!("shaders/model.wgsl"));
+        let terrain_module = atmosphere_shader(
+            &gpu,
+            "terrain",
+            &[
+                include_str!("shaders/thermal_common.wgsl"),
+                include_str!("shaders/thermal.wgsl"),
+                include_str!("shaders/terrain.wgsl"),
+            ]
+            .concat(),
+        );
+        let model_module = atmosphere_shader(
+            &gpu,
+            "model",
+            &[
+                include_str!("shaders/thermal_common.wgsl"),
+                include_str!("shaders/thermal.wgsl"),
+                include_str!("shaders/model.wgsl"),
+            ]
+            .concat(),
+        );
         let celestial = CelestialPass::new(&gpu);
         let model_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<ModelVertex>() as u64,
@@ -837,6 +892,7 @@ impl Renderer {
             terrain_frame: TerrainFrame::default(),
             colour_format,
             globals,
+            thermal,
             node_records,
             instances,
             instance_capacity: MAX_INSTANCES,
@@ -1101,7 +1157,26 @@ impl Renderer {
         .with_flash(snapshot.flash_lux);
         let physical_sky = snapshot.sky.model == SkyModel::Physical;
         let wire = snapshot.wireframe && self.terrain_pipelines.wire_supported;
-        self.write_globals(&camera, &lighting, snapshot, options.key_background, wire);
+        // A thermal sensor view: its tables for this eye and sun.
+        let sensor = snapshot.sensor_of(view_index).map(|(sensor, scene)| {
+            let frame = crate::sensor::sensor_frame(
+                &sensor,
+                scene,
+                view.eye.alt_m,
+                lighting.sun_elevation_deg,
+            );
+            self.gpu
+                .queue
+                .write_buffer(&self.thermal, 0, bytemuck::cast_slice(&frame.buffer));
+            (sensor, frame)
+        });
+        self.write_globals(
+            &camera,
+            &lighting,
+            snapshot,
+            (options.key_background, wire),
+            sensor.as_ref(),
+        );
         self.celestial.prepare(&self.gpu, snapshot, view.eye);
         if !terrain_frame.records.is_empty() {
             self.gpu.queue.write_buffer(
@@ -1201,8 +1276,16 @@ impl Renderer {
         // Its room serves the next frame.
         self.culture.recycle(culture);
 
-        let puff_count = self.puffs.prepare(&self.gpu, &camera, snapshot);
-        let cloud_count = self.clouds.prepare(&self.gpu, &camera, snapshot);
+        let sensor_view = snapshot.sensor_of(view_index);
+        let puff_count = self
+            .puffs
+            .prepare(&self.gpu, &camera, snapshot, sensor_view);
+        // Sensor views draw no clouds, lightning or rain (sensor.rs's limits).
+        let cloud_count = if sensor.is_some() {
+            0
+        } else {
+            self.clouds.prepare(&self.gpu, &camera, snapshot)
+        };
         // Below the clouds, the puffs are nearer: clouds first. Timestamp queries are numbered
         // in the order passes need them, so the written ones are 0..queries.
         let clouds_first = cloud_count > 0 && (puff_count == 0 || self.clouds.eye_below_clouds());
@@ -1213,12 +1296,16 @@ impl Renderer {
         };
         let puff_queries = (puff_count > 0).then(|| (next_query(), next_query()));
         let cloud_queries = (cloud_count > 0).then(|| (next_query(), next_query()));
-        let bolt_lines = self
-            .bolts
-            .prepare(&self.gpu, &self.globals, &camera, snapshot);
-        let particles = self
-            .precipitation
-            .prepare(&self.gpu, &camera, snapshot, &lighting);
+        let (bolt_lines, particles) = if sensor.is_some() {
+            (0, 0)
+        } else {
+            (
+                self.bolts
+                    .prepare(&self.gpu, &self.globals, &camera, snapshot),
+                self.precipitation
+                    .prepare(&self.gpu, &camera, snapshot, &lighting),
+            )
+        };
         let size = (view.width_px, view.height_px);
         let mut encoder = self
             .gpu
@@ -1394,24 +1481,41 @@ impl Renderer {
         stats.cloud_layers_drawn = cloud_count as u32;
         // The eye adapts to what the view shows (not to keyed test frames, not with a fixed
         // exposure).
-        let adapted = self.adaptation.encode(
-            &self.gpu,
-            &mut encoder,
-            size,
-            AdaptRequest {
-                slot: view_index,
-                log2_key: cig_scene::lighting::shown_grey_log2(
-                    lighting.adapted_illuminance_lux,
-                    snapshot.sky.exposure_compensation_ev,
-                ) as f32,
-                adaptation: if options.key_background || snapshot.sky.fixed_exposure_ev.is_some() {
-                    Adaptation::Off
-                } else {
-                    options.adaptation
+        let adapted = if let Some((_, frame)) = &sensor {
+            self.adaptation.encode_sensor(
+                &self.gpu,
+                &mut encoder,
+                size,
+                crate::adaptation::SensorAdaptRequest {
+                    slot: view_index,
+                    range: frame.histogram_range,
+                    min_span: 2.0 * frame.slope,
+                    manual: frame.manual,
+                    adaptation: options.adaptation,
                 },
-                hold: snapshot.flash_lux > 0.0,
-            },
-        );
+            )
+        } else {
+            self.adaptation.encode(
+                &self.gpu,
+                &mut encoder,
+                size,
+                AdaptRequest {
+                    slot: view_index,
+                    log2_key: cig_scene::lighting::shown_grey_log2(
+                        lighting.adapted_illuminance_lux,
+                        snapshot.sky.exposure_compensation_ev,
+                    ) as f32,
+                    adaptation: if options.key_background
+                        || snapshot.sky.fixed_exposure_ev.is_some()
+                    {
+                        Adaptation::Off
+                    } else {
+                        options.adaptation
+                    },
+                    hold: snapshot.flash_lux > 0.0,
+                },
+            )
+        };
         {
             let Some(targets) = self.targets.as_ref() else {
                 return Err(RenderError::Gpu("render targets missing".into()));
@@ -1511,8 +1615,8 @@ impl Renderer {
         camera: &Camera,
         lighting: &Lighting,
         snapshot: &FrameSnapshot,
-        key_background: bool,
-        wire: bool,
+        (key_background, wire): (bool, bool),
+        sensor: Option<&(SensorView, crate::sensor::SensorFrame)>,
     ) {
         let v4 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
@@ -1605,7 +1709,35 @@ impl Renderer {
             sky_frame_y: [0.0; 4],
             detail_east: v4(east, 0.0),
             detail_north: v4(north, 0.0),
+            ..Default::default()
         };
+        if let Some((view, frame)) = sensor {
+            let sky = frame.sky;
+            globals.sensor = [
+                1.0,
+                f32::from(u8::from(view.band == cig_thermal::IrBand::Mwir)),
+                frame.down_radiance,
+                frame.sun_irradiance,
+            ];
+            globals.sensor_sky0 = [sky[0], sky[1], sky[2], sky[3]];
+            globals.sensor_sky1 = [sky[4], sky[5], sky[6], sky[7]];
+            globals.sensor_display = [
+                f32::from(u8::from(view.polarity == Polarity::BlackHot)),
+                match view.display {
+                    DisplayColour::White => 0.0,
+                    DisplayColour::Green => 1.0,
+                    DisplayColour::Black => 2.0,
+                },
+                view.netd_k.max(0.0) * frame.slope,
+                view.fixed_pattern.max(0.0),
+            ];
+            globals.sensor_display2 = [
+                view.blur_px.max(0.0),
+                f32::from(u8::from(view.line_dropout)),
+                (self.frame % 65_536) as f32,
+                0.0,
+            ];
+        }
         (globals.sky_frame_x, globals.sky_frame_y) =
             sky_frame(globals.eye_up, globals.sun_dir, globals.atmos[0]);
         (globals.atmos[2], globals.atmos[3]) = eye_densities(globals.atmos[0]);
@@ -1629,6 +1761,19 @@ impl Renderer {
     ) -> Vec<((u32, u32, i32, u32), InstanceRecord)> {
         let mut out = Vec::new();
         let aim = aim_of(camera, point_of_interest_deg);
+        // Entities with hot parts: their slots in the thermal buffer (sensor.rs), 1-based.
+        let hot_slots: HashMap<u32, u32> = snapshot
+            .thermal
+            .as_ref()
+            .map(|t| {
+                t.entity_heat
+                    .iter()
+                    .take(crate::sensor::MAX_HOT_ENTITIES)
+                    .enumerate()
+                    .map(|(i, (id, _))| (*id, i as u32 + 1))
+                    .collect()
+            })
+            .unwrap_or_default();
         for entity in snapshot.entities.iter().take(MAX_INSTANCES) {
             let Some(model) = self.models.get(&entity.model) else {
                 continue;
@@ -1688,6 +1833,12 @@ impl Renderer {
                 let e = enu.enu_vector_to_ecef(v);
                 [e.x as f32, e.y as f32, e.z as f32, w]
             };
+            // The thermal word (thermal.wgsl): the default material's code and the hot slot.
+            let default_code = cig_scene::thermal::material_code(
+                cig_scene::thermal::default_material_for_model(&entity.model),
+            );
+            let slot = hot_slots.get(&entity.id).copied().unwrap_or(0);
+            let thermal_word = (u32::from(default_code) + 256 * slot) as f32;
             for (level, share_from, share_to) in levels {
                 let Some(range) = model.lods.get(level).copied() else {
                     continue;
@@ -1697,7 +1848,7 @@ impl Renderer {
                     InstanceRecord {
                         col0: col(right, share_from),
                         col1: col(forward, share_to),
-                        col2: col(up, 0.0),
+                        col2: col(up, thermal_word),
                         origin: [rel.x as f32, rel.y as f32, rel.z as f32, 0.0],
                     },
                 ));
@@ -1761,23 +1912,11 @@ impl Renderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        self.model_bind = self
-            .gpu
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("model"),
-                layout: &self.model_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: self.globals.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: self.instances.as_entire_binding(),
-                    },
-                ],
-            });
+        self.model_bind = model_bind_group(
+            &self.gpu.device,
+            &self.model_layout,
+            [&self.globals, &self.instances, &self.thermal],
+        );
         self.instance_capacity = capacity;
     }
 

@@ -20,17 +20,6 @@ const SIZE: (u32, u32) = (128, 96);
 /// 2026-06-22 07:00 UTC: 23:00 in California, the sun 20 degrees below the horizon.
 const NIGHT_UNIX_S: f64 = MORNING_UNIX_S + 12.0 * 3600.0;
 
-/// A point of the test hills `north_m`, `east_m` from its reference, `agl_m` above the ground.
-fn hills_point(north_m: f64, east_m: f64, agl_m: f64) -> Geodetic {
-    let frame = EnuFrame::new(Geodetic::new(36.0159, -121.1854, 0.0));
-    let g = frame.enu_to_geodetic(DVec3::new(east_m, north_m, 0.0));
-    let mut q = cig_terrain::QuerySession::new(cache(&hills()));
-    let ground = q
-        .hot(g.lat_deg, g.lon_deg)
-        .expect("inside the test database");
-    Geodetic::new(g.lat_deg, g.lon_deg, ground.height_ellipsoid_m() + agl_m)
-}
-
 /// A point on the sea `east_m`, `north_m` from `eye`.
 fn sea_point(eye: Geodetic, east_m: f64, north_m: f64) -> Geodetic {
     let g = EnuFrame::new(eye).enu_to_geodetic(DVec3::new(east_m, north_m, 0.0));

@@ -11,24 +11,12 @@ use cig_scene::{EntityInstance, FrameSnapshot, Hpr};
 use common::*;
 use glam::{DVec3, Vec3};
 
-fn hills_eye(north_m: f64, east_m: f64, agl_m: f64) -> Geodetic {
-    let base = Geodetic::new(36.0159, -121.1854, 0.0);
-    let frame = EnuFrame::new(base);
-    let g = frame.enu_to_geodetic(DVec3::new(east_m, north_m, 0.0));
-    let cache = cache(&hills());
-    let mut q = cig_terrain::QuerySession::new(cache);
-    let ground = q
-        .hot(g.lat_deg, g.lon_deg)
-        .expect("inside the test database");
-    Geodetic::new(g.lat_deg, g.lon_deg, ground.height_ellipsoid_m() + agl_m)
-}
-
 #[test]
 fn golden_images_match_in_daylight_and_at_dusk_with_fog_and_models() {
     let db = hills();
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
-    let eye = hills_eye(-1500.0, -1500.0, 250.0);
+    let eye = hills_point(-1500.0, -1500.0, 250.0);
     let mut snapshot = FrameSnapshot::new(
         MORNING_UNIX_S,
         vec![view(eye, (40.0, -10.0, 0.0), 60.0, (192, 128))],
@@ -41,13 +29,13 @@ fn golden_images_match_in_daylight_and_at_dusk_with_fog_and_models() {
     snapshot.unix_time_s = MORNING_UNIX_S + 8.5 * 3600.0;
     snapshot.fog = Fog::from_visibility(FogMode::ExponentialSquared, 3000.0);
     snapshot.views[0] = view(
-        hills_eye(-1500.0, -1500.0, 25.0),
+        hills_point(-1500.0, -1500.0, 25.0),
         (40.0, -4.0, 0.0),
         60.0,
         (192, 128),
     );
-    let tank_at = hills_eye(-1385.0, -1404.0, 0.0);
-    let house_at = hills_eye(-1330.0, -1450.0, 0.0);
+    let tank_at = hills_point(-1385.0, -1404.0, 0.0);
+    let house_at = hills_point(-1330.0, -1450.0, 0.0);
     snapshot.entities = vec![
         EntityInstance {
             id: 1,
@@ -105,7 +93,7 @@ fn no_background_shows_through_between_terrain_nodes() {
     .into_iter()
     .enumerate()
     {
-        let snapshot_view = view(hills_eye(n, e, agl), (heading, pitch, 0.0), 50.0, size);
+        let snapshot_view = view(hills_point(n, e, agl), (heading, pitch, 0.0), 50.0, size);
         for max_pixel_error in [0.0, 1.0, 4.0] {
             let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![snapshot_view]);
             snapshot.max_pixel_error = max_pixel_error;
@@ -148,7 +136,7 @@ fn no_cracks_while_finer_tiles_are_still_loading() {
         let snapshot = FrameSnapshot::new(
             MORNING_UNIX_S,
             vec![view(
-                hills_eye(n, e, agl),
+                hills_point(n, e, agl),
                 (heading, pitch, 0.0),
                 50.0,
                 (256, 192),
@@ -185,7 +173,7 @@ fn level_of_detail_changes_frame_to_frame_no_more_than_full_detail_does() {
     let sequence = |renderer: &mut cig_render::Renderer, max_pixel_error: f64| -> Vec<Image> {
         (0..frames)
             .map(|i| {
-                let eye = hills_eye(-2000.0 + 40.0 * i as f64, -1800.0 + 30.0 * i as f64, 180.0);
+                let eye = hills_point(-2000.0 + 40.0 * i as f64, -1800.0 + 30.0 * i as f64, 180.0);
                 let mut snapshot = FrameSnapshot::new(
                     MORNING_UNIX_S,
                     vec![view(eye, (37.0, -6.0, 0.0), 60.0, size)],
@@ -367,7 +355,7 @@ fn level_of_detail_draws_far_fewer_triangles_than_full_detail() {
     let db = hills();
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
-    let eye = hills_eye(-3800.0, -3800.0, 1500.0);
+    let eye = hills_point(-3800.0, -3800.0, 1500.0);
     let mut snapshot = FrameSnapshot::new(
         MORNING_UNIX_S,
         vec![view(eye, (45.0, -12.0, 0.0), 60.0, (160, 120))],
@@ -413,12 +401,22 @@ fn bad_views_are_errors_not_panics() {
     let db = hills();
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
-    let mut bad = view(hills_eye(0.0, 0.0, 100.0), (0.0, 0.0, 0.0), 60.0, (64, 48));
+    let mut bad = view(
+        hills_point(0.0, 0.0, 100.0),
+        (0.0, 0.0, 0.0),
+        60.0,
+        (64, 48),
+    );
     bad.width_px = 0;
     let snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![bad]);
     let err = cig_render::render_image(&mut renderer, &cache, &snapshot, 0).expect_err("zero size");
     assert!(err.to_string().contains("frame size"), "{err}");
-    let mut bad = view(hills_eye(0.0, 0.0, 100.0), (0.0, 0.0, 0.0), 60.0, (64, 48));
+    let mut bad = view(
+        hills_point(0.0, 0.0, 100.0),
+        (0.0, 0.0, 0.0),
+        60.0,
+        (64, 48),
+    );
     bad.eye.alt_m = -5000.0;
     let snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![bad]);
     let err = cig_render::render_image(&mut renderer, &cache, &snapshot, 0).expect_err("below");
@@ -550,7 +548,7 @@ fn ancestors_stand_in_while_finer_meshes_are_still_being_built() {
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
     let v = view(
-        hills_eye(-1500.0, -1500.0, 1500.0),
+        hills_point(-1500.0, -1500.0, 1500.0),
         (45.0, -40.0, 0.0),
         50.0,
         (256, 192),
@@ -587,7 +585,7 @@ fn a_ground_fog_layer_fills_the_valleys_and_leaves_the_hills_clear() {
     let db = hills();
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
-    let eye = hills_eye(-1500.0, -1500.0, 1200.0);
+    let eye = hills_point(-1500.0, -1500.0, 1200.0);
     let v = view(eye, (45.0, -35.0, 0.0), 60.0, (160, 120));
     let camera = v.camera();
     let mut q = cig_terrain::QuerySession::new(cache.clone());
@@ -656,7 +654,7 @@ fn pipelines_built_for_the_frames_switches_draw_what_the_unspecialised_ones_do()
     let db = hills();
     let cache = cache(&db);
     let mut renderer = renderer(&cache);
-    let eye = hills_eye(-1500.0, -1500.0, 400.0);
+    let eye = hills_point(-1500.0, -1500.0, 400.0);
     let base = FrameSnapshot::new(
         MORNING_UNIX_S,
         vec![view(eye, (45.0, -12.0, 0.0), 60.0, (96, 72))],
@@ -684,7 +682,7 @@ fn pipelines_built_for_the_frames_switches_draw_what_the_unspecialised_ones_do()
     // Near the ground, with the ground's detail and plain (the GROUND_DETAIL switch).
     let mut near = frames[2].1.clone();
     near.views[0] = view(
-        hills_eye(-1500.0, -1500.0, 25.0),
+        hills_point(-1500.0, -1500.0, 25.0),
         (45.0, -35.0, 0.0),
         60.0,
         (96, 72),

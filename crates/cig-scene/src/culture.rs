@@ -916,7 +916,7 @@ impl ObjectPass<'_> {
                     buckets[index].push(CultureInstance {
                         col0: [r.x, r.y, r.z, from],
                         col1: [f.x, f.y, f.z, to],
-                        col2: [u.x, u.y, u.z, 0.0],
+                        col2: [u.x, u.y, u.z, culture_thermal_default(item.kind)],
                         origin: [pos.x, pos.y, pos.z, item.tint],
                     });
                 };
@@ -1093,6 +1093,26 @@ fn rgb(r: u8, g: u8, b: u8) -> [u8; 4] {
     [r, g, b, 255]
 }
 
+/// Each culture kind's thermal material for surfaces without their own code, as the
+/// instance's `col2.w` (crate::thermal: the default code, no entity heat).
+fn culture_thermal_default(kind: CultureKind) -> f32 {
+    use cig_thermal::ThermalMaterial as M;
+    let m = match kind {
+        CultureKind::ConiferTree | CultureKind::BroadleafTree | CultureKind::Bush => {
+            M::CanopyFoliage
+        }
+        CultureKind::House | CultureKind::Shed | CultureKind::LargeBuilding => M::BuildingWall,
+        CultureKind::Wall => M::Rock,
+        CultureKind::Fence | CultureKind::PowerPole => M::Forest,
+    };
+    f32::from(crate::thermal::material_code(m))
+}
+
+/// A colour whose alpha is a thermal material's code (crate::thermal): glass, bark, stone.
+fn rgb_of(r: u8, g: u8, b: u8, material: cig_thermal::ThermalMaterial) -> [u8; 4] {
+    [r, g, b, crate::thermal::material_code(material)]
+}
+
 /// An ellipsoid about `centre` with semi-axes `radii`, `segments` around and `rings` from pole
 /// to pole (flat-shaded).
 fn add_ellipsoid(
@@ -1178,7 +1198,7 @@ fn windows(m: &mut ModelMesh, eave: f32, floors: u32, per_side: u32, colour: [u8
 /// The unit model of a culture kind, finest level first (three levels, as the built-in models).
 pub fn culture_model(kind: CultureKind) -> Model {
     let v = Vec3::new;
-    let bark = rgb(78, 60, 42);
+    let bark = rgb_of(78, 60, 42, cig_thermal::ThermalMaterial::Forest);
     let lods: Vec<ModelMesh> = match kind {
         CultureKind::ConiferTree => {
             let needles = rgb(34, 66, 38);
@@ -1241,7 +1261,13 @@ pub fn culture_model(kind: CultureKind) -> Model {
             let mut l0 = ModelMesh::default();
             gabled(&mut l0, eave, wall, roof);
             let floors = if kind == CultureKind::House { 2 } else { 1 };
-            windows(&mut l0, eave, floors, 3, rgb(52, 58, 66));
+            windows(
+                &mut l0,
+                eave,
+                floors,
+                3,
+                rgb_of(52, 58, 66, cig_thermal::ThermalMaterial::Glass),
+            );
             if kind == CultureKind::House {
                 l0.add_box(v(0.2, 0.15, 0.7), v(0.3, 0.25, 1.02), rgb(120, 70, 60));
             }
@@ -1286,7 +1312,13 @@ pub fn culture_model(kind: CultureKind) -> Model {
             let mut l0 = ModelMesh::default();
             l0.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 0.96), wall);
             l0.add_box(v(-0.48, -0.48, 0.96), v(0.48, 0.48, 1.0), roof);
-            windows(&mut l0, 0.96, 4, 6, rgb(60, 70, 84));
+            windows(
+                &mut l0,
+                0.96,
+                4,
+                6,
+                rgb_of(60, 70, 84, cig_thermal::ThermalMaterial::Glass),
+            );
             let mut l1 = ModelMesh::default();
             l1.add_box(v(-0.5, -0.5, 0.0), v(0.5, 0.5, 0.96), wall);
             l1.add_box(v(-0.48, -0.48, 0.96), v(0.48, 0.48, 1.0), roof);

@@ -3,7 +3,7 @@
 //! ([`lod`]) and node meshes ([`terrain_mesh`]), light, sky and fog ([`lighting`]), entity
 //! models ([`models`]) and the choice of their levels by the detail control parameter
 //! ([`detail`]), the per-frame snapshot ([`snapshot`]), lightning bolts ready to draw
-//! and their flash ([`bolt`]).
+//! and their flash ([`bolt`]), and what a thermal sensor view needs ([`thermal`]).
 //!
 //! This crate is pure: it never opens files, sockets, the GPU or the terminal; `cig-render`
 //! turns what it computes into frames.
@@ -20,6 +20,7 @@ pub mod node;
 pub mod overload;
 pub mod snapshot;
 pub mod terrain_mesh;
+pub mod thermal;
 pub mod view;
 
 pub use lighting::{Fog, FogMode, Lighting};

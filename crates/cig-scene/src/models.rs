@@ -205,6 +205,26 @@ impl Model {
 const OLIVE: [u8; 4] = [86, 92, 58, 255];
 const DARK: [u8; 4] = [40, 40, 38, 255];
 const GREY: [u8; 4] = [118, 122, 128, 255];
+
+/// A colour with a thermal code in its alpha (crate::thermal).
+const fn coded(colour: [u8; 4], code: u8) -> [u8; 4] {
+    [colour[0], colour[1], colour[2], code]
+}
+
+/// Tracks and wheels: running gear that warms with motion.
+const TRACKS: [u8; 4] = coded(DARK, 32 + 2);
+/// Engine deck grilles (dark olive).
+const ENGINE_DECK: [u8; 4] = coded([70, 76, 48, 255], 32);
+/// Exhaust outlets (soot black).
+const EXHAUST: [u8; 4] = coded([30, 28, 26, 255], 32 + 1);
+/// A crew member's head and shoulders.
+const CREW: [u8; 4] = coded([96, 84, 64, 255], 32 + 3);
+/// A ship's funnel casing (engine heat, haze grey).
+const ENGINE_DECK_GREY: [u8; 4] = coded([104, 108, 112, 255], 32);
+/// Window glass (thermal material 12).
+const GLASS: [u8; 4] = coded([52, 60, 70, 255], 12);
+/// Ship superstructure grey (thermal material 10).
+const SUPERSTRUCTURE: [u8; 4] = coded(GREY, 10);
 const HULL_RED: [u8; 4] = [110, 40, 36, 255];
 const WHITE: [u8; 4] = [220, 220, 215, 255];
 const WALL: [u8; 4] = [196, 184, 160, 255];
@@ -217,20 +237,29 @@ fn v(x: f32, y: f32, z: f32) -> Vec3 {
 }
 
 fn tank() -> Model {
+    // Every level keeps the engine deck at the rear of the hull top (a FLIR sees it far away).
     let mut l2 = ModelMesh::default();
     l2.add_box(v(-1.8, -3.5, 0.0), v(1.8, 3.5, 2.3), OLIVE);
+    l2.add_box(v(-1.1, -3.4, 2.3), v(1.1, -1.8, 2.35), ENGINE_DECK);
     let mut l1 = ModelMesh::default();
     l1.add_box(v(-1.8, -3.5, 0.4), v(1.8, 3.5, 1.6), OLIVE);
     l1.add_box(v(-1.2, -1.5, 1.6), v(1.2, 1.2, 2.4), OLIVE);
     l1.add_box(v(-0.1, 1.2, 1.9), v(0.1, 5.8, 2.1), DARK);
+    l1.add_box(v(-1.1, -3.4, 1.6), v(1.1, -1.8, 1.65), ENGINE_DECK);
     let mut l0 = ModelMesh::default();
     l0.add_box(v(-1.3, -3.5, 0.5), v(1.3, 3.3, 1.6), OLIVE);
-    l0.add_box(v(-1.9, -3.6, 0.0), v(-1.3, 3.6, 1.0), DARK);
-    l0.add_box(v(1.3, -3.6, 0.0), v(1.9, 3.6, 1.0), DARK);
+    l0.add_box(v(-1.9, -3.6, 0.0), v(-1.3, 3.6, 1.0), TRACKS);
+    l0.add_box(v(1.3, -3.6, 0.0), v(1.9, 3.6, 1.0), TRACKS);
     l0.add_box(v(-1.9, -3.6, 1.0), v(1.9, 3.6, 1.15), OLIVE);
     l0.add_box(v(-1.2, -1.6, 1.6), v(1.2, 1.3, 2.35), OLIVE);
     l0.add_cylinder(v(0.0, 1.3, 2.0), v(0.0, 4.6, 0.0), 0.09, 0.08, 10, DARK);
     l0.add_cylinder(v(0.5, -0.6, 2.35), v(0.0, 0.0, 0.3), 0.3, 0.3, 10, OLIVE);
+    // The commander's head out of the hatch, the engine deck grilles and two exhausts.
+    l0.add_cylinder(v(0.5, -0.6, 2.65), v(0.0, 0.0, 0.3), 0.14, 0.12, 8, CREW);
+    l0.add_box(v(-1.1, -3.4, 1.6), v(1.1, -1.8, 1.65), ENGINE_DECK);
+    for x in [-0.8_f32, 0.8] {
+        l0.add_box(v(x - 0.25, -3.62, 0.9), v(x + 0.25, -3.5, 1.3), EXHAUST);
+    }
     Model::new("tank", vec![l0, l1, l2])
 }
 
@@ -241,16 +270,20 @@ fn truck() -> Model {
     l1.add_box(v(-1.2, 1.5, 0.5), v(1.2, 3.5, 2.6), OLIVE);
     l1.add_box(v(-1.2, -3.5, 0.5), v(1.2, 1.4, 3.0), OLIVE);
     l1.add_box(v(-1.2, -3.5, 0.0), v(1.2, 3.5, 0.5), DARK);
+    l1.add_box(v(-0.9, 3.5, 0.9), v(0.9, 3.56, 1.6), ENGINE_DECK);
     let mut l0 = ModelMesh::default();
     l0.add_box(v(-1.2, 1.5, 0.9), v(1.2, 3.5, 2.6), OLIVE);
-    l0.add_box(v(-1.15, 2.6, 1.9), v(1.15, 3.52, 2.4), DARK);
+    l0.add_box(v(-1.15, 2.6, 1.9), v(1.15, 3.52, 2.4), GLASS);
     l0.add_box(v(-1.25, -3.5, 1.0), v(1.25, 1.4, 3.0), OLIVE);
     l0.add_box(v(-1.0, -3.5, 0.6), v(1.0, 3.4, 0.9), DARK);
     for y in [2.5_f32, -0.8, -2.4] {
         for x in [-1.05_f32, 1.05] {
-            l0.add_cylinder(v(x - 0.15, y, 0.5), v(0.3, 0.0, 0.0), 0.5, 0.5, 12, DARK);
+            l0.add_cylinder(v(x - 0.15, y, 0.5), v(0.3, 0.0, 0.0), 0.5, 0.5, 12, TRACKS);
         }
     }
+    // The radiator grille at the front and the exhaust stack behind the cab.
+    l0.add_box(v(-0.9, 3.5, 0.95), v(0.9, 3.56, 1.6), ENGINE_DECK);
+    l0.add_cylinder(v(1.1, 1.45, 1.0), v(0.0, 0.0, 2.2), 0.07, 0.07, 8, EXHAUST);
     Model::new("truck", vec![l0, l1, l2])
 }
 
@@ -280,24 +313,53 @@ fn ship() -> Model {
         m.tri(q[0], q[2], q[3], GREY);
         m.tri(q[0], q[3], q[4], GREY);
     };
+    // The funnel: its casing warms with the engines, its top is the exhaust.
+    let funnel = |m: &mut ModelMesh| {
+        m.add_box(v(-1.6, -18.0, 13.0), v(1.6, -14.0, 18.5), ENGINE_DECK_GREY);
+        m.add_box(v(-1.3, -17.7, 18.5), v(1.3, -14.3, 18.8), EXHAUST);
+    };
     let mut l0 = ModelMesh::default();
     hull(&mut l0, true);
-    l0.add_box(v(-4.5, -20.0, 6.0), v(4.5, 8.0, 13.0), GREY);
-    l0.add_box(v(-3.0, -12.0, 13.0), v(3.0, 2.0, 17.0), GREY);
-    l0.add_cylinder(v(0.0, -4.0, 17.0), v(0.0, 0.0, 20.0), 0.6, 0.25, 8, GREY);
-    l0.add_box(v(-4.0, -4.2, 29.0), v(4.0, -3.8, 29.4), GREY);
-    l0.add_cylinder(v(0.0, 20.0, 6.0), v(0.0, 0.0, 2.5), 2.0, 1.6, 12, GREY);
+    l0.add_box(v(-4.5, -20.0, 6.0), v(4.5, 8.0, 13.0), SUPERSTRUCTURE);
+    l0.add_box(v(-3.0, -12.0, 13.0), v(3.0, 2.0, 17.0), SUPERSTRUCTURE);
+    l0.add_cylinder(
+        v(0.0, -4.0, 17.0),
+        v(0.0, 0.0, 20.0),
+        0.6,
+        0.25,
+        8,
+        SUPERSTRUCTURE,
+    );
+    l0.add_box(v(-4.0, -4.2, 29.0), v(4.0, -3.8, 29.4), SUPERSTRUCTURE);
+    l0.add_cylinder(
+        v(0.0, 20.0, 6.0),
+        v(0.0, 0.0, 2.5),
+        2.0,
+        1.6,
+        12,
+        SUPERSTRUCTURE,
+    );
     l0.add_cylinder(v(0.0, 20.0, 7.5), v(0.0, 8.0, 0.0), 0.15, 0.12, 8, DARK);
     l0.add_box(v(-2.0, -30.0, 13.0), v(2.0, -25.0, 15.0), WHITE);
+    funnel(&mut l0);
     let mut l1 = ModelMesh::default();
     hull(&mut l1, true);
-    l1.add_box(v(-4.5, -20.0, 6.0), v(4.5, 8.0, 13.0), GREY);
-    l1.add_box(v(-3.0, -12.0, 13.0), v(3.0, 2.0, 17.0), GREY);
-    l1.add_cylinder(v(0.0, -4.0, 17.0), v(0.0, 0.0, 20.0), 0.6, 0.25, 4, GREY);
+    l1.add_box(v(-4.5, -20.0, 6.0), v(4.5, 8.0, 13.0), SUPERSTRUCTURE);
+    l1.add_box(v(-3.0, -12.0, 13.0), v(3.0, 2.0, 17.0), SUPERSTRUCTURE);
+    l1.add_cylinder(
+        v(0.0, -4.0, 17.0),
+        v(0.0, 0.0, 20.0),
+        0.6,
+        0.25,
+        4,
+        SUPERSTRUCTURE,
+    );
+    funnel(&mut l1);
     let mut l2 = ModelMesh::default();
     hull(&mut l2, false);
-    l2.add_box(v(-4.5, -20.0, 6.0), v(4.5, 8.0, 17.0), GREY);
-    l2.add_box(v(-0.5, -4.5, 17.0), v(0.5, -3.5, 37.0), GREY);
+    l2.add_box(v(-4.5, -20.0, 6.0), v(4.5, 8.0, 17.0), SUPERSTRUCTURE);
+    l2.add_box(v(-0.5, -4.5, 17.0), v(0.5, -3.5, 37.0), SUPERSTRUCTURE);
+    l2.add_box(v(-1.6, -18.0, 17.0), v(1.6, -14.0, 18.8), ENGINE_DECK_GREY);
     Model::new("ship", vec![l0, l1, l2])
 }
 
@@ -467,15 +529,23 @@ pub fn simplify_by_clustering(mesh: &ModelMesh, cells: u32) -> ModelMesh {
             .or_insert((Vec3::ZERO, 0, [0; 4]));
         e.0 += Vec3::from(v.position);
         e.1 += 1;
-        for (acc, c) in e.2.iter_mut().zip(v.colour) {
+        for (acc, c) in e.2[..3].iter_mut().zip(v.colour) {
             *acc += u32::from(c);
+        }
+        // The alpha is a thermal code (crate::thermal), not a colour: the cluster keeps its
+        // first vertex's.
+        if e.1 == 1 {
+            e.2[3] = u32::from(v.colour[3]);
         }
     }
     let index_of: std::collections::BTreeMap<Cell, usize> =
         clusters.keys().enumerate().map(|(i, k)| (*k, i)).collect();
     let centres: Vec<(Vec3, [u8; 4])> = clusters
         .values()
-        .map(|(sum, n, c)| (*sum / *n as f32, c.map(|x| (x / n) as u8)))
+        .map(|(sum, n, c)| {
+            let rgb = |i: usize| (c[i] / n) as u8;
+            (*sum / *n as f32, [rgb(0), rgb(1), rgb(2), c[3] as u8])
+        })
         .collect();
     let mut out = ModelMesh::default();
     let mut seen = std::collections::BTreeSet::new();

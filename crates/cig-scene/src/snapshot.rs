@@ -233,6 +233,10 @@ pub struct FrameSnapshot {
     pub flash_lux: f64,
     /// Rain or snow falling around the eye, if any.
     pub precipitation: Option<PrecipitationDraw>,
+    /// Per view, its thermal sensor (`None`, or no entry: the visible channel).
+    pub sensors: Vec<Option<crate::thermal::SensorView>>,
+    /// The thermal state the sensor views draw (needed when any view is a sensor).
+    pub thermal: Option<std::sync::Arc<crate::thermal::ThermalScene>>,
 }
 
 /// One straight piece of a lightning bolt, relative to its bolt's origin (ECEF axes, metres).
@@ -293,7 +297,19 @@ impl FrameSnapshot {
             bolts: Vec::new(),
             flash_lux: 0.0,
             precipitation: None,
+            sensors: Vec::new(),
+            thermal: None,
         }
+    }
+
+    /// The sensor of view `view_index` when it is a sensor view and the thermal state is
+    /// there to draw it.
+    pub fn sensor_of(
+        &self,
+        view_index: usize,
+    ) -> Option<(crate::thermal::SensorView, &crate::thermal::ThermalScene)> {
+        let sensor = self.sensors.get(view_index).copied().flatten()?;
+        Some((sensor, self.thermal.as_deref()?))
     }
 }
 

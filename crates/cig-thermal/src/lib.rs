@@ -8,6 +8,8 @@
 //!   drive the surfaces;
 //! - [`slab`]: one material's RC network (source 001, Figure 4, generalised to N nodes) and its
 //!   implicit step;
+//! - [`entity_heat`]: engines, exhausts, running gear, crews, burning hulls and hot spots,
+//!   warming and cooling with first-order time constants;
 //! - [`infrared`]: band transmittance and path radiance of the atmosphere (a LOWTRAN 7 table
 //!   generated offline by `tools/lowtran`);
 //! - [`table`]: the per-material, per-orientation table (source 001's twelve standard
@@ -15,6 +17,7 @@
 //!
 //! Pure: no files, sockets, GPU or terminal. Limits are listed in each module.
 
+pub mod entity_heat;
 pub mod infrared;
 pub mod material;
 pub mod planck;
@@ -22,6 +25,7 @@ pub mod slab;
 pub mod table;
 pub mod weather;
 
+pub use entity_heat::{EntityHeat, EntityThermalInput, HotPart, HotSpot};
 pub use infrared::{Aerosol, IrAtmosphere, IrBand, ModelAtmosphere, PathOptics};
 pub use material::{material_names, InnerBoundary, Layer, MaterialProperties, ThermalMaterial};
 pub use planck::{band_radiance, brightness_temperature_k, Band};

@@ -99,7 +99,8 @@ pub struct MaterialProperties {
 }
 
 /// Every material the thermal model knows: the terrain database's nine classes (in the
-/// terrain's byte order) and the models' materials.
+/// terrain's byte order) and the models' materials (the index is the code models carry in
+/// their vertex colours' alpha, see `cig_scene::thermal`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum ThermalMaterial {
     Water,
@@ -127,6 +128,8 @@ pub enum ThermalMaterial {
     Skin,
     /// Tree canopy foliage (leaves).
     CanopyFoliage,
+    /// Walls and roofs of buildings: concrete or brick over a heated interior.
+    BuildingWall,
 }
 
 const CELSIUS_0: f64 = 273.15;
@@ -314,6 +317,15 @@ const CLOTHING_LAYERS: [Layer; 2] = [
     TISSUE,
 ];
 const SKIN_LAYERS: [Layer; 1] = [TISSUE];
+const WALL_LAYERS: [Layer; 1] = [Layer {
+    name: "concrete, 0.2 m",
+    thickness_m: 0.2,
+    conductivity_w_m_k: 1.4,
+    density_kg_m3: 2300.0,
+    specific_heat_j_kg_k: 880.0,
+    cells: 8,
+    growth: 1.15,
+}];
 
 /// Blood perfusion and core coupling behind the skin tissue, W m-2 K-1 (Fiala 1999: the
 /// perfusion term of resting skin is of the order of 10-40).
@@ -321,7 +333,7 @@ const PERFUSION_W_M2_K: f64 = 20.0;
 const CORE_K: f64 = CELSIUS_0 + 37.0;
 
 /// Every material's properties.
-pub const MATERIALS: [MaterialProperties; 17] = [
+pub const MATERIALS: [MaterialProperties; 18] = [
     MaterialProperties {
         id: ThermalMaterial::Water,
         layers: &WATER_LAYERS,
@@ -568,11 +580,28 @@ pub const MATERIALS: [MaterialProperties; 17] = [
         sources: "Jones: leaf 0.3 mm, 70 % water (c about 3760 J/kg K), solar absorptance \
                   about 0.5, emissivity 0.95-0.98; wetness and convection as for forest",
     },
+    MaterialProperties {
+        id: ThermalMaterial::BuildingWall,
+        layers: &WALL_LAYERS,
+        solar_absorptivity: 0.6,
+        emissivity_lwir: 0.92,
+        emissivity_mwir: 0.88,
+        wetness: 0.0,
+        convection_factor: 1.0,
+        melts_at_k: None,
+        inner: InnerBoundary::Interior {
+            temperature_k: CELSIUS_0 + 20.0,
+            film_w_m2_k: 8.0,
+        },
+        sources: "Oke T2.1 concrete (dense); FLIR concrete 0.92; Oke T1.1 concrete albedo \
+                  0.10-0.35 and brick 0.20-0.40 (0.4 taken); heated interior 20 C behind \
+                  ASHRAE's still-air film",
+    },
 ];
 
 impl ThermalMaterial {
     /// Every material, in table order.
-    pub const ALL: [ThermalMaterial; 17] = [
+    pub const ALL: [ThermalMaterial; 18] = [
         ThermalMaterial::Water,
         ThermalMaterial::Sand,
         ThermalMaterial::DryClay,
@@ -590,6 +619,7 @@ impl ThermalMaterial {
         ThermalMaterial::Clothing,
         ThermalMaterial::Skin,
         ThermalMaterial::CanopyFoliage,
+        ThermalMaterial::BuildingWall,
     ];
 
     /// The material's index in [`ThermalMaterial::ALL`] and [`MATERIALS`].
@@ -622,6 +652,7 @@ impl ThermalMaterial {
             ThermalMaterial::Clothing => "clothing",
             ThermalMaterial::Skin => "skin",
             ThermalMaterial::CanopyFoliage => "canopy_foliage",
+            ThermalMaterial::BuildingWall => "building_wall",
         }
     }
 

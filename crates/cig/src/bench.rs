@@ -1,9 +1,9 @@
-//! `cig bench db|imagery|particles|render|culture|net|env|channels|soak`: the arguments mapped onto `cig-bench`'s options,
+//! `cig bench db|imagery|particles|render|culture|net|env|channels|soak|sensor`: the arguments mapped onto `cig-bench`'s options,
 //! the reports printed (figures as JSON, or the benchmark's summary).
 
 use crate::cli::{
     BenchChannelsArgs, BenchCultureArgs, BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs,
-    BenchParticlesArgs, BenchRenderArgs, BenchSoakArgs,
+    BenchParticlesArgs, BenchRenderArgs, BenchSensorArgs, BenchSoakArgs,
 };
 use crate::config::Config;
 use crate::output::build_progress;
@@ -190,4 +190,16 @@ pub fn soak(args: &BenchSoakArgs, config: &Config) -> anyhow::Result<()> {
         anyhow::bail!("the soak drifted: {}", report.summary);
     }
     Ok(())
+}
+
+pub fn sensor(args: &BenchSensorArgs, config: &Config) -> anyhow::Result<()> {
+    let options = cig_bench::sensor::SensorOptions {
+        db: args.db.clone(),
+        size: parse_size(&args.size).context("--size")?,
+        entities: args.entities,
+        paging: config.paging.clone(),
+        commit: commit(),
+    };
+    let report = cig_bench::sensor::run(&options)?;
+    print_report(&report, args.json)
 }

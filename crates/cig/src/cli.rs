@@ -111,6 +111,22 @@ pub struct IrTransmittanceArgs {
 }
 
 #[derive(Args)]
+pub struct BenchSensorArgs {
+    /// Terrain database directory.
+    #[arg(long)]
+    pub db: PathBuf,
+    /// Frame size, pixels.
+    #[arg(long, default_value = "640x360")]
+    pub size: String,
+    /// Vehicles in the frame.
+    #[arg(long, default_value_t = 50)]
+    pub entities: usize,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
 pub struct IrRadianceArgs {
     /// The band in micrometres: 8-12 (LWIR), 3-5 (MWIR) or any LO-HI.
     #[arg(long, value_name = "LO-HI")]
@@ -127,7 +143,7 @@ pub struct IrRadianceArgs {
 pub struct IrSurfaceTempArgs {
     /// The material: water, sand, dry_clay, grass, forest, rock, snow, paved_road, dirt_road,
     /// hull_paint, superstructure, vehicle_armour, glass, rubber_tracks, clothing, skin,
-    /// canopy_foliage.
+    /// canopy_foliage, building_wall.
     #[arg(long)]
     pub material: String,
     /// Geodetic latitude, degrees, north positive.
@@ -512,6 +528,9 @@ pub enum BenchCommand {
     /// entities, smoke, clouds and a storm; resident memory, frame time, descriptors and
     /// threads watched for drift (exits 1 when they drift).
     Soak(BenchSoakArgs),
+    /// The thermal sensor channel: an LWIR frame against the visible frame of the same view
+    /// (50 vehicles), the surface table's spin-up and its advance by one second.
+    Sensor(BenchSensorArgs),
 }
 
 #[derive(Args)]
@@ -868,6 +887,35 @@ pub struct RenderArgs {
     /// Geometric warp of the frame, as a projected channel's (docs/channels.md).
     #[arg(long, value_name = "FILE")]
     pub warp: Option<PathBuf>,
+    /// The sensor: visible (the eye's picture), lwir (8-12 um thermal) or mwir (3-5 um).
+    #[arg(long, default_value = "visible")]
+    pub sensor: String,
+    /// Thermal polarity: white-hot or black-hot.
+    #[arg(long, default_value = "white-hot")]
+    pub polarity: String,
+    /// Thermal manual gain (contrast), 0..1, with --level (without both: automatic gain).
+    #[arg(long)]
+    pub gain: Option<f64>,
+    /// Thermal manual level (brightness), 0..1, with --gain.
+    #[arg(long)]
+    pub level: Option<f64>,
+    /// Thermal detector noise: its noise-equivalent temperature difference, kelvin (0: none).
+    #[arg(long, default_value_t = 0.05)]
+    pub noise: f64,
+    /// Thermal display colour: white or green.
+    #[arg(long, default_value = "white")]
+    pub display: String,
+    /// Thermal: the day's air temperature "MIN,MAX", Celsius (minimum at sunrise, maximum at
+    /// 14:00 local solar time), driving the surfaces' temperatures.
+    #[arg(long, default_value = "10,24", allow_hyphen_values = true)]
+    pub air_c: String,
+    /// Thermal: relative humidity, percent.
+    #[arg(long, default_value_t = 50.0)]
+    pub rh: f64,
+    /// Thermal: the entities' engines, running or off (off: at the air's and sun's
+    /// temperature).
+    #[arg(long, default_value = "running")]
+    pub engines: String,
     /// Edge-blend ramps of the frame, as a projected channel's (docs/channels.md).
     #[arg(long, value_name = "FILE")]
     pub blend: Option<PathBuf>,

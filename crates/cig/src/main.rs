@@ -19,6 +19,7 @@ mod plume;
 mod query;
 mod render;
 mod serve;
+mod thermal_view;
 mod view;
 
 use clap::Parser;
@@ -79,6 +80,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Bench(cli::BenchCommand::Env(args)) => bench::env(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Channels(args)) => bench::channels(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Soak(args)) => bench::soak(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Sensor(args)) => bench::sensor(&args, &config),
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),

@@ -397,6 +397,20 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .transpose()?;
     let correction =
         crate::display::read_display_correction(args.warp.as_deref(), args.blend.as_deref())?;
+    let sensor = crate::thermal_view::parse_sensor(&crate::thermal_view::SensorOptions {
+        sensor: &args.sensor,
+        polarity: &args.polarity,
+        gain: args.gain,
+        level: args.level,
+        noise_k: args.noise,
+        display: &args.display,
+    })?;
+    let (air_min_c, air_max_c) = crate::thermal_view::parse_air(&args.air_c)?;
+    let engines_running = match args.engines.as_str() {
+        "running" => true,
+        "off" => false,
+        other => bail!("--engines \"{other}\" is not running or off"),
+    };
     let (cache, mut renderer) = open(&args.db, config)?;
     renderer.set_display_correction(Some(correction));
     renderer.detail.klod = klod;
@@ -480,6 +494,27 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         unix_time_s,
         snapshot.puff_origin_ecef_m,
     )?;
+    if let Some(sensor) = sensor {
+        let time = cig_environment::UtcTime::from_unix_seconds(unix_time_s)
+            .map_err(|e| anyhow::anyhow!("--time: {e}"))?;
+        let scene = crate::thermal_view::still_thermal_scene(
+            view.eye.lat_deg,
+            view.eye.lon_deg,
+            time,
+            &crate::thermal_view::FrameWeather {
+                air_min_c,
+                air_max_c,
+                rh_pct: args.rh,
+                wind_mps: wind.speed_mps,
+                cloud_cover: snapshot.cloud_cover_fraction,
+                visibility_m: args.visibility,
+            },
+            &snapshot.entities,
+            engines_running,
+        )?;
+        snapshot.sensors = vec![Some(sensor)];
+        snapshot.thermal = Some(Arc::new(scene));
+    }
     cache.update(&[view.eye]);
     cache.wait_idle();
     cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;

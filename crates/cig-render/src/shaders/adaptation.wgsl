@@ -11,6 +11,8 @@ struct AdaptParams {
     // x: low and y: high fraction of the trimmed mean, z: the bright share's fraction, w: 1 when
     // the state of this slot is valid (a frame was adapted before).
     shares: vec4<f32>,
+    // x: 1 for a thermal sensor view (the histogram bins its band radiance, sensor_bin_of).
+    mode: vec4<f32>,
 };
 
 const BINS: u32 = 64u;
@@ -25,6 +27,9 @@ const BIN_WIDTH: f32 = 0.5;
 @group(0) @binding(3) var<storage, read_write> state: array<vec4<f32>, 16>;
 
 var<workgroup> local_bins: array<atomic<u32>, 64>;
+// A sensor view's histogram range (x, y) and equalisation weight (z), then the equalised grey
+// at each bin's top (64 values in 16 vec4s).
+@group(0) @binding(4) var<storage, read_write> equalised: array<vec4<f32>, 17>;
 
 fn bin_of(c: vec3<f32>) -> u32 {
     let y = dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
@@ -47,7 +52,7 @@ fn histogram(
     let p = gid.xy * 2u;
     if (p.x < dims.x && p.y < dims.y) {
         let c = textureLoad(scene, vec2<i32>(p), 0).rgb;
-        atomicAdd(&local_bins[bin_of(c)], 1u);
+        atomicAdd(&local_bins[select(bin_of(c), sensor_bin_of(c.r), params.mode.x > 0.5)], 1u);
     }
     workgroupBarrier();
     if (li < BINS) {
@@ -105,10 +110,80 @@ fn adapt() {
     var adapted = target_log2;
     let dt = params.key.y;
     let previous = state[slot];
-    if (dt >= 0.0 && params.shares.w > 0.5 && previous.w > 0.5) {
+    // (A state of w 2 is a sensor view's gain window: not an eye's.)
+    if (dt >= 0.0 && params.shares.w > 0.5 && previous.w > 0.5 && previous.w < 1.5) {
         // Lower factor: the view got brighter (light adaptation, fast); else dark adaptation.
         let tau = select(params.slot.z, params.slot.y, target_log2 < previous.x);
         adapted = previous.x + (target_log2 - previous.x) * (1.0 - exp(-dt / max(tau, 1e-3)));
     }
     state[slot] = vec4<f32>(adapted, target_log2, mean, 1.0);
+}
+
+// The thermal sensor's automatic gain (adaptation.rs's encode_sensor): the histogram of band
+// radiance (params.mode.x 1), linear between params.key.x and params.key.y, then the window between its
+// params.shares.x and params.shares.y shares, at least params.key.w wide, approached with the
+// time constant params.slot.y (params.key.z: seconds since the view's last frame; < 0 settles
+// at once). The state is (low, high, 0, 2).
+
+fn sensor_bin_of(l: f32) -> u32 {
+    let x = (select(l, 0.0, l != l) - params.key.x) / max(params.key.y - params.key.x, 1e-6);
+    return u32(clamp(floor(x * f32(BINS)), 0.0, f32(BINS - 1u)));
+}
+
+// The radiance below which `share` of the pixels lie (linear inside the bin).
+fn sensor_percentile(share: f32, total: f32) -> f32 {
+    let want = share * total;
+    var below = 0.0;
+    let width = (params.key.y - params.key.x) / f32(BINS);
+    for (var i = 0u; i < BINS; i++) {
+        let count = f32(atomicLoad(&bins[i]));
+        if (below + count >= want && count > 0.0) {
+            return params.key.x + (f32(i) + (want - below) / count) * width;
+        }
+        below += count;
+    }
+    return params.key.y;
+}
+
+@compute @workgroup_size(1)
+fn sensor_adapt() {
+    var total = 0u;
+    for (var i = 0u; i < BINS; i++) {
+        total += atomicLoad(&bins[i]);
+    }
+    let slot = u32(params.slot.x);
+    if (total == 0u) {
+        return;
+    }
+    var lo = sensor_percentile(params.shares.x, f32(total));
+    var hi = sensor_percentile(params.shares.y, f32(total));
+    let span = max(hi - lo, params.key.w);
+    let mid = 0.5 * (lo + hi);
+    lo = mid - 0.5 * span;
+    hi = mid + 0.5 * span;
+    var window = vec2<f32>(lo, hi);
+    let dt = params.key.z;
+    let previous = state[slot];
+    if (dt >= 0.0 && params.shares.w > 0.5 && previous.w > 1.5) {
+        window = previous.xy + (window - previous.xy) * (1.0 - exp(-dt / max(params.slot.y, 1e-3)));
+    }
+    state[slot] = vec4<f32>(window, 0.0, 2.0);
+    // Plateau equalisation: each bin counts at most twice the mean bin, so a large uniform
+    // area (the sky, a fire) does not take the grey levels; the cumulative share at each bin's
+    // top is the grey there.
+    let plateau = max(2.0 * f32(total) / f32(BINS), 1.0);
+    var clipped_total = 0.0;
+    for (var i = 0u; i < BINS; i++) {
+        clipped_total += min(f32(atomicLoad(&bins[i])), plateau);
+    }
+    equalised[0] = vec4<f32>(params.key.x, params.key.y, params.slot.z, 0.0);
+    var below = 0.0;
+    for (var v = 0u; v < 16u; v++) {
+        var out = vec4<f32>(0.0);
+        for (var k = 0u; k < 4u; k++) {
+            below += min(f32(atomicLoad(&bins[v * 4u + k])), plateau);
+            out[k] = below / max(clipped_total, 1.0);
+        }
+        equalised[v + 1u] = out;
+    }
 }

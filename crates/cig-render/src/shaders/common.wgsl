@@ -52,6 +52,18 @@ struct Globals {
     // East and north (ECEF) of the database centre's tangent plane: the ground detail's plane.
     detail_east: vec4<f32>,
     detail_north: vec4<f32>,
+    // Thermal sensor view (sensor.rs): x 1 when this view is a sensor, y the band (0 LWIR,
+    // 1 MWIR), z the sky's radiance a horizontal surface reflects, w the sun's band
+    // irradiance at the ground (W m-2).
+    sensor: vec4<f32>,
+    // The sky's band radiance at 0, 1, 3, 6 and 10, 20, 40, 90 degrees of elevation.
+    sensor_sky0: vec4<f32>,
+    sensor_sky1: vec4<f32>,
+    // The sensor's display: x polarity (1 black-hot), y colour (0 white, 1 green, 2 black),
+    // z temporal noise (radiance, one sigma), w fixed-pattern noise (fraction of z).
+    sensor_display: vec4<f32>,
+    // x optics blur (pixels, one sigma), y line dropout on, z the frame's number, w unused.
+    sensor_display2: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;

@@ -15,6 +15,9 @@ struct ModelOut {
     @location(2) colour: vec3<f32>,
     // Share of the model's pixels this draw covers, [x, y) in dither thresholds.
     @location(3) @interpolate(flat) share: vec2<f32>,
+    // Thermal: the vertex's code (its colour's alpha) and the instance's word (col2.w: the
+    // default material's code plus 256 times its hot slot); see cig_scene::thermal.
+    @location(4) @interpolate(flat) thermal_code: vec2<u32>,
 };
 
 // Ordered 4x4 (Bayer) dither threshold of a pixel, in (0, 1).
@@ -41,6 +44,7 @@ fn vs_main(
     // origin.w: a culture instance's tint (0 for entities).
     out.colour = pow(colour.rgb, vec3<f32>(2.2)) * (1.0 + m.origin.w);
     out.share = vec2<f32>(m.col0.w, m.col1.w);
+    out.thermal_code = vec2<u32>(u32(round(colour.a * 255.0)), u32(max(m.col2.w, 0.0)));
     return out;
 }
 
@@ -55,6 +59,27 @@ fn fs_main(in: ModelOut) -> @location(0) vec4<f32> {
         return vec4<f32>(1.0, 0.6, 0.2, 1.0);
     }
     var n = normalize(in.normal);
+    if (sensor_on()) {
+        let code = in.thermal_code.x;
+        let word = in.thermal_code.y;
+        var material = word & 255u;
+        let slot = word >> 8u;
+        // A burning entity is hot all over; its parts at least as hot as their own rise.
+        var rise = th_entity_rise(slot, 4u);
+        var eps = th_emissivity(material);
+        if (code < TH_MATERIALS) {
+            material = code;
+            eps = th_emissivity(material);
+        } else if (code == TH_HOT_BASE + 3u) {
+            // Crew: skin, whose slab has the body's core behind it.
+            material = TH_SKIN;
+            eps = th_emissivity(material);
+        } else if (code >= TH_HOT_BASE && code < TH_HOT_BASE + TH_HOT_PARTS) {
+            rise = max(rise, th_entity_rise(slot, code - TH_HOT_BASE));
+            eps = TH_HOT_EMISSIVITY;
+        }
+        return th_shown(th_surface_temp(material, n) + rise, eps, n, in.rel);
+    }
     let colour = lit(in.colour, n);
     return vec4<f32>(apply_atmosphere_exposed(exposed(colour), in.rel), 1.0);
 }

@@ -116,6 +116,14 @@ fn fs_main(in: PuffOut) -> Accumulated {
     if (tau <= 0.0) {
         discard;
     }
+    if (g.sensor.x > 0.5) {
+        // A thermal sensor (puffs.rs's infrared_puff): the colour is the gas's band radiance,
+        // a flame's is emission.
+        var sensed: Accumulated;
+        sensed.scatter = vec4<f32>(in.albedo_tau.rgb * tau, tau);
+        sensed.emission = vec4<f32>(in.emission.rgb / FLAME_RADIANCE * (1.0 - exp(-tau)), 0.0);
+        return sensed;
+    }
     // Light: the sun on the side of the puff it faces (wrapped, light passes through thin
     // smoke) and the sky's ambient, as the terrain is lit.
     var n = -dir;

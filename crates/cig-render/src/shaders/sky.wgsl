@@ -31,6 +31,10 @@ fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
     let x_tan = mix(-t.x, t.y, in.ndc.x * 0.5 + 0.5);
     let y_tan = mix(-t.z, t.w, in.ndc.y * 0.5 + 0.5);
     let dir = normalize(g.cam_forward.xyz + g.cam_right.xyz * x_tan + g.cam_up.xyz * y_tan);
+    if (g.sensor.x > 0.5) {
+        // A thermal sensor sees the sky's band radiance (sensor.rs), no sun, moon or stars.
+        return vec4<f32>(vec3<f32>(th_sky(dir)), 1.0);
+    }
     var colour = exposed(g.fog_colour.rgb);
     if (physical_sky()) {
         colour = sky_radiance(dir);

@@ -293,6 +293,29 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let ne = textureSample(normal_atlas, atlas_sampler, in.uv).xyz * 2.0 - 1.0;
     let n = normalize(node.axis_e.xyz * ne.x + node.axis_n.xyz * ne.y + node.axis_u.xyz * ne.z);
     let distance_m = length(in.rel);
+    if (sensor_on()) {
+        // A thermal sensor: the material's temperature for this normal, as band radiance.
+        var kind: u32;
+        var texture_k = 0.0;
+        if (ground_detail_on()) {
+            let plane = vec2<f32>(dot(in.rel, g.detail_east.xyz), dot(in.rel, g.detail_north.xyz));
+            let n1 = value_noise2(plane / g.noise1.w + g.noise1.xy);
+            kind = material_at(node, in.uv, in.rel, n, n1).kind;
+            // The ground's patchiness in temperature (moisture, cover, shade): about +-1 K
+            // with the 19.3 m octave, +-0.5 K with the 2.7 m one where it resolves.
+            let px_per_m = g.flags.w / max(distance_m, 1.0);
+            let fade0 = clamp((g.noise0.w * px_per_m - 2.0) / 4.0, 0.0, 1.0);
+            var fine = 0.0;
+            if (fade0 > 0.0) {
+                fine = (value_noise(plane / g.noise0.w + g.noise0.xy) - 0.5) * fade0;
+            }
+            texture_k = 2.0 * (n1.y - 0.5) + fine;
+        } else {
+            let size = vec2<f32>(textureDimensions(colour_atlas));
+            kind = u32(round(textureLoad(colour_atlas, vec2<i32>(in.uv * size), 0).a * 255.0)) >> 4u;
+        }
+        return th_shown(th_surface_temp(kind, n) + texture_k, th_emissivity(kind), n, in.rel);
+    }
     var surface: Surface;
     var albedo: vec3<f32>;
     if (ground_detail_on()) {

@@ -7,7 +7,15 @@
 
 @group(1) @binding(0) var scene: texture_2d<f32>;
 // The eye's adaptation to the view (adaptation.rs): x the log2 factor on the pre-exposed scene.
-@group(1) @binding(1) var<uniform> adaptation: vec4<f32>;
+struct Adapted {
+    // x the log2 factor (visible); a sensor view's gain window (low, high) radiance.
+    state: vec4<f32>,
+    // A sensor view's histogram range (x, y) and equalisation weight (z).
+    range: vec4<f32>,
+    // The equalised grey at each of the 64 bins' tops.
+    equalised: array<vec4<f32>, 16>,
+};
+@group(1) @binding(1) var<uniform> adaptation: Adapted;
 
 struct ToneOut {
     @builtin(position) clip: vec4<f32>,
@@ -31,8 +39,94 @@ fn srgb_encode(c: vec3<f32>) -> vec3<f32> {
     return select(hi, lo, c <= vec3<f32>(0.0031308));
 }
 
+fn srgb_decode(c: vec3<f32>) -> vec3<f32> {
+    let lo = c / 12.92;
+    let hi = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
+    return select(hi, lo, c <= vec3<f32>(0.04045));
+}
+
+// A hash of two integers to [0, 1) (PCG-style mixing).
+fn sensor_hash(a: u32, b: u32) -> f32 {
+    var h = a * 747796405u + b * 2891336453u + 277803737u;
+    h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;
+    h = (h >> 22u) ^ h;
+    return f32(h) / 4294967296.0;
+}
+
+// Band radiance of a pixel, clamped inside the frame (NaN as 0).
+fn sensor_radiance(p: vec2<i32>) -> f32 {
+    let dims = vec2<i32>(textureDimensions(scene));
+    let l = textureLoad(scene, clamp(p, vec2<i32>(0), dims - 1), 0).r;
+    return select(l, 0.0, l != l);
+}
+
+// The thermal sensor's display (sensor.rs, cig_scene::thermal): optics blur, line dropout,
+// temporal and fixed-pattern noise of the detector, then the gain window (automatic,
+// adaptation.rs, or manual) to grey, the polarity and the display's colour. Returns display
+// values (0..1, sRGB-encoded grey).
+fn sensor_display(pixel: vec2<f32>) -> vec3<f32> {
+    var p = vec2<i32>(pixel);
+    let frame = u32(g.sensor_display2.z);
+    // A dropped line repeats the line above.
+    if (g.sensor_display2.y > 0.5 && p.y > 0 && sensor_hash(u32(p.y), frame) < 0.015) {
+        p.y -= 1;
+    }
+    let sigma = g.sensor_display2.x;
+    var l = sensor_radiance(p);
+    if (sigma > 0.05) {
+        var sum = 0.0;
+        var weight = 0.0;
+        for (var dy = -1; dy <= 1; dy++) {
+            for (var dx = -1; dx <= 1; dx++) {
+                let w = exp(-f32(dx * dx + dy * dy) / (2.0 * sigma * sigma));
+                sum += w * sensor_radiance(p + vec2<i32>(dx, dy));
+                weight += w;
+            }
+        }
+        l = sum / weight;
+    }
+    // Temporal noise: a near-Gaussian from four uniforms; fixed pattern: per column and pixel.
+    let px = u32(p.x) + 65536u * u32(p.y);
+    let u = sensor_hash(px, frame * 4u) + sensor_hash(px, frame * 4u + 1u)
+        + sensor_hash(px, frame * 4u + 2u) + sensor_hash(px, frame * 4u + 3u) - 2.0;
+    let fixed_pattern = (0.7 * (sensor_hash(u32(p.x), 99991u) - 0.5)
+        + 0.3 * (sensor_hash(px, 77773u) - 0.5)) * 3.46;
+    l += g.sensor_display.z * (u * 1.732 + g.sensor_display.w * fixed_pattern);
+    let lo = adaptation.state.x;
+    let hi = max(adaptation.state.y, lo + 1e-6);
+    var grey = clamp((l - lo) / (hi - lo), 0.0, 1.0);
+    // Plateau histogram equalisation, blended in (adaptation.rs): linear between bins' tops.
+    let weight = adaptation.range.z;
+    if (weight > 0.0) {
+        let x = clamp((l - adaptation.range.x) / max(adaptation.range.y - adaptation.range.x, 1e-6), 0.0, 1.0) * 64.0;
+        let i = min(u32(floor(x)), 63u);
+        var before = 0.0;
+        if (i > 0u) {
+            before = adaptation.equalised[(i - 1u) / 4u][(i - 1u) % 4u];
+        }
+        let top = adaptation.equalised[i / 4u][i % 4u];
+        grey = mix(grey, mix(before, top, x - f32(i)), weight);
+    }
+    if (g.sensor_display.x > 0.5) {
+        grey = 1.0 - grey;
+    }
+    if (g.sensor_display.y > 0.5 && g.sensor_display.y < 1.5) {
+        // A green phosphor (P43-like).
+        return vec3<f32>(0.28, 1.0, 0.38) * grey;
+    }
+    return vec3<f32>(grey);
+}
+
 @fragment
 fn fs_main(in: ToneOut) -> @location(0) vec4<f32> {
+    if (g.sensor.x > 0.5) {
+        // Display values straight to the target (decoded where the hardware encodes sRGB).
+        var shown = sensor_display(in.clip.xy);
+        if (g.tonemap.x < 0.5) {
+            shown = srgb_decode(shown);
+        }
+        return vec4<f32>(shown, 1.0);
+    }
     var c = textureLoad(scene, vec2<i32>(in.clip.xy), 0).rgb;
     // A NaN or infinity from any pass becomes black or the brightest value, on every GPU.
     c = select(c, vec3<f32>(0.0), c != c);
@@ -42,7 +136,7 @@ fn fs_main(in: ToneOut) -> @location(0) vec4<f32> {
         // Keyed test frames: linear radiance, clamped.
         out = min(c, vec3<f32>(1.0));
     } else {
-        c *= exp2(adaptation.x);
+        c *= exp2(adaptation.state.x);
         let s = g.tonemap.y;
         if (s > 0.0) {
             // Rod response over the sRGB primaries (peak near 507 nm), shown blue-grey.

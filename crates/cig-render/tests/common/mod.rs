@@ -125,6 +125,18 @@ pub fn sea() -> Arc<TerrainDatabase> {
     database_from(&raster, 0.0)
 }
 
+/// A point of the test hills `north_m`, `east_m` from their reference, `agl_m` above the
+/// ground.
+pub fn hills_point(north_m: f64, east_m: f64, agl_m: f64) -> cig_geo::Geodetic {
+    let frame = cig_geo::EnuFrame::new(cig_geo::Geodetic::new(36.0159, -121.1854, 0.0));
+    let g = frame.enu_to_geodetic(glam::DVec3::new(east_m, north_m, 0.0));
+    let mut q = cig_terrain::QuerySession::new(cache(&hills()));
+    let ground = q
+        .hot(g.lat_deg, g.lon_deg)
+        .expect("inside the test database");
+    cig_geo::Geodetic::new(g.lat_deg, g.lon_deg, ground.height_ellipsoid_m() + agl_m)
+}
+
 pub fn cache(db: &Arc<TerrainDatabase>) -> Arc<TileCache> {
     Arc::new(TileCache::new(Arc::clone(db), PagingConfig::default()).expect("cache"))
 }

@@ -1,0 +1,233 @@
+//! Thermal sensor views on the GPU: what the shaders read to draw band radiance instead of
+//! light.
+//!
+//! Algorithm (per sensor view and frame, on the CPU; the shaders interpolate):
+//! - the surface temperature table of every material and standard orientation
+//!   (`cig_thermal::table`, interpolated by each pixel's normal as the source's twelve-direction
+//!   look-up: source 001, "Infrared Gray Level Prediction"), the materials' band emissivities;
+//! - black-body band radiance `L_band(T)` for 150..1685 K at 1 K steps (the exact series of
+//!   `cig_thermal::planck`), so the shaders never integrate Planck's law;
+//! - the atmosphere's band transmittance and path radiance (`cig_thermal::infrared`) from the
+//!   eye over 32 ranges (1 m..100 km, logarithmic) and 9 elevations (-90..90 degrees), and
+//!   the sky's band radiance (the path radiance of a ray to space) at 8 elevations;
+//! - the entities' hot parts (rise over their surroundings, per entity).
+//!
+//! A surface shows `eps L_band(T) + (1 - eps) L_down (+ (1 - eps) E_sun cos i / pi in MWIR)`,
+//! then `tau L + L_path` along the line of sight. The display (tonemap.wgsl) maps radiance to
+//! grey with the automatic gain (adaptation.rs) or the manual window.
+//!
+//! Limits: clouds, rain and lightning are not drawn in sensor views; the sky is uniform in
+//! azimuth (no sun disc); one material per surface (no sub-pixel mixtures besides the
+//! terrain's smooth borders, which pick the dominant material).
+
+use cig_scene::thermal::{SensorView, ThermalScene};
+use cig_thermal::planck::band_radiance_unchecked;
+use cig_thermal::{IrBand, ThermalMaterial};
+
+/// Standard orientations of the surface table.
+pub(crate) const ORIENTATIONS: usize = 26;
+/// Offsets into the thermal buffer, in f32 (thermal.wgsl has the same numbers).
+pub(crate) const OFF_EMISSIVITY: usize = 480;
+pub(crate) const OFF_PLANCK: usize = 512;
+pub(crate) const PLANCK_T0_K: f64 = 150.0;
+pub(crate) const PLANCK_ENTRIES: usize = 1536;
+pub(crate) const OFF_PATH: usize = 2048;
+pub(crate) const PATH_RANGES: usize = 32;
+pub(crate) const PATH_ELEVATIONS_DEG: [f64; 9] =
+    [-90.0, -30.0, -10.0, -3.0, 0.0, 3.0, 10.0, 30.0, 90.0];
+/// Log10 of the shortest and longest range of the path table, metres.
+pub(crate) const PATH_LOG10_M: (f64, f64) = (0.0, 5.0);
+pub(crate) const OFF_ENTITY: usize = 2688;
+/// Entities with hot parts a frame can draw (more keep their materials' temperatures).
+pub(crate) const MAX_HOT_ENTITIES: usize = 255;
+pub(crate) const ENTITY_STRIDE: usize = 8;
+/// The buffer's length, f32.
+pub(crate) const THERMAL_LEN: usize = OFF_ENTITY + (MAX_HOT_ENTITIES + 1) * ENTITY_STRIDE;
+/// Sky radiance elevations, degrees (the globals' `sensor_sky0/1`).
+pub(crate) const SKY_ELEVATIONS_DEG: [f64; 8] = [0.0, 1.0, 3.0, 6.0, 10.0, 20.0, 40.0, 90.0];
+/// Solid angle of the sun's disc, sr.
+const SUN_SOLID_ANGLE_SR: f64 = 6.794e-5;
+/// The sun's effective black-body temperature, K.
+const SUN_K: f64 = 5772.0;
+
+/// What one sensor view's frame uploads.
+pub(crate) struct SensorFrame {
+    /// The thermal buffer's contents.
+    pub buffer: Vec<f32>,
+    /// Sky band radiance at [`SKY_ELEVATIONS_DEG`].
+    pub sky: [f32; 8],
+    /// Hemispherical mean of the sky's radiance (what a horizontal surface reflects).
+    pub down_radiance: f32,
+    /// The sun's band irradiance on a surface facing it, at the ground, W m-2.
+    pub sun_irradiance: f32,
+    /// `dL/dT` at the air temperature, W m-2 sr-1 K-1 (the noise's scale).
+    pub slope: f32,
+    /// Radiance of the automatic gain's histogram range (low, high).
+    pub histogram_range: (f32, f32),
+    /// The manual window as radiance (low, high), if set.
+    pub manual: Option<(f32, f32)>,
+}
+
+/// Builds a sensor view's tables for an eye at `eye_alt_m` and the sun at `sun_elevation_deg`.
+pub(crate) fn sensor_frame(
+    sensor: &SensorView,
+    scene: &ThermalScene,
+    eye_alt_m: f64,
+    sun_elevation_deg: f64,
+) -> SensorFrame {
+    let band = sensor.band;
+    let b = band.band();
+    let mut buffer = vec![0f32; THERMAL_LEN];
+    let materials = ThermalMaterial::ALL.len();
+    for (i, t) in scene
+        .surface_k
+        .iter()
+        .take(materials * ORIENTATIONS)
+        .enumerate()
+    {
+        buffer[i] = *t;
+    }
+    for (i, m) in ThermalMaterial::ALL.iter().enumerate() {
+        let p = m.properties();
+        buffer[OFF_EMISSIVITY + i] = match band {
+            IrBand::Lwir => p.emissivity_lwir,
+            IrBand::Mwir => p.emissivity_mwir,
+        } as f32;
+    }
+    for i in 0..PLANCK_ENTRIES {
+        buffer[OFF_PLANCK + i] = band_radiance_unchecked(b, PLANCK_T0_K + i as f64) as f32;
+    }
+    let atmosphere = &scene.atmosphere;
+    let eye = eye_alt_m.clamp(-400.0, 29_000.0);
+    for (j, elevation) in PATH_ELEVATIONS_DEG.iter().enumerate() {
+        let s = elevation.to_radians().sin();
+        for i in 0..PATH_RANGES {
+            let f = i as f64 / (PATH_RANGES - 1) as f64;
+            let range = 10f64.powf(PATH_LOG10_M.0 + (PATH_LOG10_M.1 - PATH_LOG10_M.0) * f);
+            let end = (eye + range * s).clamp(-400.0, 30_000.0);
+            let path = atmosphere.slant_unchecked(band, eye, end, range);
+            let k = OFF_PATH + 2 * (j * PATH_RANGES + i);
+            buffer[k] = path.transmittance as f32;
+            buffer[k + 1] = path.path_radiance_w_m2_sr as f32;
+        }
+    }
+    let to_space = |elevation_deg: f64| {
+        let s = elevation_deg.to_radians().sin().max(0.0);
+        let top = 30_000.0;
+        let range = if s > 1e-3 {
+            ((top - eye) / s).min(300_000.0)
+        } else {
+            300_000.0
+        };
+        atmosphere.slant_unchecked(band, eye, top.min(eye + range * s.max(0.0)), range)
+    };
+    let mut sky = [0f32; 8];
+    for (k, e) in SKY_ELEVATIONS_DEG.iter().enumerate() {
+        sky[k] = to_space(*e).path_radiance_w_m2_sr as f32;
+    }
+    // What a horizontal surface reflects: the cosine-weighted mean of the sky.
+    let mut down = 0.0;
+    let mut weight = 0.0;
+    for step in 0..90 {
+        let e = (step as f64 + 0.5).to_radians();
+        let w = e.sin() * e.cos();
+        down += w * f64::from(sky_at(&sky, e.to_degrees()));
+        weight += w;
+    }
+    let sun_irradiance = if sun_elevation_deg > 0.0 {
+        band_radiance_unchecked(b, SUN_K)
+            * SUN_SOLID_ANGLE_SR
+            * to_space(sun_elevation_deg).transmittance
+    } else {
+        0.0
+    };
+    // Entity slots are 1-based in the order of `entity_heat` (the renderer's entity draws
+    // give each entity its slot in the same order).
+    for (slot, (_, rise)) in scene.entity_heat.iter().take(MAX_HOT_ENTITIES).enumerate() {
+        let base = OFF_ENTITY + (slot + 1) * ENTITY_STRIDE;
+        buffer[base..base + 5].copy_from_slice(rise);
+    }
+    let air = scene.air_k;
+    let radiance = |t: f64| band_radiance_unchecked(b, t.max(1.0)) as f32;
+    SensorFrame {
+        buffer,
+        sky,
+        down_radiance: (down / weight) as f32,
+        sun_irradiance: sun_irradiance as f32,
+        slope: cig_thermal::planck::band_radiance_slope(b, air) as f32,
+        histogram_range: (radiance(air - 60.0), radiance(air + 90.0)),
+        manual: sensor
+            .manual_window_k()
+            .map(|(lo, hi)| (radiance(lo), radiance(hi))),
+    }
+}
+
+/// The sky's radiance at `elevation_deg`, interpolated between the table's elevations.
+fn sky_at(sky: &[f32; 8], elevation_deg: f64) -> f32 {
+    let e = elevation_deg.clamp(0.0, 90.0);
+    for k in 1..SKY_ELEVATIONS_DEG.len() {
+        let (e0, e1) = (SKY_ELEVATIONS_DEG[k - 1], SKY_ELEVATIONS_DEG[k]);
+        if e <= e1 {
+            let f = ((e - e0) / (e1 - e0)) as f32;
+            return sky[k - 1] * (1.0 - f) + sky[k] * f;
+        }
+    }
+    sky[7]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cig_thermal::{Aerosol, HotPart, IrAtmosphere, ModelAtmosphere};
+
+    #[test]
+    fn the_shader_uses_the_same_layout_and_codes() {
+        let wgsl = include_str!("shaders/thermal.wgsl");
+        for (name, value) in [
+            ("TH_ORIENTATIONS", ORIENTATIONS),
+            ("TH_MATERIALS", ThermalMaterial::ALL.len()),
+            ("TH_OFF_EMISSIVITY", OFF_EMISSIVITY),
+            ("TH_OFF_PLANCK", OFF_PLANCK),
+            ("TH_PLANCK_N", PLANCK_ENTRIES),
+            ("TH_OFF_PATH", OFF_PATH),
+            ("TH_PATH_RANGES", PATH_RANGES),
+            ("TH_OFF_ENTITY", OFF_ENTITY),
+            ("TH_ENTITY_STRIDE", ENTITY_STRIDE),
+            (
+                "TH_HOT_BASE",
+                usize::from(cig_scene::thermal::HOT_CODE_BASE),
+            ),
+            ("TH_HOT_PARTS", HotPart::ALL.len()),
+            ("TH_SKIN", ThermalMaterial::Skin.index()),
+        ] {
+            let line = format!("const {name}: u32 = {value}u;");
+            assert!(wgsl.contains(&line), "thermal.wgsl lacks {line}");
+        }
+        assert!(wgsl.contains(&format!("const TH_PLANCK_T0: f32 = {PLANCK_T0_K:.1};")));
+        assert_eq!(
+            HotPart::BurningHull.index(),
+            4,
+            "model.wgsl reads the burning hull as part 4"
+        );
+    }
+
+    #[test]
+    fn the_sky_is_coldest_overhead_and_the_tables_are_filled() {
+        let scene = ThermalScene {
+            surface_k: vec![290.0; ThermalMaterial::ALL.len() * ORIENTATIONS],
+            air_k: 290.0,
+            atmosphere: IrAtmosphere::model(ModelAtmosphere::MidLatitudeSummer, Aerosol::Rural),
+            entity_heat: vec![(7, [50.0, 250.0, 10.0, 17.0, 0.0])],
+        };
+        let f = sensor_frame(&SensorView::new(IrBand::Lwir), &scene, 100.0, 40.0);
+        assert!(f.sky[0] > f.sky[7] * 1.5, "{:?}", f.sky);
+        assert!(f.down_radiance > f.sky[7] && f.down_radiance < f.sky[0]);
+        assert_eq!(f.buffer[OFF_ENTITY + ENTITY_STRIDE + 1], 250.0);
+        // L_band at 300 K sits at entry 150.
+        assert!((f.buffer[OFF_PLANCK + 150] - 38.5004).abs() < 1e-3);
+        // Transmittance falls with range along the horizontal.
+        let h = OFF_PATH + 2 * 4 * PATH_RANGES;
+        assert!(f.buffer[h] > 0.99 && f.buffer[h + 2 * 31] < 0.3);
+        assert!(f.histogram_range.0 < f.histogram_range.1);
+    }
+}

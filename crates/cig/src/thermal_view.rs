@@ -1,0 +1,131 @@
+//! The command line's thermal sensor options (`cig render --sensor lwir ...`): parsing, and the
+//! thermal state of a still frame (the surface table spun up for the place and time, the
+//! entities' engines). The physics is `cig-thermal`'s.
+
+use anyhow::{bail, Context};
+use cig_scene::thermal::{DisplayColour, Polarity, SensorView, ThermalScene};
+use cig_scene::EntityInstance;
+use cig_thermal::{
+    Aerosol, AirTemperature, EntityHeat, EntityThermalInput, IrAtmosphere, IrBand, Orientations,
+    SurfaceTable, ThermalMaterial, ThermalWeather,
+};
+
+/// What `--sensor` and its companions ask for.
+pub struct SensorOptions<'a> {
+    pub sensor: &'a str,
+    pub polarity: &'a str,
+    pub gain: Option<f64>,
+    pub level: Option<f64>,
+    pub noise_k: f64,
+    pub display: &'a str,
+}
+
+/// The view's sensor (`None` for the visible channel).
+pub fn parse_sensor(o: &SensorOptions) -> anyhow::Result<Option<SensorView>> {
+    let band = match o.sensor {
+        "visible" => return Ok(None),
+        "lwir" => IrBand::Lwir,
+        "mwir" => IrBand::Mwir,
+        other => bail!("--sensor \"{other}\" is not visible, lwir or mwir"),
+    };
+    let mut view = SensorView::new(band);
+    view.polarity = Polarity::from_name(o.polarity).with_context(|| {
+        format!(
+            "--polarity \"{}\" is not white-hot or black-hot",
+            o.polarity
+        )
+    })?;
+    view.display = DisplayColour::from_name(o.display)
+        .with_context(|| format!("--display \"{}\" is not white, green or black", o.display))?;
+    view.manual_gain_level = match (o.gain, o.level) {
+        (None, None) => None,
+        (Some(g), Some(l)) => {
+            for (name, v) in [("--gain", g), ("--level", l)] {
+                if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+                    bail!("{name} {v} must lie in 0..1");
+                }
+            }
+            Some((g as f32, l as f32))
+        }
+        _ => bail!("--gain and --level go together (without both, the gain is automatic)"),
+    };
+    if !(o.noise_k.is_finite() && (0.0..=5.0).contains(&o.noise_k)) {
+        bail!("--noise {} must lie in 0..5 kelvin", o.noise_k);
+    }
+    view.netd_k = o.noise_k as f32;
+    Ok(Some(view))
+}
+
+/// The weather a still frame's surfaces were heated by.
+pub struct FrameWeather {
+    pub air_min_c: f64,
+    pub air_max_c: f64,
+    pub rh_pct: f64,
+    pub wind_mps: f64,
+    pub cloud_cover: f64,
+    pub visibility_m: f64,
+}
+
+/// Parses `--air-c MIN,MAX`.
+pub fn parse_air(text: &str) -> anyhow::Result<(f64, f64)> {
+    let parts: Vec<&str> = text.split(',').collect();
+    let [min, max] = parts[..] else {
+        bail!("--air-c \"{text}\" is not MIN,MAX in Celsius");
+    };
+    let parse = |v: &str| -> anyhow::Result<f64> {
+        v.trim()
+            .parse::<f64>()
+            .with_context(|| format!("--air-c \"{text}\": \"{v}\" is not a number"))
+    };
+    Ok((parse(min)?, parse(max)?))
+}
+
+/// The thermal state of a still frame at a place and time: every material spun up over the
+/// two days before, the entities' engines running (steady) or off.
+pub fn still_thermal_scene(
+    lat_deg: f64,
+    lon_deg: f64,
+    time: cig_environment::UtcTime,
+    weather: &FrameWeather,
+    entities: &[EntityInstance],
+    engines_running: bool,
+) -> anyhow::Result<ThermalScene> {
+    let air = AirTemperature::diurnal_c(weather.air_min_c, weather.air_max_c).context("--air-c")?;
+    let thermal_weather = ThermalWeather {
+        air,
+        relative_humidity_pct: weather.rh_pct,
+        wind_mps: weather.wind_mps,
+        cloud_cover: weather.cloud_cover,
+        deep_ground_k: None,
+    };
+    thermal_weather.validate().context("--rh")?;
+    let table = SurfaceTable::spin_up(
+        lat_deg,
+        lon_deg,
+        time,
+        thermal_weather,
+        &ThermalMaterial::ALL,
+        Orientations::Standard,
+    )
+    .context("the thermal model")?;
+    let air_k = table.air_k();
+    let atmosphere = IrAtmosphere {
+        air_k: air_k.clamp(200.0, 330.0),
+        relative_humidity_pct: weather.rh_pct,
+        aerosol: Aerosol::Rural,
+        visibility_m: weather.visibility_m,
+    };
+    atmosphere.validate().context("the infrared atmosphere")?;
+    let input = EntityThermalInput {
+        engine_on: engines_running,
+        speed_mps: 0.0,
+        burning: false,
+        destroyed: false,
+    };
+    let heat = EntityHeat::steady(&input, air_k);
+    let entity_heat = entities
+        .iter()
+        .map(|e| (e.id, heat.rise_k.map(|r| r as f32)))
+        .collect();
+    Ok(ThermalScene::from_table(&table, atmosphere, entity_heat))
+}
