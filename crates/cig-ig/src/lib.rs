@@ -29,6 +29,7 @@ pub mod pose;
 pub mod scenario;
 pub mod scenes;
 pub mod session;
+pub mod thermal;
 pub mod weather;
 pub mod world;
 

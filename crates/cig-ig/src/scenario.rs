@@ -115,7 +115,7 @@ pub enum ScenarioError {
     Value { key: String, reason: String },
 }
 
-fn value_error(key: impl Into<String>, reason: impl Into<String>) -> ScenarioError {
+pub(crate) fn value_error(key: impl Into<String>, reason: impl Into<String>) -> ScenarioError {
     ScenarioError::Value {
         key: key.into(),
         reason: reason.into(),
@@ -167,6 +167,37 @@ pub struct Scenario {
     /// A thunderstorm.
     #[serde(default)]
     pub lightning: Option<ScenarioLightning>,
+    /// The thermal sensors' weather history (`crate::thermal`).
+    #[serde(default)]
+    pub thermal: Option<ThermalSection>,
+}
+
+/// `[thermal]`: what heated the world's surfaces before the start, for the thermal sensors.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ThermalSection {
+    /// Daily minimum air temperature, Celsius (at sunrise).
+    #[serde(default)]
+    pub air_min_c: Option<f64>,
+    /// Daily maximum air temperature, Celsius (at 14:00 local solar time).
+    #[serde(default)]
+    pub air_max_c: Option<f64>,
+    /// 24 hourly air temperatures at 00:00..23:00 local solar time, Celsius (instead of the
+    /// minimum and maximum).
+    #[serde(default)]
+    pub air_hourly_c: Option<Vec<f64>>,
+    /// Relative humidity, percent (the host's Atmosphere Control replaces it).
+    #[serde(default)]
+    pub humidity_pct: Option<f64>,
+    /// Wind speed near the ground, m/s (the host's replaces it).
+    #[serde(default)]
+    pub wind_mps: Option<f64>,
+    /// Deep-ground temperature at about 1 m, Celsius (default: the air's daily mean).
+    #[serde(default)]
+    pub deep_ground_c: Option<f64>,
+    /// Aerosol model of the infrared atmosphere: none, rural (default), maritime, urban.
+    #[serde(default)]
+    pub aerosol: Option<String>,
 }
 
 /// `[sky]`: the sky model and the exposure.
@@ -464,6 +495,10 @@ pub struct ScenarioEntity {
     /// truck).
     #[serde(default)]
     pub dust: Option<bool>,
+    /// Engine running (thermal sensors: engine deck, exhaust and running gear warm); default:
+    /// the DIS appearance's power-plant bit, else running.
+    #[serde(default)]
+    pub engine: Option<bool>,
 }
 
 /// The view used when no host defines one.
@@ -480,6 +515,9 @@ pub struct ScenarioView {
     pub hpr_deg: [f64; 3],
     #[serde(default = "default_fov")]
     pub fov_deg: f64,
+    /// The view's sensor: visible (default), lwir or mwir.
+    #[serde(default)]
+    pub sensor: Option<String>,
 }
 
 fn default_fov() -> f64 {
@@ -686,6 +724,17 @@ impl Scenario {
     }
 
     fn check(&self) -> Result<(), ScenarioError> {
+        if let Some(t) = &self.thermal {
+            t.weather()?;
+        }
+        if let Some(sensor) = self.view.as_ref().and_then(|v| v.sensor.as_deref()) {
+            if !matches!(sensor, "visible" | "lwir" | "mwir") {
+                return Err(value_error(
+                    "view.sensor",
+                    format!("\"{sensor}\" is not visible, lwir or mwir"),
+                ));
+            }
+        }
         if let Some(t) = &self.start_time {
             UtcTime::parse_iso8601(t).map_err(|e| value_error("start_time", e.to_string()))?;
         }

@@ -225,6 +225,8 @@ pub struct IgView {
     /// degrees right and up of the view's centre, as the host last set it through Component
     /// Control ([`POINT_OF_INTEREST_COMPONENT`]); `None` is the view's centre.
     pub point_of_interest_deg: Option<[f64; 2]>,
+    /// View Definition's view type (IG-defined; `crate::thermal::VIEW_TYPE_LWIR`, `..._MWIR`).
+    pub view_type: u8,
 }
 
 /// Component Control of a view (component class 1, instance = the view's identifier) that
@@ -247,6 +249,7 @@ impl IgView {
             orientation: Hpr::default(),
             fov: None,
             point_of_interest_deg: None,
+            view_type: 0,
         }
     }
 }
@@ -263,6 +266,11 @@ pub struct SensorMode {
     pub noise: f64,
     pub track_mode: u8,
     pub extended_response: bool,
+    pub automatic_gain: bool,
+    pub line_dropout: bool,
+    /// AC coupling time constant, microseconds (0 and more).
+    pub ac_coupling_us: f64,
+    pub track_black: bool,
 }
 
 /// The weather and surface state the host has set.
@@ -608,6 +616,8 @@ pub struct IgSession {
     entities: BTreeMap<u16, IgEntity>,
     views: BTreeMap<u16, IgView>,
     sensors: BTreeMap<(u16, u8), SensorMode>,
+    /// Sensors whose out-of-range values the host has been told about.
+    sensors_clamped: std::collections::BTreeSet<(u16, u8)>,
     environment: EnvironmentState,
     hat_hot: BTreeMap<u16, Pending<HatHotRequest>>,
     los_segment: BTreeMap<u16, Pending<LosSegmentRequest>>,
@@ -675,6 +685,7 @@ impl IgSession {
             entities: BTreeMap::new(),
             views: BTreeMap::new(),
             sensors: BTreeMap::new(),
+            sensors_clamped: std::collections::BTreeSet::new(),
             environment: EnvironmentState::default(),
             hat_hot: BTreeMap::new(),
             los_segment: BTreeMap::new(),
@@ -1285,6 +1296,7 @@ impl IgSession {
             .entry(d.view_id)
             .or_insert_with(|| IgView::new(d.view_id, d.group_id, 0));
         view.group_id = d.group_id;
+        view.view_type = d.view_type;
         let mut fov = view.fov.unwrap_or(FovDeg::symmetric(60.0, 45.0));
         let set = |enable: bool, value: f32, slot: &mut f64| {
             if enable && value.is_finite() {
@@ -1313,9 +1325,22 @@ impl IgSession {
     }
 
     fn apply_sensor(&mut self, s: &SensorControl) -> bool {
-        let finite = [s.gain, s.level, s.noise].iter().all(|v| v.is_finite());
+        let finite = [s.gain, s.level, s.noise, s.ac_coupling_us]
+            .iter()
+            .all(|v| v.is_finite());
         if !finite {
             return false;
+        }
+        // Values outside their ranges are clamped, and the host told once per sensor.
+        let outside = [s.gain, s.level, s.noise]
+            .iter()
+            .any(|v| !(0.0..=1.0).contains(v))
+            || s.ac_coupling_us < 0.0;
+        if outside && self.sensors_clamped.insert((s.view_id, s.sensor_id)) {
+            self.tell_host(format!(
+                "Sensor Control {}/{}: gain {}, level {}, noise {} (0..1) or AC coupling {} us (0 or more) clamped",
+                s.view_id, s.sensor_id, s.gain, s.level, s.noise, s.ac_coupling_us
+            ));
         }
         self.sensors.insert(
             (s.view_id, s.sensor_id),
@@ -1329,6 +1354,10 @@ impl IgSession {
                 noise: f64::from(s.noise).clamp(0.0, 1.0),
                 track_mode: s.track_mode,
                 extended_response: s.response_type_extended,
+                automatic_gain: s.automatic_gain,
+                line_dropout: s.line_dropout_enable,
+                ac_coupling_us: f64::from(s.ac_coupling_us).max(0.0),
+                track_black: s.track_black,
             },
         );
         true

@@ -213,6 +213,10 @@ pub struct IgWorld {
     lightning_received: u64,
     /// The operator's or the scenario's storm (wins over the host's random lightning).
     own_storm: Option<crate::weather::LightningStorm>,
+    /// The thermal sensors' state (spun up when a sensor view first needs it).
+    thermal: crate::thermal::ThermalWorld,
+    /// The thermal model failed (told once).
+    thermal_told: bool,
 }
 
 /// Models of ground vehicles that raise dust when they move on soil.
@@ -244,6 +248,7 @@ fn model_for_scenario_entity(e: &ScenarioEntity, table: &ModelTable) -> String {
 
 impl IgWorld {
     pub fn new(scenario: Scenario, config: WorldConfig) -> Result<IgWorld, WorldError> {
+        let thermal = crate::thermal::ThermalWorld::new(scenario.thermal.as_ref());
         let models = ModelTable::from_scenario(&scenario);
         let mut session = IgSession::new(config.session.clone(), models.clone());
         let mut scripts = BTreeMap::new();
@@ -329,6 +334,8 @@ impl IgWorld {
             precipitation_told: false,
             lightning_received: 0,
             own_storm: scenario_storm,
+            thermal,
+            thermal_told: false,
         })
     }
 
@@ -620,6 +627,7 @@ impl IgWorld {
             self.effects_stalled = false;
         }
         self.start_smoke(query);
+        self.update_thermal();
         // Velocities: the script's where there is one, else positions at least 0.2 s apart.
         let mut velocities = BTreeMap::new();
         let poses: Vec<(u16, Pose)> = self.session.poses().iter().map(|(k, v)| (*k, *v)).collect();
@@ -843,6 +851,122 @@ impl IgWorld {
         if let Some(reason) = self.session.environment().precipitation_clamped() {
             self.precipitation_told = true;
             self.session.tell_host(reason);
+        }
+    }
+
+    /// Whether any view this IG draws is a thermal sensor's (the scenario's view, or a host's by
+    /// its view type or Sensor Control).
+    fn sensor_views_wanted(&self) -> bool {
+        let scenario = self
+            .scenario
+            .view
+            .as_ref()
+            .and_then(|v| v.sensor.as_deref())
+            .is_some_and(|s| s != "visible");
+        scenario || self.drawn_sensors().iter().any(Option::is_some)
+    }
+
+    /// Each drawn view's thermal sensor, in the order of [`IgWorld::drawn_view_ids`].
+    fn drawn_sensors(&self) -> Vec<Option<cig_scene::thermal::SensorView>> {
+        self.drawn_view_ids()
+            .into_iter()
+            .map(|id| match id {
+                Some(id) => {
+                    let view_type = self.session.views().get(&id).map_or(0, |v| v.view_type);
+                    let control = self
+                        .session
+                        .sensors()
+                        .values()
+                        .find(|s| s.view_id == id && s.on);
+                    crate::thermal::host_sensor(view_type, control)
+                }
+                None => self
+                    .scenario
+                    .view
+                    .as_ref()
+                    .and_then(|v| v.sensor.as_deref())
+                    .and_then(crate::thermal::sensor_of_name),
+            })
+            .collect()
+    }
+
+    /// Advances the thermal state (surfaces and the drawn entities' engines) to the world time,
+    /// once a sensor view or the scenario's `[thermal]` asks for it.
+    fn update_thermal(&mut self) {
+        if !(self.thermal.is_running()
+            || self.scenario.thermal.is_some()
+            || self.sensor_views_wanted())
+        {
+            return;
+        }
+        let place = self.first_eye.unwrap_or_else(|| {
+            self.scenario
+                .view
+                .as_ref()
+                .and_then(|v| v.eye)
+                .map_or(Geodetic::new(0.0, 0.0, 0.0), |e| {
+                    Geodetic::new(e[0], e[1], e[2])
+                })
+        });
+        let host_air =
+            self.session
+                .environment()
+                .atmosphere
+                .as_ref()
+                .map(|a| crate::thermal::HostAir {
+                    air_temperature_c: f64::from(a.air_temperature_c),
+                    humidity_pct: f64::from(a.humidity_pct),
+                    wind_mps: f64::from(a.horizontal_wind_speed_mps),
+                });
+        let cover = self.clouds.iter().map(|l| l.coverage).fold(0.0, f64::max);
+        let mut entities = Vec::new();
+        for (id, e) in self.session.entities() {
+            if e.life != EntityLife::Active {
+                continue;
+            }
+            let Some(pose) = self.session.poses().get(id) else {
+                continue;
+            };
+            let own = self.scenario.entities.iter().find(|s| s.id == *id);
+            let appearance = own
+                .and_then(|s| s.appearance.as_deref())
+                .and_then(crate::scenario::parse_hex_u32);
+            let (power, burning, destroyed) =
+                appearance.map_or((true, false, false), crate::thermal::appearance_heat);
+            entities.push(crate::thermal::ThermalEntity {
+                id: u32::from(*id),
+                position_ecef_m: pose.position.to_ecef(),
+                engine_on: own.and_then(|s| s.engine).unwrap_or(power) && !destroyed,
+                burning,
+                destroyed,
+            });
+        }
+        if let (Some(x), Some(eye)) = (&self.exercise, self.first_eye) {
+            for r in x.remote_entities_near(self.monotonic_s, &[eye.to_ecef()], 50_000.0) {
+                let (power, burning, destroyed) = crate::thermal::appearance_heat(r.appearance);
+                entities.push(crate::thermal::ThermalEntity {
+                    id: remote_instance_id(r.key),
+                    position_ecef_m: r.position_ecef_m,
+                    engine_on: power && !destroyed,
+                    burning,
+                    destroyed,
+                });
+            }
+        }
+        let visibility_m = self.scenario.visibility_m.unwrap_or(23_000.0);
+        if let Err(e) = self.thermal.step(
+            self.clock.now(),
+            place,
+            host_air,
+            cover,
+            visibility_m,
+            &entities,
+        ) {
+            if !self.thermal_told {
+                self.thermal_told = true;
+                self.session
+                    .tell_host(format!("the thermal sensors cannot be drawn: {e}"));
+            }
         }
     }
 
@@ -1302,6 +1426,13 @@ impl IgWorld {
                 .collect();
         }
         snapshot.sky = self.scenario.sky_settings();
+        snapshot.thermal = self.thermal.scene();
+        if snapshot.thermal.is_some() {
+            let sensors = self.drawn_sensors();
+            if sensors.len() == views.len() {
+                snapshot.sensors = sensors;
+            }
+        }
         let mut visibility_m = 40_000.0;
         if let Some(first) = views.first() {
             // Weather layers are given above MSL.

@@ -33,6 +33,14 @@
 //! offset_m = [0, 0, -2]
 //! hpr_deg = [0, -5, 0]
 //! fov_deg = [-30, 30, -20, 20] # left, right, bottom, top
+//! view_type = 1                # View Definition's (cig: 0 visible, 1 LWIR, 2 MWIR)
+//! [view.sensor]                # a Sensor Control on the view, restated each second
+//! on = true
+//! black_hot = false
+//! automatic_gain = true        # false: gain and level (0..1)
+//! gain = 0.5
+//! level = 0.5
+//! noise = 0.1                  # 0..1 (cig: NETD 0.5 K x noise)
 //! [[hat]]
 //! id = 1
 //! entity = 0                   # below the entity; or lat_deg, lon_deg, alt_m
@@ -56,7 +64,7 @@ use crate::ToolError;
 use cig_cigi::{
     decode_message, AtmosphereControl, ByteOrder, CelestialSphereControl, EntityControl,
     EntityControl4, EntityPosition, HatHotRequest, IgControl, LosSegmentRequest, Message, Packet,
-    Version, ViewControl, ViewDefinition,
+    SensorControl, Version, ViewControl, ViewDefinition,
 };
 use cig_environment::UtcTime;
 use cig_geo::{EnuFrame, Geodetic};
@@ -138,6 +146,44 @@ struct HostView {
     hpr_deg: [f32; 3],
     #[serde(default)]
     fov_deg: Option<[f32; 4]>,
+    /// View Definition's view type (cig: 0 visible, 1 LWIR, 2 MWIR).
+    #[serde(default)]
+    view_type: u8,
+    /// A Sensor Control on the view, restated with the view's frustum.
+    #[serde(default)]
+    sensor: Option<HostSensor>,
+}
+
+/// A Sensor Control the script sends.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HostSensor {
+    #[serde(default)]
+    id: u8,
+    #[serde(default = "yes")]
+    on: bool,
+    #[serde(default)]
+    black_hot: bool,
+    #[serde(default = "yes")]
+    automatic_gain: bool,
+    #[serde(default = "half")]
+    gain: f32,
+    #[serde(default = "half")]
+    level: f32,
+    #[serde(default)]
+    noise: f32,
+    #[serde(default)]
+    line_dropout: bool,
+    #[serde(default)]
+    ac_coupling_us: f32,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn half() -> f32 {
+    0.5
 }
 
 #[derive(Debug, Deserialize)]
@@ -473,7 +519,23 @@ fn build_frame(
                 right_deg: f[1],
                 bottom_deg: f[2],
                 top_deg: f[3],
+                view_type: v.view_type,
                 ..ViewDefinition::default()
+            }));
+        }
+        if let (true, Some(sensor)) = (restate, &v.sensor) {
+            packets.push(Packet::SensorControl(SensorControl {
+                view_id: v.id,
+                sensor_id: sensor.id,
+                sensor_on: sensor.on,
+                polarity_black_hot: sensor.black_hot,
+                line_dropout_enable: sensor.line_dropout,
+                automatic_gain: sensor.automatic_gain,
+                gain: sensor.gain,
+                level: sensor.level,
+                noise: sensor.noise,
+                ac_coupling_us: sensor.ac_coupling_us,
+                ..SensorControl::default()
             }));
         }
     }

@@ -1,0 +1,352 @@
+//! The world's thermal state for the sensor views: the surface table (`cig_thermal`) spun up
+//! for the served area when a sensor first needs it and advanced with the simulation clock
+//! every step, the host's and the scenario's weather driving it, and each drawn entity's hot
+//! parts warming and cooling with its engine.
+//!
+//! Engine state, by entity: the scenario's `engine`, else its DIS appearance's power-plant bit
+//! (bit 22 of a platform's appearance, SISO-REF-010 land, air and surface platforms); a
+//! remote DIS entity's appearance; a host's CIGI entity runs its engine while active (CIGI has
+//! no engine field). Damage "destroyed" (appearance bits 3-4 = 3) and the flaming bit (15) make
+//! it destroyed and burning. Speed is the entity's displacement between steps.
+//!
+//! Limits: one table for the whole served area, at the first eye's place when it is made (the
+//! sun's angles and the local solar time of a 100 km database differ by under a degree);
+//! entities' hot parts only for the vehicles drawn; craters and impacts are not yet drawn hot
+//! (`cig_thermal::HotSpot` is there for the dynamic terrain).
+
+use crate::scenario::{value_error, ThermalSection};
+use crate::ScenarioError;
+use cig_geo::Geodetic;
+use cig_scene::thermal::{SensorView, ThermalScene};
+use cig_thermal::{
+    Aerosol, AirTemperature, EntityHeat, EntityThermalInput, IrAtmosphere, IrBand, Orientations,
+    SurfaceTable, ThermalMaterial, ThermalWeather, CELSIUS_0_K,
+};
+use glam::DVec3;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// DIS platform appearance bits (SISO-REF-010).
+const BIT_POWER_PLANT_ON: u32 = 1 << 22;
+const BIT_FLAMING: u32 = 1 << 15;
+const SHIFT_DAMAGE: u32 = 3;
+const DAMAGE_DESTROYED: u32 = 3;
+
+/// What a DIS appearance says about an entity's heat: (engine on, burning, destroyed).
+pub fn appearance_heat(appearance: u32) -> (bool, bool, bool) {
+    (
+        appearance & BIT_POWER_PLANT_ON != 0,
+        appearance & BIT_FLAMING != 0,
+        (appearance >> SHIFT_DAMAGE) & 3 == DAMAGE_DESTROYED,
+    )
+}
+
+impl ThermalSection {
+    /// The weather the section describes, and its aerosol model, checked.
+    pub fn weather(&self) -> Result<(ThermalWeather, Aerosol), ScenarioError> {
+        let air = match (&self.air_hourly_c, self.air_min_c, self.air_max_c) {
+            (Some(hours), None, None) => AirTemperature::hourly_c(hours)
+                .map_err(|e| value_error("thermal.air_hourly_c", e.to_string()))?,
+            (None, min, max) => AirTemperature::diurnal_c(min.unwrap_or(10.0), max.unwrap_or(24.0))
+                .map_err(|e| value_error("thermal.air_min_c", e.to_string()))?,
+            _ => {
+                return Err(value_error(
+                    "thermal.air_hourly_c",
+                    "give either air_hourly_c or air_min_c and air_max_c",
+                ))
+            }
+        };
+        let weather = ThermalWeather {
+            air,
+            relative_humidity_pct: self.humidity_pct.unwrap_or(50.0),
+            wind_mps: self.wind_mps.unwrap_or(3.0),
+            cloud_cover: 0.0,
+            deep_ground_k: self.deep_ground_c.map(|c| c + CELSIUS_0_K),
+        };
+        weather
+            .validate()
+            .map_err(|e| value_error("thermal", e.to_string()))?;
+        let aerosol = Aerosol::from_name(self.aerosol.as_deref().unwrap_or("rural"))
+            .map_err(|e| value_error("thermal.aerosol", e.to_string()))?;
+        Ok((weather, aerosol))
+    }
+}
+
+/// One entity as the thermal state sees it this step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThermalEntity {
+    pub id: u32,
+    pub position_ecef_m: DVec3,
+    /// Engine on, burning, destroyed.
+    pub engine_on: bool,
+    pub burning: bool,
+    pub destroyed: bool,
+}
+
+/// The host's air (CIGI Atmosphere Control), when it set one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HostAir {
+    pub air_temperature_c: f64,
+    pub humidity_pct: f64,
+    pub wind_mps: f64,
+}
+
+/// The thermal state of the world.
+pub struct ThermalWorld {
+    weather: ThermalWeather,
+    aerosol: Aerosol,
+    table: Option<SurfaceTable>,
+    /// Per entity: its heat and its last (time, position) for its speed.
+    heat: BTreeMap<u32, (EntityHeat, f64, DVec3)>,
+    /// The frame's scene (rebuilt each step while the table exists).
+    scene: Option<Arc<ThermalScene>>,
+    visibility_m: f64,
+}
+
+impl ThermalWorld {
+    /// The state for a scenario's `[thermal]` section (or the defaults).
+    pub fn new(section: Option<&ThermalSection>) -> ThermalWorld {
+        let (weather, aerosol) = section
+            .and_then(|s| s.weather().ok())
+            .unwrap_or((ThermalWeather::default(), Aerosol::Rural));
+        ThermalWorld {
+            weather,
+            aerosol,
+            table: None,
+            heat: BTreeMap::new(),
+            scene: None,
+            visibility_m: 23_000.0,
+        }
+    }
+
+    /// Whether the table has been spun up.
+    pub fn is_running(&self) -> bool {
+        self.table.is_some()
+    }
+
+    /// Advances the state to `time` (spinning the table up at `place` the first time), with the
+    /// host's air, the cloud cover, the visibility and the drawn entities.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the step's inputs, each from a different part of the world"
+    )]
+    pub fn step(
+        &mut self,
+        time: cig_environment::UtcTime,
+        place: Geodetic,
+        host_air: Option<HostAir>,
+        cloud_cover: f64,
+        visibility_m: f64,
+        entities: &[ThermalEntity],
+    ) -> Result<(), cig_thermal::ThermalError> {
+        let mut weather = self.weather.clone();
+        weather.cloud_cover = cloud_cover.clamp(0.0, 1.0);
+        if let Some(h) = host_air {
+            weather.relative_humidity_pct = h.humidity_pct.clamp(0.0, 100.0);
+            weather.wind_mps = h.wind_mps.clamp(0.0, 100.0);
+            if h.air_temperature_c.is_finite() {
+                weather.air = weather.air.with_current(
+                    time,
+                    place.lat_deg,
+                    place.lon_deg,
+                    (h.air_temperature_c + CELSIUS_0_K).clamp(183.0, 333.0),
+                );
+            }
+        }
+        self.visibility_m = if visibility_m.is_finite() && visibility_m > 0.0 {
+            visibility_m
+        } else {
+            23_000.0
+        };
+        match &mut self.table {
+            Some(table) => {
+                table.set_weather(weather)?;
+                table.advance_to(time);
+            }
+            None => {
+                self.table = Some(SurfaceTable::spin_up(
+                    place.lat_deg,
+                    place.lon_deg,
+                    time,
+                    weather,
+                    &ThermalMaterial::ALL,
+                    Orientations::Standard,
+                )?);
+            }
+        }
+        let Some(table) = &self.table else {
+            return Ok(());
+        };
+        let air_k = table.air_k();
+        let now = time.unix_seconds();
+        let mut kept = BTreeMap::new();
+        for e in entities {
+            let (mut heat, last_s, last_p) = self.heat.remove(&e.id).unwrap_or((
+                EntityHeat::default(),
+                f64::NAN,
+                e.position_ecef_m,
+            ));
+            let dt = now - last_s;
+            let speed = if dt.is_finite() && dt > 1e-3 {
+                (e.position_ecef_m - last_p).length() / dt
+            } else {
+                0.0
+            };
+            let input = EntityThermalInput {
+                engine_on: e.engine_on,
+                speed_mps: speed.min(100.0),
+                burning: e.burning,
+                destroyed: e.destroyed,
+            };
+            if last_s.is_nan() {
+                // First seen: as if it had been doing this for a while.
+                heat = EntityHeat::steady(&input, air_k);
+            } else if dt > 0.0 {
+                heat.step(dt, &input, air_k);
+            }
+            kept.insert(e.id, (heat, now, e.position_ecef_m));
+        }
+        self.heat = kept;
+        let atmosphere = IrAtmosphere {
+            air_k: air_k.clamp(200.0, 330.0),
+            relative_humidity_pct: table.weather().relative_humidity_pct,
+            aerosol: self.aerosol,
+            visibility_m: self.visibility_m,
+        };
+        self.scene = Some(Arc::new(ThermalScene::from_table(
+            table,
+            atmosphere,
+            self.heat
+                .iter()
+                .map(|(id, (h, _, _))| (*id, h.rise_k.map(|r| r as f32)))
+                .collect(),
+        )));
+        Ok(())
+    }
+
+    /// The frame's thermal scene, once the table runs.
+    pub fn scene(&self) -> Option<Arc<ThermalScene>> {
+        self.scene.clone()
+    }
+}
+
+/// A sensor view for a band name of the scenario or the command line (`None` for visible).
+pub fn sensor_of_name(name: &str) -> Option<SensorView> {
+    match name {
+        "lwir" => Some(SensorView::new(IrBand::Lwir)),
+        "mwir" => Some(SensorView::new(IrBand::Mwir)),
+        _ => None,
+    }
+}
+
+/// CIGI View Definition view types cig gives a meaning to (the field is IG-defined;
+/// docs/cigi-conformance.md): 0 the visible channel, 1 LWIR, 2 MWIR.
+pub const VIEW_TYPE_LWIR: u8 = 1;
+pub const VIEW_TYPE_MWIR: u8 = 2;
+
+/// The sensor a host's view shows: its view type's band, with the Sensor Control the host set
+/// on it (gain and level unless automatic, polarity, noise as a NETD of up to 0.5 K, line
+/// dropout, AC coupling); a Sensor Control turned on over a visible view type makes it LWIR.
+pub fn host_sensor(
+    view_type: u8,
+    control: Option<&crate::session::SensorMode>,
+) -> Option<SensorView> {
+    let band = match view_type {
+        VIEW_TYPE_LWIR => Some(IrBand::Lwir),
+        VIEW_TYPE_MWIR => Some(IrBand::Mwir),
+        _ => None,
+    };
+    let control = control.filter(|c| c.on);
+    let band = band.or(control.map(|_| IrBand::Lwir))?;
+    let mut view = SensorView::new(band);
+    if let Some(c) = control {
+        view.polarity = if c.black_hot {
+            cig_scene::thermal::Polarity::BlackHot
+        } else {
+            cig_scene::thermal::Polarity::WhiteHot
+        };
+        view.manual_gain_level = (!c.automatic_gain).then_some((c.gain as f32, c.level as f32));
+        view.netd_k = (0.5 * c.noise) as f32;
+        view.line_dropout = c.line_dropout;
+        view.ac_coupling_us = c.ac_coupling_us as f32;
+    }
+    Some(view)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn appearance_bits_give_engine_fire_and_damage() {
+        assert_eq!(appearance_heat(0), (false, false, false));
+        assert_eq!(appearance_heat(1 << 22), (true, false, false));
+        assert_eq!(appearance_heat((3 << 3) | (1 << 15)), (false, true, true));
+        assert_eq!(appearance_heat(1 << 3), (false, false, false));
+    }
+
+    #[test]
+    fn the_table_spins_up_once_and_entities_warm_after_start() {
+        let mut w = ThermalWorld::new(None);
+        let t0 = cig_environment::UtcTime::parse_iso8601("2026-06-21T06:00:00Z").expect("t");
+        let place = Geodetic::new(36.0, -121.0, 0.0);
+        let mut tank = ThermalEntity {
+            id: 7,
+            position_ecef_m: place.to_ecef(),
+            engine_on: false,
+            burning: false,
+            destroyed: false,
+        };
+        w.step(t0, place, None, 0.0, 20_000.0, &[tank])
+            .expect("step");
+        let cold = w.scene().expect("scene").entity_heat[0].1[0];
+        assert!(cold.abs() < 1e-3, "{cold}");
+        tank.engine_on = true;
+        w.step(t0.plus_seconds(600.0), place, None, 0.0, 20_000.0, &[tank])
+            .expect("step");
+        let warm = w.scene().expect("scene").entity_heat[0].1[0];
+        assert!(warm > 20.0, "the engine deck warms in ten minutes: {warm}");
+        // The host's air temperature shifts the curve.
+        w.step(
+            t0.plus_seconds(601.0),
+            place,
+            Some(HostAir {
+                air_temperature_c: 35.0,
+                humidity_pct: 30.0,
+                wind_mps: 2.0,
+            }),
+            0.0,
+            20_000.0,
+            &[tank],
+        )
+        .expect("step");
+        let air = w.scene().expect("scene").air_k - CELSIUS_0_K;
+        assert!((air - 35.0).abs() < 0.01, "{air}");
+    }
+
+    #[test]
+    fn host_sensors_follow_view_type_and_control() {
+        assert_eq!(host_sensor(0, None), None);
+        assert_eq!(host_sensor(2, None).map(|s| s.band), Some(IrBand::Mwir));
+        let control = crate::session::SensorMode {
+            view_id: 0,
+            sensor_id: 0,
+            on: true,
+            black_hot: true,
+            gain: 0.4,
+            level: 0.6,
+            noise: 0.2,
+            track_mode: 0,
+            extended_response: false,
+            automatic_gain: false,
+            line_dropout: true,
+            ac_coupling_us: 20.0,
+            track_black: false,
+        };
+        let s = host_sensor(0, Some(&control)).expect("a sensor");
+        assert_eq!(s.band, IrBand::Lwir);
+        assert_eq!(s.polarity, cig_scene::thermal::Polarity::BlackHot);
+        assert_eq!(s.manual_gain_level, Some((0.4, 0.6)));
+        assert!((s.netd_k - 0.1).abs() < 1e-6 && s.line_dropout);
+    }
+}
