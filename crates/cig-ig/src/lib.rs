@@ -30,6 +30,7 @@ pub mod scenario;
 pub mod scenes;
 pub mod session;
 pub mod thermal;
+pub mod tracker;
 pub mod weather;
 pub mod world;
 

@@ -254,6 +254,20 @@ impl IgView {
     }
 }
 
+/// What a sensor's tracker reports (CIGI Sensor Response and Sensor Extended Response).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TrackReport {
+    /// 0 searching, 1 tracking, 2 impending breaklock, 3 breaklock.
+    pub status: u8,
+    pub gate_px: [u16; 2],
+    /// The gate's centre, degrees right and up of the view's centre.
+    pub gate_deg: [f32; 2],
+    /// The host's entity tracked, if the target is one.
+    pub entity_id: Option<u16>,
+    /// The track point (the entity's position), geodetic, altitude above the ellipsoid.
+    pub point: Option<Geodetic>,
+}
+
 /// A sensor's selected mode.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SensorMode {
@@ -616,6 +630,8 @@ pub struct IgSession {
     entities: BTreeMap<u16, IgEntity>,
     views: BTreeMap<u16, IgView>,
     sensors: BTreeMap<(u16, u8), SensorMode>,
+    /// What each sensor's tracker reported last.
+    tracks: BTreeMap<(u16, u8), TrackReport>,
     /// Sensors whose out-of-range values the host has been told about.
     sensors_clamped: std::collections::BTreeSet<(u16, u8)>,
     environment: EnvironmentState,
@@ -686,6 +702,7 @@ impl IgSession {
             views: BTreeMap::new(),
             sensors: BTreeMap::new(),
             sensors_clamped: std::collections::BTreeSet::new(),
+            tracks: BTreeMap::new(),
             environment: EnvironmentState::default(),
             hat_hot: BTreeMap::new(),
             los_segment: BTreeMap::new(),
@@ -2133,23 +2150,46 @@ impl IgSession {
         out.extend(notes);
     }
 
+    /// Sets what a sensor's tracker found in the last frame drawn (`crate::tracker`).
+    pub fn set_track(&mut self, view_id: u16, sensor_id: u8, track: TrackReport) {
+        self.tracks.insert((view_id, sensor_id), track);
+    }
+
     fn sensor_responses(&self, out: &mut Vec<Packet>) {
         for s in self.sensors.values().filter(|s| s.on && s.track_mode != 0) {
+            // Searching until the renderer's tracker has seen the view.
+            let t = self
+                .tracks
+                .get(&(s.view_id, s.sensor_id))
+                .copied()
+                .unwrap_or_default();
             if s.extended_response {
+                let point = t.point.unwrap_or(Geodetic::new(0.0, 0.0, 0.0));
                 out.push(Packet::SensorExtendedResponse(SensorExtendedResponse {
                     view_id: s.view_id,
                     sensor_id: s.sensor_id,
-                    sensor_status: 0,
+                    sensor_status: t.status,
+                    entity_id_valid: t.entity_id.is_some(),
+                    entity_id: t.entity_id.unwrap_or(0),
+                    gate_x_size_px: t.gate_px[0],
+                    gate_y_size_px: t.gate_px[1],
+                    gate_x_position_deg: t.gate_deg[0],
+                    gate_y_position_deg: t.gate_deg[1],
                     frame_counter: self.ig_frame_number,
-                    ..SensorExtendedResponse::default()
+                    track_latitude_deg: point.lat_deg,
+                    track_longitude_deg: point.lon_deg,
+                    track_altitude_m: point.alt_m,
                 }));
             } else {
                 out.push(Packet::SensorResponse(SensorResponse {
                     view_id: s.view_id,
                     sensor_id: s.sensor_id,
-                    sensor_status: 0,
+                    sensor_status: t.status,
+                    gate_x_size_px: t.gate_px[0],
+                    gate_y_size_px: t.gate_px[1],
+                    gate_x_position_deg: t.gate_deg[0],
+                    gate_y_position_deg: t.gate_deg[1],
                     frame_counter: self.ig_frame_number,
-                    ..SensorResponse::default()
                 }));
             }
         }

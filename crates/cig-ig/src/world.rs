@@ -217,6 +217,8 @@ pub struct IgWorld {
     thermal: crate::thermal::ThermalWorld,
     /// The thermal model failed (told once).
     thermal_told: bool,
+    /// Each tracking sensor's tracker, by (view, sensor).
+    trackers: BTreeMap<(u16, u8), crate::tracker::Tracker>,
 }
 
 /// Models of ground vehicles that raise dust when they move on soil.
@@ -336,6 +338,7 @@ impl IgWorld {
             own_storm: scenario_storm,
             thermal,
             thermal_told: false,
+            trackers: BTreeMap::new(),
         })
     }
 
@@ -535,7 +538,15 @@ impl IgWorld {
         let now = self.monotonic_s;
         let set = self.session.take_time_set();
         // A host repeating the current time every frame changes nothing and announces nothing.
-        let set = set.filter(|t| (t.unix_seconds() - self.clock.now().unix_seconds()).abs() > 1.0);
+        // Stepped on the host's clock (a display channel), the world takes the host's time of
+        // day exactly, so channels started seconds apart agree to the frame.
+        let tolerance_s = if self.host_clock_stepped_s.is_some() {
+            1e-3
+        } else {
+            1.0
+        };
+        let set = set
+            .filter(|t| (t.unix_seconds() - self.clock.now().unix_seconds()).abs() > tolerance_s);
         if let Some(t) = set {
             self.clock.set_time(t);
             if let Some(x) = self.exercise.as_mut() {
@@ -888,6 +899,109 @@ impl IgWorld {
                     .and_then(crate::thermal::sensor_of_name),
             })
             .collect()
+    }
+
+    /// The gates the trackers of the drawn sensor views want read from the frame of `frame_px`
+    /// pixels just drawn: (view index in the snapshot, gate `[x, y, width, height]`).
+    pub fn track_gates(&mut self, frame_px: [u32; 2]) -> Vec<(usize, crate::tracker::Rect)> {
+        let mut out = Vec::new();
+        let ids = self.drawn_view_ids();
+        let sensors = self.drawn_sensors();
+        for (index, id) in ids.iter().enumerate() {
+            let (Some(id), Some(Some(_))) = (id, sensors.get(index)) else {
+                continue;
+            };
+            let Some(s) = self
+                .session
+                .sensors()
+                .values()
+                .find(|s| s.view_id == *id && s.on && s.track_mode != 0)
+            else {
+                continue;
+            };
+            let tracker = self
+                .trackers
+                .entry((s.view_id, s.sensor_id))
+                .or_insert_with(|| crate::tracker::Tracker::new(frame_px));
+            out.push((index, tracker.gate(frame_px)));
+        }
+        // Trackers of sensors no longer tracking are dropped.
+        let wanted: BTreeSet<(u16, u8)> = self
+            .session
+            .sensors()
+            .values()
+            .filter(|s| s.on && s.track_mode != 0)
+            .map(|s| (s.view_id, s.sensor_id))
+            .collect();
+        self.trackers.retain(|k, _| wanted.contains(k));
+        out
+    }
+
+    /// Feeds a tracker the band radiance of its gate (`values`, row by row) from view
+    /// `view_index` of `snapshot`, and reports what it tracks to the host (the next frame's
+    /// Sensor Response): the status, the gate, and the host's entity nearest the target's
+    /// direction within the gate, with its position as the track point.
+    pub fn feed_track(
+        &mut self,
+        snapshot: &FrameSnapshot,
+        view_index: usize,
+        gate: crate::tracker::Rect,
+        values: &[f32],
+    ) {
+        let Some(Some(id)) = self.drawn_view_ids().get(view_index).copied() else {
+            return;
+        };
+        let Some(view) = snapshot.views.get(view_index) else {
+            return;
+        };
+        let Some(s) = self
+            .session
+            .sensors()
+            .values()
+            .find(|s| s.view_id == id && s.on && s.track_mode != 0)
+            .copied()
+        else {
+            return;
+        };
+        let frame_px = [view.width_px, view.height_px];
+        let Some(tracker) = self.trackers.get_mut(&(s.view_id, s.sensor_id)) else {
+            return;
+        };
+        tracker.update(gate, values, frame_px, s.track_black);
+        // The gate's centre as a direction: tangents across the frustum.
+        let [tl, tr, td, tu] = view.fov.tangents();
+        let tan_x = -tl + (tl + tr) * tracker.centre_px[0] / f64::from(view.width_px);
+        let tan_y = tu - (tu + td) * tracker.centre_px[1] / f64::from(view.height_px);
+        let camera = view.camera();
+        let ray = (camera.forward + camera.right * tan_x + camera.up * tan_y).normalize();
+        // Within the gate's half-width, the nearest host entity in angle.
+        let half_gate = f64::from(tracker.gate_px[0]) / 2.0 * (tl + tr) / f64::from(view.width_px);
+        let mut best: Option<(f64, u16, Geodetic)> = None;
+        if tracker.status == crate::tracker::STATUS_TRACKING
+            || tracker.status == crate::tracker::STATUS_IMPENDING_BREAKLOCK
+        {
+            for e in &snapshot.entities {
+                let Ok(entity_id) = u16::try_from(e.id) else {
+                    continue;
+                };
+                let to = e.position.to_ecef() - camera.eye_ecef;
+                let angle = to.normalize().angle_between(ray);
+                if angle.tan() <= half_gate && best.is_none_or(|b| angle < b.0) {
+                    best = Some((angle, entity_id, e.position));
+                }
+            }
+        }
+        let report = crate::session::TrackReport {
+            status: tracker.status,
+            gate_px: tracker.gate_px.map(|g| g.min(u32::from(u16::MAX)) as u16),
+            gate_deg: [
+                tan_x.atan().to_degrees() as f32,
+                tan_y.atan().to_degrees() as f32,
+            ],
+            entity_id: best.map(|b| b.1),
+            point: best.map(|b| b.2),
+        };
+        self.session.set_track(s.view_id, s.sensor_id, report);
     }
 
     /// Advances the thermal state (surfaces and the drawn entities' engines) to the world time,

@@ -279,6 +279,8 @@ struct Targets {
     msaa_colour: wgpu::TextureView,
     /// The resolved scene: pre-exposed radiance, read by the tone map.
     hdr: wgpu::TextureView,
+    /// Its texture (a sensor's tracker reads its gate from it).
+    hdr_texture: wgpu::Texture,
     tone_map_bind: wgpu::BindGroup,
     depth: wgpu::TextureView,
 }
@@ -586,6 +588,19 @@ impl TerrainPipelines {
                 },
             )
         })
+    }
+}
+
+/// An IEEE half-precision value as f32.
+fn f16_to_f32(bits: u16) -> f32 {
+    let sign = if bits & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exponent = i32::from((bits >> 10) & 0x1F);
+    let mantissa = f32::from(bits & 0x3FF);
+    match exponent {
+        0 => sign * mantissa * 2f32.powi(-24),
+        31 if mantissa == 0.0 => sign * f32::INFINITY,
+        31 => f32::NAN,
+        e => sign * (1.0 + mantissa / 1024.0) * 2f32.powi(e - 15),
     }
 }
 
@@ -1031,16 +1046,16 @@ impl Renderer {
                 crate::gpu::render_target(device, label, size, format, MSAA_SAMPLES, usage, &[])
                     .create_view(&Default::default())
             };
-            let hdr = crate::gpu::render_target(
+            let hdr_texture = crate::gpu::render_target(
                 device,
                 "scene",
                 size,
                 HDR_FORMAT,
                 1,
-                wgpu::TextureUsages::TEXTURE_BINDING,
+                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
                 &[],
-            )
-            .create_view(&Default::default());
+            );
+            let hdr = hdr_texture.create_view(&Default::default());
             let targets = Targets {
                 size,
                 msaa_colour: make("msaa colour", HDR_FORMAT, wgpu::TextureUsages::empty()),
@@ -1048,6 +1063,7 @@ impl Renderer {
                     .tone_map
                     .bind(&self.gpu, &hdr, &self.adaptation.tone_exposure),
                 hdr,
+                hdr_texture,
                 // The puff pass may read the depth samples.
                 depth: make(
                     "depth",
@@ -1951,6 +1967,69 @@ impl Renderer {
         self.node_first_seen
             .retain(|(v, _), (_, last)| *v != view_index || *last == frame);
         out
+    }
+
+    /// The red channel of a rectangle `[x, y, width, height]` of the last frame's resolved scene
+    /// (a sensor view's band radiance, W m-2 sr-1), row by row; clamped to the frame.
+    pub fn read_scene_region(&self, [x, y, w, h]: [u32; 4]) -> Result<Vec<f32>, RenderError> {
+        let targets = self
+            .targets
+            .as_ref()
+            .ok_or_else(|| RenderError::Readback("no frame has been drawn".into()))?;
+        let (fw, fh) = targets.size;
+        let (x, y) = (x.min(fw.saturating_sub(1)), y.min(fh.saturating_sub(1)));
+        let (w, h) = (w.min(fw - x).max(1), h.min(fh - y).max(1));
+        // Rgba16Float: 8 bytes a pixel.
+        let bytes_per_row = (w * 8).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene region"),
+            size: u64::from(bytes_per_row) * u64::from(h),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("scene region"),
+            });
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &targets.hdr_texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x, y, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(bytes_per_row),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        self.gpu.queue.submit([encoder.finish()]);
+        let slice = buffer.slice(..);
+        crate::gpu::map_for_reading(&self.gpu, &slice)?;
+        let mut out = Vec::with_capacity((w * h) as usize);
+        {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| RenderError::Readback(e.to_string()))?;
+            for row in data.chunks(bytes_per_row as usize).take(h as usize) {
+                for px in row.chunks_exact(8).take(w as usize) {
+                    out.push(f16_to_f32(u16::from_le_bytes([px[0], px[1]])));
+                }
+            }
+        }
+        buffer.unmap();
+        Ok(out)
     }
 
     /// Sets the channel's display correction (`cig_scene::display`: warp grid and edge-blend

@@ -41,6 +41,9 @@
 //! gain = 0.5
 //! level = 0.5
 //! noise = 0.1                  # 0..1 (cig: NETD 0.5 K x noise)
+//! track_mode = 3               # 0 off, 3 target: the IG's tracker answers Sensor Response
+//! track_black = false
+//! extended = true              # Sensor Extended Response (entity and track point)
 //! [[hat]]
 //! id = 1
 //! entity = 0                   # below the entity; or lat_deg, lon_deg, alt_m
@@ -176,6 +179,14 @@ struct HostSensor {
     line_dropout: bool,
     #[serde(default)]
     ac_coupling_us: f32,
+    /// 0 off, 3 target (CIGI's track modes).
+    #[serde(default)]
+    track_mode: u8,
+    #[serde(default)]
+    track_black: bool,
+    /// Ask for Sensor Extended Response.
+    #[serde(default)]
+    extended: bool,
 }
 
 fn yes() -> bool {
@@ -535,7 +546,9 @@ fn build_frame(
                 level: sensor.level,
                 noise: sensor.noise,
                 ac_coupling_us: sensor.ac_coupling_us,
-                ..SensorControl::default()
+                track_mode: sensor.track_mode,
+                track_black: sensor.track_black,
+                response_type_extended: sensor.extended,
             }));
         }
     }
@@ -639,6 +652,20 @@ impl Replies {
                     serde_json::json!({"packet": "los_extended", "id": r.los_id, "valid": r.valid,
                         "visible": r.visible, "range_valid": r.range_valid, "range_m": r.range_m, "alpha": r.alpha,
                         "lat_deg": r.lat_deg_or_x_m, "lon_deg": r.lon_deg_or_y_m, "alt_m": r.alt_m_or_z_m}),
+                )),
+                Packet::SensorResponse(r) => Some((
+                    0,
+                    serde_json::json!({"packet": "sensor", "view": r.view_id, "sensor": r.sensor_id,
+                        "status": r.sensor_status, "gate_px": [r.gate_x_size_px, r.gate_y_size_px],
+                        "gate_deg": [r.gate_x_position_deg, r.gate_y_position_deg]}),
+                )),
+                Packet::SensorExtendedResponse(r) => Some((
+                    0,
+                    serde_json::json!({"packet": "sensor_extended", "view": r.view_id, "sensor": r.sensor_id,
+                        "status": r.sensor_status, "gate_px": [r.gate_x_size_px, r.gate_y_size_px],
+                        "gate_deg": [r.gate_x_position_deg, r.gate_y_position_deg],
+                        "entity": r.entity_id_valid.then_some(r.entity_id),
+                        "track": [r.track_latitude_deg, r.track_longitude_deg, r.track_altitude_m]}),
                 )),
                 Packet::ImageGeneratorMessage(m) => Some((
                     0,

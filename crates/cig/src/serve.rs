@@ -324,6 +324,8 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         if let Output::Offscreen { renderer, out_dir } = &mut output {
             let eyes: Vec<Geodetic> = snapshot.views.iter().map(|v| v.eye).collect();
             cache.update(&eyes);
+            // Sensor views' trackers read their gates from the frames drawn.
+            let gates = world.track_gates([width_px, height_px]);
             for index in 0..snapshot.views.len() {
                 let (image, stats) = cig_render::render_image_with(
                     renderer,
@@ -335,6 +337,10 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
                         ..cig_render::FrameOptions::default()
                     },
                 )?;
+                for (_, gate) in gates.iter().filter(|g| g.0 == index) {
+                    let values = renderer.read_scene_region(*gate)?;
+                    world.feed_track(&snapshot, index, *gate, &values);
+                }
                 totals.entities_drawn = stats.entities_drawn;
                 totals.puffs_drawn = stats.puffs_drawn;
                 if let Some(dir) = out_dir {

@@ -136,3 +136,70 @@ fn cigi_sensor_control_turns_a_view_into_lwir_in_both_versions() {
         }
     }
 }
+
+#[test]
+fn the_tracker_holds_a_moving_hot_tank_and_breaks_lock_when_it_leaves_the_frame() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let scenario = dir.path().join("tanks.toml");
+    std::fs::write(&scenario, "[[models]]\nmodel = \"tank\"\ncigi_type = 1\n").expect("scenario");
+    let ig_port = free_udp_port();
+    let host_port = free_udp_port();
+    let serve = start_serve(&[
+        "--db".into(),
+        db.display().to_string(),
+        "--scenario".into(),
+        scenario.display().to_string(),
+        "--headless".into(),
+        "--size".into(),
+        "160x120".into(),
+        "--cigi-port".into(),
+        ig_port.to_string(),
+        "--cigi-host".into(),
+        format!("127.0.0.1:{host_port}"),
+        "--idle-exit-s".into(),
+        "3".into(),
+    ]);
+    // The observer 250 m above a wood looking down 27.7 degrees at a field 530 m north; a tank
+    // (an active CIGI entity: its engine runs) crossing the field west to east at 15 m/s, at
+    // night.
+    let script = "version = \"3.3\"\nframes = 720\ntime = \"2026-06-22T08:00:00Z\"\n\
+         [[entities]]\nid = 0\ntype = 1\nclamp = \"height\"\nalt_m = 250.0\nspeed_mps = 0\npath = [[35.9805, -121.205]]\n\
+         [[entities]]\nid = 1\ntype = 1\nclamp = \"height\"\nalt_m = 0.0\nspeed_mps = 15\npath = [[35.9853, -121.20578], [35.9853, -121.1900]]\n\
+         [view]\nentity = 0\nhpr_deg = [0, -27.7, 0]\nfov_deg = [-5, 5, -3.75, 3.75]\n\
+         [view.sensor]\non = true\ntrack_mode = 3\nextended = true\n";
+    let script_path = dir.path().join("track.toml");
+    std::fs::write(&script_path, script).expect("script");
+    let host = run_host(&script_path, ig_port, host_port);
+    let (status, _, stderr) = serve.finish();
+    assert!(status.success(), "{stderr}");
+    let text = String::from_utf8_lossy(&host.stdout).to_string();
+    let tracks: Vec<serde_json::Value> = text
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|v| v["packet"] == "sensor_extended")
+        .collect();
+    let statuses: Vec<u64> = tracks
+        .iter()
+        .map(|v| v["status"].as_u64().unwrap_or(9))
+        .collect();
+    let first_track = statuses
+        .iter()
+        .position(|s| *s == 1)
+        .unwrap_or_else(|| panic!("never tracking: {statuses:?}"));
+    // The tracked entity is the tank, at its place.
+    let tracked = &tracks[first_track];
+    assert_eq!(tracked["entity"], 1, "{tracked}");
+    let lat = tracked["track"][0].as_f64().unwrap_or(0.0);
+    assert!((lat - 35.9853).abs() < 0.0005, "{tracked}");
+    let tracking = statuses.iter().filter(|s| **s == 1).count();
+    assert!(tracking >= 20, "tracked {tracking} frames: {statuses:?}");
+    // The tank leaves the frame: impending breaklock, then breaklock, then searching again.
+    let rest = &statuses[first_track..];
+    let lost = rest
+        .iter()
+        .position(|s| *s == 3)
+        .unwrap_or_else(|| panic!("no breaklock: {statuses:?}"));
+    assert!(rest[..lost].contains(&2), "{statuses:?}");
+    assert!(rest[lost..].contains(&0), "{statuses:?}");
+}
