@@ -372,27 +372,9 @@ impl ToneMap {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tone map"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                // The eye's adaptation (adaptation.rs): x the log2 factor.
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                crate::pass::unfiltered_texture_entry(0, wgpu::ShaderStages::FRAGMENT),
+                // The eye's adaptation (adaptation.rs): x the log2 factor; a sensor view's gain.
+                crate::pass::uniform_entry_for(1, wgpu::ShaderStages::FRAGMENT),
             ],
         });
         let module = crate::pass::shader(gpu, "tone map", include_str!("shaders/tonemap.wgsl"));

@@ -7,6 +7,7 @@
 //! [`cig_scene::FrameSnapshot`] and the terrain [`cig_terrain::TileCache`]). Any wgpu backend
 //! works (Vulkan, Metal, DX12, GL); with no GPU, Mesa's lavapipe renders the same frames.
 
+pub mod ac_coupling;
 pub mod adaptation;
 pub mod atmosphere;
 pub mod bolts;

@@ -328,6 +328,8 @@ pub struct Renderer {
     tone_map: ToneMap,
     /// The eye's adaptation to what each view shows (the tone map's factor).
     adaptation: AdaptationPass,
+    /// A thermal sensor's AC coupling (`None` without compute shaders).
+    ac_coupling: Option<crate::ac_coupling::AcCouplingPass>,
     model_vertices: wgpu::Buffer,
     model_indices: wgpu::Buffer,
     models: HashMap<String, GpuModel>,
@@ -806,6 +808,7 @@ impl Renderer {
         let atmosphere = AtmosphereGpu::new(&gpu, &sky_layout, sky_bind.clone());
         let tone_map = ToneMap::new(&gpu, &sky_layout, colour_format);
         let adaptation = AdaptationPass::new(&gpu);
+        let ac_coupling = crate::ac_coupling::AcCouplingPass::new(&gpu);
         let terrain_module = atmosphere_shader(
             &gpu,
             "terrain",
@@ -929,6 +932,7 @@ impl Renderer {
             atmosphere,
             tone_map,
             adaptation,
+            ac_coupling,
             detail_axes,
             models: HashMap::new(),
             detail: DetailSettings::standard(),
@@ -1052,7 +1056,9 @@ impl Renderer {
                 size,
                 HDR_FORMAT,
                 1,
-                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
+                wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::COPY_DST,
                 &[],
             );
             let hdr = hdr_texture.create_view(&Default::default());
@@ -1180,6 +1186,7 @@ impl Renderer {
                 scene,
                 view.eye.alt_m,
                 lighting.sun_elevation_deg,
+                &snapshot.cloud_layers,
             );
             self.gpu
                 .queue
@@ -1296,12 +1303,7 @@ impl Renderer {
         let puff_count = self
             .puffs
             .prepare(&self.gpu, &camera, snapshot, sensor_view);
-        // Sensor views draw no clouds, lightning or rain (sensor.rs's limits).
-        let cloud_count = if sensor.is_some() {
-            0
-        } else {
-            self.clouds.prepare(&self.gpu, &camera, snapshot)
-        };
+        let cloud_count = self.clouds.prepare(&self.gpu, &camera, snapshot);
         // Below the clouds, the puffs are nearer: clouds first. Timestamp queries are numbered
         // in the order passes need them, so the written ones are 0..queries.
         let clouds_first = cloud_count > 0 && (puff_count == 0 || self.clouds.eye_below_clouds());
@@ -1312,6 +1314,7 @@ impl Renderer {
         };
         let puff_queries = (puff_count > 0).then(|| (next_query(), next_query()));
         let cloud_queries = (cloud_count > 0).then(|| (next_query(), next_query()));
+        // Sensor views draw no lightning or rain (sensor.rs's limits).
         let (bolt_lines, particles) = if sensor.is_some() {
             (0, 0)
         } else {
@@ -1497,6 +1500,24 @@ impl Renderer {
         stats.cloud_layers_drawn = cloud_count as u32;
         // The eye adapts to what the view shows (not to keyed test frames, not with a fixed
         // exposure).
+        // A sensor's AC coupling acts on the signal before its gain is set.
+        if let (Some((view, frame)), Some(ac), Some(targets)) =
+            (&sensor, self.ac_coupling.as_mut(), self.targets.as_ref())
+        {
+            ac.encode(
+                &self.gpu,
+                &mut encoder,
+                (&targets.hdr_texture, &targets.hdr),
+                size,
+                view.ac_coupling_us,
+                // The level the display shows mid-grey: the manual window's centre, else the
+                // automatic gain's histogram range's.
+                frame.manual.map_or(
+                    0.5 * (frame.histogram_range.0 + frame.histogram_range.1),
+                    |(lo, hi)| 0.5 * (lo + hi),
+                ),
+            );
+        }
         let adapted = if let Some((_, frame)) = &sensor {
             self.adaptation.encode_sensor(
                 &self.gpu,
@@ -1751,7 +1772,7 @@ impl Renderer {
                 view.blur_px.max(0.0),
                 f32::from(u8::from(view.line_dropout)),
                 (self.frame % 65_536) as f32,
-                0.0,
+                frame.cloud_radiance,
             ];
         }
         (globals.sky_frame_x, globals.sky_frame_y) =

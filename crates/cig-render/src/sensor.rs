@@ -16,7 +16,10 @@
 //! then `tau L + L_path` along the line of sight. The display (tonemap.wgsl) maps radiance to
 //! grey with the automatic gain (adaptation.rs) or the manual window.
 //!
-//! Limits: clouds, rain and lightning are not drawn in sensor views; the sky is uniform in
+//! Clouds emit at their lowest layer's mid-height temperature (every layer alike) with 0.7 of
+//! their visible extinction (liquid water absorbs in both windows).
+//!
+//! Limits: rain and lightning are not drawn in sensor views; the sky is uniform in
 //! azimuth (no sun disc); one material per surface (no sub-pixel mixtures besides the
 //! terrain's smooth borders, which pick the dominant material).
 
@@ -66,6 +69,9 @@ pub(crate) struct SensorFrame {
     pub histogram_range: (f32, f32),
     /// The manual window as radiance (low, high), if set.
     pub manual: Option<(f32, f32)>,
+    /// Band radiance of the lowest cloud layer at its mid-height temperature (the air's lapse
+    /// of 6.5 K/km above sea level), for the cloud pass.
+    pub cloud_radiance: f32,
 }
 
 /// Builds a sensor view's tables for an eye at `eye_alt_m` and the sun at `sun_elevation_deg`.
@@ -74,6 +80,7 @@ pub(crate) fn sensor_frame(
     scene: &ThermalScene,
     eye_alt_m: f64,
     sun_elevation_deg: f64,
+    cloud_layers: &[cig_environment::clouds::CloudLayer],
 ) -> SensorFrame {
     let band = sensor.band;
     let b = band.band();
@@ -149,7 +156,17 @@ pub(crate) fn sensor_frame(
     }
     let air = scene.air_k;
     let radiance = |t: f64| band_radiance_unchecked(b, t.max(1.0)) as f32;
+    let cloud_mid_m = cloud_layers
+        .iter()
+        .map(|l| l.base_m + 0.5 * l.thickness_m)
+        .fold(f64::INFINITY, f64::min);
+    let cloud_k = if cloud_mid_m.is_finite() {
+        air - 0.0065 * cloud_mid_m.max(0.0)
+    } else {
+        air
+    };
     SensorFrame {
+        cloud_radiance: radiance(cloud_k),
         buffer,
         sky,
         down_radiance: (down / weight) as f32,
@@ -219,7 +236,7 @@ mod tests {
             atmosphere: IrAtmosphere::model(ModelAtmosphere::MidLatitudeSummer, Aerosol::Rural),
             entity_heat: vec![(7, [50.0, 250.0, 10.0, 17.0, 0.0])],
         };
-        let f = sensor_frame(&SensorView::new(IrBand::Lwir), &scene, 100.0, 40.0);
+        let f = sensor_frame(&SensorView::new(IrBand::Lwir), &scene, 100.0, 40.0, &[]);
         assert!(f.sky[0] > f.sky[7] * 1.5, "{:?}", f.sky);
         assert!(f.down_radiance > f.sky[7] && f.down_radiance < f.sky[0]);
         assert_eq!(f.buffer[OFF_ENTITY + ENTITY_STRIDE + 1], 250.0);

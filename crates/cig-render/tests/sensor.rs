@@ -269,3 +269,87 @@ fn the_clear_sky_is_colder_than_the_ground_and_black_hot_inverts() {
         "a 359-361 K window shows nothing"
     );
 }
+
+#[test]
+fn ac_coupling_takes_the_level_out_of_each_line() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut r = renderer(&cache);
+    let scene = thermal(MORNING_UNIX_S, true);
+    let eye = hills_point(-60.0, 0.0, 12.0);
+    let frame = |ac_us: f32| {
+        let mut s =
+            FrameSnapshot::new(MORNING_UNIX_S, vec![view(eye, (0.0, 2.0, 0.0), 60.0, SIZE)]);
+        s.culture = false;
+        let mut sensor = quiet(IrBand::Lwir, Polarity::WhiteHot);
+        sensor.ac_coupling_us = ac_us;
+        // A fixed window, so the two frames compare grey for grey.
+        sensor.manual_gain_level = Some((0.6, 0.45));
+        s.sensors = vec![Some(sensor)];
+        s.thermal = Some(scene.clone());
+        s
+    };
+    let (plain, _) = render(&mut r, &cache, &frame(0.0), false);
+    let (coupled, _) = render(&mut r, &cache, &frame(1.0), false);
+    write_png(&coupled, &out_dir().join("sensor_ac_coupled.png"));
+    let w = SIZE.0 as usize;
+    // Sky rows against ground rows, in the middle of their lines.
+    let level = |img: &Image, row: usize| i32::from(grey(img, row * w + w * 3 / 4));
+    let plain_gap = (level(&plain, 5) - level(&plain, SIZE.1 as usize - 5)).abs();
+    let coupled_gap = (level(&coupled, 5) - level(&coupled, SIZE.1 as usize - 5)).abs();
+    assert!(
+        plain_gap > 40,
+        "sky and ground differ without coupling: {plain_gap}"
+    );
+    // The coupled frame is a picture (the level added back sits mid-window), not saturated.
+    let mid = level(&coupled, SIZE.1 as usize / 2);
+    assert!((60..=200).contains(&mid), "coupled mid-frame grey {mid}");
+    assert!(
+        coupled_gap * 3 < plain_gap,
+        "AC coupling takes each line's level out: {coupled_gap} against {plain_gap}"
+    );
+}
+
+#[test]
+fn clouds_are_warmer_than_the_clear_sky_in_lwir() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut r = renderer(&cache);
+    let scene = thermal(MORNING_UNIX_S, true);
+    let eye = hills_point(-60.0, 0.0, 12.0);
+    let frame = |clouds: bool| {
+        let mut s = FrameSnapshot::new(
+            MORNING_UNIX_S,
+            vec![view(eye, (0.0, 30.0, 0.0), 40.0, SIZE)],
+        );
+        s.culture = false;
+        if clouds {
+            s.cloud_layers = vec![cig_environment::clouds::CloudLayer::new(
+                eye.alt_m + 800.0,
+                400.0,
+                1.0,
+                cig_environment::CloudKind::Stratus,
+            )];
+            s.cloud_cover_fraction = 1.0;
+        }
+        let mut sensor = quiet(IrBand::Lwir, Polarity::WhiteHot);
+        // One window for both frames: 240-300 K.
+        sensor.manual_gain_level = Some((0.12, 0.357));
+        s.sensors = vec![Some(sensor)];
+        s.thermal = Some(scene.clone());
+        s
+    };
+    let (clear, _) = render(&mut r, &cache, &frame(false), false);
+    let (cloudy, stats) = render(&mut r, &cache, &frame(true), false);
+    assert_eq!(stats.cloud_layers_drawn, 1);
+    write_png(&cloudy, &out_dir().join("sensor_overcast.png"));
+    let mean = |img: &Image| {
+        img.rgba.chunks(4).map(|p| f64::from(p[0])).sum::<f64>() / f64::from(SIZE.0 * SIZE.1)
+    };
+    assert!(
+        mean(&cloudy) > mean(&clear) + 30.0,
+        "an overcast at ~280 K is brighter than the clear sky: {} against {}",
+        mean(&cloudy),
+        mean(&clear)
+    );
+}

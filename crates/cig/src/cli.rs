@@ -905,6 +905,12 @@ pub struct RenderArgs {
     /// Thermal display colour: white or green.
     #[arg(long, default_value = "white")]
     pub display: String,
+    /// Thermal AC coupling: the detector's line-wise decay time constant, microseconds (0: off).
+    #[arg(long, default_value_t = 0.0)]
+    pub ac_coupling_us: f64,
+    /// Thermal: line-by-line dropout.
+    #[arg(long)]
+    pub line_dropout: bool,
     /// Thermal: the day's air temperature "MIN,MAX", Celsius (minimum at sunrise, maximum at
     /// 14:00 local solar time), driving the surfaces' temperatures.
     #[arg(long, default_value = "10,24", allow_hyphen_values = true)]

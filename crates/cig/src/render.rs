@@ -404,6 +404,8 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         level: args.level,
         noise_k: args.noise,
         display: &args.display,
+        ac_coupling_us: args.ac_coupling_us,
+        line_dropout: args.line_dropout,
     })?;
     let (air_min_c, air_max_c) = crate::thermal_view::parse_air(&args.air_c)?;
     let engines_running = match args.engines.as_str() {

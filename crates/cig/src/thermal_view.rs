@@ -18,6 +18,8 @@ pub struct SensorOptions<'a> {
     pub level: Option<f64>,
     pub noise_k: f64,
     pub display: &'a str,
+    pub ac_coupling_us: f64,
+    pub line_dropout: bool,
 }
 
 /// The view's sensor (`None` for the visible channel).
@@ -53,6 +55,14 @@ pub fn parse_sensor(o: &SensorOptions) -> anyhow::Result<Option<SensorView>> {
         bail!("--noise {} must lie in 0..5 kelvin", o.noise_k);
     }
     view.netd_k = o.noise_k as f32;
+    if !(o.ac_coupling_us.is_finite() && (0.0..=1.0e6).contains(&o.ac_coupling_us)) {
+        bail!(
+            "--ac-coupling-us {} must lie in 0..1000000 microseconds",
+            o.ac_coupling_us
+        );
+    }
+    view.ac_coupling_us = o.ac_coupling_us as f32;
+    view.line_dropout = o.line_dropout;
     Ok(Some(view))
 }
 

@@ -69,6 +69,17 @@ fn lwir_and_mwir_frames_are_grey_green_on_request_and_black_hot_inverts() {
         &["--sensor", "lwir", "--gain", "0.2", "--level", "0.5"],
     );
     assert_ne!(manual, white, "the manual window is not the automatic one");
+    let (_, _, coupled) = render(
+        "ac.png",
+        &[
+            "--sensor",
+            "lwir",
+            "--ac-coupling-us",
+            "5",
+            "--line-dropout",
+        ],
+    );
+    assert_ne!(coupled, white, "AC coupling and dropout change the frame");
 }
 
 #[test]
@@ -90,6 +101,7 @@ fn bad_sensor_options_get_one_line_naming_them() {
         (vec!["--sensor", "lwir", "--air-c", "30,10"], "air maximum"),
         (vec!["--sensor", "lwir", "--rh", "150"], "150"),
         (vec!["--sensor", "lwir", "--engines", "idle"], "idle"),
+        (vec!["--sensor", "lwir", "--ac-coupling-us", "-3"], "-3"),
     ] {
         let err = one_line_error(
             &cig()

@@ -230,12 +230,18 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
             let to_top_m = (1.0 - zn_seen) * layer.place.w / max(sun_up, 0.1);
             let direct = max(exp(-sigma * to_top_m), 0.25 * exp(-0.1 * sigma * to_top_m));
             var light = g.sun_colour.rgb * phase * direct + g.ambient.rgb * (0.7 + 0.3 * zn_seen);
-            if (moon_lit) {
+            var sigma_seen = sigma;
+            if (g.sensor.x > 0.5) {
+                // A thermal sensor: the cloud's droplets absorb and emit at its temperature
+                // (sensor.rs), with 0.7 of their visible extinction.
+                light = vec3<f32>(g.sensor_display2.w);
+                sigma_seen = 0.7 * sigma;
+            } else if (moon_lit) {
                 let to_top_moon_m = (1.0 - zn_seen) * layer.place.w / max(moon_up, 0.1);
                 let moon_direct = max(exp(-sigma * to_top_moon_m), 0.25 * exp(-0.1 * sigma * to_top_moon_m));
                 light += g.moon_colour.rgb * moon_phase * moon_direct;
             }
-            let a = 1.0 - exp(-sigma * ds);
+            let a = 1.0 - exp(-sigma_seen * ds);
             radiance += transmittance * a * light;
             distance_sum += transmittance * a * s;
             weight_sum += transmittance * a;
@@ -249,10 +255,17 @@ fn fs_main(in: CloudOut) -> @location(0) vec4<f32> {
     if (weight_sum > 1e-6) {
         let mean_m = distance_sum / weight_sum;
         let f = fog_factor(mean_m);
-        fogged = f * radiance + (1.0 - f) * (1.0 - transmittance) * g.fog_colour.rgb;
+        if (g.sensor.x < 0.5) {
+            fogged = f * radiance + (1.0 - f) * (1.0 - transmittance) * g.fog_colour.rgb;
+        }
         keep = 1.0 - smoothstep(0.7 * far_m, far_m, mean_m);
     }
     var behind = 1.0 - keep * (1.0 - transmittance);
+    if (g.sensor.x > 0.5) {
+        // Band radiance, not light: no exposure, no shade (the surfaces' temperatures already
+        // have the cloud cover's shade).
+        return vec4<f32>(fogged * keep, behind);
+    }
 
     // Shade on the ground: the sun's ray from the terrain point crosses each layer above it at
     // mid-height; the slant column there dims the sun's share of the pixel's light.

@@ -62,7 +62,8 @@ struct Globals {
     // The sensor's display: x polarity (1 black-hot), y colour (0 white, 1 green, 2 black),
     // z temporal noise (radiance, one sigma), w fixed-pattern noise (fraction of z).
     sensor_display: vec4<f32>,
-    // x optics blur (pixels, one sigma), y line dropout on, z the frame's number, w unused.
+    // x optics blur (pixels, one sigma), y line dropout on, z the frame's number, w the clouds'
+    // band radiance.
     sensor_display2: vec4<f32>,
 };
 
