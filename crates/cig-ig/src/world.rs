@@ -219,6 +219,8 @@ pub struct IgWorld {
     thermal_told: bool,
     /// Each tracking sensor's tracker, by (view, sensor).
     trackers: BTreeMap<(u16, u8), crate::tracker::Tracker>,
+    /// The operator's sensor for every view (the panel's switch), over the host's.
+    operator_sensor: Option<cig_scene::thermal::SensorView>,
 }
 
 /// Models of ground vehicles that raise dust when they move on soil.
@@ -339,6 +341,7 @@ impl IgWorld {
             thermal,
             thermal_told: false,
             trackers: BTreeMap::new(),
+            operator_sensor: None,
         })
     }
 
@@ -877,8 +880,17 @@ impl IgWorld {
         scenario || self.drawn_sensors().iter().any(Option::is_some)
     }
 
+    /// The operator's sensor for every drawn view (the panel's switch), or `None` to give the
+    /// views back to the host and the scenario.
+    pub fn set_operator_sensor(&mut self, sensor: Option<cig_scene::thermal::SensorView>) {
+        self.operator_sensor = sensor;
+    }
+
     /// Each drawn view's thermal sensor, in the order of [`IgWorld::drawn_view_ids`].
     fn drawn_sensors(&self) -> Vec<Option<cig_scene::thermal::SensorView>> {
+        if let Some(sensor) = self.operator_sensor {
+            return vec![Some(sensor); self.drawn_view_ids().len()];
+        }
         self.drawn_view_ids()
             .into_iter()
             .map(|id| match id {

@@ -322,3 +322,41 @@ fn the_hosts_random_lightning_strikes_around_the_eye() {
     );
     assert!(seen > 0);
 }
+
+#[test]
+fn the_operators_sensor_turns_every_view_thermal_and_back() {
+    let (lat, lon) = centre();
+    let mut w = world(&format!("[view]\neye = [{lat}, {lon}, 300.0]\n"));
+    let mut q = query();
+    w.step(0.1, &mut q);
+    let visible = snap(&w);
+    assert!(visible.thermal.is_none() && visible.sensors.iter().all(Option::is_none));
+    let lwir = cig_scene::thermal::SensorView::new(cig_thermal::IrBand::Lwir);
+    w.set_operator_sensor(Some(lwir));
+    w.step(0.1, &mut q);
+    let sensed = snap(&w);
+    assert!(
+        sensed.thermal.is_some(),
+        "the thermal state spins up for the operator's sensor"
+    );
+    assert_eq!(sensed.sensors, vec![Some(lwir)]);
+    w.set_operator_sensor(None);
+    w.step(0.1, &mut q);
+    assert_eq!(snap(&w).sensors, vec![None]);
+}
+
+#[test]
+fn a_scenario_thermal_section_is_checked() {
+    for (text, needle) in [
+        ("[thermal]\nair_min_c = 30\nair_max_c = 10\n", "air"),
+        ("[thermal]\nhumidity_pct = 130\n", "130"),
+        ("[thermal]\naerosol = \"volcanic\"\n", "volcanic"),
+        ("[thermal]\nair_hourly_c = [1.0, 2.0]\n", "24"),
+        ("[view]\nsensor = \"uv\"\n", "uv"),
+    ] {
+        let e = Scenario::from_toml(text).expect_err(text);
+        assert!(e.to_string().contains(needle), "{text}: {e}");
+    }
+    Scenario::from_toml("[thermal]\nair_min_c = 2\nair_max_c = 15\nhumidity_pct = 70\naerosol = \"maritime\"\n[[entities]]\nid = 1\nlat_deg = 36.0\nlon_deg = -121.0\nengine = false\n")
+        .expect("a good thermal scenario");
+}

@@ -832,6 +832,7 @@ fn run_windowed(
                         tracing::warn!("the operator's cloud layer is refused: {e}");
                     }
                 }
+                cig_render::ObscurantOrder::SetSensor(sensor) => world.set_operator_sensor(sensor),
             }
         }
         let mut t = totals

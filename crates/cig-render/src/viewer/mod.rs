@@ -125,6 +125,54 @@ pub enum ObscurantOrder {
     /// The operator's cloud layer (base above mean sea level), or `None`: the clouds go back
     /// to the host and the scenario. Sent when the panel's layer changes.
     SetClouds(Option<cig_environment::CloudLayer>),
+    /// The operator's sensor for every view (`None`: back to the host's and the scenario's).
+    /// Sent when the panel's sensor changes.
+    SetSensor(Option<cig_scene::thermal::SensorView>),
+}
+
+/// Without a driver, the panel's thermal sensor: every material's surface temperatures spun
+/// up at the camera's place the first time (default weather), then advanced with the panel's
+/// clock; the frame's views drawn by `sensor`.
+fn own_sensor(
+    table: &mut Option<cig_thermal::SurfaceTable>,
+    eye: Geodetic,
+    unix_time_s: f64,
+    sensor: cig_scene::thermal::SensorView,
+    snapshot: &mut FrameSnapshot,
+) {
+    let Ok(time) = cig_environment::UtcTime::from_unix_seconds(unix_time_s) else {
+        return;
+    };
+    match table {
+        Some(t) => t.advance_to(time),
+        None => match cig_thermal::SurfaceTable::spin_up(
+            eye.lat_deg,
+            eye.lon_deg,
+            time,
+            cig_thermal::ThermalWeather::default(),
+            &cig_thermal::ThermalMaterial::ALL,
+            cig_thermal::Orientations::Standard,
+        ) {
+            Ok(t) => *table = Some(t),
+            Err(e) => {
+                tracing::warn!("the thermal sensor cannot be drawn here: {e}");
+                return;
+            }
+        },
+    }
+    let Some(t) = table else {
+        return;
+    };
+    let atmosphere = cig_thermal::IrAtmosphere {
+        air_k: t.air_k().clamp(200.0, 330.0),
+        relative_humidity_pct: t.weather().relative_humidity_pct,
+        aerosol: cig_thermal::Aerosol::Rural,
+        visibility_m: 23_000.0,
+    };
+    snapshot.thermal = Some(std::sync::Arc::new(
+        cig_scene::thermal::ThermalScene::from_table(t, atmosphere, Vec::new()),
+    ));
+    snapshot.sensors = vec![Some(sensor); snapshot.views.len()];
 }
 
 /// Without a driver, the panel's weather: rain or snow around the eye, and the last
@@ -360,6 +408,8 @@ pub fn run_viewer_driven(
         effects: None,
         operator_plumes: Vec::new(),
         sent_cloud_layer: None,
+        sent_sensor: None,
+        own_thermal: None,
         own_bolt: None,
         own_strikes: 0,
         puff_scratch: Vec::new(),
@@ -392,6 +442,11 @@ struct App {
     operator_plumes: Vec<cig_effects::EffectHandle>,
     /// With a driver: the panel's cloud layer last sent to it (`None`: nothing sent yet).
     sent_cloud_layer: Option<Option<cig_environment::CloudLayer>>,
+    /// The operator's sensor last sent to the driver.
+    sent_sensor: Option<Option<cig_scene::thermal::SensorView>>,
+    /// Without a driver, the thermal state the panel's sensor draws (spun up when first
+    /// chosen, at the camera's place).
+    own_thermal: Option<cig_thermal::SurfaceTable>,
     /// Without a driver: the operator's last lightning strike (its time and bolt).
     own_bolt: Option<(f64, cig_scene::bolt::MadeBolt)>,
     own_strikes: u64,
@@ -806,6 +861,11 @@ impl App {
             orders.push(ObscurantOrder::SetClouds(cloud_layer));
             self.sent_cloud_layer = Some(cloud_layer);
         }
+        let sensor = self.panel.sensor_view();
+        if self.driver.is_some() && self.sent_sensor != Some(sensor) {
+            orders.push(ObscurantOrder::SetSensor(sensor));
+            self.sent_sensor = Some(sensor);
+        }
         let mut snapshot = match self.driver.as_mut() {
             Some(driver) => {
                 let snapshot = driver(&ViewerTick {
@@ -869,6 +929,15 @@ impl App {
             snapshot.cloud_layers = vec![layer];
             snapshot.cloud_cover_fraction =
                 cig_environment::cloud_cover_fraction(&snapshot.cloud_layers);
+        }
+        if let (None, Some(sensor)) = (self.driver.as_ref(), sensor) {
+            own_sensor(
+                &mut self.own_thermal,
+                self.camera.eye,
+                self.panel.unix_time_s,
+                sensor,
+                &mut snapshot,
+            );
         }
         snapshot.max_pixel_error = self.panel.max_pixel_error;
         snapshot.wireframe = self.panel.wireframe;
@@ -1325,11 +1394,13 @@ fn run_own_obscurants(
                     note = Some(format!("wind refused: {e}"));
                 }
             }
-            // Weather orders are not the obscurants' ([`own_weather`]).
+            // Weather and sensor orders are not the obscurants' ([`own_weather`],
+            // [`own_sensor`]).
             ObscurantOrder::SetPrecipitation(_)
             | ObscurantOrder::StrikeLightning { .. }
             | ObscurantOrder::SetStorm { .. }
-            | ObscurantOrder::SetClouds(_) => {}
+            | ObscurantOrder::SetClouds(_)
+            | ObscurantOrder::SetSensor(_) => {}
         }
     }
     note

@@ -118,6 +118,13 @@ pub struct PanelState {
     pub precipitation_rate_mm_per_h: f64,
     /// Strikes per minute of the operator's storm around the eye (0: none).
     pub storm_strikes_per_minute: f64,
+    /// The view's sensor: `None` the visible channel, else a thermal band.
+    pub sensor_band: Option<cig_thermal::IrBand>,
+    pub sensor_black_hot: bool,
+    /// Automatic gain; else the manual gain and level (CIGI's 0..1 contrast and brightness).
+    pub sensor_automatic_gain: bool,
+    pub sensor_gain: f64,
+    pub sensor_level: f64,
     /// Orders given this frame, taken by the viewer.
     commands: Vec<ObscurantCommand>,
     /// The date field being edited.
@@ -198,6 +205,11 @@ impl PanelState {
             cloud_kind: CloudKind::Cumulus,
             cloud_wind_speed_mps: 8.0,
             cloud_wind_from_deg: 270.0,
+            sensor_band: None,
+            sensor_black_hot: false,
+            sensor_automatic_gain: true,
+            sensor_gain: 0.5,
+            sensor_level: 0.5,
             precipitation_kind: None,
             precipitation_rate_mm_per_h: 5.0,
             storm_strikes_per_minute: 0.0,
@@ -284,6 +296,8 @@ impl PanelState {
                 self.obscurants_ui(ui);
                 ui.separator();
                 self.clouds_ui(ui);
+                ui.separator();
+                self.sensor_ui(ui);
                 self.weather_ui(ui);
                 ui.separator();
                 camera_ui(ui, camera, info);
@@ -453,6 +467,50 @@ impl PanelState {
         if !self.obscurant_note.is_empty() {
             ui.label(&self.obscurant_note);
         }
+    }
+
+    fn sensor_ui(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Sensor");
+        let name = |band: Option<cig_thermal::IrBand>| match band {
+            None => "visible",
+            Some(cig_thermal::IrBand::Lwir) => "LWIR 8-12 um",
+            Some(cig_thermal::IrBand::Mwir) => "MWIR 3-5 um",
+        };
+        egui::ComboBox::from_label("channel")
+            .selected_text(name(self.sensor_band))
+            .show_ui(ui, |ui| {
+                for band in [
+                    None,
+                    Some(cig_thermal::IrBand::Lwir),
+                    Some(cig_thermal::IrBand::Mwir),
+                ] {
+                    ui.selectable_value(&mut self.sensor_band, band, name(band));
+                }
+            });
+        ui.add_enabled_ui(self.sensor_band.is_some(), |ui| {
+            ui.checkbox(&mut self.sensor_black_hot, "black-hot");
+            ui.checkbox(&mut self.sensor_automatic_gain, "automatic gain");
+            ui.add_enabled_ui(!self.sensor_automatic_gain, |ui| {
+                ui.add(egui::Slider::new(&mut self.sensor_gain, 0.0..=1.0).text("gain"));
+                ui.add(egui::Slider::new(&mut self.sensor_level, 0.0..=1.0).text("level"));
+            });
+        });
+    }
+
+    /// The sensor these settings ask for (`None`: the visible channel).
+    pub fn sensor_view(&self) -> Option<cig_scene::thermal::SensorView> {
+        let band = self.sensor_band?;
+        let mut view = cig_scene::thermal::SensorView::new(band);
+        if self.sensor_black_hot {
+            view.polarity = cig_scene::thermal::Polarity::BlackHot;
+        }
+        if !self.sensor_automatic_gain {
+            view.manual_gain_level = Some((
+                self.sensor_gain.clamp(0.0, 1.0) as f32,
+                self.sensor_level.clamp(0.0, 1.0) as f32,
+            ));
+        }
+        Some(view)
     }
 
     fn clouds_ui(&mut self, ui: &mut egui::Ui) {
@@ -676,6 +734,25 @@ fn stats_ui(ui: &mut egui::Ui, info: &FrameInfo) {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn the_sensor_switch_gives_the_view_its_sensor() {
+        let mut p = PanelState::new(0.0, 20_000.0, FogMode::Exponential, 1.0, false);
+        assert_eq!(p.sensor_view(), None);
+        p.sensor_band = Some(cig_thermal::IrBand::Mwir);
+        p.sensor_black_hot = true;
+        let auto = p.sensor_view().expect("a sensor");
+        assert_eq!(auto.band, cig_thermal::IrBand::Mwir);
+        assert_eq!(auto.polarity, cig_scene::thermal::Polarity::BlackHot);
+        assert_eq!(auto.manual_gain_level, None);
+        p.sensor_automatic_gain = false;
+        p.sensor_gain = 1.5;
+        p.sensor_level = 0.25;
+        assert_eq!(
+            p.sensor_view().expect("a sensor").manual_gain_level,
+            Some((1.0, 0.25))
+        );
+    }
 
     #[test]
     fn known_dates() {
