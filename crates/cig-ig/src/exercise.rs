@@ -107,6 +107,9 @@ pub struct Exercise {
     /// Owned processes: number → (last sent, sequence number, was active).
     process_sent: BTreeMap<u16, (f64, u16, bool)>,
     lightning: Vec<LightningStrike>,
+    /// Ground and building impacts started, for the thermal sensors' hot spots: (effect time,
+    /// ECEF point, size), the last [`MAX_IMPACTS_KEPT`].
+    impacts: Vec<(f64, DVec3, ImpactSize)>,
     outgoing: Vec<Vec<u8>>,
     counters: ExerciseCounters,
 }
@@ -210,6 +213,7 @@ impl Exercise {
             remote_processes: BTreeMap::new(),
             process_sent: BTreeMap::new(),
             lightning: Vec::new(),
+            impacts: Vec::new(),
             outgoing: Vec::new(),
             counters: ExerciseCounters::default(),
         };
@@ -335,6 +339,10 @@ impl Exercise {
                         if self.start_impact(at_s, &start, effects) {
                             self.counters.impacts_started += 1;
                         }
+                        if self.impacts.len() >= MAX_IMPACTS_KEPT {
+                            self.impacts.remove(0);
+                        }
+                        self.impacts.push((at_s, start.position_ecef_m, start.size));
                     }
                 }
                 DisMessage::EnvironmentalProcess(process) => {
@@ -642,6 +650,11 @@ impl Exercise {
         std::mem::take(&mut self.outgoing)
     }
 
+    /// The last ground and building impacts: (effect time, ECEF point, size).
+    pub fn recent_impacts(&self) -> &[(f64, DVec3, ImpactSize)] {
+        &self.impacts
+    }
+
     /// Remote entities at `now_s` within `radius_m` of any of `eyes_ecef_m`.
     pub fn remote_entities_near(
         &self,
@@ -655,6 +668,9 @@ impl Exercise {
         })
     }
 }
+
+/// Impacts kept for the thermal sensors' hot spots.
+pub const MAX_IMPACTS_KEPT: usize = 32;
 
 /// Starts one appearance effect on an entity at `position` moving at `velocity_enu_mps`, at
 /// effect time `t_s`; `seed` is the entity's identity, so every node starts the same effect.

@@ -11,8 +11,9 @@
 //!
 //! Limits: one table for the whole served area, at the first eye's place when it is made (the
 //! sun's angles and the local solar time of a 100 km database differ by under a degree);
-//! entities' hot parts only for the vehicles drawn; craters and impacts are not yet drawn hot
-//! (`cig_thermal::HotSpot` is there for the dynamic terrain).
+//! entities' hot parts only for the vehicles drawn; the hot spots of impacts are the DIS
+//! exercise's detonations on the ground (the last 32), as Gaussian warm patches, not shaped
+//! craters.
 
 use crate::scenario::{value_error, ThermalSection};
 use crate::ScenarioError;
@@ -100,6 +101,11 @@ pub struct ThermalWorld {
     heat: BTreeMap<u32, (EntityHeat, f64, DVec3)>,
     /// The frame's scene (rebuilt each step while the table exists).
     scene: Option<Arc<ThermalScene>>,
+    /// Where the table was made: the place and the ground's height there (above the
+    /// ellipsoid, the infrared paths' base).
+    place: Option<Geodetic>,
+    /// Fresh craters and impact points: (effect time of the event, ECEF point, the spot).
+    spots: Vec<(f64, DVec3, cig_thermal::HotSpot)>,
     visibility_m: f64,
 }
 
@@ -115,6 +121,8 @@ impl ThermalWorld {
             table: None,
             heat: BTreeMap::new(),
             scene: None,
+            spots: Vec::new(),
+            place: None,
             visibility_m: 23_000.0,
         }
     }
@@ -124,8 +132,9 @@ impl ThermalWorld {
         self.table.is_some()
     }
 
-    /// Advances the state to `time` (spinning the table up at `place` the first time), with the
-    /// host's air, the cloud cover, the visibility and the drawn entities.
+    /// Advances the state to `time` (spinning the table up at `place` the first time, or when
+    /// the place moved more than 100 km), with the host's air, the cloud cover, the visibility
+    /// and the drawn entities. `place`'s altitude is the ground's there.
     #[allow(
         clippy::too_many_arguments,
         reason = "the step's inputs, each from a different part of the world"
@@ -142,8 +151,13 @@ impl ThermalWorld {
         let mut weather = self.weather.clone();
         weather.cloud_cover = cloud_cover.clamp(0.0, 1.0);
         if let Some(h) = host_air {
-            weather.relative_humidity_pct = h.humidity_pct.clamp(0.0, 100.0);
-            weather.wind_mps = h.wind_mps.clamp(0.0, 100.0);
+            // Values that are not numbers are the host's mistake: the previous ones stay.
+            if h.humidity_pct.is_finite() {
+                weather.relative_humidity_pct = h.humidity_pct.clamp(0.0, 100.0);
+            }
+            if h.wind_mps.is_finite() {
+                weather.wind_mps = h.wind_mps.clamp(0.0, 100.0);
+            }
             if h.air_temperature_c.is_finite() {
                 weather.air = weather.air.with_current(
                     time,
@@ -158,6 +172,15 @@ impl ThermalWorld {
         } else {
             23_000.0
         };
+        // A table made for a place more than 100 km away is made again here (the sun's hours).
+        let far = self.place.is_some_and(|p| {
+            (p.to_ecef() - Geodetic::new(place.lat_deg, place.lon_deg, p.alt_m).to_ecef()).length()
+                > 100_000.0
+        });
+        if far {
+            self.table = None;
+        }
+        self.place = Some(place);
         match &mut self.table {
             Some(table) => {
                 table.set_weather(weather)?;
@@ -213,15 +236,42 @@ impl ThermalWorld {
             aerosol: self.aerosol,
             visibility_m: self.visibility_m,
         };
-        self.scene = Some(Arc::new(ThermalScene::from_table(
+        let mut scene = ThermalScene::from_table(
             table,
             atmosphere,
             self.heat
                 .iter()
                 .map(|(id, (h, _, _))| (*id, h.rise_k.map(|r| r as f32)))
                 .collect(),
-        )));
+        );
+        scene.base_alt_m = place.alt_m;
+        let effect_now = cig_effects::effect_time_s(now);
+        scene.hot_spots = self
+            .spots
+            .iter()
+            .filter_map(|(t, p, spot)| {
+                let rise = spot.rise_k(effect_now - t);
+                (rise > 0.2).then(|| (p.to_array(), spot.radius_m as f32, rise as f32))
+            })
+            .collect();
+        self.scene = Some(Arc::new(scene));
         Ok(())
+    }
+
+    /// Sets the hot spots of the ground's recent impacts: (effect time, ECEF point, size); a
+    /// large or medium round leaves a crater, a small one an impact point.
+    pub fn set_impacts(&mut self, impacts: &[(f64, DVec3, cig_dis::ImpactSize)]) {
+        self.spots = impacts
+            .iter()
+            .map(|(t, p, size)| {
+                let spot = match size {
+                    cig_dis::ImpactSize::Small => cig_thermal::HotSpot::impact(),
+                    cig_dis::ImpactSize::Medium => cig_thermal::HotSpot::crater(2.0),
+                    cig_dis::ImpactSize::Large => cig_thermal::HotSpot::crater(4.0),
+                };
+                (*t, *p, spot)
+            })
+            .collect();
     }
 
     /// The frame's thermal scene, once the table runs.
@@ -322,6 +372,28 @@ mod tests {
         .expect("step");
         let air = w.scene().expect("scene").air_k - CELSIUS_0_K;
         assert!((air - 35.0).abs() < 0.01, "{air}");
+    }
+
+    #[test]
+    fn impacts_leave_hot_spots_that_cool() {
+        let mut w = ThermalWorld::new(None);
+        let t0 = cig_environment::UtcTime::parse_iso8601("2026-06-21T06:00:00Z").expect("t");
+        let place = Geodetic::new(36.0, -121.0, 0.0);
+        let at = cig_effects::effect_time_s(t0.unix_seconds());
+        w.set_impacts(&[
+            (at, place.to_ecef(), cig_dis::ImpactSize::Large),
+            (at, place.to_ecef(), cig_dis::ImpactSize::Small),
+        ]);
+        w.step(t0, place, None, 0.0, 20_000.0, &[]).expect("step");
+        let fresh = w.scene().expect("scene").hot_spots.clone();
+        assert_eq!(fresh.len(), 2);
+        assert!(fresh[0].2 > 250.0 && fresh[0].1 == 4.0, "{fresh:?}");
+        w.step(t0.plus_seconds(600.0), place, None, 0.0, 20_000.0, &[])
+            .expect("step");
+        let later = w.scene().expect("scene").hot_spots.clone();
+        // The crater has cooled to about a third; the small impact is gone.
+        assert_eq!(later.len(), 1);
+        assert!(later[0].2 < fresh[0].2 / 2.5, "{later:?}");
     }
 
     #[test]

@@ -641,7 +641,7 @@ impl IgWorld {
             self.effects_stalled = false;
         }
         self.start_smoke(query);
-        self.update_thermal();
+        self.update_thermal(query);
         // Velocities: the script's where there is one, else positions at least 0.2 s apart.
         let mut velocities = BTreeMap::new();
         let poses: Vec<(u16, Pose)> = self.session.poses().iter().map(|(k, v)| (*k, *v)).collect();
@@ -998,7 +998,11 @@ impl IgWorld {
                 };
                 let to = e.position.to_ecef() - camera.eye_ecef;
                 let angle = to.normalize().angle_between(ray);
-                if angle.tan() <= half_gate && best.is_none_or(|b| angle < b.0) {
+                // In front of the sensor and inside the gate.
+                if to.dot(ray) > 0.0
+                    && angle <= half_gate.atan()
+                    && best.is_none_or(|b| angle < b.0)
+                {
                     best = Some((angle, entity_id, e.position));
                 }
             }
@@ -1018,22 +1022,28 @@ impl IgWorld {
 
     /// Advances the thermal state (surfaces and the drawn entities' engines) to the world time,
     /// once a sensor view or the scenario's `[thermal]` asks for it.
-    fn update_thermal(&mut self) {
+    fn update_thermal(&mut self, query: &mut QuerySession) {
         if !(self.thermal.is_running()
             || self.scenario.thermal.is_some()
             || self.sensor_views_wanted())
         {
             return;
         }
-        let place = self.first_eye.unwrap_or_else(|| {
+        // The table's place: the first eye, else the scenario's; none yet, no table (the sun's
+        // hours depend on it).
+        let Some(place) = self.first_eye.or_else(|| {
             self.scenario
                 .view
                 .as_ref()
                 .and_then(|v| v.eye)
-                .map_or(Geodetic::new(0.0, 0.0, 0.0), |e| {
-                    Geodetic::new(e[0], e[1], e[2])
-                })
-        });
+                .map(|e| Geodetic::new(e[0], e[1], e[2]))
+        }) else {
+            return;
+        };
+        // The ground under it: the infrared paths count heights from there.
+        let ground_m = query
+            .hot(place.lat_deg, place.lon_deg)
+            .map_or(0.0, |h| h.height_ellipsoid_m());
         let host_air =
             self.session
                 .environment()
@@ -1079,10 +1089,22 @@ impl IgWorld {
                 });
             }
         }
-        let visibility_m = self.scenario.visibility_m.unwrap_or(23_000.0);
+        if let Some(x) = &self.exercise {
+            self.thermal.set_impacts(x.recent_impacts());
+        }
+        // The air's visibility at the eye (the host's weather, else the scenario's).
+        let visibility_m =
+            self.first_eye
+                .map_or(self.scenario.visibility_m.unwrap_or(23_000.0), |eye| {
+                    self.session.view_visibility_m(Geodetic::new(
+                        eye.lat_deg,
+                        eye.lon_deg,
+                        eye.alt_m - self.eye_geoid_m,
+                    ))
+                });
         if let Err(e) = self.thermal.step(
             self.clock.now(),
-            place,
+            Geodetic::new(place.lat_deg, place.lon_deg, ground_m),
             host_air,
             cover,
             visibility_m,

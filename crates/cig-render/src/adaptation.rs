@@ -268,7 +268,8 @@ impl AdaptationPass {
     }
 
     /// Records a thermal sensor view's automatic gain (or writes its manual window) where the
-    /// tone map reads it: `(low, high)` radiance. Returns whether the GPU computed it.
+    /// tone map reads it: `(low, high)` radiance. Returns false: there is no exposure factor
+    /// for the frame's statistics to read back.
     pub fn encode_sensor(
         &mut self,
         gpu: &Gpu,
@@ -330,9 +331,9 @@ impl AdaptationPass {
         let offset = (slot * 16) as u64;
         encoder.copy_buffer_to_buffer(&c.state, offset, &self.tone_exposure, 0, 16);
         encoder.copy_buffer_to_buffer(&c.equalised, 0, &self.tone_exposure, 16, TONE_BYTES - 16);
-        encoder.copy_buffer_to_buffer(&c.state, offset, &self.readback, 0, 16);
         self.valid[slot] = true;
-        true
+        // The gain window is no eye's exposure: the frame's statistics do not read it.
+        false
     }
 
     /// The adapted log2 factor the last encoded frame was drawn with (after its submission).

@@ -1187,6 +1187,7 @@ impl Renderer {
                 view.eye.alt_m,
                 lighting.sun_elevation_deg,
                 &snapshot.cloud_layers,
+                camera.eye_ecef,
             );
             self.gpu
                 .queue

@@ -10,16 +10,21 @@
 //! - the atmosphere's band transmittance and path radiance (`cig_thermal::infrared`) from the
 //!   eye over 32 ranges (1 m..100 km, logarithmic) and 9 elevations (-90..90 degrees), and
 //!   the sky's band radiance (the path radiance of a ray to space) at 8 elevations;
-//! - the entities' hot parts (rise over their surroundings, per entity).
+//! - the entities' hot parts (rise over their surroundings, per entity), and the ground's hot
+//!   spots (fresh craters and impact points: Gaussian patches, eye-relative).
 //!
-//! A surface shows `eps L_band(T) + (1 - eps) L_down (+ (1 - eps) E_sun cos i / pi in MWIR)`,
+//! A surface shows `eps L_band(T) + (1 - eps) L_refl + (1 - eps) E_sun cos i / pi` (the
+//! reflected sun matters in MWIR), where `L_refl` is the sky's hemispherical radiance and the
+//! ground's (at the air's temperature) by the normal's view factors `(1 +- cos tilt) / 2`,
 //! then `tau L + L_path` along the line of sight. The display (tonemap.wgsl) maps radiance to
 //! grey with the automatic gain (adaptation.rs) or the manual window.
 //!
 //! Clouds emit at their lowest layer's mid-height temperature (every layer alike) with 0.7 of
 //! their visible extinction (liquid water absorbs in both windows).
 //!
-//! Limits: rain and lightning are not drawn in sensor views; the sky is uniform in
+//! Limits: rain and lightning are not drawn in sensor views; clouds and puffs are seen without
+//! the infrared path between them and the eye (their contrast is overstated at long range);
+//! the sky is uniform in
 //! azimuth (no sun disc); one material per surface (no sub-pixel mixtures besides the
 //! terrain's smooth borders, which pick the dominant material).
 
@@ -44,8 +49,13 @@ pub(crate) const OFF_ENTITY: usize = 2688;
 /// Entities with hot parts a frame can draw (more keep their materials' temperatures).
 pub(crate) const MAX_HOT_ENTITIES: usize = 255;
 pub(crate) const ENTITY_STRIDE: usize = 8;
+/// The hot spots' count, then the spots (eye-relative centre, radius, rise; 8 floats each).
+pub(crate) const OFF_SPOT_COUNT: usize = OFF_ENTITY + (MAX_HOT_ENTITIES + 1) * ENTITY_STRIDE;
+pub(crate) const OFF_SPOTS: usize = OFF_SPOT_COUNT + 8;
+pub(crate) const MAX_SPOTS: usize = 32;
+pub(crate) const SPOT_STRIDE: usize = 8;
 /// The buffer's length, f32.
-pub(crate) const THERMAL_LEN: usize = OFF_ENTITY + (MAX_HOT_ENTITIES + 1) * ENTITY_STRIDE;
+pub(crate) const THERMAL_LEN: usize = OFF_SPOTS + MAX_SPOTS * SPOT_STRIDE;
 /// Sky radiance elevations, degrees (the globals' `sensor_sky0/1`).
 pub(crate) const SKY_ELEVATIONS_DEG: [f64; 8] = [0.0, 1.0, 3.0, 6.0, 10.0, 20.0, 40.0, 90.0];
 /// Solid angle of the sun's disc, sr.
@@ -81,6 +91,7 @@ pub(crate) fn sensor_frame(
     eye_alt_m: f64,
     sun_elevation_deg: f64,
     cloud_layers: &[cig_environment::clouds::CloudLayer],
+    eye_ecef_m: glam::DVec3,
 ) -> SensorFrame {
     let band = sensor.band;
     let b = band.band();
@@ -105,7 +116,13 @@ pub(crate) fn sensor_frame(
         buffer[OFF_PLANCK + i] = band_radiance_unchecked(b, PLANCK_T0_K + i as f64) as f32;
     }
     let atmosphere = &scene.atmosphere;
-    let eye = eye_alt_m.clamp(-400.0, 29_000.0);
+    // Heights above the ground where the air's temperature was given.
+    let above_ground = eye_alt_m - scene.base_alt_m;
+    let eye = if above_ground.is_finite() {
+        above_ground.clamp(-400.0, 29_000.0)
+    } else {
+        0.0
+    };
     for (j, elevation) in PATH_ELEVATIONS_DEG.iter().enumerate() {
         let s = elevation.to_radians().sin();
         for i in 0..PATH_RANGES {
@@ -154,6 +171,28 @@ pub(crate) fn sensor_frame(
         let base = OFF_ENTITY + (slot + 1) * ENTITY_STRIDE;
         buffer[base..base + 5].copy_from_slice(rise);
     }
+    // Hot spots within 20 km, nearest first, relative to the eye (f64 difference, then f32).
+    let mut spots: Vec<(f64, [f32; 5])> = scene
+        .hot_spots
+        .iter()
+        .filter_map(|(p, radius, rise)| {
+            let rel = glam::DVec3::from_array(*p) - eye_ecef_m;
+            let d = rel.length();
+            (d < 20_000.0 && d.is_finite()).then_some((
+                d,
+                [rel.x as f32, rel.y as f32, rel.z as f32, *radius, *rise],
+            ))
+        })
+        .collect();
+    spots.sort_by(|a, b| a.0.total_cmp(&b.0));
+    spots.truncate(MAX_SPOTS);
+    buffer[OFF_SPOT_COUNT] = spots.len() as f32;
+    // The ground a tilted surface sees, at the air's temperature (thermal.wgsl's reflection).
+    buffer[OFF_SPOT_COUNT + 1] = scene.air_k as f32;
+    for (i, (_, spot)) in spots.iter().enumerate() {
+        let base = OFF_SPOTS + i * SPOT_STRIDE;
+        buffer[base..base + 5].copy_from_slice(spot);
+    }
     let air = scene.air_k;
     let radiance = |t: f64| band_radiance_unchecked(b, t.max(1.0)) as f32;
     let cloud_mid_m = cloud_layers
@@ -161,7 +200,7 @@ pub(crate) fn sensor_frame(
         .map(|l| l.base_m + 0.5 * l.thickness_m)
         .fold(f64::INFINITY, f64::min);
     let cloud_k = if cloud_mid_m.is_finite() {
-        air - 0.0065 * cloud_mid_m.max(0.0)
+        air - 0.0065 * (cloud_mid_m - scene.base_alt_m).max(0.0)
     } else {
         air
     };
@@ -210,6 +249,9 @@ mod tests {
             ("TH_PATH_RANGES", PATH_RANGES),
             ("TH_OFF_ENTITY", OFF_ENTITY),
             ("TH_ENTITY_STRIDE", ENTITY_STRIDE),
+            ("TH_OFF_SPOT_COUNT", OFF_SPOT_COUNT),
+            ("TH_OFF_SPOTS", OFF_SPOTS),
+            ("TH_SPOT_STRIDE", SPOT_STRIDE),
             (
                 "TH_HOT_BASE",
                 usize::from(cig_scene::thermal::HOT_CODE_BASE),
@@ -235,8 +277,20 @@ mod tests {
             air_k: 290.0,
             atmosphere: IrAtmosphere::model(ModelAtmosphere::MidLatitudeSummer, Aerosol::Rural),
             entity_heat: vec![(7, [50.0, 250.0, 10.0, 17.0, 0.0])],
+            hot_spots: vec![
+                ([0.0, 0.0, 10.0], 2.0, 300.0),
+                ([0.0, 0.0, 9e9], 2.0, 300.0),
+            ],
+            base_alt_m: 0.0,
         };
-        let f = sensor_frame(&SensorView::new(IrBand::Lwir), &scene, 100.0, 40.0, &[]);
+        let f = sensor_frame(
+            &SensorView::new(IrBand::Lwir),
+            &scene,
+            100.0,
+            40.0,
+            &[],
+            glam::DVec3::ZERO,
+        );
         assert!(f.sky[0] > f.sky[7] * 1.5, "{:?}", f.sky);
         assert!(f.down_radiance > f.sky[7] && f.down_radiance < f.sky[0]);
         assert_eq!(f.buffer[OFF_ENTITY + ENTITY_STRIDE + 1], 250.0);
@@ -246,5 +300,9 @@ mod tests {
         let h = OFF_PATH + 2 * 4 * PATH_RANGES;
         assert!(f.buffer[h] > 0.99 && f.buffer[h + 2 * 31] < 0.3);
         assert!(f.histogram_range.0 < f.histogram_range.1);
+        // The near hot spot is kept relative to the eye; the far one is left out.
+        assert_eq!(f.buffer[OFF_SPOT_COUNT], 1.0);
+        assert_eq!(f.buffer[OFF_SPOTS + 2], 10.0);
+        assert_eq!(f.buffer[OFF_SPOTS + 4], 300.0);
     }
 }

@@ -353,3 +353,43 @@ fn clouds_are_warmer_than_the_clear_sky_in_lwir() {
         mean(&clear)
     );
 }
+
+#[test]
+fn a_fresh_crater_glows_on_the_ground() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut r = renderer(&cache);
+    let (_, tank) = eye_and_tank();
+    let frame = |spot: bool| {
+        let mut scene = (*thermal(NIGHT_UNIX_S, false)).clone();
+        if spot {
+            scene.hot_spots = vec![(tank.to_ecef().to_array(), 3.0, 300.0)];
+        }
+        let mut s = tank_frame(
+            NIGHT_UNIX_S,
+            Some(quiet(IrBand::Lwir, Polarity::WhiteHot)),
+            Arc::new(scene),
+        );
+        s.entities.clear();
+        s
+    };
+    let (plain, _) = render(&mut r, &cache, &frame(false), false);
+    let (crater, _) = render(&mut r, &cache, &frame(true), false);
+    write_png(&crater, &out_dir().join("sensor_crater.png"));
+    // The view's axis is on the spot: the centre is the hottest there.
+    let centre = ((SIZE.1 / 2) * SIZE.0 + SIZE.0 / 2) as usize;
+    assert!(
+        grey(&crater, centre) > grey(&plain, centre) + 60,
+        "{} vs {}",
+        grey(&crater, centre),
+        grey(&plain, centre)
+    );
+    // The frame's hottest pixel is on the spot, a little below the view's axis (the axis aims
+    // 1.5 m above the ground).
+    let hottest = (0..(SIZE.0 * SIZE.1) as usize)
+        .max_by_key(|&i| grey(&crater, i))
+        .unwrap_or(0);
+    let (x, y) = (hottest % SIZE.0 as usize, hottest / SIZE.0 as usize);
+    let (cx, cy) = (SIZE.0 as usize / 2, SIZE.1 as usize / 2);
+    assert!(x.abs_diff(cx) <= 12 && y.abs_diff(cy) <= 20, "hottest at {x}, {y}");
+}

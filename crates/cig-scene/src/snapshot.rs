@@ -237,6 +237,9 @@ pub struct FrameSnapshot {
     pub sensors: Vec<Option<crate::thermal::SensorView>>,
     /// The thermal state the sensor views draw (needed when any view is a sensor).
     pub thermal: Option<std::sync::Arc<crate::thermal::ThermalScene>>,
+    /// Trackers' gates to read back after drawing: (view index, `[x, y, width, height]`
+    /// pixels), for `cig_ig`'s sensor trackers.
+    pub track_gates: Vec<(usize, [u32; 4])>,
 }
 
 /// One straight piece of a lightning bolt, relative to its bolt's origin (ECEF axes, metres).
@@ -299,6 +302,7 @@ impl FrameSnapshot {
             precipitation: None,
             sensors: Vec::new(),
             thermal: None,
+            track_gates: Vec::new(),
         }
     }
 

@@ -187,6 +187,12 @@ pub struct ThermalScene {
     /// Hot parts of entities: the entity's id and each part's rise over its surroundings,
     /// kelvin, per `HotPart::ALL`.
     pub entity_heat: Vec<(u32, [f32; 5])>,
+    /// Hot spots on the ground (fresh craters, impact points): ECEF centre, radius (metres,
+    /// the Gaussian's 1/e) and the rise over the ground now (kelvin).
+    pub hot_spots: Vec<([f64; 3], f32, f32)>,
+    /// The ground's height above the ellipsoid where `air_k` is (the infrared paths count
+    /// heights from there), metres.
+    pub base_alt_m: f64,
 }
 
 impl ThermalScene {
@@ -210,6 +216,8 @@ impl ThermalScene {
             air_k: table.air_k(),
             atmosphere,
             entity_heat,
+            hot_spots: Vec::new(),
+            base_alt_m: 0.0,
         }
     }
 }

@@ -457,7 +457,7 @@ fn parse_table(text: &str) -> Result<IrTable, String> {
 
 /// Index and weight of `x` between the grid's points (clamped to the ends).
 fn bracket(grid: &[f64], x: f64) -> (usize, f64) {
-    if x <= grid[0] {
+    if x.is_nan() || x <= grid[0] {
         return (0, 0.0);
     }
     let last = grid.len() - 1;
@@ -472,7 +472,7 @@ impl IrTable {
     /// Transmittance along range from one row: 1 at 0 km, linear to the first point,
     /// linear in log range between points, grey (a power) beyond the last.
     fn along_range(&self, row: &[f64], range_km: f64) -> f64 {
-        if range_km <= 0.0 {
+        if range_km.is_nan() || range_km <= 0.0 {
             return 1.0;
         }
         let first = self.ranges_km[0];

@@ -36,6 +36,10 @@ pub const SPIN_UP_S: f64 = 48.0 * 3600.0;
 pub const MAX_STEP_S: f64 = 60.0;
 /// Time below which an advance waits for more (the temperatures cannot change visibly).
 pub const MIN_STEP_S: f64 = 0.25;
+/// The most steps one advance takes.
+pub const MAX_ADVANCE_STEPS: usize = 240;
+/// A step back of the clock the table holds through (its temperatures kept), seconds.
+pub const HOLD_BACK_S: f64 = 600.0;
 /// A jump of the clock beyond which the table is spun up again rather than stepped.
 pub const RESPIN_AFTER_S: f64 = 3.0 * 86_400.0;
 
@@ -276,15 +280,21 @@ impl SurfaceTable {
             }
         }
         self.time = start;
-        self.step_to(time);
+        self.step_to(time, false);
     }
 
-    fn step_to(&mut self, target: UtcTime) {
+    /// Steps to `target` in steps of at most [`MAX_STEP_S`], or with `capped` in at most
+    /// [`MAX_ADVANCE_STEPS`] (a long jump forward, a host setting a later time, does not hold
+    /// a frame up; the implicit steps stay stable, only coarser).
+    fn step_to(&mut self, target: UtcTime, capped: bool) {
         let span = target.seconds_since_j2000() - self.time.seconds_since_j2000();
         if span <= 0.0 {
             return;
         }
-        let steps = (span / MAX_STEP_S).ceil().max(1.0) as usize;
+        let mut steps = (span / MAX_STEP_S).ceil().max(1.0) as usize;
+        if capped {
+            steps = steps.min(MAX_ADVANCE_STEPS);
+        }
         let dt = span / steps as f64;
         let normals: Vec<[f64; 3]> = self.orientations.iter().map(|o| o.normal_enu()).collect();
         let per_material = self.orientations.len();
@@ -303,14 +313,20 @@ impl SurfaceTable {
     }
 
     /// Advances the table to `time`: steps the time that passed (nothing below
-    /// [`MIN_STEP_S`]); spins up again if the clock went back or jumped ahead by more than
-    /// [`RESPIN_AFTER_S`].
+    /// [`MIN_STEP_S`]; a long jump in at most 240 steps); a step back of up to
+    /// [`HOLD_BACK_S`] keeps the temperatures (they change little in minutes) and takes the
+    /// time; a longer one, or a jump ahead beyond [`RESPIN_AFTER_S`], spins up again.
     pub fn advance_to(&mut self, time: UtcTime) {
         let span = time.seconds_since_j2000() - self.time.seconds_since_j2000();
-        if !(-MIN_STEP_S..=RESPIN_AFTER_S).contains(&span) {
+        if span.is_nan() {
+            return;
+        }
+        if !(-HOLD_BACK_S..=RESPIN_AFTER_S).contains(&span) {
             self.respin(time);
+        } else if span < 0.0 {
+            self.time = time;
         } else if span >= MIN_STEP_S {
-            self.step_to(time);
+            self.step_to(time, true);
         }
     }
 

@@ -499,9 +499,13 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     if let Some(sensor) = sensor {
         let time = cig_environment::UtcTime::from_unix_seconds(unix_time_s)
             .map_err(|e| anyhow::anyhow!("--time: {e}"))?;
+        let ground_alt_m = session
+            .hot(view.eye.lat_deg, view.eye.lon_deg)
+            .map_or(0.0, |h| h.height_ellipsoid_m());
         let scene = crate::thermal_view::still_thermal_scene(
             view.eye.lat_deg,
             view.eye.lon_deg,
+            ground_alt_m,
             time,
             &crate::thermal_view::FrameWeather {
                 air_min_c,

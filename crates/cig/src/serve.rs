@@ -790,6 +790,12 @@ fn run_windowed(
     let mut last_snapshot: Option<cig_scene::FrameSnapshot> = None;
     let driver: cig_render::FrameDriver = Box::new(move |tick: &cig_render::ViewerTick| {
         let (width_px, height_px) = (tick.width_px, tick.height_px);
+        // The trackers see the frame the window drew last.
+        if let Some(last) = &last_snapshot {
+            for (index, gate, values) in &tick.track_patches {
+                world.feed_track(last, *index, *gate, values);
+            }
+        }
         for order in &tick.orders {
             match *order {
                 cig_render::ObscurantOrder::StartPlume {
@@ -852,9 +858,10 @@ fn run_windowed(
             (width_px, height_px, &fallback),
         );
         match snapshot {
-            Some(snapshot) => {
+            Some(mut snapshot) => {
                 state.frame_drawn(&mut t);
                 t.frames += 1;
+                snapshot.track_gates = world.track_gates([width_px, height_px]);
                 last_snapshot = Some(snapshot.clone());
                 snapshot
             }

@@ -90,11 +90,13 @@ pub fn parse_air(text: &str) -> anyhow::Result<(f64, f64)> {
     Ok((parse(min)?, parse(max)?))
 }
 
-/// The thermal state of a still frame at a place and time: every material spun up over the
-/// two days before, the entities' engines running (steady) or off.
+/// The thermal state of a still frame at a place (the ground there `ground_alt_m` above the
+/// ellipsoid) and time: every material spun up over the two days before, the entities'
+/// engines running (steady) or off.
 pub fn still_thermal_scene(
     lat_deg: f64,
     lon_deg: f64,
+    ground_alt_m: f64,
     time: cig_environment::UtcTime,
     weather: &FrameWeather,
     entities: &[EntityInstance],
@@ -137,5 +139,7 @@ pub fn still_thermal_scene(
         .iter()
         .map(|e| (e.id, heat.rise_k.map(|r| r as f32)))
         .collect();
-    Ok(ThermalScene::from_table(&table, atmosphere, entity_heat))
+    let mut scene = ThermalScene::from_table(&table, atmosphere, entity_heat);
+    scene.base_alt_m = ground_alt_m;
+    Ok(scene)
 }

@@ -153,6 +153,8 @@ fn sensor_adapt() {
     }
     let slot = u32(params.slot.x);
     if (total == 0u) {
+        // Nothing to equalise: no equalisation (not the previous view's curve).
+        equalised[0] = vec4<f32>(params.key.x, params.key.y, 0.0, 0.0);
         return;
     }
     var lo = sensor_percentile(params.shares.x, f32(total));

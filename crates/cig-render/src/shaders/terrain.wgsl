@@ -314,7 +314,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
             let size = vec2<f32>(textureDimensions(colour_atlas));
             kind = u32(round(textureLoad(colour_atlas, vec2<i32>(in.uv * size), 0).a * 255.0)) >> 4u;
         }
-        return th_shown(th_surface_temp(kind, n) + texture_k, th_emissivity(kind), n, in.rel);
+        let t_k = th_surface_temp(kind, n) + texture_k + th_hot_spots(in.rel);
+        return th_shown(t_k, th_emissivity(kind), n, in.rel);
     }
     var surface: Surface;
     var albedo: vec3<f32>;

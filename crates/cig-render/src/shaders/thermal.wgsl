@@ -13,6 +13,9 @@ const TH_OFF_PATH: u32 = 2048u;
 const TH_PATH_RANGES: u32 = 32u;
 const TH_OFF_ENTITY: u32 = 2688u;
 const TH_ENTITY_STRIDE: u32 = 8u;
+const TH_OFF_SPOT_COUNT: u32 = 4736u;
+const TH_OFF_SPOTS: u32 = 4744u;
+const TH_SPOT_STRIDE: u32 = 8u;
 const TH_HOT_BASE: u32 = 32u;
 const TH_HOT_PARTS: u32 = 5u;
 // ThermalMaterial::Skin.
@@ -99,7 +102,11 @@ fn th_path(rel: vec3<f32>) -> vec2<f32> {
 // What the sensor sees of a surface at temperature t_k with emissivity eps and normal n:
 // emission, the reflected sky (and sun), then the path.
 fn th_shown(t_k: f32, eps: f32, n: vec3<f32>, rel: vec3<f32>) -> vec4<f32> {
-    var l = eps * th_band_radiance(t_k) + (1.0 - eps) * g.sensor.z;
+    // Reflected: the sky above the surface's horizon, the ground (at the air's temperature)
+    // below it, by the view factors (1 +- cos tilt) / 2.
+    let sky_view = 0.5 * (1.0 + clamp(dot(n, g.eye_up.xyz), -1.0, 1.0));
+    let ground = th_band_radiance(thermal[TH_OFF_SPOT_COUNT + 1u]);
+    var l = eps * th_band_radiance(t_k) + (1.0 - eps) * mix(ground, g.sensor.z, sky_view);
     l += (1.0 - eps) * g.sensor.w * max(dot(n, g.sun_dir.xyz), 0.0) / 3.14159265;
     let p = th_path(rel);
     return vec4<f32>(vec3<f32>(p.x * l + p.y), 1.0);
@@ -113,3 +120,17 @@ fn th_entity_rise(slot: u32, part: u32) -> f32 {
     return thermal[TH_OFF_ENTITY + slot * TH_ENTITY_STRIDE + part];
 }
 
+
+// The ground's hot spots (fresh craters, impact points) at an eye-relative point: the sum of
+// their Gaussian rises, kelvin.
+fn th_hot_spots(rel: vec3<f32>) -> f32 {
+    let count = u32(thermal[TH_OFF_SPOT_COUNT]);
+    var rise = 0.0;
+    for (var i = 0u; i < count; i++) {
+        let b = TH_OFF_SPOTS + i * TH_SPOT_STRIDE;
+        let d = rel - vec3<f32>(thermal[b], thermal[b + 1u], thermal[b + 2u]);
+        let r = max(thermal[b + 3u], 0.1);
+        rise += thermal[b + 4u] * exp(-dot(d, d) / (r * r));
+    }
+    return rise;
+}

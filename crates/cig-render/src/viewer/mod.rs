@@ -98,6 +98,10 @@ pub struct ViewerTick {
     pub height_px: u32,
     /// The operator's obscurant orders this frame, places resolved on the terrain.
     pub orders: Vec<ObscurantOrder>,
+    /// The band radiance of the trackers' gates the last frame asked for
+    /// (`FrameSnapshot::track_gates`), read back after it was drawn: (view index, gate,
+    /// values row by row).
+    pub track_patches: Vec<(usize, [u32; 4], Vec<f32>)>,
 }
 
 /// An operator's obscurant order with its place found.
@@ -132,7 +136,8 @@ pub enum ObscurantOrder {
 
 /// Without a driver, the panel's thermal sensor: every material's surface temperatures spun
 /// up at the camera's place the first time (default weather), then advanced with the panel's
-/// clock; the frame's views drawn by `sensor`.
+/// clock; the frame's views drawn by `sensor` (the infrared paths' heights counted from sea
+/// level: the stand-alone viewer knows no ground under the table).
 fn own_sensor(
     table: &mut Option<cig_thermal::SurfaceTable>,
     eye: Geodetic,
@@ -409,6 +414,7 @@ pub fn run_viewer_driven(
         operator_plumes: Vec::new(),
         sent_cloud_layer: None,
         sent_sensor: None,
+        track_patches: Vec::new(),
         own_thermal: None,
         own_bolt: None,
         own_strikes: 0,
@@ -442,6 +448,8 @@ struct App {
     operator_plumes: Vec<cig_effects::EffectHandle>,
     /// With a driver: the panel's cloud layer last sent to it (`None`: nothing sent yet).
     sent_cloud_layer: Option<Option<cig_environment::CloudLayer>>,
+    /// The trackers' gates read back from the last frame drawn, for the driver's next tick.
+    track_patches: Vec<(usize, [u32; 4], Vec<f32>)>,
     /// The operator's sensor last sent to the driver.
     sent_sensor: Option<Option<cig_scene::thermal::SensorView>>,
     /// Without a driver, the thermal state the panel's sensor draws (spun up when first
@@ -873,6 +881,7 @@ impl App {
                     width_px,
                     height_px,
                     orders,
+                    track_patches: std::mem::take(&mut self.track_patches),
                 });
                 if let Some(first) = snapshot.views.first() {
                     self.camera.eye = first.eye;
@@ -950,6 +959,13 @@ impl App {
             dt_s,
         };
         let stats = r.draw(&last, &targets)?;
+        // The window shows the first view: its trackers' gates go back to the driver.
+        for (index, gate) in last.snapshot.track_gates.iter().filter(|g| g.0 == 0) {
+            match r.renderer.read_scene_region(*gate) {
+                Ok(values) => self.track_patches.push((*index, *gate, values)),
+                Err(e) => tracing::debug!("a tracker's gate was not read back: {e}"),
+            }
+        }
         r.window.pre_present_notify();
         r.gpu.queue.present(surface_texture);
         for id in &textures_to_free {
