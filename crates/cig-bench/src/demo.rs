@@ -1,6 +1,7 @@
 //! The demo's scenes: a hilltop for the line-of-sight show, the scripted flight (a low pass
 //! along a valley, a climb, views at dusk) and the environment after it (the full moon,
-//! cumulus from below and above, a thunderstorm), and a contact sheet of the frames.
+//! cumulus from below and above, a thunderstorm, the valley at night through a thermal
+//! sight), and a contact sheet of the frames.
 //!
 //! Algorithm: the low pass starts 1.2 km short of the database's densest village (the 8 x 8-
 //! cell block with the most buildings) when it has culture, else at its centre; its valley is
@@ -326,6 +327,7 @@ pub fn environment_shots(
     snapshot.bolts = vec![bolt];
     snapshot.flash_lux = flash_lux;
     out.push(snapshot);
+    out.push(thermal_night(q, low, ground_m)?);
     for snapshot in &mut out {
         for view in &mut snapshot.views {
             view.width_px = size.0;
@@ -333,6 +335,97 @@ pub fn environment_shots(
         }
     }
     Ok(out)
+}
+
+/// The valley at night through a long-wave infrared sight (white-hot, automatic gain): three
+/// tanks with their engines running 300-500 m down the valley, the river warmer than the
+/// fields, the roads holding the day's heat. The surface table is spun up over the two days
+/// before, with a clear June day of 12-28 C.
+fn thermal_night(
+    q: &mut QuerySession,
+    low: cig_scene::View,
+    ground_m: f64,
+) -> Result<cig_scene::FrameSnapshot, BenchError> {
+    use cig_thermal::{
+        Aerosol, AirTemperature, EntityHeat, EntityThermalInput, IrAtmosphere, IrBand,
+        Orientations, SurfaceTable, ThermalMaterial, ThermalWeather,
+    };
+    let night = unix_time("2026-06-22T09:00:00Z")?;
+    let time = cig_environment::UtcTime::from_unix_seconds(night)?;
+    let weather = ThermalWeather {
+        air: AirTemperature::diurnal_c(12.0, 28.0)
+            .map_err(|e| BenchError::Scene(format!("the thermal weather: {e}")))?,
+        relative_humidity_pct: 45.0,
+        wind_mps: 2.0,
+        cloud_cover: 0.0,
+        deep_ground_k: None,
+    };
+    let table = SurfaceTable::spin_up(
+        low.eye.lat_deg,
+        low.eye.lon_deg,
+        time,
+        weather,
+        &ThermalMaterial::ALL,
+        Orientations::Standard,
+    )
+    .map_err(|e| BenchError::Scene(format!("the thermal model: {e}")))?;
+    let mut view = low;
+    view.orientation.pitch_deg = -4.0;
+    let (north_m, east_m) = cig_geo::metres_per_degree(view.eye.lat_deg);
+    let heading = view.orientation.heading_deg.to_radians();
+    let mut entities = Vec::new();
+    for (k, (ahead_m, side_m)) in [(300.0, -25.0), (380.0, 20.0), (480.0, -5.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let east = ahead_m * heading.sin() + side_m * heading.cos();
+        let north = ahead_m * heading.cos() - side_m * heading.sin();
+        let (lat, lon) = (
+            view.eye.lat_deg + north / north_m,
+            view.eye.lon_deg + east / east_m,
+        );
+        let alt = q.hot(lat, lon).map_or(ground_m, |h| h.height_ellipsoid_m());
+        entities.push(cig_scene::EntityInstance {
+            id: k as u32 + 1,
+            model: "tank".into(),
+            position: Geodetic::new(lat, lon, alt),
+            orientation: cig_scene::Hpr {
+                heading_deg: view.orientation.heading_deg + 40.0 * k as f64,
+                ..cig_scene::Hpr::default()
+            },
+            cue_important: false,
+            critical_radius_m: None,
+        });
+    }
+    let heat = EntityHeat::steady(
+        &EntityThermalInput {
+            engine_on: true,
+            speed_mps: 3.0,
+            burning: false,
+            destroyed: false,
+        },
+        table.air_k(),
+    );
+    let mut scene = cig_scene::thermal::ThermalScene::from_table(
+        &table,
+        IrAtmosphere {
+            air_k: table.air_k(),
+            relative_humidity_pct: 45.0,
+            aerosol: Aerosol::Rural,
+            visibility_m: 30_000.0,
+        },
+        entities
+            .iter()
+            .map(|e| (e.id, heat.rise_k.map(|r| r as f32)))
+            .collect(),
+    );
+    scene.base_alt_m = ground_m;
+    let mut snapshot = cig_scene::FrameSnapshot::new(night, vec![view]);
+    snapshot.fog = cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, 30_000.0);
+    snapshot.entities = entities;
+    snapshot.sensors = vec![Some(cig_scene::thermal::SensorView::new(IrBand::Lwir))];
+    snapshot.thermal = Some(Arc::new(scene));
+    Ok(snapshot)
 }
 
 /// Frames side by side, `columns` to a row, each halved.

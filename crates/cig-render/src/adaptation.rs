@@ -86,7 +86,7 @@ pub(crate) struct AdaptRequest {
 const TONE_BYTES: u64 = 16 + 16 + 256;
 /// How much of a sensor view's grey comes from plateau histogram equalisation (the rest is the
 /// linear window): large uniform areas (sky, a fire) do not take grey levels from the scene.
-const SENSOR_EQUALISATION: f32 = 0.5;
+const SENSOR_EQUALISATION: f32 = 0.75;
 
 /// What a thermal sensor view's automatic gain asks of the pass.
 #[derive(Clone, Copy, Debug)]

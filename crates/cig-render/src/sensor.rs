@@ -211,7 +211,8 @@ pub(crate) fn sensor_frame(
         down_radiance: (down / weight) as f32,
         sun_irradiance: sun_irradiance as f32,
         slope: cig_thermal::planck::band_radiance_slope(b, air) as f32,
-        histogram_range: (radiance(air - 60.0), radiance(air + 90.0)),
+        // Cold sky and hot engines fall into the end bins: the bins resolve the scene (1.2 K).
+        histogram_range: (radiance(air - 30.0), radiance(air + 45.0)),
         manual: sensor
             .manual_window_k()
             .map(|(lo, hi)| (radiance(lo), radiance(hi))),

@@ -391,5 +391,8 @@ fn a_fresh_crater_glows_on_the_ground() {
         .unwrap_or(0);
     let (x, y) = (hottest % SIZE.0 as usize, hottest / SIZE.0 as usize);
     let (cx, cy) = (SIZE.0 as usize / 2, SIZE.1 as usize / 2);
-    assert!(x.abs_diff(cx) <= 12 && y.abs_diff(cy) <= 20, "hottest at {x}, {y}");
+    assert!(
+        x.abs_diff(cx) <= 12 && y.abs_diff(cy) <= 20,
+        "hottest at {x}, {y}"
+    );
 }

@@ -228,7 +228,7 @@ fn fly(
     let cache = Arc::new(TileCache::new(Arc::clone(db), config.paging.clone())?);
     let gpu = cig_render::Gpu::headless()?;
     println!(
-        "flying: a low pass along the valley heading {heading:.0} deg, a climb to 1800 m, dusk; then the full moon, cumulus from below and above, a thunderstorm ({} frames of {}x{} on {})",
+        "flying: a low pass along the valley heading {heading:.0} deg, a climb to 1800 m, dusk; then the full moon, cumulus from below and above, a thunderstorm, the valley at night through a thermal sight ({} frames of {}x{} on {})",
         shots.len() + weather.len(),
         size.0,
         size.1,

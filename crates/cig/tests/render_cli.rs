@@ -439,8 +439,11 @@ fn demo_flies_to_png_frames_without_a_display_and_in_a_window_with_one() {
                 .unwrap_or(false)
         })
         .count();
-    // 24 of the flight, then the environment: moon, cumulus from below and above, a storm.
-    assert_eq!(frames, 28);
+    // 24 of the flight, then the environment: moon, cumulus from below and above, a storm, and
+    // the valley at night through a thermal sight (grey: a white display).
+    assert_eq!(frames, 29);
+    let (_, _, thermal) = common::read_png_rgba(&out.join("frame_028.png"));
+    assert!(thermal.chunks(4).all(|p| p[0] == p[1] && p[1] == p[2]));
     let sheet = std::fs::read(out.join("contact-sheet.png")).expect("contact sheet");
     assert_eq!(&sheet[1..4], b"PNG");
 
