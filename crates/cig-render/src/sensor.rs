@@ -20,7 +20,9 @@
 //! grey with the automatic gain (adaptation.rs) or the manual window.
 //!
 //! Clouds emit at their lowest layer's mid-height temperature (every layer alike) with 0.7 of
-//! their visible extinction (liquid water absorbs in both windows).
+//! their visible extinction (liquid water absorbs in both windows); a ground fog layer's
+//! droplets with half theirs, emitting at the air's temperature; the global fog of the
+//! visibility is the aerosol's (the infrared table scales with the visibility).
 //!
 //! Limits: rain and lightning are not drawn in sensor views; clouds and puffs are seen without
 //! the infrared path between them and the eye (their contrast is overstated at long range);

@@ -396,3 +396,44 @@ fn a_fresh_crater_glows_on_the_ground() {
         "hottest at {x}, {y}"
     );
 }
+
+#[test]
+fn a_ground_fog_layer_veils_the_tank_less_in_lwir_than_in_the_visible() {
+    let db = hills();
+    let cache = cache(&db);
+    let mut r = renderer(&cache);
+    let scene = thermal(MORNING_UNIX_S, true);
+    // The tank's whole contrast: the summed difference the tank makes to the frame.
+    let mut contrast = |sensor: Option<SensorView>, fog: bool| {
+        let mut with_tank = tank_frame(MORNING_UNIX_S, sensor, scene.clone());
+        if fog {
+            with_tank.ground_fog = Some(cig_scene::FogLayer {
+                top_m: with_tank.views[0].eye.alt_m + 50.0,
+                visibility_m: 120.0,
+            });
+        }
+        let mut without = with_tank.clone();
+        without.entities.clear();
+        let (a, _) = render(&mut r, &cache, &with_tank, false);
+        let (b, _) = render(&mut r, &cache, &without, false);
+        a.rgba
+            .iter()
+            .zip(&b.rgba)
+            .map(|(x, y)| f64::from((i32::from(*x) - i32::from(*y)).abs()))
+            .sum::<f64>()
+    };
+    // A wide manual window (190-390 K), the same for clear and fogged frames: nothing of the
+    // tank but its exhausts saturates.
+    let mut lwir = quiet(IrBand::Lwir, Polarity::WhiteHot);
+    lwir.manual_gain_level = Some((0.0, 0.5));
+    let visible = contrast(None, true) / contrast(None, false);
+    let infrared = contrast(Some(lwir), true) / contrast(Some(lwir), false);
+    assert!(
+        infrared < 0.9,
+        "the fog veils the tank in LWIR too: {infrared}"
+    );
+    assert!(
+        infrared > 1.5 * visible,
+        "LWIR keeps more of the tank's contrast through fog: {infrared} against {visible}"
+    );
+}

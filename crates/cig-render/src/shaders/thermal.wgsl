@@ -109,7 +109,12 @@ fn th_shown(t_k: f32, eps: f32, n: vec3<f32>, rel: vec3<f32>) -> vec4<f32> {
     var l = eps * th_band_radiance(t_k) + (1.0 - eps) * mix(ground, g.sensor.z, sky_view);
     l += (1.0 - eps) * g.sensor.w * max(dot(n, g.sun_dir.xyz), 0.0) / 3.14159265;
     let p = th_path(rel);
-    return vec4<f32>(vec3<f32>(p.x * l + p.y), 1.0);
+    var shown = p.x * l + p.y;
+    // A ground fog layer's droplets: half their visible optical depth in the infrared, emitting
+    // at the air's temperature.
+    let fog = sqrt(fog_layer_transmittance(rel));
+    shown = fog * shown + (1.0 - fog) * ground;
+    return vec4<f32>(vec3<f32>(shown), 1.0);
 }
 
 // A hot part's rise over its surroundings for the instance word's entity slot (0: none).
