@@ -126,30 +126,39 @@ pub fn planck_tail(x: f64) -> f64 {
         }
         sum
     } else {
-        let x = x.max(0.0);
-        // integral from 0 to x of t^2 (1 - t/2 + sum B_k t^k / k!) dt.
-        // Odd k > 1 have B_k = 0, so only even k contribute after the first two terms.
-        let x3 = x * x * x;
-        let mut head = x3 / 3.0 - x3 * x / 8.0;
-        let x2 = x * x;
-        let mut power = x3 * x2; // x^(k+3) for k = 2
-        for k in (2..BERNOULLI_OVER_FACTORIAL.len()).step_by(2) {
-            let term = BERNOULLI_OVER_FACTORIAL[k] * power / (k as f64 + 3.0);
-            head += term;
-            if term.abs() <= head.abs() * 1e-17 {
-                break;
-            }
-            power *= x2;
-        }
-        F_TOTAL - head
+        F_TOTAL - planck_head(x)
     }
 }
 
-/// Radiance of a black body at `temp_k` between 0 and `wavelength_um`, W m-2 sr-1.
-fn short_side_radiance(wavelength_um: f64, temp_k: f64) -> f64 {
-    let x = C2_M_K / (wavelength_um * 1e-6 * temp_k);
-    let scale = temp_k / C2_M_K;
-    C1L_W_M2_SR * scale * scale * scale * scale * planck_tail(x)
+/// `integral from 0 to x of t^3 / (e^t - 1) dt` by the Bernoulli series, for `0 <= x < 2`.
+fn planck_head(x: f64) -> f64 {
+    let x = x.max(0.0);
+    // integral from 0 to x of t^2 (1 - t/2 + sum B_k t^k / k!) dt.
+    // Odd k > 1 have B_k = 0, so only even k contribute after the first two terms.
+    let x3 = x * x * x;
+    let mut head = x3 / 3.0 - x3 * x / 8.0;
+    let x2 = x * x;
+    let mut power = x3 * x2; // x^(k+3) for k = 2
+    for k in (2..BERNOULLI_OVER_FACTORIAL.len()).step_by(2) {
+        let term = BERNOULLI_OVER_FACTORIAL[k] * power / (k as f64 + 3.0);
+        head += term;
+        if term.abs() <= head.abs() * 1e-17 {
+            break;
+        }
+        power *= x2;
+    }
+    head
+}
+
+/// `integral from x_small to x_large of t^3 / (e^t - 1) dt` (`x_small <= x_large`), taken
+/// from the heads where both are below 2, so very hot bodies lose no precision to the
+/// difference of two nearly equal tails.
+fn planck_between(x_small: f64, x_large: f64) -> f64 {
+    if x_large < 2.0 {
+        planck_head(x_large) - planck_head(x_small)
+    } else {
+        planck_tail(x_small) - planck_tail(x_large)
+    }
 }
 
 /// Black-body radiance in `band` at `temp_k`, W m-2 sr-1. `temp_k` must be finite and > 0.
@@ -162,7 +171,10 @@ pub fn band_radiance(band: Band, temp_k: f64) -> Result<f64, ThermalError> {
 
 /// [`band_radiance`] for a temperature the caller knows is finite and positive (inner loops).
 pub fn band_radiance_unchecked(band: Band, temp_k: f64) -> f64 {
-    (short_side_radiance(band.hi_um, temp_k) - short_side_radiance(band.lo_um, temp_k)).max(0.0)
+    let x = |wavelength_um: f64| C2_M_K / (wavelength_um * 1e-6 * temp_k);
+    let scale = temp_k / C2_M_K;
+    let between = planck_between(x(band.hi_um), x(band.lo_um));
+    (C1L_W_M2_SR * scale * scale * scale * scale * between).max(0.0)
 }
 
 /// `d L / d T` in `band` at `temp_k`, W m-2 sr-1 K-1 (central difference of the exact series).
@@ -297,6 +309,21 @@ mod tests {
             (below - above - 1.25e-12).abs() < 1e-13,
             "{below} vs {above}"
         );
+    }
+
+    #[test]
+    fn very_hot_bodies_keep_their_precision() {
+        // Rayleigh-Jeans: at x << 1 the band radiance is 2 c k T (1/l1^3 - 1/l2^3) / 3.
+        for t in [1.0e7, 1.0e9, 1.0e11] {
+            let l = band_radiance(Band::LWIR, t).expect("valid");
+            let (l1, l2) = (8e-6_f64, 12e-6_f64);
+            let rj =
+                2.0 * LIGHT_M_S * BOLTZMANN_J_K * t * (1.0 / l1.powi(3) - 1.0 / l2.powi(3)) / 3.0;
+            assert!(
+                (l - rj).abs() / rj < 2e-3,
+                "{t} K: {l} vs Rayleigh-Jeans {rj}"
+            );
+        }
     }
 
     #[test]
