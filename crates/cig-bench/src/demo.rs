@@ -346,10 +346,7 @@ fn thermal_night(
     low: cig_scene::View,
     ground_m: f64,
 ) -> Result<cig_scene::FrameSnapshot, BenchError> {
-    use cig_thermal::{
-        Aerosol, AirTemperature, EntityHeat, EntityThermalInput, IrAtmosphere, IrBand,
-        Orientations, SurfaceTable, ThermalMaterial, ThermalWeather,
-    };
+    use cig_thermal::{Aerosol, AirTemperature, EntityThermalInput, IrBand, ThermalWeather};
     let night = unix_time("2026-06-22T09:00:00Z")?;
     let time = cig_environment::UtcTime::from_unix_seconds(night)?;
     let weather = ThermalWeather {
@@ -360,15 +357,6 @@ fn thermal_night(
         cloud_cover: 0.0,
         deep_ground_k: None,
     };
-    let table = SurfaceTable::spin_up(
-        low.eye.lat_deg,
-        low.eye.lon_deg,
-        time,
-        weather,
-        &ThermalMaterial::ALL,
-        Orientations::Standard,
-    )
-    .map_err(|e| BenchError::Scene(format!("the thermal model: {e}")))?;
     let mut view = low;
     view.orientation.pitch_deg = -4.0;
     let (north_m, east_m) = cig_geo::metres_per_degree(view.eye.lat_deg);
@@ -397,29 +385,23 @@ fn thermal_night(
             critical_radius_m: None,
         });
     }
-    let heat = EntityHeat::steady(
+    let ids: Vec<u32> = entities.iter().map(|e| e.id).collect();
+    let scene = cig_scene::thermal::still_scene(
+        low.eye.lat_deg,
+        low.eye.lon_deg,
+        ground_m,
+        time,
+        weather,
+        (Aerosol::Rural, 30_000.0),
+        &ids,
         &EntityThermalInput {
             engine_on: true,
             speed_mps: 3.0,
             burning: false,
             destroyed: false,
         },
-        table.air_k(),
-    );
-    let mut scene = cig_scene::thermal::ThermalScene::from_table(
-        &table,
-        IrAtmosphere {
-            air_k: table.air_k(),
-            relative_humidity_pct: 45.0,
-            aerosol: Aerosol::Rural,
-            visibility_m: 30_000.0,
-        },
-        entities
-            .iter()
-            .map(|e| (e.id, heat.rise_k.map(|r| r as f32)))
-            .collect(),
-    );
-    scene.base_alt_m = ground_m;
+    )
+    .map_err(|e| BenchError::Scene(format!("the thermal model: {e}")))?;
     let mut snapshot = cig_scene::FrameSnapshot::new(night, vec![view]);
     snapshot.fog = cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, 30_000.0);
     snapshot.entities = entities;

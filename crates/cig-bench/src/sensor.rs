@@ -18,8 +18,8 @@ use cig_scene::thermal::{SensorView, ThermalScene};
 use cig_scene::{EntityInstance, FovDeg, FrameSnapshot, Hpr, View};
 use cig_terrain::{PagingConfig, QuerySession, TileCache};
 use cig_thermal::{
-    Aerosol, EntityHeat, EntityThermalInput, IrAtmosphere, IrBand, ModelAtmosphere, Orientations,
-    SurfaceTable, ThermalMaterial, ThermalWeather,
+    Aerosol, EntityHeat, EntityThermalInput, IrBand, Orientations, SurfaceTable, ThermalMaterial,
+    ThermalWeather,
 };
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -133,7 +133,7 @@ pub fn run(options: &SensorOptions) -> Result<Report, BenchError> {
     );
     let scene = Arc::new(ThermalScene::from_table(
         &table,
-        IrAtmosphere::model(ModelAtmosphere::MidLatitudeSummer, Aerosol::Rural),
+        cig_scene::thermal::atmosphere_over(&table, Aerosol::Rural, 23_000.0),
         entities
             .iter()
             .map(|e| (e.id, heat.rise_k.map(|r| r as f32)))

@@ -728,7 +728,7 @@ impl Scenario {
             t.weather()?;
         }
         if let Some(sensor) = self.view.as_ref().and_then(|v| v.sensor.as_deref()) {
-            if !matches!(sensor, "visible" | "lwir" | "mwir") {
+            if cig_scene::thermal::sensor_of_name(sensor).is_err() {
                 return Err(value_error(
                     "view.sensor",
                     format!("\"{sensor}\" is not visible, lwir or mwir"),

@@ -20,8 +20,8 @@ use crate::ScenarioError;
 use cig_geo::Geodetic;
 use cig_scene::thermal::{SensorView, ThermalScene};
 use cig_thermal::{
-    Aerosol, AirTemperature, EntityHeat, EntityThermalInput, IrAtmosphere, IrBand, Orientations,
-    SurfaceTable, ThermalMaterial, ThermalWeather, CELSIUS_0_K,
+    Aerosol, AirTemperature, EntityHeat, EntityThermalInput, IrBand, Orientations, SurfaceTable,
+    ThermalMaterial, ThermalWeather, CELSIUS_0_K,
 };
 use glam::DVec3;
 use std::collections::BTreeMap;
@@ -57,10 +57,11 @@ impl ThermalSection {
                 ))
             }
         };
+        let defaults = ThermalWeather::default();
         let weather = ThermalWeather {
             air,
-            relative_humidity_pct: self.humidity_pct.unwrap_or(50.0),
-            wind_mps: self.wind_mps.unwrap_or(3.0),
+            relative_humidity_pct: self.humidity_pct.unwrap_or(defaults.relative_humidity_pct),
+            wind_mps: self.wind_mps.unwrap_or(defaults.wind_mps),
             cloud_cover: 0.0,
             deep_ground_k: self.deep_ground_c.map(|c| c + CELSIUS_0_K),
         };
@@ -230,12 +231,8 @@ impl ThermalWorld {
             kept.insert(e.id, (heat, now, e.position_ecef_m));
         }
         self.heat = kept;
-        let atmosphere = IrAtmosphere {
-            air_k: air_k.clamp(200.0, 330.0),
-            relative_humidity_pct: table.weather().relative_humidity_pct,
-            aerosol: self.aerosol,
-            visibility_m: self.visibility_m,
-        };
+        let atmosphere =
+            cig_scene::thermal::atmosphere_over(table, self.aerosol, self.visibility_m);
         let mut scene = ThermalScene::from_table(
             table,
             atmosphere,
@@ -277,15 +274,6 @@ impl ThermalWorld {
     /// The frame's thermal scene, once the table runs.
     pub fn scene(&self) -> Option<Arc<ThermalScene>> {
         self.scene.clone()
-    }
-}
-
-/// A sensor view for a band name of the scenario or the command line (`None` for visible).
-pub fn sensor_of_name(name: &str) -> Option<SensorView> {
-    match name {
-        "lwir" => Some(SensorView::new(IrBand::Lwir)),
-        "mwir" => Some(SensorView::new(IrBand::Mwir)),
-        _ => None,
     }
 }
 

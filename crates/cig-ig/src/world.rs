@@ -908,7 +908,7 @@ impl IgWorld {
                     .view
                     .as_ref()
                     .and_then(|v| v.sensor.as_deref())
-                    .and_then(crate::thermal::sensor_of_name),
+                    .and_then(|name| cig_scene::thermal::sensor_of_name(name).ok().flatten()),
             })
             .collect()
     }

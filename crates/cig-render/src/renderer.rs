@@ -595,15 +595,7 @@ impl TerrainPipelines {
 
 /// An IEEE half-precision value as f32.
 fn f16_to_f32(bits: u16) -> f32 {
-    let sign = if bits & 0x8000 != 0 { -1.0 } else { 1.0 };
-    let exponent = i32::from((bits >> 10) & 0x1F);
-    let mantissa = f32::from(bits & 0x3FF);
-    match exponent {
-        0 => sign * mantissa * 2f32.powi(-24),
-        31 if mantissa == 0.0 => sign * f32::INFINITY,
-        31 => f32::NAN,
-        e => sign * (1.0 + mantissa / 1024.0) * 2f32.powi(e - 15),
-    }
+    half::f16::from_bits(bits).to_f32()
 }
 
 /// The models' bind group: the globals, the instance records and the thermal tables.

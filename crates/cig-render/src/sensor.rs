@@ -86,6 +86,21 @@ pub(crate) struct SensorFrame {
     pub cloud_radiance: f32,
 }
 
+/// The band's black-body radiance at `PLANCK_T0_K + i` kelvin, worked out once per band.
+fn planck_table(band: IrBand) -> &'static [f32] {
+    static TABLES: [std::sync::OnceLock<Vec<f32>>; 2] =
+        [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
+    let slot = match band {
+        IrBand::Lwir => 0,
+        IrBand::Mwir => 1,
+    };
+    TABLES[slot].get_or_init(|| {
+        (0..PLANCK_ENTRIES)
+            .map(|i| band_radiance_unchecked(band.band(), PLANCK_T0_K + i as f64) as f32)
+            .collect()
+    })
+}
+
 /// Builds a sensor view's tables for an eye at `eye_alt_m` and the sun at `sun_elevation_deg`.
 pub(crate) fn sensor_frame(
     sensor: &SensorView,
@@ -114,9 +129,7 @@ pub(crate) fn sensor_frame(
             IrBand::Mwir => p.emissivity_mwir,
         } as f32;
     }
-    for i in 0..PLANCK_ENTRIES {
-        buffer[OFF_PLANCK + i] = band_radiance_unchecked(b, PLANCK_T0_K + i as f64) as f32;
-    }
+    buffer[OFF_PLANCK..OFF_PLANCK + PLANCK_ENTRIES].copy_from_slice(planck_table(band));
     let atmosphere = &scene.atmosphere;
     // Heights above the ground where the air's temperature was given.
     let above_ground = eye_alt_m - scene.base_alt_m;

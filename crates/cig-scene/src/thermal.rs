@@ -124,6 +124,21 @@ impl DisplayColour {
     }
 }
 
+/// The sensor a name asks for: `visible` (`Ok(None)`), `lwir` or `mwir` (the names of the
+/// command line and the scenario); `Err(())` for any other name.
+#[allow(
+    clippy::result_unit_err,
+    reason = "callers say which option or key was wrong, with its value"
+)]
+pub fn sensor_of_name(name: &str) -> Result<Option<SensorView>, ()> {
+    match name {
+        "visible" => Ok(None),
+        "lwir" => Ok(Some(SensorView::new(IrBand::Lwir))),
+        "mwir" => Ok(Some(SensorView::new(IrBand::Mwir))),
+        _ => Err(()),
+    }
+}
+
 /// One view's sensor settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SensorView {
@@ -220,6 +235,60 @@ impl ThermalScene {
             base_alt_m: 0.0,
         }
     }
+}
+
+/// The infrared atmosphere over a surface table: the table's air (within the atmosphere
+/// table's range) and humidity, with an aerosol model and visibility.
+pub fn atmosphere_over(
+    table: &cig_thermal::SurfaceTable,
+    aerosol: cig_thermal::Aerosol,
+    visibility_m: f64,
+) -> IrAtmosphere {
+    IrAtmosphere {
+        air_k: table.air_k().clamp(200.0, 330.0),
+        relative_humidity_pct: table.weather().relative_humidity_pct,
+        aerosol,
+        visibility_m,
+    }
+}
+
+/// The thermal state of a still frame (a render, a benchmark, the demo): every material spun
+/// up at a place (the ground `ground_alt_m` above the ellipsoid) over the two days before
+/// `time`, the infrared atmosphere over it, and `entities` with their engines steady in
+/// `engine`'s state.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "a frame's place, time, weather, air and vehicles"
+)]
+pub fn still_scene(
+    lat_deg: f64,
+    lon_deg: f64,
+    ground_alt_m: f64,
+    time: cig_environment::UtcTime,
+    weather: cig_thermal::ThermalWeather,
+    (aerosol, visibility_m): (cig_thermal::Aerosol, f64),
+    entities: &[u32],
+    engine: &cig_thermal::EntityThermalInput,
+) -> Result<ThermalScene, cig_thermal::ThermalError> {
+    let table = cig_thermal::SurfaceTable::spin_up(
+        lat_deg,
+        lon_deg,
+        time,
+        weather,
+        &ThermalMaterial::ALL,
+        cig_thermal::Orientations::Standard,
+    )?;
+    let atmosphere = atmosphere_over(&table, aerosol, visibility_m);
+    atmosphere.validate()?;
+    let heat = cig_thermal::EntityHeat::steady(engine, table.air_k());
+    let rise = heat.rise_k.map(|r| r as f32);
+    let mut scene = ThermalScene::from_table(
+        &table,
+        atmosphere,
+        entities.iter().map(|id| (*id, rise)).collect(),
+    );
+    scene.base_alt_m = ground_alt_m;
+    Ok(scene)
 }
 
 #[cfg(test)]

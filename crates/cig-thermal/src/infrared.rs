@@ -374,6 +374,7 @@ struct IrTable {
     ln_ranges: Vec<f64>,
     ranges_km: Vec<f64>,
     vis_km: Vec<f64>,
+    ln_vis: Vec<f64>,
     rh_aerosol: Vec<f64>,
     /// [band][t][rh] -> (mean along range, planck along range)
     gas: Vec<(Vec<f64>, Vec<f64>)>,
@@ -448,6 +449,7 @@ fn parse_table(text: &str) -> Result<IrTable, String> {
         rh_gas,
         ln_ranges: ranges_km.iter().map(|r| r.ln()).collect(),
         ranges_km,
+        ln_vis: vis_km.iter().map(|v| v.ln()).collect(),
         vis_km,
         rh_aerosol,
         gas,
@@ -519,8 +521,7 @@ impl IrTable {
         } else {
             (vis_km, range_km)
         };
-        let ln_vis: Vec<f64> = self.vis_km.iter().map(|v| v.ln()).collect();
-        let (vi, vw) = bracket(&ln_vis, vis.ln());
+        let (vi, vw) = bracket(&self.ln_vis, vis.ln());
         let (ri, rw) = bracket(&self.rh_aerosol, rh);
         let n_rh = self.rh_aerosol.len();
         let base = (band * 3 + model) * self.vis_km.len() * n_rh;

@@ -5,10 +5,7 @@
 use anyhow::{bail, Context};
 use cig_scene::thermal::{DisplayColour, Polarity, SensorView, ThermalScene};
 use cig_scene::EntityInstance;
-use cig_thermal::{
-    Aerosol, AirTemperature, EntityHeat, EntityThermalInput, IrAtmosphere, IrBand, Orientations,
-    SurfaceTable, ThermalMaterial, ThermalWeather,
-};
+use cig_thermal::{Aerosol, AirTemperature, EntityThermalInput, ThermalWeather};
 
 /// What `--sensor` and its companions ask for.
 pub struct SensorOptions<'a> {
@@ -24,13 +21,11 @@ pub struct SensorOptions<'a> {
 
 /// The view's sensor (`None` for the visible channel).
 pub fn parse_sensor(o: &SensorOptions) -> anyhow::Result<Option<SensorView>> {
-    let band = match o.sensor {
-        "visible" => return Ok(None),
-        "lwir" => IrBand::Lwir,
-        "mwir" => IrBand::Mwir,
-        other => bail!("--sensor \"{other}\" is not visible, lwir or mwir"),
+    let Some(mut view) = cig_scene::thermal::sensor_of_name(o.sensor)
+        .map_err(|()| anyhow::anyhow!("--sensor \"{}\" is not visible, lwir or mwir", o.sensor))?
+    else {
+        return Ok(None);
     };
-    let mut view = SensorView::new(band);
     view.polarity = Polarity::from_name(o.polarity).with_context(|| {
         format!(
             "--polarity \"{}\" is not white-hot or black-hot",
@@ -111,35 +106,21 @@ pub fn still_thermal_scene(
         deep_ground_k: None,
     };
     thermal_weather.validate().context("--rh")?;
-    let table = SurfaceTable::spin_up(
+    let ids: Vec<u32> = entities.iter().map(|e| e.id).collect();
+    cig_scene::thermal::still_scene(
         lat_deg,
         lon_deg,
+        ground_alt_m,
         time,
         thermal_weather,
-        &ThermalMaterial::ALL,
-        Orientations::Standard,
+        (Aerosol::Rural, weather.visibility_m),
+        &ids,
+        &EntityThermalInput {
+            engine_on: engines_running,
+            speed_mps: 0.0,
+            burning: false,
+            destroyed: false,
+        },
     )
-    .context("the thermal model")?;
-    let air_k = table.air_k();
-    let atmosphere = IrAtmosphere {
-        air_k: air_k.clamp(200.0, 330.0),
-        relative_humidity_pct: weather.rh_pct,
-        aerosol: Aerosol::Rural,
-        visibility_m: weather.visibility_m,
-    };
-    atmosphere.validate().context("the infrared atmosphere")?;
-    let input = EntityThermalInput {
-        engine_on: engines_running,
-        speed_mps: 0.0,
-        burning: false,
-        destroyed: false,
-    };
-    let heat = EntityHeat::steady(&input, air_k);
-    let entity_heat = entities
-        .iter()
-        .map(|e| (e.id, heat.rise_k.map(|r| r as f32)))
-        .collect();
-    let mut scene = ThermalScene::from_table(&table, atmosphere, entity_heat);
-    scene.base_alt_m = ground_alt_m;
-    Ok(scene)
+    .context("the thermal model")
 }

@@ -168,12 +168,7 @@ fn own_sensor(
     let Some(t) = table else {
         return;
     };
-    let atmosphere = cig_thermal::IrAtmosphere {
-        air_k: t.air_k().clamp(200.0, 330.0),
-        relative_humidity_pct: t.weather().relative_humidity_pct,
-        aerosol: cig_thermal::Aerosol::Rural,
-        visibility_m: 23_000.0,
-    };
+    let atmosphere = cig_scene::thermal::atmosphere_over(t, cig_thermal::Aerosol::Rural, 23_000.0);
     snapshot.thermal = Some(std::sync::Arc::new(
         cig_scene::thermal::ThermalScene::from_table(t, atmosphere, Vec::new()),
     ));
