@@ -1,7 +1,7 @@
 //! The demo's scenes: a hilltop for the line-of-sight show, the scripted flight (a low pass
 //! along a valley, a climb, views at dusk) and the environment after it (the full moon,
 //! cumulus from below and above, a thunderstorm, the valley at night through a thermal
-//! sight), and a contact sheet of the frames.
+//! sight and through night-vision goggles), and a contact sheet of the frames.
 //!
 //! Algorithm: the low pass starts 1.2 km short of the database's densest village (the 8 x 8-
 //! cell block with the most buildings) when it has culture, else at its centre; its valley is
@@ -328,6 +328,7 @@ pub fn environment_shots(
     snapshot.flash_lux = flash_lux;
     out.push(snapshot);
     out.push(thermal_night(q, low, ground_m)?);
+    out.push(nvg_night(q, low, ground_m)?);
     for snapshot in &mut out {
         for view in &mut snapshot.views {
             view.width_px = size.0;
@@ -337,28 +338,12 @@ pub fn environment_shots(
     Ok(out)
 }
 
-/// The valley at night through a long-wave infrared sight (white-hot, automatic gain): three
-/// tanks with their engines running 300-500 m down the valley, the river warmer than the
-/// fields, the roads holding the day's heat. The surface table is spun up over the two days
-/// before, with a clear June day of 12-28 C.
-fn thermal_night(
+/// Three tanks 300-500 m down the valley ahead of `view`'s eye, on the ground.
+fn valley_tanks(
     q: &mut QuerySession,
-    low: cig_scene::View,
+    view: &cig_scene::View,
     ground_m: f64,
-) -> Result<cig_scene::FrameSnapshot, BenchError> {
-    use cig_thermal::{Aerosol, AirTemperature, EntityThermalInput, IrBand, ThermalWeather};
-    let night = unix_time("2026-06-22T09:00:00Z")?;
-    let time = cig_environment::UtcTime::from_unix_seconds(night)?;
-    let weather = ThermalWeather {
-        air: AirTemperature::diurnal_c(12.0, 28.0)
-            .map_err(|e| BenchError::Scene(format!("the thermal weather: {e}")))?,
-        relative_humidity_pct: 45.0,
-        wind_mps: 2.0,
-        cloud_cover: 0.0,
-        deep_ground_k: None,
-    };
-    let mut view = low;
-    view.orientation.pitch_deg = -4.0;
+) -> Vec<cig_scene::EntityInstance> {
     let (north_m, east_m) = cig_geo::metres_per_degree(view.eye.lat_deg);
     let heading = view.orientation.heading_deg.to_radians();
     let mut entities = Vec::new();
@@ -385,6 +370,83 @@ fn thermal_night(
             critical_radius_m: None,
         });
     }
+    entities
+}
+
+/// The valley at 22:00 through night-vision goggles (P43, automatic brightness): the same three
+/// tanks driving toward the eye with their headlights and tail lights on, the settlements' street and porch lights,
+/// and an illumination flare 350 m above the valley 2.5 km ahead, 20 s after it lit.
+fn nvg_night(
+    q: &mut QuerySession,
+    low: cig_scene::View,
+    ground_m: f64,
+) -> Result<cig_scene::FrameSnapshot, BenchError> {
+    let night = unix_time("2026-06-22T05:00:00Z")?;
+    let mut view = low;
+    view.orientation.pitch_deg = -2.0;
+    // Driving toward the eye, headlights on.
+    let mut entities = valley_tanks(q, &view, ground_m);
+    for (k, e) in entities.iter_mut().enumerate() {
+        e.orientation.heading_deg = view.orientation.heading_deg + 170.0 + 10.0 * k as f64;
+    }
+    let mut snapshot = cig_scene::FrameSnapshot::new(night, vec![view]);
+    snapshot.fog = cig_scene::Fog::from_visibility(cig_scene::FogMode::Exponential, 30_000.0);
+    let switches = cig_scene::lights::LightSwitches {
+        head: true,
+        tail: true,
+        ..Default::default()
+    };
+    for e in &entities {
+        cig_scene::lights::entity_lights(
+            cig_scene::lights::EntityLightSet::GroundVehicle,
+            &switches,
+            e.id,
+            e.position,
+            e.orientation,
+            [3.5, 1.8, 1.2],
+            &mut snapshot.lights,
+        );
+    }
+    let (north_m, east_m) = cig_geo::metres_per_degree(view.eye.lat_deg);
+    let heading = view.orientation.heading_deg.to_radians();
+    let (lat, lon) = (
+        view.eye.lat_deg + 2500.0 * heading.cos() / north_m,
+        view.eye.lon_deg + 2500.0 * heading.sin() / east_m,
+    );
+    let below = q.hot(lat, lon).map_or(ground_m, |h| h.height_ellipsoid_m());
+    let flare = cig_scene::lights::Flare::artillery_155mm(
+        Geodetic::new(lat, lon, below + 450.0),
+        night - 20.0,
+    );
+    snapshot.lights.extend(flare.light_at(night, Some(below)));
+    snapshot.entities = entities;
+    snapshot.nvg = vec![Some(cig_scene::nvg::NvgView::default())];
+    Ok(snapshot)
+}
+
+/// The valley at night through a long-wave infrared sight (white-hot, automatic gain): three
+/// tanks with their engines running 300-500 m down the valley, the river warmer than the
+/// fields, the roads holding the day's heat. The surface table is spun up over the two days
+/// before, with a clear June day of 12-28 C.
+fn thermal_night(
+    q: &mut QuerySession,
+    low: cig_scene::View,
+    ground_m: f64,
+) -> Result<cig_scene::FrameSnapshot, BenchError> {
+    use cig_thermal::{Aerosol, AirTemperature, EntityThermalInput, IrBand, ThermalWeather};
+    let night = unix_time("2026-06-22T09:00:00Z")?;
+    let time = cig_environment::UtcTime::from_unix_seconds(night)?;
+    let weather = ThermalWeather {
+        air: AirTemperature::diurnal_c(12.0, 28.0)
+            .map_err(|e| BenchError::Scene(format!("the thermal weather: {e}")))?,
+        relative_humidity_pct: 45.0,
+        wind_mps: 2.0,
+        cloud_cover: 0.0,
+        deep_ground_k: None,
+    };
+    let mut view = low;
+    view.orientation.pitch_deg = -4.0;
+    let entities = valley_tanks(q, &view, ground_m);
     let ids: Vec<u32> = entities.iter().map(|e| e.id).collect();
     let scene = cig_scene::thermal::still_scene(
         low.eye.lat_deg,

@@ -7,7 +7,8 @@
 //! SISO-REF-010 Gaussian plume/puff records) by hand; [`dead_reckoning`] implements DRM 1-9 of
 //! Annex E; [`remote`] keeps the remote entity table with smoothing and timeouts;
 //! [`publisher`] applies the 1 m / 3° thresholds and 5 s heartbeat to owned entities;
-//! [`appearance`] maps appearance bits to obscurant effects (thesis 000 §VI.E.2-3);
+//! [`appearance`] maps appearance bits to obscurant effects (thesis 000 §VI.E.2-3) and to
+//! the lights an entity has on (SISO-REF-010 land, air, surface and subsurface layouts);
 //! [`detonation`] turns ground and building impacts into seeded effect starts (§VI.E.2);
 //! [`time_sync`] shares the simulation world time and lightning (§VI.E.4-5) over Data PDUs.
 //!
@@ -25,7 +26,7 @@ pub mod time_sync;
 
 pub use dis_rs;
 
-pub use appearance::{DustCloudSize, EffectsDiff, EffectsRequested, EntityEffect};
+pub use appearance::{DustCloudSize, EffectsDiff, EffectsRequested, EntityEffect, LightsRequested};
 pub use codec::{
     decode_datagram, decode_header, decode_pdu, encode_pdu, DecodeError, DecodedPdu, DisMessage,
     DisVersion, EncodeError, EncodeHeader, PduHeaderInfo,

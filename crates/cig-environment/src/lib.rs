@@ -23,6 +23,11 @@
 //! - [`illuminance`]: the USNO/Brown (1952) cubic fits of sun and moon
 //!   illuminance in altitude, the moon's phase law and distance, 0.002 lux of
 //!   night sky, a cloud-cover divisor.
+//! - [`nvg`]: night-vision (Gen III, Class A minus-blue) weighting of light in
+//!   2856 K-equivalent lux: the CIE 1931 V(λ) table and a shaped approximation
+//!   of the tube's response R(λ), integrated over Planckian, LED, sodium and
+//!   flare model spectra and over sunlight, moonlight (ROLO lunar reflectance)
+//!   and skylight (Bird–Riordan); the night sky's factor is a documented choice.
 //! - [`atmosphere`]: the Bruneton (2017) / Hillaire (2020) clear-sky
 //!   atmosphere: transmittance and multiple-scattering tables, sky radiance
 //!   and sky irradiance (Rayleigh, Mie, ozone; three wavelengths).
@@ -56,6 +61,7 @@ pub mod lightning;
 pub mod moon;
 pub mod moon_disc;
 pub mod nutation;
+pub mod nvg;
 pub mod precipitation;
 pub mod stars;
 pub mod sun;
@@ -71,6 +77,7 @@ pub use ephemeris::{ephemeris, BodyPosition, Ephemeris, Observer};
 pub use events::{day_events, DayEvents};
 pub use illuminance::{natural_illuminance, Illuminance};
 pub use lightning::{generate_bolt, Bolt, BoltParams, BoltSegment, FlashEnvelope};
+pub use nvg::{nvg_irradiance, LightSpectrum, NaturalSpectrum, NvgIrradiance};
 pub use precipitation::{Precipitation, PrecipitationKind};
 pub use time::{CalendarTime, UtcTime};
 

@@ -17,6 +17,9 @@
 //!   master's wait for its slaves, with a timeout that drops a dead channel).
 //! - [`weather`]: lightning storms (a Poisson strike schedule that is a function of seed and
 //!   world time), the bolts lit now and their flash.
+//! - [`lights`]: each drawn entity's lamps (light set from its model and domain, switches from
+//!   its DIS appearance, the scenario or the host's Component Control) and burning entities'
+//!   fires.
 //! - [`scenes`]: the fires and the lightning bolt a single frame asks for (`cig render --smoke`,
 //!   `--lightning`, the demo's storm).
 //!
@@ -24,6 +27,7 @@
 
 pub mod exercise;
 pub mod frame_lock;
+pub mod lights;
 pub mod model_table;
 pub mod pose;
 pub mod scenario;

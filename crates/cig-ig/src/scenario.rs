@@ -52,6 +52,9 @@
 //! path = [[51.02, -1.45], [51.03, -1.44]]
 //! loop_path = true
 //! dust = true                          # trail of dust when moving on soil (tank, truck: on)
+//! lights = ["head", "tail"]            # lamps on: head, tail, brake, blackout, blackout_brake,
+//!                                      # spot, landing, navigation, anti_collision, strobe,
+//!                                      # running, interior (as the model's light set has them)
 //!
 //! [view]                               # the view when no host defines one
 //! entity = 1                           # attached to an entity (body offsets), or
@@ -59,6 +62,25 @@
 //! offset_m = [-20.0, 0.0, -5.0]        # x forward, y right, z down
 //! hpr_deg = [90.0, -5.0, 0.0]
 //! fov_deg = 60.0
+//! sensor = "visible"                   # visible, lwir, mwir or nvg
+//!
+//! [view.nvg]                           # the goggle, for sensor = "nvg"
+//! gain = 1.0                           # 0.1..10, 1 nominal
+//! phosphor = "p43"                     # p43 (green) or p45 / white
+//!
+//! [[light]]                            # a lamp standing in the world (all frames)
+//! lat_deg = 51.01
+//! lon_deg = -1.47
+//! alt_m = 105.0                        # above the ellipsoid
+//! candela = 500.0
+//! colour = "warm"                      # white, warm, red, green, amber, blue or sodium
+//!
+//! [[flare]]                            # an illumination flare
+//! lat_deg = 51.01
+//! lon_deg = -1.46
+//! alt_m = 700.0                        # where it ignites, above the ellipsoid
+//! at_s = 30.0                          # lit this long after the start
+//! kind = "155mm"                       # 155mm (M485, 120 s) or 81mm (M853A1, 60 s)
 //!
 //! [[smoke]]                          # smoke and fire sources (DIS Environmental Processes)
 //! id = 1
@@ -170,6 +192,72 @@ pub struct Scenario {
     /// The thermal sensors' weather history (`crate::thermal`).
     #[serde(default)]
     pub thermal: Option<ThermalSection>,
+    /// Lamps standing in the world, lit every frame.
+    #[serde(default, rename = "light")]
+    pub lights: Vec<ScenarioLight>,
+    /// Illumination flares, lit at their time.
+    #[serde(default, rename = "flare")]
+    pub flares: Vec<ScenarioFlare>,
+}
+
+/// `[[light]]`: a lamp standing in the world.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioLight {
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    /// Above the ellipsoid.
+    #[serde(default)]
+    pub alt_m: f64,
+    pub candela: f64,
+    /// A lamp name (`cig_scene::lights::named_lamp`).
+    #[serde(default = "default_lamp_colour")]
+    pub colour: String,
+}
+
+fn default_lamp_colour() -> String {
+    "warm".to_string()
+}
+
+/// `[[flare]]`: an illumination flare.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioFlare {
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    /// Where it ignites, above the ellipsoid.
+    pub alt_m: f64,
+    /// Seconds after the scenario's start when it is lit.
+    #[serde(default)]
+    pub at_s: f64,
+    /// `155mm` or `81mm`.
+    pub kind: String,
+}
+
+impl ScenarioFlare {
+    /// The flare, its ignition `at_s` after `start_unix_s`; `None` for an unknown kind (refused
+    /// when the scenario is checked).
+    pub fn flare(&self, start_unix_s: f64) -> Option<cig_scene::lights::Flare> {
+        let start = cig_geo::Geodetic::new(self.lat_deg, self.lon_deg, self.alt_m);
+        let at = start_unix_s + self.at_s;
+        match self.kind.as_str() {
+            "155mm" => Some(cig_scene::lights::Flare::artillery_155mm(start, at)),
+            "81mm" => Some(cig_scene::lights::Flare::mortar_81mm(start, at)),
+            _ => None,
+        }
+    }
+}
+
+/// `[view.nvg]`: the night-vision goggle of a `sensor = "nvg"` view.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioNvg {
+    /// Manual gain, 0.1..10 (1 nominal).
+    #[serde(default)]
+    pub gain: Option<f32>,
+    /// `p43` (green) or `p45` / `white`.
+    #[serde(default)]
+    pub phosphor: Option<String>,
 }
 
 /// `[thermal]`: what heated the world's surfaces before the start, for the thermal sensors.
@@ -499,6 +587,10 @@ pub struct ScenarioEntity {
     /// the DIS appearance's power-plant bit, else running.
     #[serde(default)]
     pub engine: Option<bool>,
+    /// Lamps switched on (`crate::lights::SWITCH_NAMES`); lamps its model's light set lacks
+    /// are not drawn.
+    #[serde(default)]
+    pub lights: Vec<String>,
 }
 
 /// The view used when no host defines one.
@@ -515,9 +607,12 @@ pub struct ScenarioView {
     pub hpr_deg: [f64; 3],
     #[serde(default = "default_fov")]
     pub fov_deg: f64,
-    /// The view's sensor: visible (default), lwir or mwir.
+    /// The view's sensor: visible (default), lwir, mwir or nvg.
     #[serde(default)]
     pub sensor: Option<String>,
+    /// The goggle of an `nvg` view (defaults without it).
+    #[serde(default)]
+    pub nvg: Option<ScenarioNvg>,
 }
 
 fn default_fov() -> f64 {
@@ -728,10 +823,53 @@ impl Scenario {
             t.weather()?;
         }
         if let Some(sensor) = self.view.as_ref().and_then(|v| v.sensor.as_deref()) {
-            if cig_scene::thermal::sensor_of_name(sensor).is_err() {
+            if sensor != "nvg" && cig_scene::thermal::sensor_of_name(sensor).is_err() {
                 return Err(value_error(
                     "view.sensor",
-                    format!("\"{sensor}\" is not visible, lwir or mwir"),
+                    format!("\"{sensor}\" is not visible, lwir, mwir or nvg"),
+                ));
+            }
+        }
+        if let Some(n) = self.view.as_ref().and_then(|v| v.nvg.as_ref()) {
+            if let Some(p) = &n.phosphor {
+                cig_scene::nvg::Phosphor::from_name(p)
+                    .map_err(|e| value_error("view.nvg.phosphor", e.to_string()))?;
+            }
+            if let Some(g) = n.gain {
+                let view = cig_scene::nvg::NvgView {
+                    gain: g,
+                    ..cig_scene::nvg::NvgView::default()
+                };
+                view.validate()
+                    .map_err(|e| value_error("view.nvg.gain", e.to_string()))?;
+            }
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            let key = format!("light[{i}]");
+            check_lat_lon(&key, l.lat_deg, l.lon_deg)?;
+            check_finite(&format!("{key}.alt_m"), l.alt_m, -12_000.0, 1.0e6)?;
+            if !(l.candela.is_finite() && l.candela > 0.0 && l.candela <= 1.0e9) {
+                return Err(value_error(
+                    format!("{key}.candela"),
+                    format!("{} must be more than 0 and at most 1e9", l.candela),
+                ));
+            }
+            if cig_scene::lights::named_lamp(&l.colour).is_none() {
+                return Err(value_error(
+                    format!("{key}.colour"),
+                    format!("\"{}\" is not {}", l.colour, cig_scene::lights::LAMP_NAMES),
+                ));
+            }
+        }
+        for (i, f) in self.flares.iter().enumerate() {
+            let key = format!("flare[{i}]");
+            check_lat_lon(&key, f.lat_deg, f.lon_deg)?;
+            check_finite(&format!("{key}.alt_m"), f.alt_m, -12_000.0, 1.0e6)?;
+            check_finite(&format!("{key}.at_s"), f.at_s, 0.0, 1.0e7)?;
+            if f.flare(0.0).is_none() {
+                return Err(value_error(
+                    format!("{key}.kind"),
+                    format!("\"{}\" is not 155mm or 81mm", f.kind),
                 ));
             }
         }
@@ -873,6 +1011,17 @@ impl Scenario {
                     ));
                 }
             }
+            for (j, name) in e.lights.iter().enumerate() {
+                if crate::lights::switch_of_name(name).is_none() {
+                    return Err(value_error(
+                        format!("{key}.lights[{j}]"),
+                        format!(
+                            "\"{name}\" is not {}",
+                            crate::lights::SWITCH_NAMES.join(", ")
+                        ),
+                    ));
+                }
+            }
             if let Some(a) = &e.appearance {
                 if parse_hex_u32(a).is_none() {
                     return Err(value_error(
@@ -994,6 +1143,36 @@ impl Scenario {
     pub fn fog_mode(&self) -> Option<FogMode> {
         self.fog.as_deref().and_then(FogMode::parse)
     }
+
+    /// The goggle of the scenario's view, when its sensor is `nvg`.
+    pub fn nvg_view(&self) -> Option<cig_scene::nvg::NvgView> {
+        let view = self.view.as_ref()?;
+        if view.sensor.as_deref() != Some("nvg") {
+            return None;
+        }
+        let mut nvg = cig_scene::nvg::NvgView::default();
+        if let Some(n) = &view.nvg {
+            if let Some(g) = n.gain {
+                nvg.gain = g;
+            }
+            if let Some(p) = n.phosphor.as_deref() {
+                nvg.phosphor = cig_scene::nvg::Phosphor::from_name(p).unwrap_or(nvg.phosphor);
+            }
+        }
+        Some(nvg)
+    }
+
+    /// The scenario's standing lamps (`[[light]]`), as checked.
+    pub fn light_points(&self) -> Vec<cig_scene::lights::LightPoint> {
+        self.lights
+            .iter()
+            .filter_map(|l| {
+                let lamp = cig_scene::lights::named_lamp(&l.colour)?;
+                let at = cig_geo::Geodetic::new(l.lat_deg, l.lon_deg, l.alt_m);
+                cig_scene::lights::omni_lamp(at, l.candela as f32, lamp).ok()
+            })
+            .collect()
+    }
 }
 
 /// Parses a sky model name.
@@ -1074,6 +1253,125 @@ delivery = "multicast:239.1.2.3"
             let e = Scenario::from_toml(&bad).expect_err("refused").to_string();
             assert!(e.starts_with(key), "{e}");
         }
+    }
+
+    #[test]
+    fn nvg_views_lamps_flares_and_entity_lights_parse() {
+        let text = FULL.replace(
+            "appearance = \"0x8000\"\n",
+            "appearance = \"0x8000\"\nlights = [\"head\", \"tail\", \"blackout\"]\n",
+        ) + r#"
+[[light]]
+lat_deg = 51.01
+lon_deg = -1.47
+alt_m = 105.0
+candela = 500.0
+[[light]]
+lat_deg = 51.02
+lon_deg = -1.47
+candela = 20.0
+colour = "red"
+[[flare]]
+lat_deg = 51.01
+lon_deg = -1.46
+alt_m = 700.0
+at_s = 30.0
+kind = "81mm"
+"#;
+        let text = text.replace(
+            "offset_m = [-20, 0, -5]\n",
+            "offset_m = [-20, 0, -5]\nsensor = \"nvg\"\n[view.nvg]\ngain = 2.5\nphosphor = \"white\"\n",
+        );
+        let s = Scenario::from_toml(&text).expect("parses");
+        let nvg = s.nvg_view().expect("an NVG view");
+        assert_eq!(nvg.gain, 2.5);
+        assert_eq!(nvg.phosphor, cig_scene::nvg::Phosphor::White);
+        let lamps = s.light_points();
+        assert_eq!(lamps.len(), 2);
+        assert_eq!(lamps[0].intensity_cd, 500.0);
+        assert_eq!(
+            Some(lamps[0].spectrum),
+            cig_scene::lights::named_lamp("warm").map(|l| l.1)
+        );
+        let flare = s.flares[0].flare(1000.0).expect("a flare");
+        assert_eq!(flare.ignition_unix_s, 1030.0);
+        assert_eq!(flare.burn_s, 60.0);
+        assert!(flare.light_at(1029.0, None).is_none());
+        assert!(flare.light_at(1031.0, None).is_some());
+        let sw = crate::lights::switches_of_names(&s.entities[0].lights);
+        assert!(sw.head && sw.tail && sw.blackout && !sw.brake);
+        // Without the goggle's sensor there is no NVG view; without [view.nvg], defaults.
+        assert_eq!(Scenario::from_toml(FULL).expect("parses").nvg_view(), None);
+        let plain = FULL.replace(
+            "offset_m = [-20, 0, -5]\n",
+            "offset_m = [-20, 0, -5]\nsensor = \"nvg\"\n",
+        );
+        let nvg = Scenario::from_toml(&plain).expect("parses").nvg_view();
+        assert_eq!(nvg, Some(cig_scene::nvg::NvgView::default()));
+    }
+
+    #[test]
+    fn bad_nvg_lamp_flare_and_light_values_name_their_key() {
+        let view = |extra: &str| {
+            FULL.replace(
+                "offset_m = [-20, 0, -5]\n",
+                &format!("offset_m = [-20, 0, -5]\n{extra}\n"),
+            )
+        };
+        let light = |body: &str| format!("{FULL}\n[[light]]\n{body}\n");
+        let flare = |body: &str| format!("{FULL}\n[[flare]]\n{body}\n");
+        let cases = [
+            (view("sensor = \"uv\""), "view.sensor"),
+            (view("[view.nvg]\ngain = 50.0"), "view.nvg.gain"),
+            (view("[view.nvg]\ngain = nan"), "view.nvg.gain"),
+            (view("[view.nvg]\nphosphor = \"p99\""), "view.nvg.phosphor"),
+            (
+                light("lat_deg = 51.0\nlon_deg = -1.5\ncandela = 0.0"),
+                "light[0].candela",
+            ),
+            (
+                light("lat_deg = 51.0\nlon_deg = -1.5\ncandela = inf"),
+                "light[0].candela",
+            ),
+            (
+                light("lat_deg = 51.0\nlon_deg = -1.5\ncandela = 5.0\ncolour = \"pink\""),
+                "light[0].colour",
+            ),
+            (
+                light("lat_deg = 99.0\nlon_deg = -1.5\ncandela = 5.0"),
+                "light[0].lat_deg",
+            ),
+            (
+                light("lat_deg = 51.0\nlon_deg = -1.5\nalt_m = nan\ncandela = 5.0"),
+                "light[0].alt_m",
+            ),
+            (
+                flare("lat_deg = 51.0\nlon_deg = -1.5\nalt_m = 600.0\nkind = \"60mm\""),
+                "flare[0].kind",
+            ),
+            (
+                flare(
+                    "lat_deg = 51.0\nlon_deg = -1.5\nalt_m = 600.0\nat_s = -1.0\nkind = \"155mm\"",
+                ),
+                "flare[0].at_s",
+            ),
+            (
+                FULL.replace(
+                    "appearance = \"0x8000\"\n",
+                    "appearance = \"0x8000\"\nlights = [\"head\", \"headlights\"]\n",
+                ),
+                "entities[0].lights[1]",
+            ),
+        ];
+        for (text, key) in cases {
+            let e = Scenario::from_toml(&text).expect_err(key).to_string();
+            assert!(e.starts_with(key), "{key}: {e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
+        let e = Scenario::from_toml(&view("sensor = \"uv\""))
+            .expect_err("uv")
+            .to_string();
+        assert!(e.contains("nvg"), "{e}");
     }
 
     #[test]

@@ -182,6 +182,9 @@ pub struct IgEntity {
     pub animations: BTreeMap<u16, AnimationControl>,
     /// The host has never placed it (it came from the scenario and follows its script).
     pub scripted: bool,
+    /// Lamps the host switched on (Component Control [`crate::lights::LIGHTS_COMPONENT`]);
+    /// `None` until the host sets them (a scenario entity keeps its scenario's lamps).
+    pub lights: Option<cig_scene::lights::LightSwitches>,
 }
 
 impl IgEntity {
@@ -207,6 +210,7 @@ impl IgEntity {
             parts: BTreeMap::new(),
             animations: BTreeMap::new(),
             scripted: false,
+            lights: None,
         }
     }
 }
@@ -780,8 +784,9 @@ impl IgSession {
         std::mem::take(&mut self.user_packets)
     }
     /// Queues an IG Message for the host (deduplicated; at most 16 wait).
-    /// A Component Control: a view's point of interest ([`POINT_OF_INTEREST_COMPONENT`]) is
-    /// the one component defined; anything else is not applied.
+    /// A Component Control: a view's point of interest ([`POINT_OF_INTEREST_COMPONENT`]) and
+    /// an entity's lamps ([`crate::lights::LIGHTS_COMPONENT`]) are the components defined;
+    /// anything else is not applied.
     fn apply_component(
         &mut self,
         class: u8,
@@ -790,6 +795,24 @@ impl IgSession {
         state: u8,
         data: [u32; 2],
     ) -> bool {
+        if class == crate::lights::COMPONENT_CLASS_ENTITY
+            && component == crate::lights::LIGHTS_COMPONENT
+        {
+            let mask = if state == 0 { 0 } else { data[0] };
+            if mask >> crate::lights::SWITCH_NAMES.len() != 0 {
+                self.tell_host(format!(
+                    "Component Control: entity {instance}'s lights mask {mask:#x} has bits above {}; they are ignored",
+                    crate::lights::SWITCH_NAMES.len() - 1
+                ));
+            }
+            return match self.entities.get_mut(&instance) {
+                Some(e) => {
+                    e.lights = Some(crate::lights::switches_of_mask(mask));
+                    true
+                }
+                None => false,
+            };
+        }
         if class != COMPONENT_CLASS_VIEW || component != POINT_OF_INTEREST_COMPONENT {
             return false;
         }

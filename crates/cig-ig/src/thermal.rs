@@ -278,9 +278,32 @@ impl ThermalWorld {
 }
 
 /// CIGI View Definition view types cig gives a meaning to (the field is IG-defined;
-/// docs/cigi-conformance.md): 0 the visible channel, 1 LWIR, 2 MWIR.
+/// docs/cigi-conformance.md): 0 the visible channel, 1 LWIR, 2 MWIR, 3 night-vision goggles.
 pub const VIEW_TYPE_LWIR: u8 = 1;
 pub const VIEW_TYPE_MWIR: u8 = 2;
+pub const VIEW_TYPE_NVG: u8 = 3;
+
+/// The night-vision goggle a host's view shows: an NVG view type's goggle at its defaults,
+/// with the gain of a Sensor Control on the view (CIGI's 0..1 gain, already clamped by the
+/// session, maps to the goggle's 0.1..10 as `10^(2 g - 1)`: 0.5 is the nominal 1); a Sensor
+/// Control turned off over an NVG view makes it visible. Any other view type has none.
+pub fn host_nvg(
+    view_type: u8,
+    control: Option<&crate::session::SensorMode>,
+) -> Option<cig_scene::nvg::NvgView> {
+    if view_type != VIEW_TYPE_NVG {
+        return None;
+    }
+    let mut nvg = cig_scene::nvg::NvgView::default();
+    if let Some(c) = control {
+        if !c.on {
+            return None;
+        }
+        let gain = 10f64.powf(2.0 * c.gain.clamp(0.0, 1.0) - 1.0);
+        nvg.gain = (gain as f32).clamp(0.1, 10.0);
+    }
+    Some(nvg)
+}
 
 /// The sensor a host's view shows: its view type's band, with the Sensor Control the host set
 /// on it (gain and level unless automatic, polarity, noise as a NETD of up to 0.5 K, line
@@ -292,6 +315,8 @@ pub fn host_sensor(
     let band = match view_type {
         VIEW_TYPE_LWIR => Some(IrBand::Lwir),
         VIEW_TYPE_MWIR => Some(IrBand::Mwir),
+        // A Sensor Control on a goggle's view sets the goggle, not a thermal band.
+        VIEW_TYPE_NVG => return None,
         _ => None,
     };
     let control = control.filter(|c| c.on);
@@ -408,5 +433,40 @@ mod tests {
         assert_eq!(s.polarity, cig_scene::thermal::Polarity::BlackHot);
         assert_eq!(s.manual_gain_level, Some((0.4, 0.6)));
         assert!((s.netd_k - 0.1).abs() < 1e-6 && s.line_dropout);
+        // On an NVG view the control is the goggle's, not a thermal sensor's.
+        assert_eq!(host_sensor(VIEW_TYPE_NVG, Some(&control)), None);
+    }
+
+    #[test]
+    fn host_nvg_gain_maps_zero_one_to_a_tenth_to_ten() {
+        assert_eq!(host_nvg(0, None), None);
+        assert_eq!(host_nvg(VIEW_TYPE_LWIR, None), None);
+        assert_eq!(host_nvg(VIEW_TYPE_NVG, None).map(|n| n.gain), Some(1.0));
+        let mut control = crate::session::SensorMode {
+            view_id: 0,
+            sensor_id: 0,
+            on: true,
+            black_hot: false,
+            gain: 0.5,
+            level: 0.5,
+            noise: 0.0,
+            track_mode: 0,
+            extended_response: false,
+            automatic_gain: true,
+            line_dropout: false,
+            ac_coupling_us: 0.0,
+            track_black: false,
+        };
+        let gain =
+            |c: &crate::session::SensorMode| host_nvg(VIEW_TYPE_NVG, Some(c)).map(|n| n.gain);
+        assert!((gain(&control).expect("nvg") - 1.0).abs() < 1e-6);
+        control.gain = 0.0;
+        assert!((gain(&control).expect("nvg") - 0.1).abs() < 1e-6);
+        control.gain = 1.0;
+        assert!((gain(&control).expect("nvg") - 10.0).abs() < 1e-5);
+        control.gain = 0.75;
+        assert!((gain(&control).expect("nvg") - 10f32.sqrt()).abs() < 1e-4);
+        control.on = false;
+        assert_eq!(gain(&control), None);
     }
 }

@@ -221,6 +221,12 @@ pub struct IgWorld {
     trackers: BTreeMap<(u16, u8), crate::tracker::Tracker>,
     /// The operator's sensor for every view (the panel's switch), over the host's.
     operator_sensor: Option<cig_scene::thermal::SensorView>,
+    /// The operator's night-vision goggle for every view (the panel's switch), over the
+    /// host's; a thermal sensor on the same view wins.
+    operator_nvg: Option<cig_scene::nvg::NvgView>,
+    /// The scenario's flares and the surface under each (above the ellipsoid) once the
+    /// terrain query answered there.
+    flares: Vec<(cig_scene::lights::Flare, Option<f64>)>,
 }
 
 /// Models of ground vehicles that raise dust when they move on soil.
@@ -301,6 +307,12 @@ impl IgWorld {
         effects.advance_to(effect_time_s(start_unix_s))?;
         let clouds = scenario.cloud_layers();
         let scenario_storm = scenario.lightning.as_ref().and_then(|l| l.storm());
+        let flares = scenario
+            .flares
+            .iter()
+            .filter_map(|f| f.flare(start_unix_s))
+            .map(|f| (f, None))
+            .collect();
         Ok(IgWorld {
             session,
             scenario,
@@ -342,6 +354,8 @@ impl IgWorld {
             thermal_told: false,
             trackers: BTreeMap::new(),
             operator_sensor: None,
+            operator_nvg: None,
+            flares,
         })
     }
 
@@ -642,6 +656,7 @@ impl IgWorld {
         }
         self.start_smoke(query);
         self.update_thermal(query);
+        self.place_flares(query);
         // Velocities: the script's where there is one, else positions at least 0.2 s apart.
         let mut velocities = BTreeMap::new();
         let poses: Vec<(u16, Pose)> = self.session.poses().iter().map(|(k, v)| (*k, *v)).collect();
@@ -876,7 +891,8 @@ impl IgWorld {
             .view
             .as_ref()
             .and_then(|v| v.sensor.as_deref())
-            .is_some_and(|s| s != "visible");
+            .and_then(|s| cig_scene::thermal::sensor_of_name(s).ok().flatten())
+            .is_some();
         scenario || self.drawn_sensors().iter().any(Option::is_some)
     }
 
@@ -884,6 +900,50 @@ impl IgWorld {
     /// views back to the host and the scenario.
     pub fn set_operator_sensor(&mut self, sensor: Option<cig_scene::thermal::SensorView>) {
         self.operator_sensor = sensor;
+    }
+
+    /// The operator's night-vision goggle for every drawn view (the panel's switch), or `None`
+    /// to give the views back to the host and the scenario.
+    pub fn set_operator_nvg(&mut self, nvg: Option<cig_scene::nvg::NvgView>) {
+        self.operator_nvg = nvg;
+    }
+
+    /// Each drawn view's night-vision goggle, in the order of [`IgWorld::drawn_view_ids`]:
+    /// the operator's, else the host's (View Definition view type 3 with its Sensor Control,
+    /// `crate::thermal::host_nvg`), else the scenario's; none where the view shows a thermal
+    /// sensor.
+    pub fn drawn_nvg(&self) -> Vec<Option<cig_scene::nvg::NvgView>> {
+        let sensors = self.drawn_sensors();
+        self.drawn_view_ids()
+            .into_iter()
+            .enumerate()
+            .map(|(index, id)| {
+                if sensors.get(index).is_some_and(Option::is_some) {
+                    return None;
+                }
+                if self.operator_nvg.is_some() {
+                    return self.operator_nvg;
+                }
+                match id {
+                    Some(id) => {
+                        let view_type = self.session.views().get(&id).map_or(0, |v| v.view_type);
+                        let control = self.session.sensors().values().find(|s| s.view_id == id);
+                        crate::thermal::host_nvg(view_type, control)
+                    }
+                    None => self.scenario.nvg_view(),
+                }
+            })
+            .collect()
+    }
+
+    /// Finds the surface under each scenario flare (once the terrain query answers there), so a
+    /// flare goes out when it reaches the ground.
+    fn place_flares(&mut self, query: &mut QuerySession) {
+        for (flare, ground) in self.flares.iter_mut().filter(|(_, g)| g.is_none()) {
+            if let Ok(h) = query.hot(flare.start.lat_deg, flare.start.lon_deg) {
+                *ground = Some(h.height_ellipsoid_m());
+            }
+        }
     }
 
     /// Each drawn view's thermal sensor, in the order of [`IgWorld::drawn_view_ids`].
@@ -1581,6 +1641,10 @@ impl IgWorld {
                 snapshot.sensors = sensors;
             }
         }
+        let nvg = self.drawn_nvg();
+        if nvg.len() == views.len() && nvg.iter().any(Option::is_some) {
+            snapshot.nvg = nvg;
+        }
         let mut visibility_m = 40_000.0;
         if let Some(first) = views.first() {
             // Weather layers are given above MSL.
@@ -1669,11 +1733,44 @@ impl IgWorld {
             self.effects.snapshot(origin, &mut snapshot.puffs);
             snapshot.puff_origin_ecef_m = origin;
         }
+        snapshot.lights = self.scenario.light_points();
+        for (flare, ground) in &self.flares {
+            snapshot.lights.extend(flare.light_at(now_unix_s, *ground));
+        }
+        self.smoke_fire_lights(now_unix_s, &mut snapshot.lights);
         for (id, e) in self.session.entities() {
             if e.life != EntityLife::Active {
                 continue;
             }
             if let Some(pose) = self.session.poses().get(id) {
+                let own = self.scenario.entities.iter().find(|s| s.id == *id);
+                let burning = own
+                    .and_then(|s| s.appearance.as_deref())
+                    .and_then(crate::scenario::parse_hex_u32)
+                    .is_some_and(|a| crate::thermal::appearance_heat(a).1);
+                let switches = e.lights.unwrap_or_else(|| {
+                    own.map_or_else(cig_scene::lights::LightSwitches::default, |s| {
+                        crate::lights::switches_of_names(&s.lights)
+                    })
+                });
+                let dis_kind_domain = own
+                    .and_then(|s| s.dis_type.as_deref())
+                    .and_then(DisTypePattern::parse)
+                    .and_then(|p| p.exact())
+                    .map(|t| (t.kind, t.domain));
+                crate::lights::add_entity_lights(
+                    &crate::lights::LitEntity {
+                        id: u32::from(*id),
+                        model: &e.model,
+                        dis_kind_domain,
+                        switches,
+                        burning,
+                        position: pose.position,
+                        orientation: pose.orientation,
+                    },
+                    now_unix_s,
+                    &mut snapshot.lights,
+                );
                 snapshot.entities.push(EntityInstance {
                     id: u32::from(*id),
                     model: e.model.clone(),
@@ -1693,21 +1790,61 @@ impl IgWorld {
                 let [heading_deg, pitch_deg, roll_deg] = r.heading_pitch_roll_deg;
                 let models = self.session.models();
                 let model = models.model_for_dis(&r.entity_type);
+                let (kind, domain) = (r.entity_type.kind, r.entity_type.domain);
+                let orientation = Hpr {
+                    heading_deg,
+                    pitch_deg,
+                    roll_deg,
+                };
+                crate::lights::add_entity_lights(
+                    &crate::lights::LitEntity {
+                        id: remote_instance_id(r.key),
+                        model,
+                        dis_kind_domain: Some((kind, domain)),
+                        switches: crate::lights::switches_of_dis(
+                            cig_dis::LightsRequested::from_appearance(r.appearance, kind, domain),
+                        ),
+                        burning: crate::thermal::appearance_heat(r.appearance).1,
+                        position: r.geodetic,
+                        orientation,
+                    },
+                    now_unix_s,
+                    &mut snapshot.lights,
+                );
                 snapshot.entities.push(EntityInstance {
                     id: remote_instance_id(r.key),
                     model: model.to_string(),
                     cue_important: models.is_cue_important(model),
                     critical_radius_m: models.critical_radius_m(model),
                     position: r.geodetic,
-                    orientation: Hpr {
-                        heading_deg,
-                        pitch_deg,
-                        roll_deg,
-                    },
+                    orientation,
                 });
             }
         }
         snapshot
+    }
+
+    /// The fires of the scenario's flame sources while they burn, at their sources.
+    fn smoke_fire_lights(&self, now_unix_s: f64, out: &mut Vec<cig_scene::lights::LightPoint>) {
+        let since_start_s = now_unix_s - self.start_unix_s;
+        for s in &self.smoke {
+            let Some((position, _)) = s.started else {
+                continue;
+            };
+            let src = &s.source;
+            let burning = src.kind == "flame"
+                && since_start_s >= src.start_s
+                && since_start_s < src.start_s + src.duration_s;
+            if burning {
+                out.push(cig_scene::lights::fire_light(
+                    position,
+                    (src.heat_release_w * 1e-6) as f32,
+                    src.size_m as f32,
+                    u64::from(src.id),
+                    now_unix_s,
+                ));
+            }
+        }
     }
 
     /// The wind the effects drift in, as (east, north) m/s.

@@ -1,10 +1,12 @@
 //! Lightning and precipitation in the world: the same seed and time give the same bolts and
 //! flash on two IGs whatever their frame rates, the flash rises within two frames and decays,
-//! and the host's rain layer (CIGI Weather Control) reaches the snapshot, clamped and reported.
+//! and the host's rain layer (CIGI Weather Control) reaches the snapshot, clamped and reported;
+//! night-vision views from the scenario and the host, and the world's lights (entity lamps
+//! switched by the scenario and the host's Component Control, lamps and flares).
 
 use cig_cigi::{
-    decode_message, encode_message, ByteOrder, EntityControl, IgControl, Message, Packet, Version,
-    ViewControl, WeatherControl,
+    decode_message, encode_message, ByteOrder, ComponentControl, EntityControl, IgControl, Message,
+    Packet, SensorControl, Version, ViewControl, ViewDefinition, WeatherControl,
 };
 use cig_effects::EffectsConfig;
 use cig_environment::{PrecipitationKind, UtcTime};
@@ -359,4 +361,115 @@ fn a_scenario_thermal_section_is_checked() {
     }
     Scenario::from_toml("[thermal]\nair_min_c = 2\nair_max_c = 15\nhumidity_pct = 70\naerosol = \"maritime\"\n[[entities]]\nid = 1\nlat_deg = 36.0\nlon_deg = -121.0\nengine = false\n")
         .expect("a good thermal scenario");
+}
+
+#[test]
+fn nvg_views_come_from_the_scenario_and_the_host_and_yield_to_a_thermal_sensor() {
+    let (lat, lon) = centre();
+    let mut q = query();
+    let mut w = world(&format!(
+        "[view]\neye = [{lat}, {lon}, 300.0]\nsensor = \"nvg\"\n[view.nvg]\ngain = 3.0\n"
+    ));
+    w.step(0.1, &mut q);
+    let s = snap(&w);
+    assert_eq!(s.nvg_of(0).map(|n| n.gain), Some(3.0));
+    assert!(
+        s.sensors.iter().all(Option::is_none),
+        "an NVG view is not thermal"
+    );
+    let lwir = cig_scene::thermal::SensorView::new(cig_thermal::IrBand::Lwir);
+    w.set_operator_sensor(Some(lwir));
+    w.step(0.1, &mut q);
+    assert_eq!(snap(&w).nvg_of(0), None, "the thermal sensor wins");
+    w.set_operator_sensor(None);
+
+    // The host's view of type 3 with a Sensor Control's gain of 1: the goggle at gain 10.
+    let mut w = world("");
+    let view = vec![
+        Packet::EntityControl(EntityControl {
+            entity_id: 0,
+            entity_state: 1,
+            lat_deg_or_x_m: lat,
+            lon_deg_or_y_m: lon,
+            alt_m_or_z_m: 200.0,
+            ..EntityControl::default()
+        }),
+        Packet::ViewControl(ViewControl {
+            view_id: 0,
+            entity_id: 0,
+            ..ViewControl::default()
+        }),
+        Packet::ViewDefinition(ViewDefinition {
+            view_id: 0,
+            view_type: 3,
+            ..ViewDefinition::default()
+        }),
+    ];
+    send(&mut w, 1, view.clone());
+    w.step(0.1, &mut q);
+    assert_eq!(snap(&w).nvg_of(0).map(|n| n.gain), Some(1.0));
+    let mut packets = view;
+    packets.push(Packet::SensorControl(SensorControl {
+        view_id: 0,
+        sensor_on: true,
+        gain: 1.5,
+        ..SensorControl::default()
+    }));
+    send(&mut w, 2, packets);
+    w.step(0.1, &mut q);
+    let gain = snap(&w).nvg_of(0).map(|n| n.gain).expect("an NVG view");
+    assert!((gain - 10.0).abs() < 1e-4, "gain 1.5 clamped to 1: {gain}");
+    let mut told = String::new();
+    for m in w.host_message(&mut q, 0).packets {
+        if let Packet::ImageGeneratorMessage(m) = m {
+            told.push_str(&m.text);
+        }
+    }
+    assert!(told.contains("clamped"), "the host is told: {told}");
+}
+
+#[test]
+fn entity_lamps_follow_the_scenario_and_the_hosts_component_control() {
+    let (lat, lon) = centre();
+    let mut q = query();
+    let mut w = world(&format!(
+        "[view]\neye = [{lat}, {lon}, 300.0]\n\
+         [[entities]]\nid = 1\nmodel = \"truck\"\nlat_deg = {lat}\nlon_deg = {lon}\nclamp = \"height\"\n\
+         lights = [\"head\", \"tail\"]\n\
+         [[light]]\nlat_deg = {lat}\nlon_deg = {lon}\nalt_m = 110.0\ncandela = 300.0\n\
+         [[flare]]\nlat_deg = {lat}\nlon_deg = {lon}\nalt_m = 700.0\nat_s = 1.0\nkind = \"155mm\"\n"
+    ));
+    w.step(0.1, &mut q);
+    // Two headlamps, two tail lamps, the standing lamp; the flare is not lit yet.
+    assert_eq!(snap(&w).lights.len(), 5);
+    for _ in 0..20 {
+        w.step(0.1, &mut q);
+    }
+    let lit = snap(&w);
+    assert_eq!(lit.lights.len(), 6, "the flare burns");
+    assert!(lit
+        .lights
+        .iter()
+        .any(|l| l.spectrum == cig_environment::nvg::LightSpectrum::Flare));
+    // The host switches the truck's lamps to headlamps and brake lamps (bits 0 and 2).
+    let switch = |mask: u32, state: u8| {
+        Packet::ComponentControl(ComponentControl {
+            component_class: cig_ig::lights::COMPONENT_CLASS_ENTITY,
+            component_id: cig_ig::lights::LIGHTS_COMPONENT,
+            instance_id: 1,
+            component_state: state,
+            data: [mask, 0, 0, 0, 0, 0],
+        })
+    };
+    send(&mut w, 1, vec![switch(0b101, 1)]);
+    w.step(0.1, &mut q);
+    let s = snap(&w);
+    assert_eq!(
+        s.lights.len(),
+        6,
+        "head and brake lamps instead of head and tail"
+    );
+    send(&mut w, 2, vec![switch(0b101, 0)]);
+    w.step(0.1, &mut q);
+    assert_eq!(snap(&w).lights.len(), 2, "all off: the lamp and the flare");
 }

@@ -78,6 +78,20 @@ pub(crate) struct AdaptRequest {
     /// A transient (a lightning flash) lights this frame: the eye keeps the state it had (or
     /// the natural exposure, with none yet), so the flash brightens the frame.
     pub hold: bool,
+    /// A night-vision view: the automatic brightness control's limits instead of the eye's.
+    pub intensifier: Option<IntensifierControl>,
+}
+
+/// The image intensifier's automatic brightness control, as the adaptation pass runs it: the
+/// same trimmed log-mean brought to a key (cig_scene::nvg::OUTPUT_KEY), within the tube's gain
+/// limits, with one time constant both ways, no knee, and never held for a flash (the control
+/// reacts to it).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct IntensifierControl {
+    /// log2 of the lowest and highest factor on the pre-exposed scene.
+    pub lowest_log2: f32,
+    pub highest_log2: f32,
+    pub tau_s: f32,
 }
 
 /// The tone map's uniform: the slot's state (16 bytes), then for sensor views the histogram's
@@ -223,7 +237,7 @@ impl AdaptationPass {
             encoder.copy_buffer_to_buffer(&c.state, offset, &self.tone_exposure, 0, 16);
             encoder.copy_buffer_to_buffer(&c.state, offset, &self.readback, 0, 16);
         };
-        if request.hold {
+        if request.hold && request.intensifier.is_none() {
             if self.valid[slot] {
                 publish(encoder);
                 return true;
@@ -236,16 +250,35 @@ impl AdaptationPass {
             Adaptation::Step(dt) if dt.is_finite() && dt >= 0.0 => dt,
             _ => -1.0,
         };
+        let (lowest, highest, tau_light, tau_dark, knee_log2, nvg) = match request.intensifier {
+            Some(c) => (
+                c.lowest_log2,
+                c.highest_log2,
+                c.tau_s,
+                c.tau_s,
+                // No knee: the tube saturates, it does not hold its highlights.
+                60.0,
+                1.0,
+            ),
+            None => (
+                DARKEST_EV,
+                BRIGHTEST_EV,
+                TAU_LIGHT_S,
+                TAU_DARK_S,
+                KNEE.log2(),
+                0.0,
+            ),
+        };
         let params = AdaptParams {
-            key: [request.log2_key, dt_s, DARKEST_EV, BRIGHTEST_EV],
-            slot: [slot as f32, TAU_LIGHT_S, TAU_DARK_S, KNEE.log2()],
+            key: [request.log2_key, dt_s, lowest, highest],
+            slot: [slot as f32, tau_light, tau_dark, knee_log2],
             shares: [
                 SHARES[0],
                 SHARES[1],
                 SHARES[2],
                 f32::from(u8::from(self.valid[slot])),
             ],
-            mode: [0.0; 4],
+            mode: [0.0, nvg, 0.0, 0.0],
         };
         gpu.queue
             .write_buffer(&c.params, 0, bytemuck::bytes_of(&params));

@@ -121,13 +121,60 @@ pub(crate) struct BoltPass {
     staging: Vec<GpuLine>,
 }
 
-fn line_buffer(gpu: &Gpu, capacity: usize) -> wgpu::Buffer {
+/// Emitters over what is behind them: colour added, alpha kept.
+pub(crate) const ADDITIVE: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+    alpha: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::Zero,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+};
+
+/// A storage buffer of `capacity` records of `T` that the CPU writes.
+pub(crate) fn record_buffer<T>(gpu: &Gpu, label: &str, capacity: usize) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("bolt lines"),
-        size: (capacity * std::mem::size_of::<GpuLine>()) as u64,
+        label: Some(label),
+        size: (capacity * std::mem::size_of::<T>()) as u64,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
+}
+
+/// The bind group of an overlay pass: the globals at 0, the records at 1, the pass's
+/// per-frame uniform at 2.
+pub(crate) fn overlay_bind(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    (globals, records, frame): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+) -> wgpu::BindGroup {
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: records.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: frame.as_entire_binding(),
+            },
+        ],
+    })
+}
+
+fn line_buffer(gpu: &Gpu, capacity: usize) -> wgpu::Buffer {
+    record_buffer::<GpuLine>(gpu, "bolt lines", capacity)
 }
 
 impl BoltPass {
@@ -147,18 +194,6 @@ impl BoltPass {
             include_str!("shaders/bolts.wgsl")
         );
         let module = shader(gpu, "bolts", &source);
-        let additive = wgpu::BlendState {
-            color: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::One,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            },
-            alpha: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::Zero,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            },
-        };
         // The bolt writes its depth, so the cloud and puff passes after the scene see it where
         // it is (in front of an overcast, behind smoke).
         let pipeline = overlay_pipeline(
@@ -167,7 +202,7 @@ impl BoltPass {
             &module,
             &layout,
             colour_format,
-            additive,
+            ADDITIVE,
             true,
         );
         let frame = device.create_buffer(&wgpu::BufferDescriptor {
@@ -197,24 +232,7 @@ impl BoltPass {
         lines: &wgpu::Buffer,
         frame: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("bolts"),
-            layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: globals.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: lines.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: frame.as_entire_binding(),
-                },
-            ],
-        })
+        overlay_bind(gpu, "bolts", layout, (globals, lines, frame))
     }
 
     /// Uploads the snapshot's bolt lines relative to the camera's eye; returns how many to

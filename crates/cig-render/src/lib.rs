@@ -17,6 +17,7 @@ pub mod display;
 pub mod gltf_model;
 pub mod gpu;
 pub mod imagery;
+pub mod lights;
 pub mod offscreen;
 pub mod pass;
 pub mod precipitation;

@@ -46,9 +46,10 @@ use cig_scene::thermal::{DisplayColour, Polarity, SensorView};
 const _: () =
     assert!(std::mem::size_of::<CultureInstance>() == std::mem::size_of::<InstanceRecord>());
 use cig_scene::detail::DetailSettings;
-use cig_scene::lighting::{FogMode, Lighting, SkyModel};
+use cig_scene::lighting::{FogMode, Lighting, SkyModel, Weighting};
 use cig_scene::lod::{LodSettings, NodeLayout, TerrainLod};
 use cig_scene::models::{Model, ModelVertex};
+use cig_scene::nvg::NvgView;
 use cig_scene::overload::{
     klod_for, OverloadControl, OverloadCounters, OverloadError, OverloadSettings,
 };
@@ -116,6 +117,8 @@ pub mod serde_like {
         pub view_adaptation_ev: f64,
         /// Lightning bolt lines drawn.
         pub bolt_lines_drawn: u32,
+        /// Light points drawn (those the observer sees).
+        pub light_points: u32,
         /// Rain drops or snow flakes drawn.
         pub precipitation_particles: u32,
         /// The detail control parameter's constant `K_LOD` models were drawn at this frame
@@ -141,6 +144,14 @@ const MAX_INSTANCES: usize = 8192;
 /// Culture instances a view draws at most (64 MB of records; also bounded by the device's
 /// largest storage binding): a frame past it drops the farthest kinds' rest.
 const MAX_CULTURE_INSTANCES: usize = 1_000_000;
+/// Reach of the culture's street and settlement lights from the eye, metres (a 3000 cd lamp
+/// is at the dark-adapted eye's threshold through clear air at about this range).
+const CULTURE_LIGHT_RANGE_M: f64 = 20_000.0;
+/// Lights that light the surfaces around them, at most (flares, fires, headlights).
+const MAX_LOCAL_LIGHTS: usize = 8;
+/// A light's illuminance at a goggle below which it is not drawn, lx_A: about 50
+/// photoelectrons a frame through a 25 mm objective, lost in any background.
+const NVG_LIGHT_THRESHOLD_LXA: f64 = 1e-9;
 /// Tile loads a view may request per frame beyond the paging areas.
 const PREFETCH_PER_FRAME: usize = 8;
 /// Detail-noise cell sizes, metres (incommensurate so the pattern never visibly repeats).
@@ -183,6 +194,10 @@ struct Globals {
     sensor_sky1: [f32; 4],
     sensor_display: [f32; 4],
     sensor_display2: [f32; 4],
+    nvg: [f32; 4],
+    nvg2: [f32; 4],
+    nvg3: [f32; 4],
+    local_lights: [[f32; 4]; 24],
 }
 
 /// The sky-view table's frame for the frame's up and sun (single precision, as the shaders
@@ -350,6 +365,10 @@ pub struct Renderer {
     celestial: CelestialPass,
     clouds: CloudPass,
     bolts: crate::bolts::BoltPass,
+    light_points: crate::lights::LightPass,
+    /// This view's light points (the world's and the culture's), kept for their room.
+    lights_scratch: Vec<cig_scene::lights::LightPoint>,
+    drawn_scratch: Vec<cig_scene::lights::DrawnLight>,
     precipitation: crate::precipitation::PrecipitationPass,
     /// Queries: 0 the frame's start, 1 its end (the tone map's), then as needed the start and
     /// end of the puff passes and of the cloud passes.
@@ -890,6 +909,7 @@ impl Renderer {
         let puffs = PuffPass::new(&gpu, HDR_FORMAT, &atmosphere.layout);
         let clouds = CloudPass::new(&gpu, HDR_FORMAT);
         let bolts = crate::bolts::BoltPass::new(&gpu, HDR_FORMAT, &globals);
+        let light_points = crate::lights::LightPass::new(&gpu, HDR_FORMAT, &globals);
         let precipitation =
             crate::precipitation::PrecipitationPass::new(&gpu, HDR_FORMAT, &globals);
         let mut renderer = Renderer {
@@ -937,6 +957,9 @@ impl Renderer {
             celestial,
             clouds,
             bolts,
+            light_points,
+            lights_scratch: Vec::new(),
+            drawn_scratch: Vec::new(),
             precipitation,
             timestamps,
             frame: 0,
@@ -1162,13 +1185,21 @@ impl Renderer {
             options.mesh_budget,
             &mut terrain_frame,
         );
-        let lighting = Lighting::with_sky(
+        // A night-vision view sees every source through the photocathode's weighting.
+        let nvg = snapshot.nvg_of(view_index);
+        let weighting = if nvg.is_some() {
+            Weighting::Intensifier
+        } else {
+            Weighting::Eye
+        };
+        let lighting = Lighting::weighted(
             snapshot.unix_time_s,
             view.eye,
             snapshot.cloud_cover_fraction,
             &snapshot.sky,
+            weighting,
         )
-        .with_flash(snapshot.flash_lux);
+        .with_flash(snapshot.flash_lux * weighting.flash_factor());
         let physical_sky = snapshot.sky.model == SkyModel::Physical;
         let wire = snapshot.wireframe && self.terrain_pipelines.wire_supported;
         // A thermal sensor view: its tables for this eye and sun.
@@ -1186,12 +1217,82 @@ impl Renderer {
                 .write_buffer(&self.thermal, 0, bytemuck::cast_slice(&frame.buffer));
             (sensor, frame)
         });
+        if nvg.is_some() {
+            self.gpu.queue.write_buffer(
+                &self.thermal,
+                0,
+                bytemuck::cast_slice(&crate::sensor::nvg_buffer()),
+            );
+        }
+        // Light points: the world's, and the resident culture's street and settlement lights
+        // while they are switched on; those that light the ground near the eye, and those
+        // the view's observer sees (Allard's law against the eye's threshold, or the tube's).
+        let mut lights = std::mem::take(&mut self.lights_scratch);
+        lights.clear();
+        lights.extend_from_slice(&snapshot.lights);
+        let street_on = snapshot
+            .street_lights
+            .unwrap_or_else(|| cig_scene::lights::street_lights_on(lighting.usno_illuminance_lux));
+        if street_on && snapshot.culture && sensor.is_none() {
+            self.culture
+                .culture_lights_near(cache, &camera, CULTURE_LIGHT_RANGE_M, &mut lights);
+        }
+        let local = if sensor.is_none() {
+            cig_scene::lights::local_lights(
+                &lights,
+                camera.eye_ecef,
+                snapshot.unix_time_s,
+                MAX_LOCAL_LIGHTS,
+            )
+        } else {
+            Vec::new()
+        };
+        let mut drawn = std::mem::take(&mut self.drawn_scratch);
+        drawn.clear();
+        if sensor.is_none() {
+            let observer = match nvg {
+                Some(_) => cig_scene::lights::Observer::Intensifier {
+                    threshold_lxa: NVG_LIGHT_THRESHOLD_LXA,
+                },
+                // The eye adapted to the scene: a ground of albedo 0.2 under the natural light.
+                None => cig_scene::lights::Observer::Eye {
+                    background_cd_per_m2: 0.2 * lighting.usno_illuminance_lux
+                        / std::f64::consts::PI,
+                },
+            };
+            cig_scene::lights::drawn_lights(
+                &lights,
+                camera.eye_ecef,
+                view.eye.alt_m,
+                &camera.planes,
+                snapshot.unix_time_s,
+                &cig_scene::lights::LightPath {
+                    fog: &snapshot.fog,
+                    ground_fog: drawn_ground_fog(snapshot),
+                    puffs: &snapshot.puffs,
+                    puff_origin_ecef_m: snapshot.puff_origin_ecef_m,
+                },
+                observer,
+                &mut drawn,
+            );
+        }
+        self.lights_scratch = lights;
+        let light_count = self.light_points.prepare(
+            &self.gpu,
+            &self.globals,
+            &camera,
+            &drawn,
+            lighting.exposure,
+            nvg.as_ref(),
+        );
+        self.drawn_scratch = drawn;
         self.write_globals(
             &camera,
             &lighting,
             snapshot,
             (options.key_background, wire),
             sensor.as_ref(),
+            (nvg.as_ref(), &local),
         );
         self.celestial.prepare(&self.gpu, snapshot, view.eye);
         if !terrain_frame.records.is_empty() {
@@ -1387,8 +1488,11 @@ impl Renderer {
                     view: &targets.depth,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(0.0),
-                        // Kept for the puff and cloud passes, which read it.
-                        store: if puff_count > 0 || cloud_count > 0 {
+                        // Kept for the puff, cloud and halo passes, which read it.
+                        store: if puff_count > 0
+                            || cloud_count > 0
+                            || self.light_points.needs_halo_pass(light_count)
+                        {
                             wgpu::StoreOp::Store
                         } else {
                             wgpu::StoreOp::Discard
@@ -1450,6 +1554,8 @@ impl Renderer {
             // After the opaque geometry and the sky: lightning (additive) and rain or snow
             // (over).
             stats.draw_calls += self.bolts.draw(&mut pass, bolt_lines);
+            stats.draw_calls += self.light_points.draw(&mut pass, light_count);
+            stats.light_points = light_count as u32;
             stats.draw_calls += self.precipitation.draw(&mut pass, particles);
             stats.bolt_lines_drawn = bolt_lines as u32;
             stats.precipitation_particles = particles;
@@ -1491,6 +1597,16 @@ impl Renderer {
             );
         }
         stats.cloud_layers_drawn = cloud_count as u32;
+        // A goggle's halos: in the tube, over whatever is in front of them.
+        if let Some(targets) = self.targets.as_ref() {
+            stats.draw_calls += self.light_points.encode_halos(
+                &self.gpu,
+                &mut encoder,
+                &self.globals,
+                (&targets.hdr, &targets.depth),
+                light_count,
+            );
+        }
         // The eye adapts to what the view shows (not to keyed test frames, not with a fixed
         // exposure).
         // A sensor's AC coupling acts on the signal before its gain is set.
@@ -1531,10 +1647,13 @@ impl Renderer {
                 size,
                 AdaptRequest {
                     slot: view_index,
-                    log2_key: cig_scene::lighting::shown_grey_log2(
-                        lighting.adapted_illuminance_lux,
-                        snapshot.sky.exposure_compensation_ev,
-                    ) as f32,
+                    log2_key: match nvg {
+                        Some(nvg) => (cig_scene::nvg::OUTPUT_KEY * nvg.gain).log2(),
+                        None => cig_scene::lighting::shown_grey_log2(
+                            lighting.adapted_illuminance_lux,
+                            snapshot.sky.exposure_compensation_ev,
+                        ) as f32,
+                    },
                     adaptation: if options.key_background
                         || snapshot.sky.fixed_exposure_ev.is_some()
                     {
@@ -1543,6 +1662,16 @@ impl Renderer {
                         options.adaptation
                     },
                     hold: snapshot.flash_lux > 0.0,
+                    intensifier: nvg.map(|nvg| {
+                        let unit = (cig_scene::lighting::LIGHTING_UNITS_PER_LUX * lighting.exposure)
+                            .log2() as f32;
+                        let (lowest, highest) = nvg.gain_limits();
+                        crate::adaptation::IntensifierControl {
+                            lowest_log2: lowest.log2() as f32 - unit,
+                            highest_log2: highest.log2() as f32 - unit,
+                            tau_s: nvg.tube.abc_tau_s as f32,
+                        }
+                    }),
                 },
             )
         };
@@ -1647,6 +1776,7 @@ impl Renderer {
         snapshot: &FrameSnapshot,
         (key_background, wire): (bool, bool),
         sensor: Option<&(SensorView, crate::sensor::SensorFrame)>,
+        (nvg, local): (Option<&NvgView>, &[cig_scene::lights::LocalLight]),
     ) {
         let v4 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
@@ -1767,6 +1897,56 @@ impl Renderer {
                 (self.frame % 65_536) as f32,
                 frame.cloud_radiance,
             ];
+        }
+        globals.nvg3[1] = 1.0;
+        // Lights that light the surfaces near the eye: intensities as illuminance at 1 m in
+        // the frame's light units (NVG-weighted on goggles).
+        for (i, light) in local.iter().take(MAX_LOCAL_LIGHTS).enumerate() {
+            let intensity = if nvg.is_some() {
+                light.nvg_intensity_cd
+            } else {
+                light.intensity_cd
+            };
+            let [x, y, z] = light.rel_m;
+            let [r, g, b] = light.colour;
+            let [ax, ay, az] = light.axis;
+            let beam = light.axis != [0.0; 3];
+            globals.local_lights[3 * i] = [
+                x,
+                y,
+                z,
+                (f64::from(intensity) * cig_scene::lighting::LIGHTING_UNITS_PER_LUX) as f32,
+            ];
+            globals.local_lights[3 * i + 1] =
+                [r, g, b, if beam { light.cos_half_width } else { -2.0 }];
+            globals.local_lights[3 * i + 2] = [ax, ay, az, light.back_fraction];
+            globals.nvg3[2] = (i + 1) as f32;
+        }
+        if let Some(nvg) = nvg {
+            let fov_deg = f64::from(nvg.fov_deg);
+            let pixel_deg = (1.0 / camera.pixels_per_tangent).atan().to_degrees();
+            let scene_unit_lxa = cig_scene::lighting::LIGHTING_UNITS_PER_LUX * lighting.exposure;
+            globals.nvg = [
+                1.0,
+                (nvg.tube.photoelectrons_per_lxa_deg2(fov_deg) * pixel_deg * pixel_deg
+                    / scene_unit_lxa) as f32,
+                (nvg.tube.mcp_excess_noise - 1.0).max(0.0) as f32,
+                (0.5 * fov_deg).to_radians().tan() as f32,
+            ];
+            let [r, g, b] = nvg.phosphor.colour();
+            globals.nvg2 = [
+                r,
+                g,
+                b,
+                (nvg.tube.blur_sigma_deg(fov_deg) / pixel_deg) as f32,
+            ];
+            globals.nvg3 = [
+                f32::from(u8::from(nvg.noise)),
+                cig_environment::nvg::LightSpectrum::Flame.nvg_per_lux() as f32,
+                0.0,
+                0.0,
+            ];
+            globals.sensor_display2[2] = (self.frame % 65_536) as f32;
         }
         (globals.sky_frame_x, globals.sky_frame_y) =
             sky_frame(globals.eye_up, globals.sun_dir, globals.atmos[0]);

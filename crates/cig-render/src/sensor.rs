@@ -247,6 +247,34 @@ fn sky_at(sky: &[f32; 8], elevation_deg: f64) -> f32 {
     sky[7]
 }
 
+/// Offset of the terrain materials' mean visible luminance in a night-vision view's buffer
+/// (thermal.wgsl's `NVG_OFF_TERRAIN_LUMA`).
+pub(crate) const NVG_OFF_TERRAIN_LUMA: usize = 32;
+
+/// A night-vision view's table, written where a thermal view's tables go (binding 9): each
+/// thermal material's NVG reflectance (`cig_scene::nvg::NVG_REFLECTANCE`), then each terrain
+/// material's mean visible luminance (linear, from its base colour), by which the shader
+/// scales the drawn colour's texture onto the NVG reflectance.
+pub(crate) fn nvg_buffer() -> Vec<f32> {
+    let mut buffer = vec![0f32; THERMAL_LEN];
+    buffer[..cig_scene::nvg::NVG_REFLECTANCE.len()]
+        .copy_from_slice(&cig_scene::nvg::NVG_REFLECTANCE);
+    for (i, m) in cig_terrain::Material::ALL.iter().enumerate() {
+        let [r, g, b, _] = cig_scene::terrain_mesh::material_colour(*m);
+        // The atlas is an sRGB texture: its exact decoding.
+        let lin = |c: u8| {
+            let v = f32::from(c) / 255.0;
+            if v <= 0.04045 {
+                v / 12.92
+            } else {
+                ((v + 0.055) / 1.055).powf(2.4)
+            }
+        };
+        buffer[NVG_OFF_TERRAIN_LUMA + i] = 0.2126 * lin(r) + 0.7152 * lin(g) + 0.0722 * lin(b);
+    }
+    buffer
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -255,6 +283,9 @@ mod tests {
     #[test]
     fn the_shader_uses_the_same_layout_and_codes() {
         let wgsl = include_str!("shaders/thermal.wgsl");
+        assert!(wgsl.contains(&format!(
+            "const NVG_OFF_TERRAIN_LUMA: u32 = {NVG_OFF_TERRAIN_LUMA}u;"
+        )));
         for (name, value) in [
             ("TH_ORIENTATIONS", ORIENTATIONS),
             ("TH_MATERIALS", ThermalMaterial::ALL.len()),

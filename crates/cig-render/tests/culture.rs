@@ -417,3 +417,24 @@ fn real_time_frames_get_their_culture_from_the_selector_thread_soon_after() {
     }
     assert_eq!(drawn, complete.culture_drawn);
 }
+
+#[test]
+fn street_lights_are_on_at_night_and_off_at_noon() {
+    let (db, raster) = wood();
+    let cache = cache(&db);
+    let mut renderer = renderer(&cache);
+    let eye = south_of_wood(&raster, 600.0, 12.0);
+    let mut counts = Vec::new();
+    // 22:00 and noon in California.
+    for unix_s in [
+        MORNING_UNIX_S + 13.0 * 3600.0,
+        MORNING_UNIX_S + 4.0 * 3600.0,
+    ] {
+        let mut s = snapshot(eye, -2.0, true, true);
+        s.unix_time_s = unix_s;
+        let (_, stats) = frame(&mut renderer, &cache, &s);
+        counts.push(stats.light_points);
+    }
+    assert!(counts[0] >= 1, "porch lights at night: {counts:?}");
+    assert_eq!(counts[1], 0, "{counts:?}");
+}

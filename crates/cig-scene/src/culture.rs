@@ -216,6 +216,8 @@ pub struct CultureSelector {
     /// Makes newly resident tiles ready off the frame's thread (`None` where no thread could
     /// be started: they are then made in the frame).
     builder: Option<TileBuilder>,
+    /// Each resident tile's street and settlement lights (the tile they were made from).
+    lights: HashMap<TileKey, (Arc<Tile>, Arc<[crate::lights::LightPoint]>)>,
 }
 
 /// Turns resident tiles into their render form on a thread of its own, so a frame never waits
@@ -314,6 +316,7 @@ impl CultureSelector {
             layout,
             geoid,
             tiles: HashMap::new(),
+            lights: HashMap::new(),
             levels,
             eviction_epoch: u64::MAX,
             buckets: Vec::new(),
@@ -650,6 +653,39 @@ impl CultureSelector {
 
     /// Resident finest tiles within `range_m` of the eye (every resident finest tile when the
     /// range is unbounded).
+    /// Appends the street and settlement lights of the resident finest tiles within
+    /// `range_m` of the camera's eye (`crate::lights::culture_lights`, made once per tile
+    /// while it stays resident).
+    pub fn culture_lights_near(
+        &mut self,
+        cache: &TileCache,
+        camera: &Camera,
+        range_m: f64,
+        out: &mut Vec<crate::lights::LightPoint>,
+    ) {
+        let near = self.tiles_near(camera, range_m, cache);
+        self.lights
+            .retain(|key, (tile, _)| near.iter().any(|(k, t)| k == key && Arc::ptr_eq(t, tile)));
+        let rules = crate::lights::CultureLightRules::default();
+        for (key, tile) in near {
+            let Some(culture) = &tile.culture else {
+                continue;
+            };
+            let lights = self.lights.entry(key).or_insert_with(|| {
+                let mut made = Vec::new();
+                crate::lights::culture_lights(
+                    &self.layout,
+                    &self.geoid,
+                    culture,
+                    &rules,
+                    &mut made,
+                );
+                (Arc::clone(&tile), made.into())
+            });
+            out.extend_from_slice(&lights.1);
+        }
+    }
+
     fn tiles_near(
         &self,
         camera: &Camera,

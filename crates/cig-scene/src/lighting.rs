@@ -304,6 +304,20 @@ impl Lighting {
         cloud_cover_fraction: f64,
         sky: &SkySettings,
     ) -> Lighting {
+        Lighting::weighted(unix_time_s, eye, cloud_cover_fraction, sky, Weighting::Eye)
+    }
+
+    /// The light as `weighting` sees it: for [`Weighting::Intensifier`] every colour is in
+    /// 2856 K-equivalent lux (lx_A) × units instead of lux × units, each source weighted by
+    /// its spectrum (`cig_environment::nvg`: sunlight and the sun-lit sky, moonlight and the
+    /// moon-lit sky, the night sky's airglow), and the illuminances are in lx_A.
+    pub fn weighted(
+        unix_time_s: f64,
+        eye: Geodetic,
+        cloud_cover_fraction: f64,
+        sky: &SkySettings,
+        weighting: Weighting,
+    ) -> Lighting {
         use cig_environment::illuminance as lux;
         let frame = EnuFrame::new(eye);
         let cover = if cloud_cover_fraction.is_finite() {
@@ -345,16 +359,17 @@ impl Lighting {
                 ),
             };
         let units = LIGHTING_UNITS_PER_LUX / divisor;
-        let sun_toa = cig_environment::SUN_ILLUMINANCE_TOA_LUX;
+        let [sun_k, moon_k, night_k] = weighting.factors();
+        let sun_toa = cig_environment::SUN_ILLUMINANCE_TOA_LUX * sun_k;
         // The moon above the atmosphere: its zenith illuminance over the zenith transmittance.
         let zenith_t = luminance(atmosphere.sun_transmittance(0.0, 90.0)).max(1e-6);
-        let moon_toa = moon_zenith_lux / zenith_t;
+        let moon_toa = moon_zenith_lux * moon_k / zenith_t;
         let sun_t = atmosphere.sun_transmittance(altitude_m, sun_alt);
         let moon_t = atmosphere.sun_transmittance(altitude_m, moon_alt);
         let sky_sun = atmosphere.sky_irradiance(altitude_m, sun_alt);
         let sky_moon = atmosphere.sky_irradiance(altitude_m, moon_alt);
         // The night-sky background, slightly blue (airglow and starlight).
-        let night = [0.8, 0.9, 1.2].map(|c| c * lux::NIGHT_SKY_LUX);
+        let night = [0.8, 0.9, 1.2].map(|c| c * lux::NIGHT_SKY_LUX * night_k);
         let ambient: [f64; 3] =
             std::array::from_fn(|c| sky_sun[c] * sun_toa + sky_moon[c] * moon_toa + night[c]);
         // Sky radiance toward the zenith and (averaged over azimuth) the horizon, shown as π L.
@@ -436,6 +451,42 @@ fn ephemeris_at(unix_time_s: f64, eye: Geodetic) -> Option<cig_environment::Ephe
     let time = cig_environment::UtcTime::from_unix_seconds(t).ok()?;
     let observer = cig_environment::Observer::new(lat, eye.lon_deg, alt).ok()?;
     Some(cig_environment::ephemeris(&observer, time))
+}
+
+/// Whose spectral weighting the light colours are in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Weighting {
+    /// The eye's (photopic lux).
+    #[default]
+    Eye,
+    /// A Gen III image intensifier's (2856 K-equivalent lux, `cig_environment::nvg`).
+    Intensifier,
+}
+
+impl Weighting {
+    /// Factors on the sun's, the moon's and the night sky's lux.
+    pub fn factors(self) -> [f64; 3] {
+        match self {
+            Weighting::Eye => [1.0; 3],
+            Weighting::Intensifier => [
+                cig_environment::nvg::SUN_NVG_PER_LUX,
+                cig_environment::nvg::MOON_NVG_PER_LUX,
+                cig_environment::nvg::NIGHT_SKY_NVG_PER_LUX,
+            ],
+        }
+    }
+
+    /// Factor on a lightning flash's lux: lightning's spectrum is rich in the near infrared
+    /// (the O I 777 nm and N I 868 nm lines; Orville and Henderson, *J. Atmos. Sci.* 41, 1984),
+    /// about as an incandescent source per lux.
+    pub fn flash_factor(self) -> f64 {
+        match self {
+            Weighting::Eye => 1.0,
+            Weighting::Intensifier => {
+                cig_environment::nvg::LightSpectrum::Incandescent.nvg_per_lux()
+            }
+        }
+    }
 }
 
 /// Colour of a lightning flash's light (bluish white, unit luminance-weighted).

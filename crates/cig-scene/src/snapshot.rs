@@ -235,6 +235,17 @@ pub struct FrameSnapshot {
     pub precipitation: Option<PrecipitationDraw>,
     /// Per view, its thermal sensor (`None`, or no entry: the visible channel).
     pub sensors: Vec<Option<crate::thermal::SensorView>>,
+    /// The world's light points (entities' lamps, fires, flares, lights the host or the
+    /// command line placed); the database's street and settlement lights come from its
+    /// resident culture (`culture::CultureSelector::culture_lights_near`), switched by
+    /// [`Self::street_lights`].
+    pub lights: Vec<crate::lights::LightPoint>,
+    /// Street and settlement lights: `None` switches them by the natural illuminance
+    /// (`lights::street_lights_on`), `Some` forces them on or off.
+    pub street_lights: Option<bool>,
+    /// Per view, its night-vision goggle (index as `views`; missing entries are visible
+    /// views). A view with a thermal sensor shows the thermal picture.
+    pub nvg: Vec<Option<crate::nvg::NvgView>>,
     /// The thermal state the sensor views draw (needed when any view is a sensor).
     pub thermal: Option<std::sync::Arc<crate::thermal::ThermalScene>>,
     /// Trackers' gates to read back after drawing: (view index, `[x, y, width, height]`
@@ -301,6 +312,9 @@ impl FrameSnapshot {
             flash_lux: 0.0,
             precipitation: None,
             sensors: Vec::new(),
+            nvg: Vec::new(),
+            lights: Vec::new(),
+            street_lights: None,
             thermal: None,
             track_gates: Vec::new(),
         }
@@ -308,6 +322,14 @@ impl FrameSnapshot {
 
     /// The sensor of view `view_index` when it is a sensor view and the thermal state is
     /// there to draw it.
+    /// The night-vision goggle of view `view_index`, unless it has a thermal sensor.
+    pub fn nvg_of(&self, view_index: usize) -> Option<crate::nvg::NvgView> {
+        if self.sensor_of(view_index).is_some() {
+            return None;
+        }
+        self.nvg.get(view_index).copied().flatten()
+    }
+
     pub fn sensor_of(
         &self,
         view_index: usize,

@@ -354,7 +354,8 @@ pub fn material_colour(m: Material) -> [u8; 4] {
         Material::Forest => [52, 76, 42, 0],
         Material::Rock => [122, 116, 108, 0],
         Material::Snow => [236, 239, 243, 40],
-        Material::PavedRoad => [72, 72, 74, 60],
+        // Aged asphalt (broadband visible albedo about 0.15-0.2, lighter than green grass).
+        Material::PavedRoad => [128, 128, 130, 60],
         Material::DirtRoad => [140, 116, 86, 0],
     }
 }

@@ -887,9 +887,34 @@ pub struct RenderArgs {
     /// Geometric warp of the frame, as a projected channel's (docs/channels.md).
     #[arg(long, value_name = "FILE")]
     pub warp: Option<PathBuf>,
-    /// The sensor: visible (the eye's picture), lwir (8-12 um thermal) or mwir (3-5 um).
+    /// The sensor: visible (the eye's picture), lwir (8-12 um thermal), mwir (3-5 um) or nvg
+    /// (a Gen III image intensifier's goggle).
     #[arg(long, default_value = "visible")]
     pub sensor: String,
+    /// Night vision: the goggle's manual gain, 0.1..10 (1 nominal): scales the brightness the
+    /// automatic brightness control holds and its limits.
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    pub nvg_gain: f64,
+    /// Night vision: the tube's phosphor, p43 (green) or white.
+    #[arg(long, default_value = "p43")]
+    pub phosphor: String,
+    /// A light point "LAT,LON,ALT_M,CANDELA[,COLOUR]" (altitude above the ellipsoid; colour
+    /// white, warm, red, green, amber, blue or sodium; default warm, an incandescent lamp).
+    /// Repeatable.
+    #[arg(
+        long = "light",
+        value_name = "LAT,LON,ALT_M,CANDELA[,COLOUR]",
+        allow_hyphen_values = true
+    )]
+    pub lights: Vec<String>,
+    /// An illumination flare "LAT,LON,ALT_M" burning at --time (just lit), lighting the ground
+    /// around it. Repeatable.
+    #[arg(
+        long = "flare",
+        value_name = "LAT,LON,ALT_M",
+        allow_hyphen_values = true
+    )]
+    pub flares: Vec<String>,
     /// Thermal polarity: white-hot or black-hot.
     #[arg(long, default_value = "white-hot")]
     pub polarity: String,

@@ -3,8 +3,8 @@
 use crate::cli::EphemArgs;
 use anyhow::{anyhow, Context};
 use cig_environment::{
-    day_events, ephemeris, natural_illuminance, DayEvents, Ephemeris, Illuminance, Observer,
-    UtcTime,
+    day_events, ephemeris, natural_illuminance, nvg_irradiance, DayEvents, Ephemeris, Illuminance,
+    NvgIrradiance, Observer, UtcTime,
 };
 /// Parses an ISO 8601 instant (RFC 3339, or ISO 8601 with or without an offset; no
 /// offset means UTC; a date alone means its midnight UTC) into a UTC instant of 1900..=2100.
@@ -27,8 +27,16 @@ fn event_list(e: &DayEvents) -> [(&'static str, Option<UtcTime>); 10] {
     ]
 }
 
-/// The JSON shape: sun, moon, illuminance_lux, events.
-pub fn ephem_json(e: &Ephemeris, lux: &Illuminance, events: &DayEvents) -> serde_json::Value {
+/// The unit of `nvg_irradiance`, as printed.
+pub const NVG_UNIT: &str = "lx_A (2856 K-equivalent lux)";
+
+/// The JSON shape: sun, moon, illuminance_lux, nvg_irradiance, events.
+pub fn ephem_json(
+    e: &Ephemeris,
+    lux: &Illuminance,
+    nvg: &NvgIrradiance,
+    events: &DayEvents,
+) -> serde_json::Value {
     let mut ev = serde_json::Map::new();
     for (name, t) in event_list(events) {
         ev.insert(
@@ -55,6 +63,15 @@ pub fn ephem_json(e: &Ephemeris, lux: &Illuminance, events: &DayEvents) -> serde
             "sky": lux.sky_lux,
             "total": lux.total_lux,
         },
+        "nvg_irradiance": {
+            "sun": nvg.sun_lxa,
+            "moon": nvg.moon_lxa,
+            "sky": nvg.sky_lxa,
+            "night_sky": nvg.night_sky_lxa,
+            "total": nvg.total_lxa,
+            "unit": NVG_UNIT,
+            "total_w_m2": nvg.total_w_m2,
+        },
         "events": ev,
     })
 }
@@ -64,9 +81,10 @@ pub fn run(args: &EphemArgs) -> anyhow::Result<()> {
     let observer = Observer::new(args.lat, args.lon, args.alt)?;
     let e = ephemeris(&observer, time);
     let lux = natural_illuminance(&e, args.cloud_cover).context("--cloud-cover")?;
+    let nvg = nvg_irradiance(&e, args.cloud_cover).context("--cloud-cover")?;
     let events = day_events(&observer, time);
     if args.json {
-        println!("{}", ephem_json(&e, &lux, &events));
+        println!("{}", ephem_json(&e, &lux, &nvg, &events));
         return Ok(());
     }
     println!(
@@ -93,6 +111,10 @@ pub fn run(args: &EphemArgs) -> anyhow::Result<()> {
     println!(
         "illuminance  {:.4e} lux total (sun {:.4e}, moon {:.4e}, night sky {:.4e}; cloud cover {})",
         lux.total_lux, lux.sun_lux, lux.moon_lux, lux.sky_lux, args.cloud_cover
+    );
+    println!(
+        "nvg          {:.4e} {NVG_UNIT} total (sun {:.4e}, moon {:.4e}, sky {:.4e}, night sky {:.4e}; {:.4e} W/m2 NVG-weighted)",
+        nvg.total_lxa, nvg.sun_lxa, nvg.moon_lxa, nvg.sky_lxa, nvg.night_sky_lxa, nvg.total_w_m2
     );
     if let Some(start) = events.day_start {
         println!(

@@ -111,6 +111,51 @@ pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<EntitySpec> {
     })
 }
 
+/// Parses `--light "LAT,LON,ALT_M,CANDELA[,COLOUR]"` into an all-round lamp.
+pub fn parse_light(text: &str) -> anyhow::Result<cig_scene::lights::LightPoint> {
+    let (numbers, colour) = match text.rsplit_once(',') {
+        Some((head, tail)) if tail.trim().parse::<f64>().is_err() => (head, tail.trim()),
+        _ => (text, "warm"),
+    };
+    let v = parse_numbers(numbers, "--light", &[4])
+        .map_err(|e| anyhow::anyhow!("{e:#} (LAT,LON,ALT_M,CANDELA[,COLOUR])"))?;
+    let (lat_deg, lon_deg, alt_m, candela) = (v[0], v[1], v[2], v[3]);
+    if !(-90.0..=90.0).contains(&lat_deg) || !(-180.0..=180.0).contains(&lon_deg) {
+        bail!("--light \"{text}\": latitude must lie in -90..90 and longitude in -180..180");
+    }
+    if !(alt_m.is_finite() && (-500.0..=100_000.0).contains(&alt_m)) {
+        bail!("--light \"{text}\": altitude {alt_m} m must lie in -500..100000");
+    }
+    if !(candela.is_finite() && candela > 0.0 && candela <= 1e9) {
+        bail!("--light \"{text}\": intensity {candela} cd must be above 0 and at most 1e9");
+    }
+    let lamp = cig_scene::lights::named_lamp(colour).with_context(|| {
+        format!(
+            "--light \"{text}\": unknown colour \"{colour}\" ({})",
+            cig_scene::lights::LAMP_NAMES
+        )
+    })?;
+    cig_scene::lights::omni_lamp(Geodetic::new(lat_deg, lon_deg, alt_m), candela as f32, lamp)
+        .map_err(|e| anyhow::anyhow!("--light \"{text}\": {e}"))
+}
+
+/// Parses `--flare "LAT,LON,ALT_M"`: a 155 mm illumination flare lit at `unix_time_s`.
+pub fn parse_flare(text: &str, unix_time_s: f64) -> anyhow::Result<cig_scene::lights::Flare> {
+    let v = parse_numbers(text, "--flare", &[3])
+        .map_err(|e| anyhow::anyhow!("{e:#} (LAT,LON,ALT_M)"))?;
+    let (lat_deg, lon_deg, alt_m) = (v[0], v[1], v[2]);
+    if !(-90.0..=90.0).contains(&lat_deg) || !(-180.0..=180.0).contains(&lon_deg) {
+        bail!("--flare \"{text}\": latitude must lie in -90..90 and longitude in -180..180");
+    }
+    if !(alt_m.is_finite() && (-500.0..=20_000.0).contains(&alt_m)) {
+        bail!("--flare \"{text}\": altitude {alt_m} m must lie in -500..20000");
+    }
+    Ok(cig_scene::lights::Flare::artillery_155mm(
+        Geodetic::new(lat_deg, lon_deg, alt_m),
+        unix_time_s,
+    ))
+}
+
 /// Parses "LAT,LON[,HEAT_MW[,SECONDS]]".
 pub fn parse_smoke(text: &str) -> anyhow::Result<FireSpec> {
     let v = parse_numbers(text, "--smoke", &[2, 3, 4])
@@ -255,6 +300,7 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "cloud_layers_drawn": stats.cloud_layers_drawn,
         "cloud_gpu_ms": stats.cloud_gpu_ms,
         "bolt_lines_drawn": stats.bolt_lines_drawn,
+        "light_points": stats.light_points,
         "precipitation_particles": stats.precipitation_particles,
         "klod": stats.klod,
         "klod_nominal": stats.klod_nominal,
@@ -397,8 +443,13 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .transpose()?;
     let correction =
         crate::display::read_display_correction(args.warp.as_deref(), args.blend.as_deref())?;
+    let nvg = crate::thermal_view::parse_nvg(&args.sensor, args.nvg_gain, &args.phosphor)?;
     let sensor = crate::thermal_view::parse_sensor(&crate::thermal_view::SensorOptions {
-        sensor: &args.sensor,
+        sensor: if nvg.is_some() {
+            "visible"
+        } else {
+            &args.sensor
+        },
         polarity: &args.polarity,
         gain: args.gain,
         level: args.level,
@@ -449,7 +500,37 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
                 .with_context(|| format!("cannot clamp entity {} to the terrain", spec.model))?,
         );
     }
+    let lights = args
+        .lights
+        .iter()
+        .map(|text| parse_light(text))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let flares = args
+        .flares
+        .iter()
+        .map(|text| parse_flare(text, unix_time_s))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let mut snapshot = FrameSnapshot::new(unix_time_s, vec![view]);
+    // Lights and flares must stand over the database (their ground is asked for).
+    for (text, light) in args.lights.iter().zip(&lights) {
+        let at = Geodetic::from_ecef(light.position_ecef_m);
+        session
+            .hot(at.lat_deg, at.lon_deg)
+            .with_context(|| format!("--light \"{text}\" is outside the database"))?;
+    }
+    snapshot.lights = lights;
+    for (text, flare) in args.flares.iter().zip(&flares) {
+        let ground = session
+            .hot(flare.start.lat_deg, flare.start.lon_deg)
+            .with_context(|| format!("--flare \"{text}\" is outside the database"))?
+            .height_ellipsoid_m();
+        if flare.start.alt_m <= ground {
+            bail!("--flare \"{text}\": the flare is below the ground ({ground:.0} m there)");
+        }
+        snapshot
+            .lights
+            .extend(flare.light_at(unix_time_s, Some(ground)));
+    }
     snapshot.culture = culture;
     snapshot.fog = Fog::from_visibility(fog_mode, args.visibility);
     if let Some(p) = precipitation {
@@ -521,6 +602,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         snapshot.sensors = vec![Some(sensor)];
         snapshot.thermal = Some(Arc::new(scene));
     }
+    snapshot.nvg = vec![nvg];
     cache.update(&[view.eye]);
     cache.wait_idle();
     cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;

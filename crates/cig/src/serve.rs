@@ -99,6 +99,10 @@ struct Totals {
     /// Entities and obscurant puffs in the last frame drawn.
     entities_drawn: u32,
     puffs_drawn: u32,
+    /// Light points in the last frame's snapshot (entity lamps, fires, flares, the scenario's
+    /// lamps), and the most in any frame.
+    lights: usize,
+    lights_max: usize,
     /// User-defined CIGI packets received (no extension handles them yet: counted, dropped).
     user_defined_packets: u64,
     /// Synchronous mode: host frames applied without being drawn (the channel was behind),
@@ -321,6 +325,8 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
             // Synchronous mode and no host frame within a period: nothing new to draw.
             continue;
         };
+        totals.lights = snapshot.lights.len();
+        totals.lights_max = totals.lights_max.max(totals.lights);
         if let Output::Offscreen { renderer, out_dir } = &mut output {
             let eyes: Vec<Geodetic> = snapshot.views.iter().map(|v| v.eye).collect();
             cache.update(&eyes);
@@ -839,6 +845,7 @@ fn run_windowed(
                     }
                 }
                 cig_render::ObscurantOrder::SetSensor(sensor) => world.set_operator_sensor(sensor),
+                cig_render::ObscurantOrder::SetNvg(nvg) => world.set_operator_nvg(nvg),
             }
         }
         let mut t = totals
@@ -1244,7 +1251,9 @@ fn report(
         "last_frame": {
             "entities_drawn": totals.entities_drawn,
             "puffs_drawn": totals.puffs_drawn,
+            "lights": totals.lights,
         },
+        "lights_max": totals.lights_max,
         "channel": {
             "setup": channel.json(),
             "host_frame_drawn": totals.drawn_host_frame,

@@ -19,10 +19,33 @@ pub struct SensorOptions<'a> {
     pub line_dropout: bool,
 }
 
+/// The night-vision goggle `--sensor nvg` asks for, with `--nvg-gain` and `--phosphor`
+/// (`None` for any other sensor; the gain and phosphor are checked either way).
+pub fn parse_nvg(
+    sensor: &str,
+    gain: f64,
+    phosphor: &str,
+) -> anyhow::Result<Option<cig_scene::nvg::NvgView>> {
+    let phosphor = cig_scene::nvg::Phosphor::from_name(phosphor)
+        .map_err(|e| anyhow::anyhow!("--phosphor: {e}"))?;
+    let view = cig_scene::nvg::NvgView {
+        gain: gain as f32,
+        phosphor,
+        ..Default::default()
+    };
+    view.validate()
+        .map_err(|e| anyhow::anyhow!("--nvg-gain: {e}"))?;
+    Ok((sensor == "nvg").then_some(view))
+}
+
 /// The view's sensor (`None` for the visible channel).
 pub fn parse_sensor(o: &SensorOptions) -> anyhow::Result<Option<SensorView>> {
-    let Some(mut view) = cig_scene::thermal::sensor_of_name(o.sensor)
-        .map_err(|()| anyhow::anyhow!("--sensor \"{}\" is not visible, lwir or mwir", o.sensor))?
+    let Some(mut view) = cig_scene::thermal::sensor_of_name(o.sensor).map_err(|()| {
+        anyhow::anyhow!(
+            "--sensor \"{}\" is not visible, lwir, mwir or nvg",
+            o.sensor
+        )
+    })?
     else {
         return Ok(None);
     };

@@ -37,7 +37,10 @@ fn json_has_exactly_the_issue_shape() {
         "--time",
         "2024-06-21T12:00:00Z",
     ]);
-    assert_eq!(keys(&v), ["sun", "moon", "illuminance_lux", "events"]);
+    assert_eq!(
+        keys(&v),
+        ["sun", "moon", "illuminance_lux", "nvg_irradiance", "events"]
+    );
     assert_eq!(
         keys(&v["sun"]),
         ["azimuth_deg", "altitude_deg", "apparent_altitude_deg"]
@@ -91,6 +94,56 @@ fn json_has_exactly_the_issue_shape() {
     assert!((9e4..1.3e5).contains(&total), "{total}");
     let f = v["moon"]["illuminated_fraction"].as_f64().unwrap();
     assert!((0.98..=1.0).contains(&f), "full moon on 2024-06-22: {f}");
+}
+
+#[test]
+fn nvg_irradiance_is_positive_and_richer_than_lux_on_a_moonless_night() {
+    // Greenwich, 2024-01-11: new moon at 11:57 UTC. At midnight the sun is near -60 deg and
+    // the moon, a few degrees from the sun, far below the horizon; at noon the sun is up.
+    let at = |time: &str| ephem_json(&["--lat", "51.4779", "--lon", "0", "--time", time]);
+    let night = at("2024-01-11T00:00:00Z");
+    let noon = at("2024-01-11T12:00:00Z");
+    assert!(night["sun"]["altitude_deg"].as_f64().unwrap() < -18.0);
+    assert!(night["moon"]["altitude_deg"].as_f64().unwrap() < -10.0);
+    assert!(noon["sun"]["altitude_deg"].as_f64().unwrap() > 10.0);
+    let ratio = |v: &Value| {
+        let nvg = &v["nvg_irradiance"];
+        assert_eq!(
+            keys(nvg),
+            [
+                "sun",
+                "moon",
+                "sky",
+                "night_sky",
+                "total",
+                "unit",
+                "total_w_m2"
+            ]
+        );
+        assert_eq!(nvg["unit"], "lx_A (2856 K-equivalent lux)");
+        let total = nvg["total"].as_f64().unwrap();
+        assert!(
+            total > 0.0 && nvg["total_w_m2"].as_f64().unwrap() > 0.0,
+            "{nvg}"
+        );
+        let parts: f64 = ["sun", "moon", "sky", "night_sky"]
+            .iter()
+            .map(|k| nvg[*k].as_f64().unwrap())
+            .sum();
+        assert!((parts - total).abs() <= 1e-12 * total, "{nvg}");
+        total / v["illuminance_lux"]["total"].as_f64().unwrap()
+    };
+    let (night_ratio, noon_ratio) = (ratio(&night), ratio(&noon));
+    // Airglow makes the moonless sky several times richer for the tube than its lux; daylight
+    // is bluer than illuminant A.
+    assert!(
+        night_ratio > 2.0 * noon_ratio,
+        "{night_ratio} vs {noon_ratio}"
+    );
+    assert!(
+        noon_ratio < 1.0 && night_ratio > 1.0,
+        "{night_ratio} vs {noon_ratio}"
+    );
 }
 
 #[test]
@@ -174,6 +227,7 @@ fn human_output_lists_positions_and_events() {
         "sun ",
         "moon ",
         "illuminance",
+        "lx_A (2856 K-equivalent lux)",
         "sunrise",
         "2024-03-20T11:18",
         "moonset",

@@ -439,11 +439,20 @@ fn demo_flies_to_png_frames_without_a_display_and_in_a_window_with_one() {
                 .unwrap_or(false)
         })
         .count();
-    // 24 of the flight, then the environment: moon, cumulus from below and above, a storm, and
-    // the valley at night through a thermal sight (grey: a white display).
-    assert_eq!(frames, 29);
+    // 24 of the flight, then the environment: moon, cumulus from below and above, a storm, the
+    // valley at night through a thermal sight (grey: a white display) and through night-vision
+    // goggles (green in a black circle).
+    assert_eq!(frames, 30);
     let (_, _, thermal) = common::read_png_rgba(&out.join("frame_028.png"));
     assert!(thermal.chunks(4).all(|p| p[0] == p[1] && p[1] == p[2]));
+    let (w, h, goggles) = common::read_png_rgba(&out.join("frame_029.png"));
+    assert!(
+        goggles[..4].iter().take(3).all(|c| *c == 0),
+        "the corner is the mask"
+    );
+    let centre = ((h / 2 * w + w / 2) * 4) as usize;
+    let px = &goggles[centre..centre + 3];
+    assert!(px[1] > px[0] && px[1] > px[2] && px[1] > 20, "{px:?}");
     let sheet = std::fs::read(out.join("contact-sheet.png")).expect("contact sheet");
     assert_eq!(&sheet[1..4], b"PNG");
 
@@ -586,4 +595,69 @@ fn an_eye_below_the_terrain_is_drawn_from_its_surface_with_one_warning() {
     let mean = |px: &[u8]| px.iter().map(|&v| f64::from(v)).sum::<f64>() / px.len() as f64;
     assert!(mean(&below) > 30.0, "{}", mean(&below));
     assert_ne!(below, above);
+}
+
+#[test]
+fn render_draws_night_vision_lights_and_a_flare() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let night = "2026-06-22T05:00:00Z";
+    let (_, plain) = render_with(&db, dir.path(), "night", night, &[]);
+    let (goggles, stats) = render_with(
+        &db,
+        dir.path(),
+        "nvg",
+        night,
+        &[
+            "--sensor",
+            "nvg",
+            "--phosphor",
+            "white",
+            "--nvg-gain",
+            "2",
+            "--light",
+            "36.0,-121.2,700,5000,sodium",
+            "--flare",
+            "36.005,-121.19,1000",
+        ],
+    );
+    // The database's street and porch lights, and on goggles the lamp and the flare as well.
+    let street = plain["light_points"].as_u64().expect("count");
+    assert!(street > 0, "{plain}");
+    assert_eq!(stats["light_points"].as_u64(), Some(street + 2), "{stats}");
+    assert!(!goggles.is_empty());
+    let (_, _, rgba) = common::read_png_rgba(&dir.path().join("nvg.png"));
+    assert!(
+        rgba[..3].iter().all(|c| *c == 0),
+        "the corner is the goggle's mask"
+    );
+}
+
+#[test]
+fn bad_night_vision_and_light_values_give_one_line_errors() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = small_db(dir.path());
+    let out = dir.path().join("frame.png");
+    let cases: Vec<(&str, &str, &str)> = vec![
+        ("--light", "36.0,-121.2,700,-5", "intensity"),
+        ("--light", "36.0,-121.2,700,nan", "--light"),
+        ("--light", "36.0,-121.2,700,inf", "finite numbers"),
+        ("--light", "36.0,-121.2,700,1e12", "intensity"),
+        ("--light", "36.0,-121.2,700", "--light"),
+        ("--light", "36.0,-121.2,700,100,purple", "unknown colour"),
+        ("--light", "10,10,700,100", "outside the database"),
+        ("--flare", "10,10,900", "outside the database"),
+        ("--flare", "36.0,-121.2,-400", "below the ground"),
+        ("--phosphor", "amber", "unknown phosphor"),
+        ("--nvg-gain", "0", "--nvg-gain"),
+        ("--nvg-gain", "nan", "--nvg-gain"),
+        ("--sensor", "goggles", "nvg"),
+    ];
+    for (option, value, expect) in cases {
+        let mut args = render_args(&db, &out);
+        args.extend([option.to_string(), value.to_string()]);
+        let line = one_line_error(&cig().args(&args).assert().failure());
+        assert!(line.contains(expect), "{option} {value}: {line}");
+    }
+    assert!(!out.exists(), "no frame written after an error");
 }

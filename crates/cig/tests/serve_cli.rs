@@ -603,3 +603,78 @@ fn serve_warns_once_of_an_eye_below_the_terrain_and_draws_from_its_surface() {
     let png = frames.join("frame_00004.png");
     assert!(png.exists(), "the frames are drawn");
 }
+
+/// Runs `cig serve` without rendering while `cig dis send` sends a land vehicle with
+/// `appearance`; the most light points any frame's snapshot held.
+fn lights_of_a_remote_land_vehicle(dir: &Path, db: &Path, appearance: &str) -> u64 {
+    let ig_dis_port = free_udp_port();
+    let scenario = dir.join(format!("lights-{appearance}.toml"));
+    std::fs::write(
+        &scenario,
+        format!(
+            "start_time = \"2026-06-21T22:00:00Z\"\n\
+             [dis]\nexercise = 3\nsite = 1\napplication = 3001\nport = {ig_dis_port}\ndelivery = \"unicast:127.0.0.1:{}\"\n",
+            free_udp_port()
+        ),
+    )
+    .expect("scenario");
+    let serve = start_serve(&[
+        "--db".into(),
+        db.display().to_string(),
+        "--scenario".into(),
+        scenario.display().to_string(),
+        "--no-render".into(),
+        "--cigi-port".into(),
+        free_udp_port().to_string(),
+        "--frames".into(),
+        "240".into(),
+        "--json".into(),
+    ]);
+    cig()
+        .args(["dis", "send", "--port", &ig_dis_port.to_string()])
+        .args([
+            "--to",
+            "127.0.0.1",
+            "--entity",
+            "2:5:9",
+            "--type",
+            "1:1:225:1:1",
+        ])
+        .args([
+            "--exercise",
+            "3",
+            "--lat",
+            "36.0",
+            "--lon",
+            "-121.2",
+            "--alt",
+            "0",
+        ])
+        .args([
+            "--appearance",
+            appearance,
+            "--count",
+            "5",
+            "--interval-s",
+            "0.1",
+        ])
+        .timeout(Duration::from_secs(30))
+        .assert()
+        .success();
+    let (status, stdout, stderr) = serve.finish();
+    assert!(status.success(), "{stderr}");
+    let summary: Value = serde_json::from_slice(&stdout).expect("json");
+    assert_eq!(summary["dis"]["remote_entities"], 1, "{summary}");
+    summary["lights_max"].as_u64().expect("lights_max")
+}
+
+#[test]
+fn a_dis_headlights_bit_lights_a_remote_vehicles_headlamps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let dark = lights_of_a_remote_land_vehicle(dir.path(), &db, "0x0");
+    // Land platform appearance bit 12: head lights (SISO-REF-010 UID 31).
+    let lit = lights_of_a_remote_land_vehicle(dir.path(), &db, "0x1000");
+    assert_eq!(dark, 0);
+    assert_eq!(lit, 2, "two headlamps");
+}

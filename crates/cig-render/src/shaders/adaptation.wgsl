@@ -11,7 +11,8 @@ struct AdaptParams {
     // x: low and y: high fraction of the trimmed mean, z: the bright share's fraction, w: 1 when
     // the state of this slot is valid (a frame was adapted before).
     shares: vec4<f32>,
-    // x: 1 for a thermal sensor view (the histogram bins its band radiance, sensor_bin_of).
+    // x: 1 for a thermal sensor view (the histogram bins its band radiance, sensor_bin_of);
+    // y: 1 for a night-vision view (the red channel's signal, not luminance).
     mode: vec4<f32>,
 };
 
@@ -32,7 +33,8 @@ var<workgroup> local_bins: array<atomic<u32>, 64>;
 @group(0) @binding(4) var<storage, read_write> equalised: array<vec4<f32>, 17>;
 
 fn bin_of(c: vec3<f32>) -> u32 {
-    let y = dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+    // A night-vision view (mode.y 1) holds its signal in the red channel.
+    let y = select(dot(c, vec3<f32>(0.2126, 0.7152, 0.0722)), c.r, params.mode.y > 0.5);
     // NaN and negative values count as black.
     let l = log2(max(select(y, 0.0, y != y), 1e-12));
     return u32(clamp(floor((l - LOG2_MIN) / BIN_WIDTH), 0.0, f32(BINS - 1u)));

@@ -65,6 +65,19 @@ struct Globals {
     // x optics blur (pixels, one sigma), y line dropout on, z the frame's number, w the clouds'
     // band radiance.
     sensor_display2: vec4<f32>,
+    // Night-vision view (nvg.rs): x 1 when this view is an intensifier, y photoelectrons a
+    // frame per pre-exposed scene unit in one pixel, z the microchannel plate's excess noise
+    // (F - 1), w tan of half the goggle's circular field.
+    nvg: vec4<f32>,
+    // The phosphor's colour at full output (xyz); w the tube's blur, pixels (one sigma).
+    nvg2: vec4<f32>,
+    // x: photoelectron noise on, y: flames' factor (their NVG weighting), z: local lights in
+    // use, w: unused.
+    nvg3: vec4<f32>,
+    // Lights that light the surfaces around them (flares, fires, headlights; lights.rs), three
+    // vec4s each: eye-relative position and intensity (light units at 1 m); colour and the
+    // cosine of the beam's half width (< -1: all round); the beam's axis and its back share.
+    local_lights: array<vec4<f32>, 24>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;
@@ -167,6 +180,40 @@ fn apply_fog_at(colour: vec3<f32>, rel: vec3<f32>) -> vec3<f32> {
 // night and noon alike. The environment's exposure control sets `g.flags.y`.
 fn exposed(radiance: vec3<f32>) -> vec3<f32> {
     return radiance * g.flags.y;
+}
+
+fn nvg_on() -> bool {
+    return g.nvg.x > 0.5;
+}
+
+// The local lights' illuminance on a surface at eye-relative `rel` with normal `n` (light
+// units): inverse square, Lambert, the beam's lobe (smooth over 0.1 of its cosine, its back
+// share behind).
+fn local_light(rel: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    let count = min(u32(g.nvg3.z), 8u);
+    for (var i = 0u; i < count; i++) {
+        let a = g.local_lights[3u * i];
+        let b = g.local_lights[3u * i + 1u];
+        let c = g.local_lights[3u * i + 2u];
+        let d = a.xyz - rel;
+        let d2 = max(dot(d, d), 1.0);
+        let l = d * inverseSqrt(d2);
+        var lobe = 1.0;
+        if (b.w > -1.5) {
+            lobe = max(c.w, smoothstep(b.w - 0.05, b.w + 0.05, dot(-l, c.xyz)));
+        }
+        sum += b.xyz * (a.w * lobe * max(dot(n, l), 0.0) / d2);
+    }
+    return sum;
+}
+
+// Sun, moon, sky and the local lights on a surface.
+fn lit_at(albedo: vec3<f32>, n: vec3<f32>, rel: vec3<f32>) -> vec3<f32> {
+    if (g.nvg3.z > 0.5) {
+        return lit(albedo, n) + albedo * local_light(rel, n);
+    }
+    return lit(albedo, n);
 }
 
 fn lit(albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {

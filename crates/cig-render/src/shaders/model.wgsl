@@ -80,6 +80,10 @@ fn fs_main(in: ModelOut) -> @location(0) vec4<f32> {
         }
         return th_shown(th_surface_temp(material, n) + rise, eps, n, in.rel);
     }
-    let colour = lit(in.colour, n);
+    var albedo = in.colour;
+    if (nvg_on()) {
+        albedo = nvg_model_albedo(in.thermal_code.x, in.thermal_code.y);
+    }
+    let colour = lit_at(albedo, n, in.rel);
     return vec4<f32>(apply_atmosphere_exposed(exposed(colour), in.rel), 1.0);
 }

@@ -139,6 +139,8 @@ fn fs_main(in: PuffOut) -> Accumulated {
     let shown = apply_atmosphere_exposed(exposed(in.albedo_tau.rgb * (sun + moon + sky)), dir * distance_m);
     var out: Accumulated;
     out.scatter = vec4<f32>(shown * tau, tau);
-    out.emission = vec4<f32>(exposed(in.emission.rgb) * (f * (1.0 - exp(-tau))), 0.0);
+    // On goggles a flame's glow is weighted by its spectrum (rich in the near infrared).
+    let flame = select(1.0, g.nvg3.y, nvg_on());
+    out.emission = vec4<f32>(exposed(in.emission.rgb) * (flame * f * (1.0 - exp(-tau))), 0.0);
     return out;
 }

@@ -375,7 +375,10 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         );
         albedo = surface.albedo;
     }
-    var colour = lit(albedo, n);
+    if (nvg_on()) {
+        albedo = nvg_terrain_albedo(surface.kind, albedo);
+    }
+    var colour = lit_at(albedo, n, in.rel);
     // Water and wet surfaces: a sun glint.
     let view_dir = -in.rel / max(distance_m, 1e-3);
     let h = normalize(view_dir + g.sun_dir.xyz);

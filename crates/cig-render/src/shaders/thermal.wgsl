@@ -139,3 +139,29 @@ fn th_hot_spots(rel: vec3<f32>) -> f32 {
     }
     return rise;
 }
+
+// A night-vision view's reflectances (sensor.rs's nvg_buffer, written where a thermal view's
+// tables go): each thermal material's NVG-band reflectance at 0..18, each terrain material's
+// mean visible luminance (linear) at NVG_OFF_TERRAIN_LUMA..+9.
+const NVG_OFF_TERRAIN_LUMA: u32 = 32u;
+
+// A terrain material's albedo on goggles: its NVG reflectance, times how much lighter or
+// darker the drawn colour (detail, imagery) is than the material's mean, within 0.5..2.
+fn nvg_terrain_albedo(kind: u32, albedo: vec3<f32>) -> vec3<f32> {
+    let k = min(kind, 8u);
+    let luma = dot(albedo, vec3<f32>(0.2126, 0.7152, 0.0722));
+    let ratio = clamp(luma / max(thermal[NVG_OFF_TERRAIN_LUMA + k], 1e-3), 0.5, 2.0);
+    return vec3<f32>(thermal[k] * ratio);
+}
+
+// A model surface's albedo on goggles: the NVG reflectance of its thermal code's material (the
+// instance's default for uncoded surfaces and hot parts, skin for crew).
+fn nvg_model_albedo(code: u32, word: u32) -> vec3<f32> {
+    var material = word & 255u;
+    if (code < TH_MATERIALS) {
+        material = code;
+    } else if (code == TH_HOT_BASE + 3u) {
+        material = TH_SKIN;
+    }
+    return vec3<f32>(thermal[min(material, TH_MATERIALS - 1u)]);
+}

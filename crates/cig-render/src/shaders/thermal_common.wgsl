@@ -17,3 +17,4 @@ fn th_sky(dir: vec3<f32>) -> f32 {
     }
     return value;
 }
+

@@ -117,8 +117,84 @@ fn sensor_display(pixel: vec2<f32>) -> vec3<f32> {
     return vec3<f32>(grey);
 }
 
+// A near-Gaussian (mean 0, sigma 1) from four uniforms of a pixel and a frame.
+fn nvg_normal(px: u32, seed: u32) -> f32 {
+    let u = sensor_hash(px, seed * 4u) + sensor_hash(px, seed * 4u + 1u)
+        + sensor_hash(px, seed * 4u + 2u) + sensor_hash(px, seed * 4u + 3u) - 2.0;
+    return u * 1.732;
+}
+
+// A Poisson count of mean `mean`: Knuth's product of uniforms below 4 (at most 20 draws), the
+// rounded normal law above.
+fn nvg_poisson(mean: f32, px: u32, frame: u32) -> f32 {
+    if (mean >= 4.0) {
+        return max(floor(mean + sqrt(mean) * nvg_normal(px, frame * 2u) + 0.5), 0.0);
+    }
+    let limit = exp(-mean);
+    var p = 1.0;
+    var k = 0.0;
+    for (var i = 0u; i < 20u; i++) {
+        p *= sensor_hash(px, frame * 64u + i + 7u);
+        if (p <= limit) {
+            break;
+        }
+        k += 1.0;
+    }
+    return k;
+}
+
+// The night-vision display (cig_scene::nvg): the tube's blur, the photoelectrons a pixel
+// catches this frame (Poisson) and the microchannel plate's gain spread, the automatic
+// brightness control's gain (adaptation.rs), the phosphor's saturation and colour, and the
+// goggle's circular field in a black surround. Returns display values (linear).
+fn nvg_display(pixel: vec2<f32>) -> vec3<f32> {
+    let p = vec2<i32>(pixel);
+    let frame = u32(g.sensor_display2.z);
+    let sigma = g.nvg2.w;
+    var v = min(sensor_radiance(p), 65504.0);
+    if (sigma > 0.3) {
+        var sum = 0.0;
+        var weight = 0.0;
+        for (var dy = -1; dy <= 1; dy++) {
+            for (var dx = -1; dx <= 1; dx++) {
+                let w = exp(-f32(dx * dx + dy * dy) / (2.0 * sigma * sigma));
+                sum += w * min(sensor_radiance(p + vec2<i32>(dx, dy)), 65504.0);
+                weight += w;
+            }
+        }
+        v = sum / weight;
+    }
+    if (g.nvg3.x > 0.5) {
+        let px = u32(p.x) + 65536u * u32(p.y);
+        let per_unit = max(g.nvg.y, 1e-20);
+        let electrons = nvg_poisson(v * per_unit, px, frame);
+        let signal = max(electrons + sqrt(electrons * g.nvg.z) * nvg_normal(px, frame * 2u + 1u), 0.0);
+        v = signal / per_unit;
+    }
+    let b = v * exp2(adaptation.state.x);
+    var out = 1.0 - exp(-b);
+    // The goggle's circular field: the pixel's angle from the view's axis.
+    let dims = vec2<f32>(textureDimensions(scene));
+    let t = g.tangents;
+    let x_tan = mix(-t.x, t.y, pixel.x / dims.x);
+    let y_tan = mix(t.w, -t.z, pixel.y / dims.y);
+    let r_tan = length(vec2<f32>(x_tan, y_tan));
+    let inside = clamp((g.nvg.w - r_tan) * g.flags.w + 0.5, 0.0, 1.0);
+    // The tube's edge is a little dimmer than its centre.
+    let edge = r_tan / max(g.nvg.w, 1e-6);
+    out *= inside * (1.0 - 0.12 * edge * edge);
+    return g.nvg2.xyz * out;
+}
+
 @fragment
 fn fs_main(in: ToneOut) -> @location(0) vec4<f32> {
+    if (g.nvg.x > 0.5) {
+        var shown = nvg_display(in.clip.xy);
+        if (g.tonemap.x > 0.5) {
+            shown = srgb_encode(shown);
+        }
+        return vec4<f32>(shown, 1.0);
+    }
     if (g.sensor.x > 0.5) {
         // Display values straight to the target (decoded where the hardware encodes sRGB).
         var shown = sensor_display(in.clip.xy);

@@ -132,6 +132,9 @@ pub enum ObscurantOrder {
     /// The operator's sensor for every view (`None`: back to the host's and the scenario's).
     /// Sent when the panel's sensor changes.
     SetSensor(Option<cig_scene::thermal::SensorView>),
+    /// The operator's night-vision goggle for every view (`None`: back to the host's and the
+    /// scenario's). Sent when the panel's channel changes.
+    SetNvg(Option<cig_scene::nvg::NvgView>),
 }
 
 /// Without a driver, the panel's thermal sensor: every material's surface temperatures spun
@@ -409,6 +412,7 @@ pub fn run_viewer_driven(
         operator_plumes: Vec::new(),
         sent_cloud_layer: None,
         sent_sensor: None,
+        sent_nvg: None,
         track_patches: Vec::new(),
         own_thermal: None,
         own_bolt: None,
@@ -447,6 +451,8 @@ struct App {
     track_patches: Vec<(usize, [u32; 4], Vec<f32>)>,
     /// The operator's sensor last sent to the driver.
     sent_sensor: Option<Option<cig_scene::thermal::SensorView>>,
+    /// The operator's goggle last sent to the driver.
+    sent_nvg: Option<Option<cig_scene::nvg::NvgView>>,
     /// Without a driver, the thermal state the panel's sensor draws (spun up when first
     /// chosen, at the camera's place).
     own_thermal: Option<cig_thermal::SurfaceTable>,
@@ -869,6 +875,11 @@ impl App {
             orders.push(ObscurantOrder::SetSensor(sensor));
             self.sent_sensor = Some(sensor);
         }
+        let nvg = self.panel.nvg_view();
+        if self.driver.is_some() && self.sent_nvg != Some(nvg) {
+            orders.push(ObscurantOrder::SetNvg(nvg));
+            self.sent_nvg = Some(nvg);
+        }
         let mut snapshot = match self.driver.as_mut() {
             Some(driver) => {
                 let snapshot = driver(&ViewerTick {
@@ -942,6 +953,10 @@ impl App {
                 sensor,
                 &mut snapshot,
             );
+        }
+        // Without a driver, the panel's goggle draws every view.
+        if let (None, Some(nvg)) = (self.driver.as_ref(), nvg) {
+            snapshot.nvg = vec![Some(nvg); snapshot.views.len()];
         }
         snapshot.max_pixel_error = self.panel.max_pixel_error;
         snapshot.wireframe = self.panel.wireframe;
@@ -1411,7 +1426,8 @@ fn run_own_obscurants(
             | ObscurantOrder::StrikeLightning { .. }
             | ObscurantOrder::SetStorm { .. }
             | ObscurantOrder::SetClouds(_)
-            | ObscurantOrder::SetSensor(_) => {}
+            | ObscurantOrder::SetSensor(_)
+            | ObscurantOrder::SetNvg(_) => {}
         }
     }
     note

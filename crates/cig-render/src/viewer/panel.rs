@@ -120,6 +120,9 @@ pub struct PanelState {
     pub storm_strikes_per_minute: f64,
     /// The view's sensor: `None` the visible channel, else a thermal band.
     pub sensor_band: Option<cig_thermal::IrBand>,
+    /// The view is a night-vision goggle's (with no thermal band); its gain from
+    /// `sensor_gain` as `10^(2 g - 1)`, 0.1..10.
+    pub sensor_nvg: bool,
     pub sensor_black_hot: bool,
     /// Automatic gain; else the manual gain and level (CIGI's 0..1 contrast and brightness).
     pub sensor_automatic_gain: bool,
@@ -206,6 +209,7 @@ impl PanelState {
             cloud_wind_speed_mps: 8.0,
             cloud_wind_from_deg: 270.0,
             sensor_band: None,
+            sensor_nvg: false,
             sensor_black_hot: false,
             sensor_automatic_gain: true,
             sensor_gain: 0.5,
@@ -471,22 +475,30 @@ impl PanelState {
 
     fn sensor_ui(&mut self, ui: &mut egui::Ui) {
         ui.strong("Sensor");
-        let name = |band: Option<cig_thermal::IrBand>| match band {
-            None => "visible",
-            Some(cig_thermal::IrBand::Lwir) => "LWIR 8-12 um",
-            Some(cig_thermal::IrBand::Mwir) => "MWIR 3-5 um",
+        let name = |choice: (Option<cig_thermal::IrBand>, bool)| match choice {
+            (None, false) => "visible",
+            (None, true) => "NVG (image intensifier)",
+            (Some(cig_thermal::IrBand::Lwir), _) => "LWIR 8-12 um",
+            (Some(cig_thermal::IrBand::Mwir), _) => "MWIR 3-5 um",
         };
+        let mut choice = (self.sensor_band, self.sensor_nvg);
         egui::ComboBox::from_label("channel")
-            .selected_text(name(self.sensor_band))
+            .selected_text(name(choice))
             .show_ui(ui, |ui| {
-                for band in [
-                    None,
-                    Some(cig_thermal::IrBand::Lwir),
-                    Some(cig_thermal::IrBand::Mwir),
+                for c in [
+                    (None, false),
+                    (Some(cig_thermal::IrBand::Lwir), false),
+                    (Some(cig_thermal::IrBand::Mwir), false),
+                    (None, true),
                 ] {
-                    ui.selectable_value(&mut self.sensor_band, band, name(band));
+                    ui.selectable_value(&mut choice, c, name(c));
                 }
             });
+        (self.sensor_band, self.sensor_nvg) = (choice.0, choice.0.is_none() && choice.1);
+        ui.add_enabled_ui(self.sensor_nvg, |ui| {
+            ui.add(egui::Slider::new(&mut self.sensor_gain, 0.0..=1.0).text("NVG gain"))
+                .on_hover_text("0.5 is the goggle's nominal gain; 0 a tenth, 1 ten times");
+        });
         ui.add_enabled_ui(self.sensor_band.is_some(), |ui| {
             ui.checkbox(&mut self.sensor_black_hot, "black-hot");
             ui.checkbox(&mut self.sensor_automatic_gain, "automatic gain");
@@ -495,6 +507,18 @@ impl PanelState {
                 ui.add(egui::Slider::new(&mut self.sensor_level, 0.0..=1.0).text("level"));
             });
         });
+    }
+
+    /// The night-vision goggle these settings ask for (`None`: not a goggle's view).
+    pub fn nvg_view(&self) -> Option<cig_scene::nvg::NvgView> {
+        if !self.sensor_nvg || self.sensor_band.is_some() {
+            return None;
+        }
+        let gain = 10f64.powf(2.0 * self.sensor_gain.clamp(0.0, 1.0) - 1.0);
+        Some(cig_scene::nvg::NvgView {
+            gain: (gain as f32).clamp(0.1, 10.0),
+            ..cig_scene::nvg::NvgView::default()
+        })
     }
 
     /// The sensor these settings ask for (`None`: the visible channel).
