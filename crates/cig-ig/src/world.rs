@@ -900,12 +900,18 @@ impl IgWorld {
     /// views back to the host and the scenario.
     pub fn set_operator_sensor(&mut self, sensor: Option<cig_scene::thermal::SensorView>) {
         self.operator_sensor = sensor;
+        if sensor.is_some() {
+            self.operator_nvg = None;
+        }
     }
 
     /// The operator's night-vision goggle for every drawn view (the panel's switch), or `None`
     /// to give the views back to the host and the scenario.
     pub fn set_operator_nvg(&mut self, nvg: Option<cig_scene::nvg::NvgView>) {
         self.operator_nvg = nvg;
+        if nvg.is_some() {
+            self.operator_sensor = None;
+        }
     }
 
     /// Each drawn view's night-vision goggle, in the order of [`IgWorld::drawn_view_ids`]:
@@ -913,6 +919,10 @@ impl IgWorld {
     /// `crate::thermal::host_nvg`), else the scenario's; none where the view shows a thermal
     /// sensor.
     pub fn drawn_nvg(&self) -> Vec<Option<cig_scene::nvg::NvgView>> {
+        // The operator's choice is every drawn view's, whatever the host set.
+        if let Some(nvg) = self.operator_nvg {
+            return vec![Some(nvg); self.drawn_view_ids().len()];
+        }
         let sensors = self.drawn_sensors();
         self.drawn_view_ids()
             .into_iter()
@@ -921,13 +931,16 @@ impl IgWorld {
                 if sensors.get(index).is_some_and(Option::is_some) {
                     return None;
                 }
-                if self.operator_nvg.is_some() {
-                    return self.operator_nvg;
-                }
                 match id {
                     Some(id) => {
                         let view_type = self.session.views().get(&id).map_or(0, |v| v.view_type);
-                        let control = self.session.sensors().values().find(|s| s.view_id == id);
+                        // A sensor turned on wins over one turned off on the same view.
+                        let control = self
+                            .session
+                            .sensors()
+                            .values()
+                            .filter(|s| s.view_id == id)
+                            .max_by_key(|s| s.on);
                         crate::thermal::host_nvg(view_type, control)
                     }
                     None => self.scenario.nvg_view(),
@@ -950,6 +963,10 @@ impl IgWorld {
     fn drawn_sensors(&self) -> Vec<Option<cig_scene::thermal::SensorView>> {
         if let Some(sensor) = self.operator_sensor {
             return vec![Some(sensor); self.drawn_view_ids().len()];
+        }
+        // The operator's goggles take every view from a host's thermal sensor too.
+        if self.operator_nvg.is_some() {
+            return vec![None; self.drawn_view_ids().len()];
         }
         self.drawn_view_ids()
             .into_iter()

@@ -144,9 +144,9 @@ const MAX_INSTANCES: usize = 8192;
 /// Culture instances a view draws at most (64 MB of records; also bounded by the device's
 /// largest storage binding): a frame past it drops the farthest kinds' rest.
 const MAX_CULTURE_INSTANCES: usize = 1_000_000;
-/// Reach of the culture's street and settlement lights from the eye, metres (a 3000 cd lamp
-/// is at the dark-adapted eye's threshold through clear air at about this range).
-const CULTURE_LIGHT_RANGE_M: f64 = 20_000.0;
+/// The farthest the culture's street and settlement lights are gathered from, metres (their
+/// reach is Allard's law's; the resident tiles rarely reach this far).
+const MAX_CULTURE_LIGHT_RANGE_M: f64 = 60_000.0;
 /// Lights that light the surfaces around them, at most (flares, fires, headlights).
 const MAX_LOCAL_LIGHTS: usize = 8;
 /// A light's illuminance at a goggle below which it is not drawn, lx_A: about 50
@@ -1234,8 +1234,22 @@ impl Renderer {
             .street_lights
             .unwrap_or_else(|| cig_scene::lights::street_lights_on(lighting.usno_illuminance_lux));
         if street_on && snapshot.culture && sensor.is_none() {
+            // As far as Allard's law lets a street lamp seen from the side reach the observer.
+            let threshold_lux = if nvg.is_some() {
+                NVG_LIGHT_THRESHOLD_LXA
+            } else {
+                cig_environment::stars::threshold_illuminance_lux(
+                    0.2 * lighting.usno_illuminance_lux / std::f64::consts::PI,
+                )
+            };
+            let range_m = cig_scene::lights::allard_range_m(
+                f64::from(cig_scene::lights::STREET_LAMP_CD),
+                &snapshot.fog,
+                threshold_lux,
+            )
+            .clamp(1_000.0, MAX_CULTURE_LIGHT_RANGE_M);
             self.culture
-                .culture_lights_near(cache, &camera, CULTURE_LIGHT_RANGE_M, &mut lights);
+                .culture_lights_near(cache, &camera, range_m, &mut lights);
         }
         let local = if sensor.is_none() {
             cig_scene::lights::local_lights(
@@ -1654,8 +1668,9 @@ impl Renderer {
                             snapshot.sky.exposure_compensation_ev,
                         ) as f32,
                     },
-                    adaptation: if options.key_background
-                        || snapshot.sky.fixed_exposure_ev.is_some()
+                    // The eye's fixed exposure does not switch off a goggle's control.
+                    adaptation: if nvg.is_none()
+                        && (options.key_background || snapshot.sky.fixed_exposure_ev.is_some())
                     {
                         Adaptation::Off
                     } else {
@@ -1908,7 +1923,12 @@ impl Renderer {
                 light.intensity_cd
             };
             let [x, y, z] = light.rel_m;
-            let [r, g, b] = light.colour;
+            // On goggles the signal is one number (lx_A), carried grey.
+            let [r, g, b] = if nvg.is_some() {
+                [1.0; 3]
+            } else {
+                light.colour
+            };
             let [ax, ay, az] = light.axis;
             let beam = light.axis != [0.0; 3];
             globals.local_lights[3 * i] = [
@@ -1940,12 +1960,9 @@ impl Renderer {
                 b,
                 (nvg.tube.blur_sigma_deg(fov_deg) / pixel_deg) as f32,
             ];
-            globals.nvg3 = [
-                f32::from(u8::from(nvg.noise)),
-                cig_environment::nvg::LightSpectrum::Flame.nvg_per_lux() as f32,
-                0.0,
-                0.0,
-            ];
+            // (nvg3.z, the local lights' count, is set above.)
+            globals.nvg3[0] = f32::from(u8::from(nvg.noise));
+            globals.nvg3[1] = cig_environment::nvg::LightSpectrum::Flame.nvg_per_lux() as f32;
             globals.sensor_display2[2] = (self.frame % 65_536) as f32;
         }
         (globals.sky_frame_x, globals.sky_frame_y) =

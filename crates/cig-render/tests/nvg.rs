@@ -92,8 +92,9 @@ fn the_brightness_control_holds_a_quarter_moon_and_a_full_moon_alike() {
         (full - quarter).abs() <= 0.25 * full.max(quarter),
         "full moon {full:.1}, quarter moon {quarter:.1}: {means:?}"
     );
-    // The scene's light differs by far more than the picture does.
-    assert!(means[0].1 > 3.0 * means[1].1, "{means:?}");
+    // The scene's light differs by far more than the picture does (nearly three times in
+    // the goggle's weighting, where the night sky's airglow adds to both).
+    assert!(means[0].1 > 2.5 * means[1].1, "{means:?}");
 }
 
 /// The mean temporal standard deviation (green, 0..255) of the pixels of the central square

@@ -651,8 +651,6 @@ impl CultureSelector {
         true
     }
 
-    /// Resident finest tiles within `range_m` of the eye (every resident finest tile when the
-    /// range is unbounded).
     /// Appends the street and settlement lights of the resident finest tiles within
     /// `range_m` of the camera's eye (`crate::lights::culture_lights`, made once per tile
     /// while it stays resident).
@@ -686,6 +684,8 @@ impl CultureSelector {
         }
     }
 
+    /// Resident finest tiles within `range_m` of the eye (every resident finest tile when the
+    /// range is unbounded).
     fn tiles_near(
         &self,
         camera: &Camera,

@@ -307,10 +307,12 @@ impl Lighting {
         Lighting::weighted(unix_time_s, eye, cloud_cover_fraction, sky, Weighting::Eye)
     }
 
-    /// The light as `weighting` sees it: for [`Weighting::Intensifier`] every colour is in
-    /// 2856 K-equivalent lux (lx_A) × units instead of lux × units, each source weighted by
-    /// its spectrum (`cig_environment::nvg`: sunlight and the sun-lit sky, moonlight and the
-    /// moon-lit sky, the night sky's airglow), and the illuminances are in lx_A.
+    /// The light as `weighting` sees it: for [`Weighting::Intensifier`] every colour is grey,
+    /// in 2856 K-equivalent lux (lx_A) × units instead of lux × units, each source weighted by
+    /// its spectrum (`cig_environment::nvg`: sunlight, the sun-lit sky, moonlight, the
+    /// moon-lit sky, the night sky's airglow), and the natural and adapted illuminances are in
+    /// lx_A (the USNO illuminance stays in lux). The sky-view tables on the GPU keep the
+    /// atmosphere's colour; an intensifier view reads their red channel.
     pub fn weighted(
         unix_time_s: f64,
         eye: Geodetic,
@@ -359,11 +361,15 @@ impl Lighting {
                 ),
             };
         let units = LIGHTING_UNITS_PER_LUX / divisor;
-        let [sun_k, moon_k, night_k] = weighting.factors();
-        let sun_toa = cig_environment::SUN_ILLUMINANCE_TOA_LUX * sun_k;
+        let [sun_k, moon_k, night_k, sun_sky_k, moon_sky_k] = weighting.factors();
+        // The sky's light (its tables multiply these) and the direct beams', apart: on goggles
+        // they weigh differently.
+        let sun_toa = cig_environment::SUN_ILLUMINANCE_TOA_LUX * sun_sky_k;
+        let sun_beam_toa = cig_environment::SUN_ILLUMINANCE_TOA_LUX * sun_k;
         // The moon above the atmosphere: its zenith illuminance over the zenith transmittance.
         let zenith_t = luminance(atmosphere.sun_transmittance(0.0, 90.0)).max(1e-6);
-        let moon_toa = moon_zenith_lux * moon_k / zenith_t;
+        let moon_toa = moon_zenith_lux * moon_sky_k / zenith_t;
+        let moon_beam_toa = moon_zenith_lux * moon_k / zenith_t;
         let sun_t = atmosphere.sun_transmittance(altitude_m, sun_alt);
         let moon_t = atmosphere.sun_transmittance(altitude_m, moon_alt);
         let sky_sun = atmosphere.sky_irradiance(altitude_m, sun_alt);
@@ -400,26 +406,31 @@ impl Lighting {
         }
         // The natural illuminance on horizontal ground as this model lights it: direct sun and
         // moon, the sun-lit and moon-lit sky and the night-sky background.
-        let sun_lum = luminance(sun_t) * sun_toa * sun_alt.to_radians().sin().max(0.0);
-        let moon_lum = luminance(moon_t) * moon_toa * moon_alt.to_radians().sin().max(0.0);
+        let sun_lum = luminance(sun_t) * sun_beam_toa * sun_alt.to_radians().sin().max(0.0);
+        let moon_lum = luminance(moon_t) * moon_beam_toa * moon_alt.to_radians().sin().max(0.0);
         let modelled = (sun_lum + moon_lum + luminance(ambient)) / divisor;
         let adapted = match sky.fixed_exposure_ev {
             Some(ev) if ev.is_finite() => illuminance_for_exposure_value(ev.clamp(-20.0, 20.0)),
             _ => modelled,
+        };
+        // On goggles one number (lx_A) is carried grey, at each colour's luminance.
+        let rgb = |c: [f64; 3], scale: f64| match weighting {
+            Weighting::Eye => rgb(c, scale),
+            Weighting::Intensifier => [(luminance(c) * scale) as f32; 3],
         };
         let sky_horizon = rgb(horizon, units);
         let to_ecef = |v: [f64; 3]| frame.enu_vector_to_ecef(DVec3::from_array(v)).normalize();
         Lighting {
             sun_direction: to_ecef(sun_enu),
             sun_elevation_deg: sun_alt,
-            sun_colour: rgb(sun_t.map(|t| t * sun_toa), units),
+            sun_colour: rgb(sun_t.map(|t| t * sun_beam_toa), units),
             ambient_colour: rgb(ambient, units),
             sky_zenith: rgb(zenith, units),
             sky_horizon,
             fog_colour: sky_horizon,
             moon_direction: to_ecef(moon_enu),
             moon_elevation_deg: moon_alt,
-            moon_colour: rgb(moon_t.map(|t| t * moon_toa), units),
+            moon_colour: rgb(moon_t.map(|t| t * moon_beam_toa), units),
             moon_phase_angle_deg: phase,
             moon_illuminated_fraction: fraction,
             sun_toa_colour: rgb([sun_toa; 3], units),
@@ -464,14 +475,18 @@ pub enum Weighting {
 }
 
 impl Weighting {
-    /// Factors on the sun's, the moon's and the night sky's lux.
-    pub fn factors(self) -> [f64; 3] {
+    /// Factors on the lux of direct sunlight, direct moonlight, the night sky, the sun-lit
+    /// sky and the moon-lit sky.
+    pub fn factors(self) -> [f64; 5] {
+        use cig_environment::nvg as n;
         match self {
-            Weighting::Eye => [1.0; 3],
+            Weighting::Eye => [1.0; 5],
             Weighting::Intensifier => [
-                cig_environment::nvg::SUN_NVG_PER_LUX,
-                cig_environment::nvg::MOON_NVG_PER_LUX,
-                cig_environment::nvg::NIGHT_SKY_NVG_PER_LUX,
+                n::SUN_NVG_PER_LUX,
+                n::MOON_NVG_PER_LUX,
+                n::NIGHT_SKY_NVG_PER_LUX,
+                n::SUNLIT_SKY_NVG_PER_LUX,
+                n::MOONLIT_SKY_NVG_PER_LUX,
             ],
         }
     }

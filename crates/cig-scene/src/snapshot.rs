@@ -320,8 +320,6 @@ impl FrameSnapshot {
         }
     }
 
-    /// The sensor of view `view_index` when it is a sensor view and the thermal state is
-    /// there to draw it.
     /// The night-vision goggle of view `view_index`, unless it has a thermal sensor.
     pub fn nvg_of(&self, view_index: usize) -> Option<crate::nvg::NvgView> {
         if self.sensor_of(view_index).is_some() {
@@ -330,6 +328,8 @@ impl FrameSnapshot {
         self.nvg.get(view_index).copied().flatten()
     }
 
+    /// The sensor of view `view_index` when it is a sensor view and the thermal state is
+    /// there to draw it.
     pub fn sensor_of(
         &self,
         view_index: usize,

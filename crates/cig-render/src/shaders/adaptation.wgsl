@@ -24,7 +24,7 @@ const BIN_WIDTH: f32 = 0.5;
 @group(0) @binding(1) var<storage, read_write> bins: array<atomic<u32>, 64>;
 @group(0) @binding(2) var<uniform> params: AdaptParams;
 // Per view slot: x adapted log2 factor, y target log2 factor, z trimmed mean log2 luminance,
-// w 1 once adapted.
+// w 1 once adapted by the eye (3 by an intensifier's control, 2 a thermal sensor's window).
 @group(0) @binding(3) var<storage, read_write> state: array<vec4<f32>, 16>;
 
 var<workgroup> local_bins: array<atomic<u32>, 64>;
@@ -112,13 +112,15 @@ fn adapt() {
     var adapted = target_log2;
     let dt = params.key.y;
     let previous = state[slot];
-    // (A state of w 2 is a sensor view's gain window: not an eye's.)
-    if (dt >= 0.0 && params.shares.w > 0.5 && previous.w > 0.5 && previous.w < 1.5) {
+    // (A state of w 2 is a sensor view's gain window, of w 3 an intensifier's control: the eye
+    // (w 1) and the tube never follow each other's state.)
+    let tag = select(1.0, 3.0, params.mode.y > 0.5);
+    if (dt >= 0.0 && params.shares.w > 0.5 && abs(previous.w - tag) < 0.5) {
         // Lower factor: the view got brighter (light adaptation, fast); else dark adaptation.
         let tau = select(params.slot.z, params.slot.y, target_log2 < previous.x);
         adapted = previous.x + (target_log2 - previous.x) * (1.0 - exp(-dt / max(tau, 1e-3)));
     }
-    state[slot] = vec4<f32>(adapted, target_log2, mean, 1.0);
+    state[slot] = vec4<f32>(adapted, target_log2, mean, tag);
 }
 
 // The thermal sensor's automatic gain (adaptation.rs's encode_sensor): the histogram of band
@@ -168,7 +170,7 @@ fn sensor_adapt() {
     var window = vec2<f32>(lo, hi);
     let dt = params.key.z;
     let previous = state[slot];
-    if (dt >= 0.0 && params.shares.w > 0.5 && previous.w > 1.5) {
+    if (dt >= 0.0 && params.shares.w > 0.5 && abs(previous.w - 2.0) < 0.5) {
         window = previous.xy + (window - previous.xy) * (1.0 - exp(-dt / max(params.slot.y, 1e-3)));
     }
     state[slot] = vec4<f32>(window, 0.0, 2.0);

@@ -187,8 +187,8 @@ fn nvg_on() -> bool {
 }
 
 // The local lights' illuminance on a surface at eye-relative `rel` with normal `n` (light
-// units): inverse square, Lambert, the beam's lobe (smooth over 0.1 of its cosine, its back
-// share behind).
+// units): inverse square, Lambert, the beam's lobe (cig_scene::lights::Lobe::Beam's Gaussian
+// in angle, its back share behind).
 fn local_light(rel: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     let count = min(u32(g.nvg3.z), 8u);
@@ -201,7 +201,11 @@ fn local_light(rel: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
         let l = d * inverseSqrt(d2);
         var lobe = 1.0;
         if (b.w > -1.5) {
-            lobe = max(c.w, smoothstep(b.w - 0.05, b.w + 0.05, dot(-l, c.xyz)));
+            // A Gaussian in the angle off the axis, half maximum at the half width.
+            let off = acos(clamp(dot(-l, c.xyz), -1.0, 1.0));
+            let half_width = max(acos(clamp(b.w, -1.0, 1.0)), 1e-3);
+            let x = off / half_width;
+            lobe = max(c.w, exp(-0.6931472 * x * x));
         }
         sum += b.xyz * (a.w * lobe * max(dot(n, l), 0.0) / d2);
     }
