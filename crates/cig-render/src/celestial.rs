@@ -259,6 +259,8 @@ pub(crate) struct CelestialPass {
     star_buffer: wgpu::Buffer,
     /// Julian years since J2000 of the proper motion in `star_buffer` (NaN before the first).
     star_epoch_years: f64,
+    /// Whether the uploaded stars are weighted for an image intensifier.
+    stars_for_goggles: bool,
 }
 
 /// A read-only storage buffer the sky's fragment shader reads.
@@ -338,6 +340,7 @@ impl CelestialPass {
             uniform,
             star_buffer,
             star_epoch_years: f64::NAN,
+            stars_for_goggles: false,
         }
     }
 
@@ -351,8 +354,16 @@ impl CelestialPass {
 
     /// Writes the frame's moon, sun and sky rotation for a view of `snapshot` from `eye` (its
     /// time, moon and star switches), and the stars' proper motion when the date has moved by
-    /// more than a few days.
-    pub(crate) fn prepare(&mut self, gpu: &Gpu, snapshot: &FrameSnapshot, eye: Geodetic) {
+    /// more than a few days. On goggles (`goggles`) the moon's disc and each star are weighted
+    /// for the photocathode (`cig_environment::nvg`: moonlight's factor; a blackbody at the
+    /// star's temperature from its B−V) and drawn grey.
+    pub(crate) fn prepare(
+        &mut self,
+        gpu: &Gpu,
+        snapshot: &FrameSnapshot,
+        eye: Geodetic,
+        goggles: bool,
+    ) {
         let unix_time_s = snapshot.unix_time_s;
         let units = radiance_per_cd_per_m2();
         let intensity = if snapshot.star_intensity.is_finite() {
@@ -378,21 +389,31 @@ impl CelestialPass {
             ..Default::default()
         };
         let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+        let moon_k = if goggles {
+            cig_environment::nvg::MOON_NVG_PER_LUX
+        } else {
+            1.0
+        };
         if let Some(moon) = moon_view(unix_time_s, eye).filter(|_| snapshot.moon_visible) {
-            let colour = stars::star_colour_linear_srgb(Some(MOON_B_MINUS_V));
+            let colour = if goggles {
+                [1.0; 3]
+            } else {
+                stars::star_colour_linear_srgb(Some(MOON_B_MINUS_V))
+            };
             u.moon_dir = v4(
                 moon.direction_ecef,
                 moon.angular_radius_deg.to_radians().sin(),
             );
             u.moon_sun = v4(
                 moon.sun_direction_ecef,
-                moon_disc::moon_surface_luminance_cd_per_m2(moon.phase_angle_deg) * units,
+                moon_disc::moon_surface_luminance_cd_per_m2(moon.phase_angle_deg) * units * moon_k,
             );
             u.moon_colour = [
                 colour[0] as f32,
                 colour[1] as f32,
                 colour[2] as f32,
-                (moon_disc::earthshine_luminance_cd_per_m2(moon.phase_angle_deg) * units) as f32,
+                (moon_disc::earthshine_luminance_cd_per_m2(moon.phase_angle_deg) * units * moon_k)
+                    as f32,
             ];
         }
         if let Some(time) = frame_time(unix_time_s) {
@@ -404,13 +425,18 @@ impl CelestialPass {
             u.ecef_to_celestial = [v4(m.x_axis, 0.0), v4(m.y_axis, 0.0), v4(m.z_axis, 0.0)];
             let years = stars::julian_years_since_j2000(time);
             let stale = (years - self.star_epoch_years).abs();
-            if stale.is_nan() || stale >= 0.01 {
+            if stale.is_nan() || stale >= 0.01 || goggles != self.stars_for_goggles {
                 let records: Vec<StarRecord> = stars::catalogue()
                     .iter()
                     .map(|s: &Star| {
-                        let c = stars::star_colour_linear_srgb(s.b_minus_v);
+                        let (c, k) = if goggles {
+                            let t = stars::temperature_k_from_b_minus_v(s.b_minus_v.unwrap_or(0.6));
+                            ([1.0; 3], cig_environment::nvg::blackbody_nvg_per_lux(t))
+                        } else {
+                            (stars::star_colour_linear_srgb(s.b_minus_v), 1.0)
+                        };
                         StarRecord {
-                            dir_lux: v4(s.direction_j2000(years), s.illuminance_lux()),
+                            dir_lux: v4(s.direction_j2000(years), s.illuminance_lux() * k),
                             colour: [c[0] as f32, c[1] as f32, c[2] as f32, 0.0],
                         }
                     })
@@ -418,6 +444,7 @@ impl CelestialPass {
                 gpu.queue
                     .write_buffer(&self.star_buffer, 0, bytemuck::cast_slice(&records));
                 self.star_epoch_years = years;
+                self.stars_for_goggles = goggles;
             }
         }
         gpu.queue

@@ -1308,7 +1308,8 @@ impl Renderer {
             sensor.as_ref(),
             (nvg.as_ref(), &local),
         );
-        self.celestial.prepare(&self.gpu, snapshot, view.eye);
+        self.celestial
+            .prepare(&self.gpu, snapshot, view.eye, nvg.is_some());
         if !terrain_frame.records.is_empty() {
             self.gpu.queue.write_buffer(
                 &self.node_records,
