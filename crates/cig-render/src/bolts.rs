@@ -114,10 +114,8 @@ pub(crate) fn overlay_pipeline(
 pub(crate) struct BoltPass {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::RenderPipeline,
-    lines: wgpu::Buffer,
-    capacity: usize,
+    lines: OverlayRecords,
     frame: wgpu::Buffer,
-    bind: wgpu::BindGroup,
     staging: Vec<GpuLine>,
 }
 
@@ -173,8 +171,54 @@ pub(crate) fn overlay_bind(
     })
 }
 
-fn line_buffer(gpu: &Gpu, capacity: usize) -> wgpu::Buffer {
-    record_buffer::<GpuLine>(gpu, "bolt lines", capacity)
+/// An overlay pass's records on the GPU: the buffer, how many it holds, and the pass's bind
+/// group over it (rebuilt when the buffer grows).
+pub(crate) struct OverlayRecords {
+    label: &'static str,
+    pub buffer: wgpu::Buffer,
+    capacity: usize,
+    max: usize,
+    pub bind: wgpu::BindGroup,
+}
+
+impl OverlayRecords {
+    /// Room for `capacity` records of `T` (growing to at most `max`), bound with the globals
+    /// and the pass's `frame` uniform in `layout`.
+    pub(crate) fn new<T>(
+        gpu: &Gpu,
+        label: &'static str,
+        layout: &wgpu::BindGroupLayout,
+        (globals, frame): (&wgpu::Buffer, &wgpu::Buffer),
+        (capacity, max): (usize, usize),
+    ) -> OverlayRecords {
+        let buffer = record_buffer::<T>(gpu, label, capacity);
+        let bind = overlay_bind(gpu, label, layout, (globals, &buffer, frame));
+        OverlayRecords {
+            label,
+            buffer,
+            capacity,
+            max,
+            bind,
+        }
+    }
+
+    /// Writes `records` (at most `max` of them), growing the buffer by powers of two first.
+    pub(crate) fn write<T: bytemuck::Pod>(
+        &mut self,
+        gpu: &Gpu,
+        layout: &wgpu::BindGroupLayout,
+        (globals, frame): (&wgpu::Buffer, &wgpu::Buffer),
+        records: &[T],
+    ) {
+        let records = &records[..records.len().min(self.max)];
+        if records.len() > self.capacity {
+            self.capacity = records.len().next_power_of_two().min(self.max);
+            self.buffer = record_buffer::<T>(gpu, self.label, self.capacity);
+            self.bind = overlay_bind(gpu, self.label, layout, (globals, &self.buffer, frame));
+        }
+        gpu.queue
+            .write_buffer(&self.buffer, 0, bytemuck::cast_slice(records));
+    }
 }
 
 impl BoltPass {
@@ -211,28 +255,20 @@ impl BoltPass {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let capacity = 256;
-        let lines = line_buffer(gpu, capacity);
-        let bind = Self::bind(gpu, &layout, globals, &lines, &frame);
+        let lines = OverlayRecords::new::<GpuLine>(
+            gpu,
+            "bolt lines",
+            &layout,
+            (globals, &frame),
+            (256, MAX_LINES),
+        );
         BoltPass {
             layout,
             pipeline,
             lines,
-            capacity,
             frame,
-            bind,
             staging: Vec::new(),
         }
-    }
-
-    fn bind(
-        gpu: &Gpu,
-        layout: &wgpu::BindGroupLayout,
-        globals: &wgpu::Buffer,
-        lines: &wgpu::Buffer,
-        frame: &wgpu::Buffer,
-    ) -> wgpu::BindGroup {
-        overlay_bind(gpu, "bolts", layout, (globals, lines, frame))
     }
 
     /// Uploads the snapshot's bolt lines relative to the camera's eye; returns how many to
@@ -274,13 +310,8 @@ impl BoltPass {
         if count == 0 {
             return 0;
         }
-        if count > self.capacity {
-            self.capacity = count.next_power_of_two().min(MAX_LINES);
-            self.lines = line_buffer(gpu, self.capacity);
-            self.bind = Self::bind(gpu, &self.layout, globals, &self.lines, &self.frame);
-        }
-        gpu.queue
-            .write_buffer(&self.lines, 0, bytemuck::cast_slice(&self.staging));
+        self.lines
+            .write(gpu, &self.layout, (globals, &self.frame), &self.staging);
         let frame = BoltFrame {
             viewport: [
                 camera.view.width_px as f32,
@@ -301,7 +332,7 @@ impl BoltPass {
             return 0;
         }
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind, &[]);
+        pass.set_bind_group(0, &self.lines.bind, &[]);
         pass.draw(0..6, 0..count as u32);
         1
     }

@@ -18,7 +18,7 @@
 //! up to 65 % too bright); no glare or starburst in the visible (the eye's own bloom is not
 //! drawn).
 
-use crate::bolts::{overlay_bind, overlay_pipeline, record_buffer, ADDITIVE};
+use crate::bolts::{overlay_pipeline, OverlayRecords, ADDITIVE};
 use crate::gpu::Gpu;
 use crate::pass::{shader, storage_entry, uniform_entry};
 use cig_scene::lighting::LIGHTING_UNITS_PER_LUX;
@@ -55,15 +55,9 @@ pub(crate) struct LightPass {
     halos: Option<(wgpu::BindGroupLayout, wgpu::RenderPipeline)>,
     /// Whether this frame's lights have halos.
     with_halos: bool,
-    lights: wgpu::Buffer,
-    capacity: usize,
+    lights: OverlayRecords,
     frame: wgpu::Buffer,
-    bind: wgpu::BindGroup,
     staging: Vec<GpuLight>,
-}
-
-fn light_buffer(gpu: &Gpu, capacity: usize) -> wgpu::Buffer {
-    record_buffer::<GpuLight>(gpu, "light points", capacity)
 }
 
 impl LightPass {
@@ -144,30 +138,22 @@ impl LightPass {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let capacity = 256;
-        let lights = light_buffer(gpu, capacity);
-        let bind = Self::bind(gpu, &layout, globals, &lights, &frame);
+        let lights = OverlayRecords::new::<GpuLight>(
+            gpu,
+            "light points",
+            &layout,
+            (globals, &frame),
+            (256, MAX_LIGHTS),
+        );
         LightPass {
             layout,
             pipeline,
             halos,
             with_halos: false,
             lights,
-            capacity,
             frame,
-            bind,
             staging: Vec::new(),
         }
-    }
-
-    fn bind(
-        gpu: &Gpu,
-        layout: &wgpu::BindGroupLayout,
-        globals: &wgpu::Buffer,
-        lights: &wgpu::Buffer,
-        frame: &wgpu::Buffer,
-    ) -> wgpu::BindGroup {
-        overlay_bind(gpu, "light points", layout, (globals, lights, frame))
     }
 
     /// Uploads a view's lights (eye-relative, kept and attenuated by `cig_scene::lights`) at
@@ -210,13 +196,8 @@ impl LightPass {
         if count == 0 {
             return 0;
         }
-        if count > self.capacity {
-            self.capacity = count.next_power_of_two().min(MAX_LIGHTS);
-            self.lights = light_buffer(gpu, self.capacity);
-            self.bind = Self::bind(gpu, &self.layout, globals, &self.lights, &self.frame);
-        }
-        gpu.queue
-            .write_buffer(&self.lights, 0, bytemuck::cast_slice(&self.staging));
+        self.lights
+            .write(gpu, &self.layout, (globals, &self.frame), &self.staging);
         let spread_px = nvg.map_or(POINT_SPREAD_PX, |n| {
             let blur_px = n.tube.blur_sigma_deg(f64::from(n.fov_deg)) / pixel_deg;
             POINT_SPREAD_PX.max(blur_px as f32)
@@ -266,7 +247,7 @@ impl LightPass {
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: self.lights.as_entire_binding(),
+                    resource: self.lights.buffer.as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
@@ -303,7 +284,7 @@ impl LightPass {
             return 0;
         }
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind, &[]);
+        pass.set_bind_group(0, &self.lights.bind, &[]);
         pass.draw(0..6, 0..count as u32);
         1
     }

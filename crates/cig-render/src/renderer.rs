@@ -1221,7 +1221,7 @@ impl Renderer {
             self.gpu.queue.write_buffer(
                 &self.thermal,
                 0,
-                bytemuck::cast_slice(&crate::sensor::nvg_buffer()),
+                bytemuck::cast_slice(crate::sensor::nvg_buffer()),
             );
         }
         // Light points: the world's, and the resident culture's street and settlement lights

@@ -254,8 +254,13 @@ pub(crate) const NVG_OFF_TERRAIN_LUMA: usize = 32;
 /// A night-vision view's table, written where a thermal view's tables go (binding 9): each
 /// thermal material's NVG reflectance (`cig_scene::nvg::NVG_REFLECTANCE`), then each terrain
 /// material's mean visible luminance (linear, from its base colour), by which the shader
-/// scales the drawn colour's texture onto the NVG reflectance.
-pub(crate) fn nvg_buffer() -> Vec<f32> {
+/// scales the drawn colour's texture onto the NVG reflectance. Made once.
+pub(crate) fn nvg_buffer() -> &'static [f32] {
+    static BUFFER: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
+    BUFFER.get_or_init(make_nvg_buffer)
+}
+
+fn make_nvg_buffer() -> Vec<f32> {
     let mut buffer = vec![0f32; THERMAL_LEN];
     buffer[..cig_scene::nvg::NVG_REFLECTANCE.len()]
         .copy_from_slice(&cig_scene::nvg::NVG_REFLECTANCE);
