@@ -43,5 +43,5 @@ pub use exercise::{Exercise, ExerciseCounters};
 pub use model_table::{CigiEntityType, ModelTable};
 pub use pose::{BodyOffset, Pose};
 pub use scenario::{DisSettings, Scenario, ScenarioError, SmokeSource};
-pub use session::{IgSession, SessionConfig, SessionCounters};
+pub use session::{HostTimeSet, IgSession, SessionConfig, SessionCounters};
 pub use world::{IgWorld, WorldConfig, WorldError};

@@ -6,7 +6,8 @@
 //! row on a tie. Types no row matches get the scenario's default model, so an unknown vehicle
 //! is still seen. Models a row marks `cue_important` are important cues: the renderer keeps
 //! their detail under overload ([`ModelTable::is_cue_important`]); a row may set a model's
-//! critical radius for the detail control parameter ([`ModelTable::critical_radius_m`]).
+//! critical radius for the detail control parameter ([`ModelTable::critical_radius_m`]) and
+//! whether its vehicles raise dust ([`ModelTable::raises_dust`]).
 //!
 //! Limits: no substitution by country or by nearby categories beyond the patterns' wildcards.
 
@@ -33,7 +34,11 @@ pub struct ModelTable {
     gltf: Vec<(String, PathBuf)>,
     cue_important: BTreeSet<String>,
     critical_radius_m: BTreeMap<String, f32>,
+    dust: BTreeMap<String, bool>,
 }
+
+/// Models of ground vehicles that raise dust when they move on soil, unless a row says not.
+const DUST_MODELS: [&str; 2] = ["tank", "truck"];
 
 impl Default for ModelTable {
     fn default() -> Self {
@@ -44,6 +49,7 @@ impl Default for ModelTable {
             gltf: Vec::new(),
             cue_important: BTreeSet::new(),
             critical_radius_m: BTreeMap::new(),
+            dust: BTreeMap::new(),
         }
     }
 }
@@ -70,6 +76,9 @@ impl ModelTable {
                     .critical_radius_m
                     .entry(row.model.clone())
                     .or_insert(r as f32);
+            }
+            if let Some(dust) = row.dust {
+                table.dust.entry(row.model.clone()).or_insert(dust);
             }
             if let Some(path) = &row.gltf {
                 if !table.gltf.iter().any(|(name, _)| *name == row.model) {
@@ -114,6 +123,15 @@ impl ModelTable {
         self.critical_radius_m.get(model).copied()
     }
 
+    /// Whether entities drawn with `model` raise dust when they move on soil: the first row
+    /// that says, else the ground vehicles (tank, truck) do.
+    pub fn raises_dust(&self, model: &str) -> bool {
+        self.dust
+            .get(model)
+            .copied()
+            .unwrap_or_else(|| DUST_MODELS.contains(&model))
+    }
+
     /// glTF files to load: (model name, path relative to the scenario).
     pub fn gltf_files(&self) -> &[(String, PathBuf)] {
         &self.gltf
@@ -150,11 +168,13 @@ dis_type = "1:1"
 model = "tank"
 dis_type = "1:1:225:1"
 cigi_type = 7
+dust = false
 [[models]]
 model = "ship"
 dis_type = "1:3:*"
 cue_important = true
 critical_radius_m = 60.0
+dust = true
 "#,
         )
         .expect("scenario");
@@ -179,6 +199,11 @@ critical_radius_m = 60.0
         assert!(!table.is_cue_important("building"));
         assert_eq!(table.critical_radius_m("ship"), Some(60.0));
         assert_eq!(table.critical_radius_m("tank"), None);
+        // Dust: as a row says, else the ground vehicles only.
+        assert!(!table.raises_dust("tank"));
+        assert!(table.raises_dust("ship"));
+        assert!(table.raises_dust("truck"));
+        assert!(!table.raises_dust("building"));
     }
 
     #[test]

@@ -37,6 +37,8 @@
 //! cue_important = true                 # keeps its detail under overload (default false)
 //! critical_radius_m = 60.0             # r_c of the detail control parameter (default: the
 //!                                      # model's bounding radius)
+//! dust = false                         # entities of this model raise no dust trail on soil
+//!                                      # (default: on for tank and truck)
 //!
 //! [[entities]]                         # entities this IG owns (drawn, and published on DIS)
 //! id = 1                               # CIGI entity id space (0 is the ownship)
@@ -549,6 +551,11 @@ pub struct ModelMapping {
     /// belongs to the model.
     #[serde(default)]
     pub critical_radius_m: Option<f64>,
+    /// Whether entities drawn with this model raise a dust trail when they move on soil (the
+    /// host's and the exercise's as well as the scenario's own; default: on for the ground
+    /// vehicles, tank and truck). Like `cue_important` it belongs to the model.
+    #[serde(default)]
+    pub dust: Option<bool>,
 }
 
 /// An entity the IG owns.

@@ -627,6 +627,55 @@ impl Default for SessionConfig {
     }
 }
 
+/// A time of day the host set (Celestial Sphere Control), as a channel needs it to agree with
+/// the others: the host's clock of the message that told it (a channel that read several host
+/// frames at once carries it forward to the frame it steps to) and how finely it was told
+/// (CIGI 3.3 has no seconds field: a host restating the time every second must not pull the
+/// clock back to the start of the minute).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HostTimeSet {
+    /// The time told; in CIGI 3.3 the start of its minute.
+    pub time: UtcTime,
+    /// The span the true time lies in from `time`: 60 s in CIGI 3.3, 0 in 4.0.
+    pub resolution_s: f64,
+    /// The host's clock ([`IgSession::host_clock_s`]) of the message that told it.
+    pub told_at_host_s: Option<f64>,
+}
+
+impl HostTimeSet {
+    /// The time to set the clock to, or `None` when the clock (`clock_unix_s`) already agrees
+    /// with what the host told within its resolution and `tolerance_s`. `stepped_to_host_s` is
+    /// the host clock the world is stepped to, `rate` the simulation clock's rate. Inside a
+    /// minute told by CIGI 3.3 the seconds are taken from the host's clock (its seconds modulo
+    /// the minute), so channels that join at different times pick the same instant.
+    pub fn time_to_take(
+        &self,
+        clock_unix_s: f64,
+        stepped_to_host_s: Option<f64>,
+        rate: f64,
+        tolerance_s: f64,
+    ) -> Option<UtcTime> {
+        let carried_s = match (stepped_to_host_s, self.told_at_host_s) {
+            (Some(now_s), Some(at_s)) if now_s > at_s => (now_s - at_s) * rate,
+            _ => 0.0,
+        };
+        let start = self.time.plus_seconds(carried_s);
+        let behind_s = clock_unix_s - start.unix_seconds();
+        if (-tolerance_s..self.resolution_s + tolerance_s).contains(&behind_s)
+            && (self.resolution_s > 0.0 || behind_s <= tolerance_s)
+        {
+            return None;
+        }
+        let within_s = match self.told_at_host_s {
+            Some(at_s) if self.resolution_s > 0.0 && (at_s * rate).is_finite() => {
+                (at_s * rate).rem_euclid(self.resolution_s)
+            }
+            _ => 0.0,
+        };
+        Some(start.plus_seconds(within_s))
+    }
+}
+
 /// The IG's CIGI state.
 pub struct IgSession {
     config: SessionConfig,
@@ -659,7 +708,7 @@ pub struct IgSession {
     /// The host's clock from its IG Control timestamps, unwrapped: (last ticks, seconds).
     host_clock: Option<(u32, f64)>,
     requested_database: i8,
-    time_set: Option<UtcTime>,
+    time_set: Option<HostTimeSet>,
     poses: BTreeMap<u16, Pose>,
     counters: SessionCounters,
 }
@@ -776,7 +825,7 @@ impl IgSession {
     }
 
     /// A time the host set with Celestial Sphere Control since the last call.
-    pub fn take_time_set(&mut self) -> Option<UtcTime> {
+    pub fn take_time_set(&mut self) -> Option<HostTimeSet> {
         self.time_set.take()
     }
     /// User-defined packets received since the last call.
@@ -1026,7 +1075,17 @@ impl IgSession {
                         u32::from(c.minute),
                         seconds,
                     ) {
-                        Ok(t) => self.time_set = Some(t),
+                        Ok(t) => {
+                            self.time_set = Some(HostTimeSet {
+                                time: t,
+                                // CIGI 3.3's packet has no seconds: it tells the minute.
+                                resolution_s: match self.host_format {
+                                    Some((Version::V3_3, _)) => 60.0,
+                                    _ => 0.0,
+                                },
+                                told_at_host_s: self.host_clock_s(),
+                            });
+                        }
                         Err(e) => {
                             self.tell_host(format!("Celestial Sphere Control: {e}"));
                             return false;

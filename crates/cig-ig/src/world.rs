@@ -229,9 +229,6 @@ pub struct IgWorld {
     flares: Vec<(cig_scene::lights::Flare, Option<f64>)>,
 }
 
-/// Models of ground vehicles that raise dust when they move on soil.
-const DUST_MODELS: [&str; 2] = ["tank", "truck"];
-
 /// A scenario smoke source and the plume it runs.
 struct SmokeState {
     source: SmokeSource,
@@ -553,7 +550,6 @@ impl IgWorld {
         };
         self.monotonic_s += dt;
         let now = self.monotonic_s;
-        let set = self.session.take_time_set();
         // A host repeating the current time every frame changes nothing and announces nothing.
         // Stepped on the host's clock (a display channel), the world takes the host's time of
         // day exactly, so channels started seconds apart agree to the frame.
@@ -562,8 +558,14 @@ impl IgWorld {
         } else {
             1.0
         };
-        let set = set
-            .filter(|t| (t.unix_seconds() - self.clock.now().unix_seconds()).abs() > tolerance_s);
+        let set = self.session.take_time_set().and_then(|set| {
+            set.time_to_take(
+                self.clock.now().unix_seconds(),
+                self.host_clock_stepped_s,
+                self.clock.rate(),
+                tolerance_s,
+            )
+        });
         if let Some(t) = set {
             self.clock.set_time(t);
             if let Some(x) = self.exercise.as_mut() {
@@ -1323,7 +1325,7 @@ impl IgWorld {
                 .iter()
                 .find(|s| s.id == *id && e.scripted)
                 .and_then(|s| s.dust)
-                .unwrap_or_else(|| DUST_MODELS.contains(&e.model.as_str()));
+                .unwrap_or_else(|| self.session.models().raises_dust(&e.model));
             // An entity whose own appearance asks for dust has that trail already.
             let by_appearance = self.owned_effects.keys().any(|(owner, effect)| {
                 *owner == *id && matches!(effect, cig_dis::EntityEffect::DustCloud(_))

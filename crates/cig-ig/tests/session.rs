@@ -1460,6 +1460,89 @@ fn clocked_frame(frame: u32, ticks: u32) -> Vec<u8> {
     bytes
 }
 
+/// Host frame `frame` at 8 Hz on the host's clock; every eighth one also tells the time of
+/// day (19:00:00 plus the host's clock; CIGI 3.3 tells only its minute), as `cig host` does
+/// for channels that join late.
+fn timed_frame(version: Version, frame: u32) -> Vec<u8> {
+    let t_s = f64::from(frame) / 8.0;
+    let mut packets = vec![Packet::IgControl(IgControl {
+        ig_mode: 1,
+        host_frame_number: frame,
+        timestamp_valid: true,
+        timestamp_10us: (t_s * 1e5).round() as u32,
+        ..IgControl::default()
+    })];
+    if frame.is_multiple_of(8) {
+        let c = UtcTime::from_calendar(2026, 6, 21, 19, 0, 0.0)
+            .expect("time")
+            .plus_seconds(t_s)
+            .to_calendar();
+        packets.push(Packet::CelestialSphereControl(CelestialSphereControl {
+            hour: c.hour as u8,
+            minute: c.minute as u8,
+            seconds: c.second as f32,
+            date_time_valid: true,
+            date_mmddyyyy: c.month * 1_000_000 + c.day * 10_000 + c.year as u32,
+            ..CelestialSphereControl::default()
+        }));
+    }
+    let mut bytes = Vec::new();
+    encode_message(
+        &Message::new(version, ByteOrder::LittleEndian, packets),
+        &mut bytes,
+    )
+    .expect("encode");
+    bytes
+}
+
+#[test]
+fn a_channel_that_reads_several_host_frames_at_once_keeps_the_hosts_time_of_day() {
+    let mut q = query();
+    let expected_s = UtcTime::from_calendar(2026, 6, 21, 19, 0, 0.0)
+        .expect("time")
+        .unix_seconds();
+    for version in [Version::V3_3, Version::V4_0] {
+        let mut prompt = world("");
+        let mut behind = world("");
+        let mut late = world("");
+        for frame in 0..24u32 {
+            let bytes = timed_frame(version, frame);
+            let host_s = f64::from(frame) / 8.0;
+            prompt.receive_cigi(&bytes).expect("host frame");
+            prompt.step_to_host_clock(0.125, &mut q);
+            behind.receive_cigi(&bytes).expect("host frame");
+            // The slow channel reads frames 0, 1-9, 10-23: the time told in frames 8 and 16
+            // is old by the host frame it steps to.
+            if [0, 9, 23].contains(&frame) {
+                behind.step_to_host_clock(0.125, &mut q);
+                assert!(
+                    (behind.unix_time_s() - prompt.unix_time_s()).abs() < 1e-3,
+                    "{version:?} frame {frame}: {} s apart",
+                    behind.unix_time_s() - prompt.unix_time_s()
+                );
+            }
+            // A channel that restarts at host frame 10 and first hears the time at frame 16.
+            if frame >= 10 {
+                late.receive_cigi(&bytes).expect("host frame");
+                late.step_to_host_clock(0.125, &mut q);
+                if frame >= 16 {
+                    assert!(
+                        (late.unix_time_s() - prompt.unix_time_s()).abs() < 1e-3,
+                        "{version:?} frame {frame}: the late one {} s off",
+                        late.unix_time_s() - prompt.unix_time_s()
+                    );
+                }
+            }
+            // The host's time of day, never pulled back to the minute by a restatement.
+            assert!(
+                (prompt.unix_time_s() - (expected_s + host_s)).abs() < 1e-3,
+                "{version:?} frame {frame}: {} s off",
+                prompt.unix_time_s() - (expected_s + host_s)
+            );
+        }
+    }
+}
+
 #[test]
 fn channels_on_the_hosts_clock_agree_and_a_slave_answers_nothing() {
     let mut q = query();
