@@ -62,6 +62,63 @@ pub enum Command {
     /// Thermal infrared physics: band radiance, surface temperatures.
     #[command(subcommand)]
     Ir(IrCommand),
+    /// The sea: wave statistics of the simulated surface, the horizon and hull-down ranges.
+    #[command(subcommand)]
+    Sea(SeaCommand),
+}
+
+#[derive(Subcommand)]
+pub enum SeaCommand {
+    /// Significant wave height, peak period and whitecap coverage measured from the simulated
+    /// sea surface (cig's FFT cascades) for a wind and fetch or a WMO sea state code.
+    #[command(allow_negative_numbers = true)]
+    Stats(SeaStatsArgs),
+    /// The sea horizon, its dip and how much of a target is hidden below it, on the round
+    /// earth with standard terrestrial refraction (k = 0.13) or without.
+    #[command(allow_negative_numbers = true)]
+    Horizon(SeaHorizonArgs),
+}
+
+#[derive(Args)]
+pub struct SeaStatsArgs {
+    /// Wind speed 10 m above the sea, m/s (0-60).
+    #[arg(long, conflicts_with = "sea_state")]
+    pub wind_mps: Option<f64>,
+    /// Fetch, km (default: a fully developed sea, Pierson-Moskowitz).
+    #[arg(long, requires = "wind_mps")]
+    pub fetch_km: Option<f64>,
+    /// WMO sea state code, 0-9: a fully developed sea in the middle of the code's range.
+    #[arg(long)]
+    pub sea_state: Option<f64>,
+    /// Direction the wind blows from, degrees true.
+    #[arg(long, default_value_t = 270.0)]
+    pub wind_from_deg: f64,
+    /// Seed of the wave field (every IG of an exercise uses the same one).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct SeaHorizonArgs {
+    /// The eye's height above the sea, metres.
+    #[arg(long)]
+    pub eye_m: f64,
+    /// A target's top (masthead) height above the sea, metres: the range at which it sinks
+    /// below the horizon.
+    #[arg(long)]
+    pub top_m: Option<f64>,
+    /// A target's range, metres: the height hidden below the horizon there.
+    #[arg(long)]
+    pub range_m: Option<f64>,
+    /// Refraction coefficient k (0: the geometric horizon; default 0.13, standard).
+    #[arg(long, default_value_t = 0.13)]
+    pub refraction_k: f64,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Subcommand)]

@@ -18,6 +18,7 @@ mod output;
 mod plume;
 mod query;
 mod render;
+mod sea;
 mod serve;
 mod thermal_view;
 mod view;
@@ -92,6 +93,8 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Ir(cli::IrCommand::Radiance(args)) => ir::radiance(&args),
         cli::Command::Ir(cli::IrCommand::SurfaceTemp(args)) => ir::surface_temp(&args),
         cli::Command::Ir(cli::IrCommand::Transmittance(args)) => ir::transmittance(&args),
+        cli::Command::Sea(cli::SeaCommand::Stats(args)) => sea::stats(&args),
+        cli::Command::Sea(cli::SeaCommand::Horizon(args)) => sea::horizon(&args),
         cli::Command::Config(cli::ConfigCommand::Default) => {
             print!("{}", config::Config::default_toml()?);
             Ok(())
