@@ -23,6 +23,7 @@ pub mod pass;
 pub mod precipitation;
 pub mod puffs;
 pub mod renderer;
+pub mod sea;
 pub mod sensor;
 pub mod terrain;
 pub mod viewer;

@@ -84,12 +84,20 @@ pub(crate) fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
 
 /// A filterable 2-D float texture (both stages may sample).
 pub(crate) fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    texture_entry_of(binding, wgpu::TextureViewDimension::D2)
+}
+
+/// A filterable float texture of the given dimension (both stages may sample).
+pub(crate) fn texture_entry_of(
+    binding: u32,
+    view_dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
         ty: wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: wgpu::TextureViewDimension::D2,
+            view_dimension,
             multisampled: false,
         },
         count: None,

@@ -366,6 +366,8 @@ pub struct Renderer {
     clouds: CloudPass,
     bolts: crate::bolts::BoltPass,
     light_points: crate::lights::LightPass,
+    sea: crate::sea::SeaPass,
+    sea_pipeline: wgpu::RenderPipeline,
     /// This view's light points (the world's and the culture's), kept for their room.
     lights_scratch: Vec<cig_scene::lights::LightPoint>,
     drawn_scratch: Vec<cig_scene::lights::DrawnLight>,
@@ -910,6 +912,24 @@ impl Renderer {
         let clouds = CloudPass::new(&gpu, HDR_FORMAT);
         let bolts = crate::bolts::BoltPass::new(&gpu, HDR_FORMAT, &globals);
         let light_points = crate::lights::LightPass::new(&gpu, HDR_FORMAT, &globals);
+        let sea =
+            crate::sea::SeaPass::new(&gpu, GeoidLookup::new(&cache.database().manifest().geoid));
+        let sea_module = atmosphere_shader(&gpu, "sea", include_str!("shaders/sea.wgsl"));
+        let sea_pipeline = pipeline(
+            &gpu,
+            HDR_FORMAT,
+            &PipelineSpec {
+                label: "sea",
+                module: &sea_module,
+                layouts: &[&sea.layout, &atmosphere.layout],
+                buffers: &[],
+                depth_write: true,
+                depth_compare: wgpu::CompareFunction::Greater,
+                polygon_mode: wgpu::PolygonMode::Fill,
+                cull: None,
+                constants: &[],
+            },
+        );
         let precipitation =
             crate::precipitation::PrecipitationPass::new(&gpu, HDR_FORMAT, &globals);
         let mut renderer = Renderer {
@@ -958,6 +978,8 @@ impl Renderer {
             clouds,
             bolts,
             light_points,
+            sea,
+            sea_pipeline,
             lights_scratch: Vec::new(),
             drawn_scratch: Vec::new(),
             precipitation,
@@ -1300,6 +1322,13 @@ impl Renderer {
             nvg.as_ref(),
         );
         self.drawn_scratch = drawn;
+        // The sea (not in a thermal sensor's view yet).
+        let sea_vertices = if sensor.is_none() {
+            self.sea
+                .prepare(&self.gpu, &self.globals, &camera, snapshot.sea.as_deref())
+        } else {
+            0
+        };
         self.write_globals(
             &camera,
             &lighting,
@@ -1558,6 +1587,13 @@ impl Renderer {
             stats.culture_drawn = culture_drawn as u32;
             stats.culture_blocks_occluded = culture_occluded as u32;
             stats.culture_cpu_ms = culture_cpu_ms;
+            if let (true, Some(bind)) = (sea_vertices > 0, self.sea.bind_group()) {
+                pass.set_pipeline(&self.sea_pipeline);
+                pass.set_bind_group(0, bind, &[]);
+                pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
+                pass.draw(0..sea_vertices, 0..1);
+                stats.draw_calls += 1;
+            }
             // The sky where no geometry was drawn (its depth test passes at the cleared far
             // plane only).
             pass.set_pipeline(&self.sky_pipeline);
@@ -1797,7 +1833,10 @@ impl Renderer {
         let v4 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         let c4 = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
         let [tl, tr, td, tu] = camera.view.fov.tangents();
-        let alt = camera.view.eye.alt_m.max(0.0);
+        // The horizon's dip from the eye's height above mean sea level (the geoid), where the
+        // sea's horizon lies.
+        let eye = camera.view.eye;
+        let alt = (eye.alt_m - self.sea.undulation_m(eye.lat_deg, eye.lon_deg)).max(0.0);
         let dip = (2.0 * alt / cig_geo::WGS84_A_M).sqrt();
         let fog = snapshot.fog;
         let mode = f32::from(fog_mode_index(fog.mode));
@@ -1861,8 +1900,9 @@ impl Renderer {
                 [r, g, b, f32::from(u8::from(lighting.moon_lights_the_sky()))]
             },
             atmos: [
+                // The atmosphere's ground is mean sea level: the eye's height above the geoid.
                 (cig_environment::AtmosphereParams::EARTH.bottom_radius_m
-                    + camera.view.eye.alt_m.clamp(1.0, 99_000.0)) as f32,
+                    + alt.clamp(1.0, 99_000.0)) as f32,
                 match snapshot.sky.model {
                     SkyModel::Physical => 0.0,
                     SkyModel::Flat => 1.0,

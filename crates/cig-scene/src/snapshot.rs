@@ -251,6 +251,8 @@ pub struct FrameSnapshot {
     /// Trackers' gates to read back after drawing: (view index, `[x, y, width, height]`
     /// pixels), for `cig_ig`'s sensor trackers.
     pub track_gates: Vec<(usize, [u32; 4])>,
+    /// The sea over the open ocean and the database's sea areas, when the scene has one.
+    pub sea: Option<std::sync::Arc<crate::sea::SeaDraw>>,
 }
 
 /// One straight piece of a lightning bolt, relative to its bolt's origin (ECEF axes, metres).
@@ -316,6 +318,7 @@ impl FrameSnapshot {
             lights: Vec::new(),
             street_lights: None,
             thermal: None,
+            sea: None,
             track_gates: Vec::new(),
         }
     }

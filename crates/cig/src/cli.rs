@@ -972,6 +972,19 @@ pub struct RenderArgs {
         allow_hyphen_values = true
     )]
     pub flares: Vec<String>,
+    /// A sea at mean sea level, fully developed for a WMO sea state code 0-9 (the open ocean
+    /// beyond the database and wherever the ground lies below sea level).
+    #[arg(
+        long,
+        value_name = "N",
+        conflicts_with = "sea_wind",
+        allow_hyphen_values = true
+    )]
+    pub sea_state: Option<f64>,
+    /// A sea raised by this wind (m/s at 10 m) blowing from FROM_DEG (default 270), fully
+    /// developed.
+    #[arg(long, value_name = "MPS[,FROM_DEG]", allow_hyphen_values = true)]
+    pub sea_wind: Option<String>,
     /// Thermal polarity: white-hot or black-hot.
     #[arg(long, default_value = "white-hot")]
     pub polarity: String,

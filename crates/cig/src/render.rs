@@ -561,6 +561,15 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     };
     snapshot.max_pixel_error = args.max_pixel_error;
     snapshot.wireframe = args.wireframe;
+    if let Some(conditions) =
+        crate::sea::conditions_from_args(args.sea_state, args.sea_wind.as_deref())?
+    {
+        snapshot.sea = Some(Arc::new(crate::sea::sea_draw(
+            &conditions,
+            view.eye,
+            unix_time_s,
+        )?));
+    }
     snapshot.entities = entities;
     snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&clouds);
     snapshot.cloud_layers = clouds;

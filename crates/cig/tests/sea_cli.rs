@@ -2,7 +2,8 @@
 
 mod common;
 
-use common::{cig, json_output, one_line_error};
+use common::{cig, json_output, one_line_error, read_png_rgba, small_db};
+use std::path::{Path, PathBuf};
 
 fn number(v: &serde_json::Value, key: &str) -> f64 {
     v[key]
@@ -82,4 +83,130 @@ fn bad_sea_input_gives_one_line_errors() {
         let line = one_line_error(&out);
         assert!(line.contains(needle), "{args:?}: {line}");
     }
+}
+
+/// Renders a 320x180 frame with the sea off the small database's west edge (open ocean), 3 m
+/// above mean sea level (the geoid lies about 33 m below the ellipsoid there).
+fn render_sea(db: &Path, out: &Path, heading_deg: f64, time: &str, sea: &[&str]) -> PathBuf {
+    let mut args: Vec<String> = [
+        "render",
+        "--db",
+        &db.display().to_string(),
+        "--eye",
+        "35.99,-121.40,-30",
+        "--hpr",
+        &format!("{heading_deg},-3,0"),
+        "--size",
+        "320x180",
+        "--time",
+        time,
+        "--out",
+        &out.display().to_string(),
+    ]
+    .iter()
+    .map(ToString::to_string)
+    .collect();
+    args.extend(sea.iter().map(ToString::to_string));
+    cig().args(&args).assert().success();
+    out.to_path_buf()
+}
+
+/// Mean of the sRGB channels over rows `rows` of an RGBA frame.
+fn mean_rows(pixels: &[u8], width: u32, rows: std::ops::Range<u32>) -> f64 {
+    mean_rect(pixels, width, rows, 0..width)
+}
+
+/// Mean of the sRGB channels over rows `rows` and columns `columns` of an RGBA frame.
+fn mean_rect(
+    pixels: &[u8],
+    width: u32,
+    rows: std::ops::Range<u32>,
+    columns: std::ops::Range<u32>,
+) -> f64 {
+    let w = width as usize;
+    let (c0, c1) = (columns.start as usize, columns.end as usize);
+    let mut sum = 0.0;
+    let mut n = 0.0;
+    for y in rows {
+        let row = y as usize * w;
+        for px in pixels[(row + c0) * 4..(row + c1) * 4].chunks_exact(4) {
+            sum += f64::from(px[0]) + f64::from(px[1]) + f64::from(px[2]);
+            n += 3.0;
+        }
+    }
+    sum / n
+}
+
+#[test]
+fn the_sea_glitters_toward_the_sun_is_darker_away_from_it_and_does_not_shimmer() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    // An evening sun low in the west-north-west (about 295 degrees, 10 degrees up).
+    let time = "2026-06-22T02:30:00Z";
+    let toward = render_sea(
+        &db,
+        &dir.path().join("toward.png"),
+        295.0,
+        time,
+        &["--sea-state", "3"],
+    );
+    let away = render_sea(
+        &db,
+        &dir.path().join("away.png"),
+        115.0,
+        time,
+        &["--sea-state", "3"],
+    );
+    let bare = render_sea(&db, &dir.path().join("bare.png"), 295.0, time, &[]);
+    let (w, h, toward) = read_png_rgba(&toward);
+    let (_, _, away) = read_png_rgba(&away);
+    let (_, _, bare) = read_png_rgba(&bare);
+    // The lower part of the frame is sea.
+    let sea_rows = h * 2 / 3..h;
+    // The sun's glitter path: the sea under the sun (the middle tenth of the frame) against
+    // the same place looking away from it.
+    let path = w * 9 / 20..w * 11 / 20;
+    let lit = mean_rect(&toward, w, sea_rows.clone(), path.clone());
+    let dark = mean_rect(&away, w, sea_rows.clone(), path);
+    assert!(lit > 2.0 * dark, "toward the sun {lit:.1}, away {dark:.1}");
+    let lit = mean_rows(&toward, w, sea_rows.clone());
+    // Without a sea the ground below the horizon is not drawn like water.
+    let none = mean_rows(&bare, w, sea_rows.clone());
+    assert!(
+        (lit - none).abs() > 20.0,
+        "with a sea {lit:.1}, without {none:.1}"
+    );
+    // A still camera over a calm sea, one frame (1/30 s) apart: the far sea, where the waves
+    // are finer than a pixel, changes little (no shimmering noise).
+    let calm = |name: &str, time: &str| {
+        let path = render_sea(
+            &db,
+            &dir.path().join(name),
+            200.0,
+            time,
+            &["--sea-state", "2"],
+        );
+        read_png_rgba(&path).2
+    };
+    let a = calm("calm0.png", "2026-06-21T20:00:00.000Z");
+    let b = calm("calm1.png", "2026-06-21T20:00:00.033Z");
+    // The far sea: just below the horizon (3 degrees above the frame's centre).
+    let far_rows = (h * 45 / 100) * w..(h * 60 / 100) * w;
+    let diff: f64 = a[far_rows.start as usize * 4..far_rows.end as usize * 4]
+        .iter()
+        .zip(&b[far_rows.start as usize * 4..far_rows.end as usize * 4])
+        .map(|(x, y)| f64::from(x.abs_diff(*y)))
+        .sum::<f64>()
+        / f64::from(far_rows.end - far_rows.start)
+        / 4.0;
+    assert!(
+        diff < 3.0,
+        "the far sea changes by {diff:.2} levels a frame"
+    );
+    let moved: f64 = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| f64::from(x.abs_diff(*y)))
+        .sum::<f64>();
+    assert!(moved > 0.0, "the waves move");
 }

@@ -1,0 +1,360 @@
+//! The sea surface: a polar grid of rings around the eye on the round earth, displaced by the
+//! wave cascades' grids (`cig_scene::sea::SeaDraw`, computed on the CPU so that the height
+//! queries and the picture are one surface) and shaded with Fresnel reflection of cig's sky,
+//! the sun's glitter, the light the water body scatters up, and whitecaps.
+//!
+//! Algorithm: Tessendorf's FFT ocean drawn as a radial grid (rings spaced geometrically from
+//! under the eye to past the horizon, so triangles keep a near-constant size on screen). Each
+//! cascade is a repeating texture array layer with mipmaps made on the CPU; a vertex reads the
+//! level whose texels match the grid's spacing there. Slopes are LEAN-mapped (Olano and Baker
+//! 2010): the textures hold the slopes and their squares, so a pixel's filtered texels give the
+//! mean slope and the variance of the slopes it covers; that variance, plus what no cascade
+//! resolves (Cox and Munk's total less the grids'), widens the glitter's slope distribution.
+//! Far off, where the waves are finer than a pixel, the sea therefore turns into the smooth
+//! glitter pattern of its slope statistics instead of aliasing into shimmering noise. Sun glint
+//! after Cox and Munk: `π L = π E F p(slope) / (4 μ_v μ_n⁴)`, with Schlick's Fresnel (water,
+//! F0 = 0.02).
+//!
+//! Limits: the sea lies at mean sea level plus the scene's level everywhere (the database's
+//! water posts beneath it are drawn too and may show through in troughs); no refraction of
+//! what lies below the surface, no shadows on the water, no explicit (Wave Control) waves in
+//! the picture yet; thermal sensor views do not draw it yet.
+
+use crate::gpu::Gpu;
+use crate::pass::uniform_entry;
+use cig_scene::sea::SeaDraw;
+use cig_scene::Camera;
+use cig_terrain::database::GeoidLookup;
+
+/// Rings of the grid, from under the eye to its far edge.
+const RINGS: u32 = 192;
+/// Segments around each ring.
+const SEGMENTS: u32 = 256;
+/// Cascades the pass draws at most (texture array layers).
+pub const MAX_CASCADES: usize = 4;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct SeaUniform {
+    /// ECEF east at the eye; w: rings.
+    east: [f32; 4],
+    /// ECEF north at the eye; w: segments.
+    north: [f32; 4],
+    /// x: the sea's level relative to the eye (m, negative below it), y: the earth's radius
+    /// (m), z: the grid's far radius (m), w: its first ring's radius (m).
+    params: [f32; 4],
+    /// Per cascade: the eye's place in the tile (fraction, east and north), the tile (m) and
+    /// its texel (m).
+    cascades: [[f32; 4]; MAX_CASCADES],
+    /// x: unresolved slope variance, y: the whitecaps' Jacobian, z: cascades, w: mip levels.
+    shade: [f32; 4],
+    /// The water body's colour; w unused.
+    water: [f32; 4],
+}
+
+/// The sea's GPU state: three texture arrays (displacement, LEAN slopes, displacement
+/// gradient), one layer per cascade, rebuilt when the cascades' size changes.
+pub(crate) struct SeaPass {
+    pub(crate) layout: wgpu::BindGroupLayout,
+    uniform: wgpu::Buffer,
+    sampler: wgpu::Sampler,
+    textures: Option<SeaTextures>,
+    geoid: GeoidLookup,
+}
+
+struct SeaTextures {
+    size: u32,
+    layers: u32,
+    mips: u32,
+    displacement: wgpu::Texture,
+    slopes: wgpu::Texture,
+    gradient: wgpu::Texture,
+    bind: wgpu::BindGroup,
+}
+
+fn array_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    crate::pass::texture_entry_of(binding, wgpu::TextureViewDimension::D2Array)
+}
+
+impl SeaPass {
+    pub(crate) fn new(gpu: &Gpu, geoid: GeoidLookup) -> SeaPass {
+        let device = &gpu.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("sea"),
+            entries: &[
+                uniform_entry(0),
+                uniform_entry(1),
+                array_entry(2),
+                array_entry(3),
+                array_entry(4),
+                crate::pass::sampler_entry(5),
+            ],
+        });
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sea"),
+            size: std::mem::size_of::<SeaUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("sea"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            anisotropy_clamp: 1,
+            ..Default::default()
+        });
+        SeaPass {
+            layout,
+            uniform,
+            sampler,
+            textures: None,
+            geoid,
+        }
+    }
+
+    /// Uploads the frame's sea for `camera`; returns the vertices to draw (0: nothing).
+    pub(crate) fn prepare(
+        &mut self,
+        gpu: &Gpu,
+        globals: &wgpu::Buffer,
+        camera: &Camera,
+        sea: Option<&SeaDraw>,
+    ) -> u32 {
+        let Some(sea) = sea else {
+            return 0;
+        };
+        let cascades = &sea.cascades[..sea.cascades.len().min(MAX_CASCADES)];
+        let Some(size) = cascades.first().map(|c| c.size) else {
+            return 0;
+        };
+        if size < 2 || cascades.iter().any(|c| c.size != size) {
+            tracing::warn!("the sea's cascades differ in size: not drawn");
+            return 0;
+        }
+        let size = size as u32;
+        let layers = cascades.len() as u32;
+        if self
+            .textures
+            .as_ref()
+            .is_none_or(|t| t.size != size || t.layers != layers)
+        {
+            self.textures = Some(self.make_textures(gpu, globals, size, layers));
+        }
+        let Some(textures) = self.textures.as_ref() else {
+            return 0;
+        };
+        for (layer, grid) in cascades.iter().enumerate() {
+            let displacement: Vec<[f32; 4]> = grid
+                .height_displacement
+                .iter()
+                .map(|t| [t[0], t[1], t[2], 0.0])
+                .collect();
+            let slopes: Vec<[f32; 4]> = grid
+                .slopes
+                .iter()
+                .map(|s| [s[0], s[1], s[0] * s[0], s[1] * s[1]])
+                .collect();
+            let gradient: Vec<[f32; 4]> = grid
+                .displacement_gradient
+                .iter()
+                .map(|d| [d[0], d[1], d[2], 0.0])
+                .collect();
+            for (texture, texels) in [
+                (&textures.displacement, displacement),
+                (&textures.slopes, slopes),
+                (&textures.gradient, gradient),
+            ] {
+                upload_mips(gpu, texture, layer as u32, size, textures.mips, texels);
+            }
+        }
+        // The eye in the sea's plane, and the sea's level relative to it.
+        let eye = camera.view.eye;
+        let plane = cig_geo::EnuFrame::new(sea.origin);
+        let eye_in_plane = plane.ecef_to_enu(camera.eye_ecef);
+        let here = cig_geo::EnuFrame::new(eye);
+        let east = here.enu_vector_to_ecef(glam::DVec3::X);
+        let north = here.enu_vector_to_ecef(glam::DVec3::Y);
+        let sea_level_m = self.geoid.undulation_m(eye.lat_deg, eye.lon_deg) + sea.level_m;
+        let height_m = (eye.alt_m - sea_level_m).max(0.5);
+        let radius_m = cig_geo::WGS84_A_M;
+        let far_m = ((2.0 * radius_m * height_m).sqrt() * 1.5 + 2_000.0).min(400_000.0);
+        let mut uniform = SeaUniform {
+            east: [east.x as f32, east.y as f32, east.z as f32, RINGS as f32],
+            north: [
+                north.x as f32,
+                north.y as f32,
+                north.z as f32,
+                SEGMENTS as f32,
+            ],
+            params: [
+                (sea_level_m - eye.alt_m) as f32,
+                radius_m as f32,
+                far_m as f32,
+                (0.25 * height_m).clamp(0.05, 2.0) as f32,
+            ],
+            shade: [
+                sea.unresolved_slope_variance as f32,
+                sea.whitecap_jacobian as f32,
+                layers as f32,
+                textures.mips as f32,
+            ],
+            water: [sea.water_rgb[0], sea.water_rgb[1], sea.water_rgb[2], 0.0],
+            ..SeaUniform::default()
+        };
+        for (slot, grid) in uniform.cascades.iter_mut().zip(cascades) {
+            let frac = |x: f64| (x / grid.tile_m).rem_euclid(1.0) as f32;
+            *slot = [
+                frac(eye_in_plane.x),
+                frac(eye_in_plane.y),
+                grid.tile_m as f32,
+                (grid.tile_m / f64::from(size)) as f32,
+            ];
+        }
+        gpu.queue
+            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        RINGS * SEGMENTS * 6
+    }
+
+    /// The geoid's height above the ellipsoid here (the database's grid), metres.
+    pub(crate) fn undulation_m(&self, lat_deg: f64, lon_deg: f64) -> f64 {
+        self.geoid.undulation_m(lat_deg, lon_deg)
+    }
+
+    pub(crate) fn bind_group(&self) -> Option<&wgpu::BindGroup> {
+        self.textures.as_ref().map(|t| &t.bind)
+    }
+
+    fn make_textures(
+        &self,
+        gpu: &Gpu,
+        globals: &wgpu::Buffer,
+        size: u32,
+        layers: u32,
+    ) -> SeaTextures {
+        let mips = size.ilog2() + 1;
+        let make = |label| {
+            gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: size,
+                    height: size,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: mips,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba16Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            })
+        };
+        let displacement = make("sea displacement");
+        let slopes = make("sea slopes");
+        let gradient = make("sea gradient");
+        let view = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            })
+        };
+        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("sea"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: globals.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: self.uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&view(&displacement)),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&view(&slopes)),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&view(&gradient)),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        });
+        SeaTextures {
+            size,
+            layers,
+            mips,
+            displacement,
+            slopes,
+            gradient,
+            bind,
+        }
+    }
+}
+
+/// Uploads one layer and its mip chain (2 x 2 box averages of the periodic grid).
+fn upload_mips(
+    gpu: &Gpu,
+    texture: &wgpu::Texture,
+    layer: u32,
+    size: u32,
+    mips: u32,
+    mut texels: Vec<[f32; 4]>,
+) {
+    let mut side = size as usize;
+    for level in 0..mips {
+        let half: Vec<[u16; 4]> = texels
+            .iter()
+            .map(|t| t.map(|v| half::f16::from_f32(v).to_bits()))
+            .collect();
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: level,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&half),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(side as u32 * 8),
+                rows_per_image: None,
+            },
+            wgpu::Extent3d {
+                width: side as u32,
+                height: side as u32,
+                depth_or_array_layers: 1,
+            },
+        );
+        if side == 1 {
+            break;
+        }
+        let next = side / 2;
+        let mut smaller = vec![[0.0f32; 4]; next * next];
+        for (i, out) in smaller.iter_mut().enumerate() {
+            let (x, y) = (2 * (i % next), 2 * (i / next));
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let t = texels[(y + dy) * side + x + dx];
+                for c in 0..4 {
+                    out[c] += 0.25 * t[c];
+                }
+            }
+        }
+        texels = smaller;
+        side = next;
+    }
+}
