@@ -20,6 +20,7 @@ pub mod models;
 pub mod node;
 pub mod nvg;
 pub mod overload;
+pub mod reticle;
 pub mod sea;
 pub mod snapshot;
 pub mod terrain_mesh;

@@ -8,6 +8,7 @@
 //! yet drawn.
 
 use cig_geo::Geodetic;
+use cig_sea::motion::{HullParameters, ShipMotionModel, ShipPose};
 use cig_sea::surface::{CascadeGrid, SeaSurface};
 
 /// Cox and Munk's (1954) total mean square slope of a wind sea, `0.003 + 0.00512 U10`.
@@ -57,6 +58,46 @@ impl SeaDraw {
     }
 }
 
+/// The hull a built-in model floats on: the `ship` model's 90 m frigate (12 m beam, 3 m
+/// draft, 1.2 m metacentric height); other models do not float.
+pub fn builtin_hull(model: &str) -> Option<HullParameters> {
+    (model == "ship")
+        .then(|| HullParameters::new(90.0, 12.0, 3.0, 1.2))
+        .and_then(Result::ok)
+}
+
+/// Sets a floating entity on the sea at the surface's time: its waterline (the model's
+/// origin) at the sea level under it (`geoid_m`: the geoid's height above the ellipsoid there)
+/// plus the heave, pitched and rolled to the waves it spans, waves shorter than the hull
+/// filtered out (`cig_sea::motion`'s wave-following equilibrium: no dynamics of its own).
+///
+/// # Errors
+/// When the sea cannot be sampled there (a position thousands of kilometres from the origin).
+pub fn ride_the_sea(
+    entity: &mut crate::EntityInstance,
+    hull: HullParameters,
+    surface: &SeaSurface,
+    sea: &SeaDraw,
+    geoid_m: f64,
+) -> Result<(), cig_sea::SeaError> {
+    let plane = cig_geo::EnuFrame::new(sea.origin);
+    let at = plane.geodetic_to_enu(entity.position);
+    let pose = ShipPose {
+        x_east_m: at.x,
+        y_north_m: at.y,
+        heading_deg: entity.orientation.heading_deg,
+    };
+    let motion = ShipMotionModel::new(hull).equilibrium(
+        |x, y, _| surface.sample(x, y).height_m,
+        pose,
+        surface.time_s(),
+    )?;
+    entity.position.alt_m = geoid_m + sea.level_m + motion.heave_m;
+    entity.orientation.pitch_deg = motion.pitch_deg;
+    entity.orientation.roll_deg = motion.roll_deg;
+    Ok(())
+}
+
 /// Mean square slope of one grid, both axes together.
 fn slope_variance(grid: &CascadeGrid) -> f64 {
     let n = grid.slopes.len().max(1) as f64;
@@ -90,5 +131,41 @@ mod tests {
                 sea.unresolved_slope_variance
             );
         }
+    }
+
+    #[test]
+    fn a_ship_rides_higher_seas_harder() {
+        let origin = Geodetic::new(36.0, -122.0, 0.0);
+        let hull = builtin_hull("ship").expect("the ship floats");
+        assert!(builtin_hull("tank").is_none());
+        let motion = |code: u8| {
+            let conditions = SeaConditions::for_sea_state(code, 270.0).expect("sea state");
+            let mut surface =
+                SeaSurface::new(&conditions, 5, SurfaceConfig::default()).expect("surface");
+            let mut sum = 0.0;
+            for k in 0..12 {
+                surface.update(f64::from(k) * 1.7).expect("update");
+                let sea = SeaDraw::new(&surface, origin, 0.0);
+                let mut ship = crate::EntityInstance {
+                    id: 1,
+                    model: "ship".into(),
+                    position: Geodetic::new(36.001, -122.001, 0.0),
+                    orientation: crate::Hpr {
+                        heading_deg: 30.0,
+                        ..Default::default()
+                    },
+                    cue_important: false,
+                    critical_radius_m: None,
+                };
+                ride_the_sea(&mut ship, hull, &surface, &sea, -30.0).expect("ride");
+                sum += (ship.position.alt_m + 30.0).abs()
+                    + ship.orientation.pitch_deg.abs()
+                    + ship.orientation.roll_deg.abs();
+            }
+            sum
+        };
+        let calm = motion(2);
+        let rough = motion(6);
+        assert!(rough > 4.0 * calm, "sea state 2: {calm}, 6: {rough}");
     }
 }

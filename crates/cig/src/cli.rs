@@ -985,6 +985,12 @@ pub struct RenderArgs {
     /// developed.
     #[arg(long, value_name = "MPS[,FROM_DEG]", allow_hyphen_values = true)]
     pub sea_wind: Option<String>,
+    /// A periscope's view "HEIGHT_M,MAG": the head HEIGHT_M above mean sea level (-11000 to
+    /// 30) at --eye's place (its altitude is ignored), magnification MAG (the field is 48/MAG
+    /// degrees wide: 1.5x 32, 6x 8, 12x 4), with the reticle and the true bearing drawn; a
+    /// wave over the head covers the view and drains off it.
+    #[arg(long, value_name = "HEIGHT_M,MAG", allow_hyphen_values = true)]
+    pub periscope: Option<String>,
     /// Thermal polarity: white-hot or black-hot.
     #[arg(long, default_value = "white-hot")]
     pub polarity: String,

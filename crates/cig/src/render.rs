@@ -9,6 +9,7 @@ use cig_render::{FrameStats, Gpu, Image, Renderer};
 use cig_scene::lighting::{Fog, FogMode};
 use cig_scene::snapshot::{place_entity, Clamp, EntitySpec};
 use cig_scene::{FovDeg, FrameSnapshot, Hpr, View};
+use cig_terrain::database::GeoidLookup;
 use cig_terrain::{QuerySession, TileCache};
 use cig_terrain_io::store::open_database;
 use std::path::Path;
@@ -307,6 +308,8 @@ pub fn stats_json(stats: &FrameStats, gpu: &Gpu, view: &View) -> serde_json::Val
         "overload": stats.overload,
         "adapter": gpu.describe(),
         "size": [view.width_px, view.height_px],
+        "fov_deg": [view.fov.left_deg + view.fov.right_deg, view.fov.down_deg + view.fov.up_deg],
+        "eye": [view.eye.lat_deg, view.eye.lon_deg, view.eye.alt_m],
     })
 }
 
@@ -351,8 +354,13 @@ pub fn open(db: &Path, config: &Config) -> anyhow::Result<(Arc<TileCache>, Rende
 }
 
 pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
-    let view = parse_view(&args.eye, &args.hpr, &args.fov, &args.size)?;
+    let mut view = parse_view(&args.eye, &args.hpr, &args.fov, &args.size)?;
     let unix_time_s = parse_time(&args.time)?;
+    let periscope = args
+        .periscope
+        .as_deref()
+        .map(crate::sea::parse_periscope)
+        .transpose()?;
     if !(args.max_pixel_error.is_finite() && args.max_pixel_error >= 0.0) {
         bail!(
             "--max-pixel-error {} must be 0 or more",
@@ -470,6 +478,16 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     if let Some(occlusion) = culture_occlusion {
         renderer.culture_occlusion = occlusion;
     }
+    let geoid = GeoidLookup::new(&cache.database().manifest().geoid);
+    if let Some((height_m, magnification)) = periscope {
+        // The head above mean sea level; the field 48 degrees over the magnification.
+        view.eye.alt_m = geoid.undulation_m(view.eye.lat_deg, view.eye.lon_deg) + height_m;
+        view.fov = FovDeg::from_horizontal(
+            magnification.field_of_view_deg(),
+            view.width_px,
+            view.height_px,
+        );
+    }
     let mut session = QuerySession::new(Arc::clone(&cache));
     // An eye inside the terrain is drawn from its surface, with a word.
     let mut views = [view];
@@ -561,14 +579,24 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     };
     snapshot.max_pixel_error = args.max_pixel_error;
     snapshot.wireframe = args.wireframe;
+    // The share of a periscope's window under water.
+    let mut wash = 0.0;
     if let Some(conditions) =
         crate::sea::conditions_from_args(args.sea_state, args.sea_wind.as_deref())?
     {
-        snapshot.sea = Some(Arc::new(crate::sea::sea_draw(
-            &conditions,
-            view.eye,
-            unix_time_s,
-        )?));
+        let (surface, sea) = crate::sea::frame_sea(&conditions, view.eye, unix_time_s)?;
+        if let Some((height_m, _)) = periscope {
+            wash = crate::sea::wash_over(&surface, &sea, view.eye, height_m)?;
+        }
+        // Ships float: on the sea under them, pitched and rolled by its waves.
+        for entity in &mut entities {
+            if let Some(hull) = cig_scene::sea::builtin_hull(&entity.model) {
+                let geoid_m = geoid.undulation_m(entity.position.lat_deg, entity.position.lon_deg);
+                cig_scene::sea::ride_the_sea(entity, hull, &surface, &sea, geoid_m)
+                    .with_context(|| format!("--entity {} on the sea", entity.model))?;
+            }
+        }
+        snapshot.sea = Some(Arc::new(sea));
     }
     snapshot.entities = entities;
     snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&clouds);
@@ -615,7 +643,20 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     cache.update(&[view.eye]);
     cache.wait_idle();
     cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;
-    let (image, stats) = cig_render::render_image(&mut renderer, &cache, &snapshot, 0)?;
+    let (mut image, stats) = cig_render::render_image(&mut renderer, &cache, &snapshot, 0)?;
+    if periscope.is_some() {
+        crate::sea::draw_wash(&mut image.rgba, image.width, image.height, wash);
+        let bearing_deg = view.orientation.heading_deg;
+        cig_scene::reticle::draw_periscope_reticle(
+            &mut cig_scene::reticle::Canvas {
+                rgba: &mut image.rgba,
+                width: image.width,
+                height: image.height,
+            },
+            view.fov.left_deg + view.fov.right_deg,
+            bearing_deg,
+        );
+    }
     write_png(&image, &args.out)?;
     if let Some(path) = &args.stats {
         let json = stats_json(&stats, renderer.gpu(), &view);

@@ -43,11 +43,11 @@ fn sea_state_conditions(code: f64, wind_from_deg: f64) -> anyhow::Result<SeaCond
 
 /// The sea one frame at `unix_time_s` draws: the surface (seed 1) at that time, its plane's
 /// origin the eye's whole degrees (the same waves for nearby eyes and every IG).
-pub fn sea_draw(
+pub fn frame_sea(
     conditions: &SeaConditions,
     eye: cig_geo::Geodetic,
     unix_time_s: f64,
-) -> anyhow::Result<cig_scene::sea::SeaDraw> {
+) -> anyhow::Result<(SeaSurface, cig_scene::sea::SeaDraw)> {
     let mut surface =
         SeaSurface::new(conditions, 1, SurfaceConfig::default()).context("the sea surface")?;
     // The waves' clock: seconds of the day, so the same instant gives the same sea anywhere.
@@ -55,7 +55,55 @@ pub fn sea_draw(
         .update(unix_time_s.rem_euclid(86_400.0))
         .context("the sea surface")?;
     let origin = cig_geo::Geodetic::new(eye.lat_deg.round(), eye.lon_deg.round(), 0.0);
-    Ok(cig_scene::sea::SeaDraw::new(&surface, origin, 0.0))
+    let draw = cig_scene::sea::SeaDraw::new(&surface, origin, 0.0);
+    Ok((surface, draw))
+}
+
+/// A periscope asked for by `--periscope HEIGHT_M,MAG`: the head's height above mean sea
+/// level and the magnification.
+pub fn parse_periscope(text: &str) -> anyhow::Result<(f64, cig_sea::periscope::Magnification)> {
+    let v = crate::render::parse_numbers(text, "--periscope", &[2])?;
+    let (height_m, power) = (v[0], v[1]);
+    // The head may be anywhere from the deepest sea floor to 30 m up.
+    cig_sea::periscope::PeriscopeMount::new(height_m, 11_000.0)
+        .with_context(|| format!("--periscope \"{text}\": the head's height"))?;
+    let magnification = cig_sea::periscope::Magnification::new(power)
+        .with_context(|| format!("--periscope \"{text}\": the magnification"))?;
+    Ok((height_m, magnification))
+}
+
+/// How much of a periscope's window the sea covers at the surface's time: the sea at the head
+/// over the second before, sampled every 1/20 s on a surface of its own.
+pub fn wash_over(
+    surface: &SeaSurface,
+    sea: &cig_scene::sea::SeaDraw,
+    head: cig_geo::Geodetic,
+    head_height_m: f64,
+) -> anyhow::Result<f64> {
+    let mut past = surface.clone();
+    let now_s = surface.time_s();
+    let at = cig_geo::EnuFrame::new(sea.origin).geodetic_to_enu(head);
+    let mut history = Vec::with_capacity(21);
+    for k in 0..=20 {
+        let t_s = now_s - 1.0 + f64::from(k) * 0.05;
+        past.update(t_s).context("the sea at the periscope")?;
+        history.push((t_s, past.sample(at.x, at.y).height_m + sea.level_m));
+    }
+    cig_sea::periscope::WashOver::DEFAULT
+        .coverage(head_height_m, &history, now_s)
+        .context("the sea at the periscope")
+}
+
+/// Covers the lower `coverage` of a frame with sea water seen from inside it (draining from
+/// the top down).
+pub fn draw_wash(rgba: &mut [u8], width: u32, height: u32, coverage: f64) {
+    let first_row = ((1.0 - coverage.clamp(0.0, 1.0)) * f64::from(height)).round() as usize;
+    let water = [8.0, 38.0, 44.0];
+    for px in rgba.chunks_exact_mut(4).skip(first_row * width as usize) {
+        for (c, w) in px.iter_mut().zip(water) {
+            *c = (f64::from(*c) * 0.1 + w * 0.9).round() as u8;
+        }
+    }
 }
 
 /// Times (seconds) the statistics average over: a few wave periods apart, not a multiple of

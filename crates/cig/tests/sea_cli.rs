@@ -210,3 +210,87 @@ fn the_sea_glitters_toward_the_sun_is_darker_away_from_it_and_does_not_shimmer()
         .sum::<f64>();
     assert!(moved > 0.0, "the waves move");
 }
+
+#[test]
+fn a_periscope_sees_48_degrees_over_its_power_draws_its_reticle_and_washes_over() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let periscope = |name: &str, spec: &str, sea: &str| {
+        let out = dir.path().join(format!("{name}.png"));
+        let stats = dir.path().join(format!("{name}.json"));
+        cig()
+            .args(["render", "--db"])
+            .arg(&db)
+            .args([
+                "--eye",
+                "35.99,-121.40,500",
+                "--hpr",
+                "270,0,0",
+                "--size",
+                "400x200",
+                "--time",
+                "2026-06-21T20:00:00Z",
+                "--periscope",
+                spec,
+                "--sea-state",
+                sea,
+                "--out",
+            ])
+            .arg(&out)
+            .arg("--stats")
+            .arg(&stats)
+            .assert()
+            .success();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).expect("stats")).expect("json");
+        (read_png_rgba(&out), json)
+    };
+    // 6x: 8 degrees; the head 1.5 m above mean sea level (the geoid about 33 m down here).
+    let ((w, h, rgba), json) = periscope("six", "1.5,6", "2");
+    let fov = json["fov_deg"][0].as_f64().expect("fov");
+    assert!((fov - 8.0).abs() < 1e-9, "{json}");
+    let alt = json["eye"][2].as_f64().expect("eye");
+    assert!((-40.0..-25.0).contains(&alt), "{json}");
+    // The reticle: a black line across the centre, graduated; a major tick every degree.
+    let black = |x: u32, y: u32| {
+        let i = ((y * w + x) * 4) as usize;
+        rgba[i] < 10 && rgba[i + 1] < 10 && rgba[i + 2] < 10
+    };
+    assert!((0..w).filter(|&x| black(x, h / 2)).count() as f64 > 0.95 * f64::from(w));
+    let degree_px =
+        (1f64.to_radians().tan() / 4f64.to_radians().tan() * f64::from(w) / 2.0).round() as u32;
+    assert!(
+        black(w / 2 + degree_px, h / 2 - 5),
+        "a major tick 1 degree right"
+    );
+    // 1.5x: 32 degrees.
+    let (_, json) = periscope("low", "1.5,1.5", "2");
+    assert!((json["fov_deg"][0].as_f64().expect("fov") - 32.0).abs() < 1e-9);
+    // A head 10 cm up in a very rough sea: under water, the view is the sea's inside.
+    let ((w, h, rgba), _) = periscope("washed", "0.1,6", "6");
+    let teal = rgba
+        .chunks_exact(4)
+        .filter(|p| p[2] > p[0] + 10 && p[1] > p[0] + 10 && p[2] < 90)
+        .count();
+    assert!(
+        teal as f64 > 0.5 * f64::from(w * h),
+        "{teal} of {} pixels",
+        w * h
+    );
+    // Bad periscopes.
+    for (spec, needle) in [
+        ("31,6", "height"),
+        ("1,0", "magnification"),
+        ("1", "--periscope"),
+    ] {
+        let out = cig()
+            .args(["render", "--db"])
+            .arg(&db)
+            .args(["--eye", "35.99,-121.40,0", "--periscope", spec, "--out"])
+            .arg(dir.path().join("bad.png"))
+            .assert()
+            .failure();
+        let line = one_line_error(&out);
+        assert!(line.contains(needle), "{spec}: {line}");
+    }
+}
