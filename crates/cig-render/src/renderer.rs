@@ -1591,7 +1591,8 @@ impl Renderer {
                 pass.set_pipeline(&self.sea_pipeline);
                 pass.set_bind_group(0, bind, &[]);
                 pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
-                pass.draw(0..sea_vertices, 0..1);
+                pass.set_index_buffer(self.sea.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..sea_vertices, 0, 0..1);
                 stats.draw_calls += 1;
             }
             // The sky where no geometry was drawn (its depth test passes at the cleared far

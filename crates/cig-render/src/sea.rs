@@ -56,6 +56,8 @@ struct SeaUniform {
 /// gradient), one layer per cascade, rebuilt when the cascades' size changes.
 pub(crate) struct SeaPass {
     pub(crate) layout: wgpu::BindGroupLayout,
+    /// The grid's triangles: two per quad of ring and segment, made once.
+    pub(crate) indices: wgpu::Buffer,
     uniform: wgpu::Buffer,
     sampler: wgpu::Sampler,
     textures: Option<SeaTextures>,
@@ -106,8 +108,26 @@ impl SeaPass {
             anisotropy_clamp: 1,
             ..Default::default()
         });
+        let mut grid = Vec::with_capacity((RINGS * SEGMENTS * 6) as usize);
+        let vertex = |ring: u32, segment: u32| ring * (SEGMENTS + 1) + segment;
+        for ring in 0..RINGS {
+            for segment in 0..SEGMENTS {
+                let (a, b) = (vertex(ring, segment), vertex(ring + 1, segment));
+                let (c, d) = (vertex(ring + 1, segment + 1), vertex(ring, segment + 1));
+                grid.extend_from_slice(&[a, b, c, a, c, d]);
+            }
+        }
+        let indices = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("sea grid"),
+                contents: bytemuck::cast_slice(&grid),
+                usage: wgpu::BufferUsages::INDEX,
+            },
+        );
         SeaPass {
             layout,
+            indices,
             uniform,
             sampler,
             textures: None,
@@ -115,7 +135,7 @@ impl SeaPass {
         }
     }
 
-    /// Uploads the frame's sea for `camera`; returns the vertices to draw (0: nothing).
+    /// Uploads the frame's sea for `camera`; returns the indices to draw (0: nothing).
     pub(crate) fn prepare(
         &mut self,
         gpu: &Gpu,

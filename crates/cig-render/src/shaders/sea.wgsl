@@ -39,14 +39,10 @@ fn cascade_uv(c: u32, local: vec2<f32>) -> vec2<f32> {
 
 @vertex
 fn vs_main(@builtin(vertex_index) index: u32) -> SeaOut {
+    // Vertices row by row: (segments + 1) a ring, the last repeating the first's azimuth.
     let segments = u32(sea.north.w);
-    let quad = index / 6u;
-    let corner = index % 6u;
-    // Two triangles per quad: (0,0) (1,0) (1,1), (0,0) (1,1) (0,1) in (ring, segment) steps.
-    var dr = array<u32, 6>(0u, 1u, 1u, 0u, 1u, 0u);
-    var ds = array<u32, 6>(0u, 0u, 1u, 0u, 1u, 1u);
-    let ring = quad / segments + dr[corner];
-    let segment = quad % segments + ds[corner];
+    let ring = index / (segments + 1u);
+    let segment = index % (segments + 1u);
     let r = ring_radius(ring);
     let azimuth = 6.2831853 * f32(segment) / f32(segments);
     let local = r * vec2<f32>(cos(azimuth), sin(azimuth));
