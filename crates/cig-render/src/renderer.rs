@@ -1837,7 +1837,9 @@ impl Renderer {
         // The horizon's dip from the eye's height above mean sea level (the geoid), where the
         // sea's horizon lies.
         let eye = camera.view.eye;
-        let alt = (eye.alt_m - self.sea.undulation_m(eye.lat_deg, eye.lon_deg)).max(0.0);
+        let sea_level_m = self.sea.undulation_m(eye.lat_deg, eye.lon_deg)
+            + snapshot.sea.as_ref().map_or(0.0, |sea| sea.level_m);
+        let alt = (eye.alt_m - sea_level_m).max(0.0);
         let dip = (2.0 * alt / cig_geo::WGS84_A_M).sqrt();
         let fog = snapshot.fog;
         let mode = f32::from(fog_mode_index(fog.mode));

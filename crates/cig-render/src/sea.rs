@@ -43,6 +43,8 @@ struct SeaUniform {
     /// x: the sea's level relative to the eye (m, negative below it), y: the earth's radius
     /// (m), z: the grid's far radius (m), w: its first ring's radius (m).
     params: [f32; 4],
+    /// The eye's east (xy) and north (zw) in the sea plane's axes (the meridians converge).
+    axes: [f32; 4],
     /// Per cascade: the eye's place in the tile (fraction, east and north), the tile (m) and
     /// its texel (m).
     cascades: [[f32; 4]; MAX_CASCADES],
@@ -190,14 +192,23 @@ impl SeaPass {
                 upload_mips(gpu, texture, layer as u32, size, textures.mips, texels);
             }
         }
-        // The eye in the sea's plane, and the sea's level relative to it.
+        // The point under the eye in the sea's plane, the eye's axes there, and the sea's level
+        // relative to the eye.
         let eye = camera.view.eye;
+        let sea_level_m = self.geoid.undulation_m(eye.lat_deg, eye.lon_deg) + sea.level_m;
         let plane = cig_geo::EnuFrame::new(sea.origin);
-        let eye_in_plane = plane.ecef_to_enu(camera.eye_ecef);
+        let eye_in_plane = plane.geodetic_to_enu(cig_geo::Geodetic {
+            alt_m: sea_level_m,
+            ..eye
+        });
         let here = cig_geo::EnuFrame::new(eye);
         let east = here.enu_vector_to_ecef(glam::DVec3::X);
         let north = here.enu_vector_to_ecef(glam::DVec3::Y);
-        let sea_level_m = self.geoid.undulation_m(eye.lat_deg, eye.lon_deg) + sea.level_m;
+        let axis = |v: glam::DVec3| {
+            let p = plane.ecef_vector_to_enu(v).truncate().normalize_or_zero();
+            [p.x as f32, p.y as f32]
+        };
+        let ([ex, ey], [nx, ny]) = (axis(east), axis(north));
         let height_m = (eye.alt_m - sea_level_m).max(0.5);
         let radius_m = cig_geo::WGS84_A_M;
         let far_m = ((2.0 * radius_m * height_m).sqrt() * 1.5 + 2_000.0).min(400_000.0);
@@ -215,8 +226,14 @@ impl SeaPass {
                 far_m as f32,
                 (0.25 * height_m).clamp(0.05, 2.0) as f32,
             ],
+            axes: [ex, ey, nx, ny],
             shade: [
-                sea.unresolved_slope_variance as f32,
+                // Cascades past the textures' layers count as unresolved slopes.
+                (sea.unresolved_slope_variance
+                    + sea.cascades[cascades.len()..]
+                        .iter()
+                        .map(cig_scene::sea::slope_variance)
+                        .sum::<f64>()) as f32,
                 sea.whitecap_jacobian as f32,
                 layers as f32,
                 textures.mips as f32,

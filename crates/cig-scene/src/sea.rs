@@ -99,7 +99,7 @@ pub fn ride_the_sea(
 }
 
 /// Mean square slope of one grid, both axes together.
-fn slope_variance(grid: &CascadeGrid) -> f64 {
+pub fn slope_variance(grid: &CascadeGrid) -> f64 {
     let n = grid.slopes.len().max(1) as f64;
     grid.slopes
         .iter()
@@ -123,10 +123,15 @@ mod tests {
             surface.update(10.0).expect("update");
             let sea = SeaDraw::new(&surface, Geodetic::new(36.0, -122.0, 0.0), 0.0);
             let resolved: f64 = sea.cascades.iter().map(slope_variance).sum();
-            assert!(resolved > 0.0);
-            let total = resolved + sea.unresolved_slope_variance;
+            let total = cox_munk_slope_variance(wind);
+            // The cascades carry most of the slopes (waves down to 0.3 m); what they miss is
+            // left to the glitter.
             assert!(
-                total >= cox_munk_slope_variance(wind) - 1e-9,
+                (0.3 * total..1.2 * total).contains(&resolved),
+                "{wind}: the grids' {resolved} against Cox-Munk's {total}"
+            );
+            assert!(
+                (resolved + sea.unresolved_slope_variance - total.max(resolved)).abs() < 1e-3,
                 "{wind}: {resolved} + {}",
                 sea.unresolved_slope_variance
             );

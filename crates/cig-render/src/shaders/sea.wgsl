@@ -5,6 +5,8 @@ struct SeaUniform {
     east: vec4<f32>,
     north: vec4<f32>,
     params: vec4<f32>,
+    // The eye's east (xy) and north (zw) in the sea plane's axes.
+    axes: vec4<f32>,
     cascades: array<vec4<f32>, 4>,
     shade: vec4<f32>,
     water: vec4<f32>,
@@ -28,13 +30,25 @@ fn ring_radius(i: u32) -> f32 {
         return 0.0;
     }
     let rings = sea.east.w;
-    let t = (f32(i) - 1.0) / max(rings - 2.0, 1.0);
+    let t = (f32(i) - 1.0) / max(rings - 1.0, 1.0);
     return sea.params.w * pow(sea.params.z / sea.params.w, t);
 }
 
+// A vector in the eye's east and north expressed in the sea plane's axes.
+fn to_plane(v: vec2<f32>) -> vec2<f32> {
+    return v.x * sea.axes.xy + v.y * sea.axes.zw;
+}
+
+// A vector in the sea plane's axes expressed in the eye's east and north.
+fn from_plane(v: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(dot(v, sea.axes.xy), dot(v, sea.axes.zw));
+}
+
+// Texture coordinates of cascade `c` at `local` (eye east and north, metres): the grid's
+// point i lies at i texels, the texel's centre half a texel further.
 fn cascade_uv(c: u32, local: vec2<f32>) -> vec2<f32> {
     let k = sea.cascades[c];
-    return k.xy + local / k.z;
+    return k.xy + (to_plane(local) + vec2<f32>(0.5 * k.w)) / k.z;
 }
 
 @vertex
@@ -54,7 +68,7 @@ fn vs_main(@builtin(vertex_index) index: u32) -> SeaOut {
         let lod = clamp(log2(max(spacing, 1e-3) / sea.cascades[c].w), 0.0, sea.shade.w - 1.0);
         d += textureSampleLevel(sea_displacement, sea_sampler, cascade_uv(c, local), c, lod).xyz;
     }
-    let p = local + d.yz;
+    let p = local + from_plane(d.yz);
     // The round earth: the surface drops below the eye's horizontal plane by d^2 / 2R.
     let drop = dot(p, p) / (2.0 * sea.params.y);
     let up = g.eye_up.xyz;
@@ -108,7 +122,7 @@ fn fs_main(in: SeaOut) -> @location(0) vec4<f32> {
     for (var c = 0u; c < count; c++) {
         let uv = cascade_uv(c, in.local);
         let s = textureSample(sea_slopes, sea_sampler, uv, c);
-        slope += s.xy;
+        slope += from_plane(s.xy);
         variance += max(s.z - s.x * s.x, 0.0) + max(s.w - s.y * s.y, 0.0);
         grad += textureSample(sea_gradient, sea_sampler, uv, c).xyz;
     }
@@ -121,7 +135,7 @@ fn fs_main(in: SeaOut) -> @location(0) vec4<f32> {
     let r = reflect(-v, n);
     // Whitecaps where the surface's Jacobian folds.
     let jacobian = (1.0 + grad.x) * (1.0 + grad.y) - grad.z * grad.z;
-    let foam = smoothstep(sea.shade.y + 0.05, sea.shade.y - 0.2, jacobian);
+    let foam = 1.0 - smoothstep(sea.shade.y - 0.2, sea.shade.y + 0.05, jacobian);
     let s2 = max(variance, 1e-4);
     let light = glint(g.sun_colour.rgb, g.sun_dir.xyz, v, n, s2)
         + glint(g.moon_colour.rgb, g.moon_dir.xyz, v, n, s2);
