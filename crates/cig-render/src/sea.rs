@@ -63,7 +63,16 @@ pub(crate) struct SeaPass {
     uniform: wgpu::Buffer,
     sampler: wgpu::Sampler,
     textures: Option<SeaTextures>,
+    scratch: MipScratch,
     geoid: GeoidLookup,
+}
+
+/// The mip chains' memory, kept from frame to frame: every level of one layer after another
+/// (f32), and one level as the texture's f16 bits.
+#[derive(Default)]
+struct MipScratch {
+    chain: Vec<[f32; 4]>,
+    half: Vec<[u16; 4]>,
 }
 
 struct SeaTextures {
@@ -133,6 +142,7 @@ impl SeaPass {
             uniform,
             sampler,
             textures: None,
+            scratch: MipScratch::default(),
             geoid,
         }
     }
@@ -168,29 +178,32 @@ impl SeaPass {
         let Some(textures) = self.textures.as_ref() else {
             return 0;
         };
-        for (layer, grid) in cascades.iter().enumerate() {
-            let displacement: Vec<[f32; 4]> = grid
-                .height_displacement
-                .iter()
-                .map(|t| [t[0], t[1], t[2], 0.0])
-                .collect();
-            let slopes: Vec<[f32; 4]> = grid
-                .slopes
-                .iter()
-                .map(|s| [s[0], s[1], s[0] * s[0], s[1] * s[1]])
-                .collect();
-            let gradient: Vec<[f32; 4]> = grid
-                .displacement_gradient
-                .iter()
-                .map(|d| [d[0], d[1], d[2], 0.0])
-                .collect();
-            for (texture, texels) in [
-                (&textures.displacement, displacement),
-                (&textures.slopes, slopes),
-                (&textures.gradient, gradient),
-            ] {
-                upload_mips(gpu, texture, layer as u32, size, textures.mips, texels);
-            }
+        let scratch = &mut self.scratch;
+        for (layer, grid) in (0u32..).zip(cascades) {
+            let mut upload = |texture, texels: &mut dyn Iterator<Item = [f32; 4]>| {
+                scratch.upload(gpu, texture, layer, size, textures.mips, texels);
+            };
+            upload(
+                &textures.displacement,
+                &mut grid
+                    .height_displacement
+                    .iter()
+                    .map(|t| [t[0], t[1], t[2], 0.0]),
+            );
+            upload(
+                &textures.slopes,
+                &mut grid
+                    .slopes
+                    .iter()
+                    .map(|s| [s[0], s[1], s[0] * s[0], s[1] * s[1]]),
+            );
+            upload(
+                &textures.gradient,
+                &mut grid
+                    .displacement_gradient
+                    .iter()
+                    .map(|d| [d[0], d[1], d[2], 0.0]),
+            );
         }
         // The point under the eye in the sea's plane, the eye's axes there, and the sea's level
         // relative to the eye.
@@ -339,59 +352,71 @@ impl SeaPass {
     }
 }
 
-/// Uploads one layer and its mip chain (2 x 2 box averages of the periodic grid).
-fn upload_mips(
-    gpu: &Gpu,
-    texture: &wgpu::Texture,
-    layer: u32,
-    size: u32,
-    mips: u32,
-    mut texels: Vec<[f32; 4]>,
-) {
-    let mut side = size as usize;
-    for level in 0..mips {
-        let half: Vec<[u16; 4]> = texels
-            .iter()
-            .map(|t| t.map(|v| half::f16::from_f32(v).to_bits()))
-            .collect();
-        gpu.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture,
-                mip_level: level,
-                origin: wgpu::Origin3d {
-                    x: 0,
-                    y: 0,
-                    z: layer,
+impl MipScratch {
+    /// Uploads one layer of `size` x `size` texels and its mip chain (2 x 2 box averages of
+    /// the periodic grid) into `texture`.
+    fn upload(
+        &mut self,
+        gpu: &Gpu,
+        texture: &wgpu::Texture,
+        layer: u32,
+        size: u32,
+        mips: u32,
+        texels: &mut dyn Iterator<Item = [f32; 4]>,
+    ) {
+        self.chain.clear();
+        self.chain.extend(texels);
+        let (mut start, mut side) = (0usize, size as usize);
+        for level in 0..mips {
+            let Some(texels) = self.chain.get(start..start + side * side) else {
+                return;
+            };
+            self.half.clear();
+            self.half.extend(
+                texels
+                    .iter()
+                    .map(|t| t.map(|v| half::f16::from_f32(v).to_bits())),
+            );
+            gpu.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture,
+                    mip_level: level,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: layer,
+                    },
+                    aspect: wgpu::TextureAspect::All,
                 },
-                aspect: wgpu::TextureAspect::All,
-            },
-            bytemuck::cast_slice(&half),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(side as u32 * 8),
-                rows_per_image: None,
-            },
-            wgpu::Extent3d {
-                width: side as u32,
-                height: side as u32,
-                depth_or_array_layers: 1,
-            },
-        );
-        if side == 1 {
-            break;
-        }
-        let next = side / 2;
-        let mut smaller = vec![[0.0f32; 4]; next * next];
-        for (i, out) in smaller.iter_mut().enumerate() {
-            let (x, y) = (2 * (i % next), 2 * (i / next));
-            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                let t = texels[(y + dy) * side + x + dx];
-                for c in 0..4 {
-                    out[c] += 0.25 * t[c];
-                }
+                bytemuck::cast_slice(&self.half),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(side as u32 * 8),
+                    rows_per_image: None,
+                },
+                wgpu::Extent3d {
+                    width: side as u32,
+                    height: side as u32,
+                    depth_or_array_layers: 1,
+                },
+            );
+            if side == 1 {
+                break;
             }
+            let next = side / 2;
+            for i in 0..next * next {
+                let (x, y) = (2 * (i % next), 2 * (i / next));
+                let mut average = [0.0f32; 4];
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let t = self.chain[start + (y + dy) * side + x + dx];
+                    for (a, v) in average.iter_mut().zip(t) {
+                        *a += 0.25 * v;
+                    }
+                }
+                self.chain.push(average);
+            }
+            start += side * side;
+            side = next;
         }
-        texels = smaller;
-        side = next;
     }
 }
