@@ -61,6 +61,7 @@ pub enum BuildProgress<'a> {
 /// When `out` exists (without `force`), the parameters are refused, or writing fails.
 pub fn synthesize_database(
     params: &cig_synth::SynthParams,
+    options: &cig_synth::SynthOptions,
     out: &Path,
     force: bool,
     tile_cells: u32,
@@ -69,7 +70,7 @@ pub fn synthesize_database(
     check_output(out, force)?;
     progress(BuildProgress::Begin(BuildStage::Synthesize));
     let (mut raster, report, features) =
-        cig_synth::synthesize_with_features(params, &mut |step, fraction| {
+        cig_synth::synthesize_with_options(params, options, &mut |step, fraction| {
             progress(BuildProgress::Synthesize { step, fraction });
         })
         .step("cannot synthesize terrain")?;
@@ -91,10 +92,13 @@ pub fn synthesize_database(
     });
     progress(BuildProgress::End);
     tracing::info!("culture: {} objects placed", culture.len());
-    let source = format!(
+    let mut source = format!(
         "cig-synth seed={} origin={},{} size_km={} spacing_m={}",
         params.seed, params.origin_lat_deg, params.origin_lon_deg, params.size_km, params.spacing_m
     );
+    if let Some(side) = options.sea_side {
+        source.push_str(&format!(" sea_side={side}"));
+    }
     // Its roads, rivers and lakes as shapes, painted into the imagery.
     build_database_with_imagery(
         &mut raster,
@@ -341,7 +345,14 @@ pub fn demo_or(
             "{label}: building the demo database (50 km x 50 km, 30 m posts) at {}",
             path.display()
         );
-        synthesize_database(&demo_params(), &path, false, tile_cells, progress)?;
+        synthesize_database(
+            &demo_params(),
+            &cig_synth::SynthOptions::default(),
+            &path,
+            false,
+            tile_cells,
+            progress,
+        )?;
     }
     Ok(path)
 }
@@ -371,8 +382,15 @@ mod tests {
             seed: 2,
             ..demo_params()
         };
-        let manifest =
-            synthesize_database(&params, &dir.path().join("db"), false, 64, &mut |_| {}).unwrap();
+        let manifest = synthesize_database(
+            &params,
+            &cig_synth::SynthOptions::default(),
+            &dir.path().join("db"),
+            false,
+            64,
+            &mut |_| {},
+        )
+        .unwrap();
         let culture = manifest.culture.expect("culture in the manifest");
         assert!(culture.trees() > 1_000, "{culture:?}");
         assert!(culture.buildings() > 10, "{culture:?}");

@@ -43,6 +43,7 @@ pub mod net;
 pub mod particles;
 pub mod render;
 mod report;
+pub mod sea;
 pub mod sensor;
 pub mod soak;
 

@@ -32,6 +32,7 @@ pub mod model_table;
 pub mod pose;
 pub mod scenario;
 pub mod scenes;
+pub mod sea;
 pub mod session;
 pub mod thermal;
 pub mod tracker;

@@ -155,7 +155,10 @@ pub fn light_set(model: &str, dis_kind_domain: Option<(u8, u8)>) -> EntityLightS
         .any(|k| name.contains(k))
     {
         EntityLightSet::Aircraft
-    } else if name.contains("ship") || name.contains("boat") {
+    } else if name.contains("ship")
+        || name.contains("boat")
+        || cig_scene::models::ship_particulars(&name).is_some()
+    {
         EntityLightSet::Ship
     } else if name == "building" || name == "tree" || name.is_empty() {
         EntityLightSet::None
@@ -170,7 +173,9 @@ pub fn half_extent_m(model: &str, set: EntityLightSet) -> [f32; 3] {
     match model {
         "tank" => [3.5, 1.8, 1.2],
         "truck" => [3.5, 1.25, 1.5],
-        "ship" => [60.0, 10.0, 15.0],
+        "ship" | "destroyer" => [75.0, 9.0, 20.0],
+        "merchant" => [90.0, 14.0, 19.0],
+        "patrol_craft" => [20.0, 3.5, 7.0],
         _ => match set {
             EntityLightSet::GroundVehicle => [2.5, 1.0, 0.8],
             EntityLightSet::Aircraft => [8.0, 8.0, 2.0],

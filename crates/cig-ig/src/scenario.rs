@@ -99,6 +99,18 @@
 //! rate_mm_per_h = 8.0                  # water equivalent, 0..200
 //! seed = 1                             # the particles' places
 //!
+//! [sea]                                # the sea over the database's water and beyond its edge
+//! sea_state = 4                        # WMO code 0-9: a fully developed sea, or
+//! wind_mps = 12.0                      # the wind (at 10 m) the sea grows in
+//! wind_from_deg = 270
+//! fetch_km = 40                        # the wind's run over water (default: unlimited)
+//! swell = { height_m = 1.5, period_s = 11.0, from_deg = 240.0 }
+//! level_m = 0.0                        # the sea surface above MSL (the tide)
+//! water_temperature_c = 15.0
+//! clarity_pct = 80.0                   # 0 turbid, 100 clear open ocean
+//! whitecaps = true
+//! seed = 1                             # every IG with this seed draws the same waves
+//!
 //! [lightning]                          # a thunderstorm that strikes by itself
 //! lat_deg = 51.05                      # centre
 //! lon_deg = -1.45
@@ -191,6 +203,9 @@ pub struct Scenario {
     /// A thunderstorm.
     #[serde(default)]
     pub lightning: Option<ScenarioLightning>,
+    /// The sea (the host's Maritime Surface Conditions and Wave Control add to it).
+    #[serde(default)]
+    pub sea: Option<ScenarioSea>,
     /// The thermal sensors' weather history (`crate::thermal`).
     #[serde(default)]
     pub thermal: Option<ThermalSection>,
@@ -409,6 +424,123 @@ impl ScenarioCloud {
     }
 }
 
+/// `[sea]`: the sea's waves and water.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioSea {
+    /// A WMO sea state code, 0-9: the fully developed sea of its wind (excludes `wind_mps`).
+    #[serde(default)]
+    pub sea_state: Option<f64>,
+    /// The wind the sea grows in, at 10 m, m/s (excludes `sea_state`).
+    #[serde(default)]
+    pub wind_mps: Option<f64>,
+    /// Where the wind blows from, degrees true.
+    #[serde(default = "west_deg")]
+    pub wind_from_deg: f64,
+    /// The wind's run over water, km (none: fully developed).
+    #[serde(default)]
+    pub fetch_km: Option<f64>,
+    /// A swell from a distant storm.
+    #[serde(default)]
+    pub swell: Option<ScenarioSwell>,
+    /// The sea surface above mean sea level, metres (the tide).
+    #[serde(default)]
+    pub level_m: f64,
+    #[serde(default = "fifteen")]
+    pub water_temperature_c: f64,
+    /// 0 turbid, 100 clear open ocean.
+    #[serde(default = "hundred")]
+    pub clarity_pct: f64,
+    #[serde(default = "yes")]
+    pub whitecaps: bool,
+    #[serde(default = "one_u64")]
+    pub seed: u64,
+}
+
+/// `[sea] swell = {..}`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioSwell {
+    pub height_m: f64,
+    pub period_s: f64,
+    pub from_deg: f64,
+}
+
+fn west_deg() -> f64 {
+    270.0
+}
+
+fn fifteen() -> f64 {
+    15.0
+}
+
+fn hundred() -> f64 {
+    100.0
+}
+
+impl ScenarioSea {
+    /// The wind sea and swell the section describes.
+    ///
+    /// # Errors
+    /// A value out of range, as a one-line error naming the key.
+    pub fn conditions(&self) -> Result<cig_sea::spectrum::SeaConditions, ScenarioError> {
+        use cig_sea::spectrum::{SeaConditions, Swell};
+        let base = match (self.sea_state, self.wind_mps) {
+            (Some(code), None) => {
+                if !(code.is_finite() && (0.0..=9.0).contains(&code) && code.fract() == 0.0) {
+                    return Err(value_error(
+                        "sea.sea_state",
+                        format!("{code} is not a WMO sea state code, a whole number 0-9"),
+                    ));
+                }
+                #[expect(
+                    clippy::cast_possible_truncation,
+                    clippy::cast_sign_loss,
+                    reason = "a whole number in 0..=9, checked above"
+                )]
+                let code = code as u8;
+                SeaConditions::for_sea_state(code, self.wind_from_deg)
+                    .map_err(|e| value_error("sea.sea_state", e.to_string()))?
+            }
+            (None, Some(wind)) => SeaConditions::new(wind, self.wind_from_deg)
+                .map_err(|e| value_error("sea.wind_mps", e.to_string()))?,
+            (None, None) => SeaConditions::new(0.0, self.wind_from_deg)
+                .map_err(|e| value_error("sea.wind_from_deg", e.to_string()))?,
+            (Some(_), Some(_)) => {
+                return Err(value_error("sea", "give sea_state or wind_mps, not both"))
+            }
+        };
+        let with_fetch = match self.fetch_km {
+            Some(km) => base
+                .with_fetch_m(km * 1000.0)
+                .map_err(|e| value_error("sea.fetch_km", e.to_string()))?,
+            None => base,
+        };
+        match self.swell {
+            Some(s) => {
+                let swell = Swell::new(s.height_m, s.period_s, s.from_deg)
+                    .map_err(|e| value_error("sea.swell", e.to_string()))?;
+                with_fetch
+                    .with_swell(swell)
+                    .map_err(|e| value_error("sea.swell", e.to_string()))
+            }
+            None => Ok(with_fetch),
+        }
+    }
+
+    fn check(&self) -> Result<(), ScenarioError> {
+        self.conditions()?;
+        check_finite("sea.level_m", self.level_m, -20.0, 20.0)?;
+        check_finite(
+            "sea.water_temperature_c",
+            self.water_temperature_c,
+            -2.0,
+            40.0,
+        )?;
+        check_finite("sea.clarity_pct", self.clarity_pct, 0.0, 100.0)
+    }
+}
+
 /// The scenario's thunderstorm.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -527,7 +659,8 @@ pub struct GroundFog {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelMapping {
-    /// Model name: a built-in one (tank, truck, ship, building, tree) or the name a glTF file
+    /// Model name: a built-in one (tank, truck, destroyer or ship, merchant, patrol_craft,
+    /// building, tree) or the name a glTF file
     /// is loaded under.
     pub model: String,
     /// glTF 2.0 file, relative to the scenario's folder.
@@ -1078,6 +1211,9 @@ impl Scenario {
                 0.0,
                 cig_environment::precipitation::MAX_RATE_MM_PER_H,
             )?;
+        }
+        if let Some(sea) = &self.sea {
+            sea.check()?;
         }
         if let Some(l) = &self.lightning {
             check_lat_lon("lightning", l.lat_deg, l.lon_deg)?;

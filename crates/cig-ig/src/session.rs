@@ -26,7 +26,9 @@
 //!   switches and the star field intensity (clamped to 0..100 %, reported) reach the renderer.
 //!   Atmosphere, Weather
 //!   (global, regional and entity layers), Environmental Region, Maritime and Terrestrial
-//!   Surface Conditions, Wave Control: kept; visibility and fog come from them, rain, snow,
+//!   Surface Conditions, Wave Control: kept; Maritime Surface Conditions and Wave Control drive
+//!   the sea ([`crate::sea`]: its level, water and explicit waves); visibility and fog come
+//!   from them, rain, snow,
 //!   sleet and hail layers (4-7) give the precipitation over the eye (rate from the layer's
 //!   aerosol concentration as liquid water content, else its severity; clamped to 200 mm/h
 //!   and reported), and a layer's random lightning enable a storm around the eye.
@@ -34,7 +36,9 @@
 //! - HAT/HOT, LOS Segment and Vector, Position and Environmental Conditions requests and
 //!   Collision Detection Segment and Volume definitions: answered in the next frame's message
 //!   (standing requests with an update period every that many frames), from the terrain
-//!   database's query service, the surface the renderer draws at full detail.
+//!   database's query service, the surface the renderer draws at full detail; over the sea
+//!   (off the database, or its water posts at mean sea level) from the wave surface at the
+//!   frame's time (material water, the wave's normal), and a clamped entity there floats.
 //! - User-defined packets: kept for the caller (`take_user_packets`).
 //!
 //! Line of sight also sees the obscurants: the smoke, flame and dust on the clear part of the
@@ -325,6 +329,27 @@ impl EnvironmentState {
         let x = enu.x * c - enu.y * s;
         let y = enu.x * s + enu.y * c;
         x.abs() <= f64::from(region.size_x_m) / 2.0 && y.abs() <= f64::from(region.size_y_m) / 2.0
+    }
+
+    /// The host's maritime surface conditions at a point: an active region's where the point
+    /// lies in one, else the global ones (enabled only; entity-scoped ones are not positional).
+    pub fn maritime_at(&self, point: Geodetic) -> Option<&MaritimeSurfaceConditionsControl> {
+        self.maritime
+            .iter()
+            .find(|((scope, region), m)| {
+                *scope == SCOPE_REGIONAL
+                    && m.surface_conditions_enable
+                    && self
+                        .regions
+                        .get(region)
+                        .is_some_and(|r| Self::region_contains(r, point))
+            })
+            .map(|(_, m)| m)
+            .or_else(|| {
+                self.maritime
+                    .get(&(SCOPE_GLOBAL, 0))
+                    .filter(|m| m.surface_conditions_enable)
+            })
     }
 
     /// The weather layers that apply at a point: regional ones where the point is inside an
@@ -711,6 +736,9 @@ pub struct IgSession {
     time_set: Option<HostTimeSet>,
     poses: BTreeMap<u16, Pose>,
     counters: SessionCounters,
+    /// The sea at the frame's time (set by the world each frame), and the scenario's water.
+    sea: Option<std::sync::Arc<crate::sea::SeaNow>>,
+    scenario_water: crate::sea::Water,
 }
 
 fn geodetic_msl(lat_deg: f64, lon_deg: f64, alt_msl_m: f64, query: &QuerySession) -> Geodetic {
@@ -775,6 +803,51 @@ impl IgSession {
             time_set: None,
             poses: BTreeMap::new(),
             counters: SessionCounters::default(),
+            sea: None,
+            scenario_water: crate::sea::Water::of_scenario(None),
+        }
+    }
+
+    /// The sea at the frame's time (`None`: no sea), for the height answers and the clamping.
+    pub fn set_sea(&mut self, sea: Option<std::sync::Arc<crate::sea::SeaNow>>) {
+        self.sea = sea;
+    }
+
+    /// The scenario's water, which the host's Maritime Surface Conditions override.
+    pub fn set_scenario_water(&mut self, water: crate::sea::Water) {
+        self.scenario_water = water;
+    }
+
+    /// The sea at the frame's time, if there is one.
+    pub fn sea(&self) -> Option<&std::sync::Arc<crate::sea::SeaNow>> {
+        self.sea.as_ref()
+    }
+
+    /// The water at a point (altitude above MSL): the host's region there, else its global
+    /// conditions, else the scenario's.
+    pub fn water_at(&self, point_msl: Geodetic) -> crate::sea::Water {
+        self.scenario_water
+            .with_host(self.environment.maritime_at(point_msl))
+    }
+
+    /// The surface under a point: the sea's waves where it is sea, else the terrain.
+    ///
+    /// # Errors
+    /// The terrain query's, where the point is not sea.
+    pub fn surface_hot(
+        &self,
+        query: &mut QuerySession,
+        lat_deg: f64,
+        lon_deg: f64,
+    ) -> Result<SurfacePoint, cig_terrain::QueryError> {
+        match &self.sea {
+            Some(sea) => {
+                let level = self
+                    .water_at(Geodetic::new(lat_deg, lon_deg, 0.0))
+                    .level_msl_m;
+                sea.hot(query, lat_deg, lon_deg, level)
+            }
+            None => query.hot(lat_deg, lon_deg),
         }
     }
 
@@ -1565,7 +1638,28 @@ impl IgSession {
                 alt_m,
             } => {
                 let mut orientation = e.orientation;
-                let position = if e.clamp == Clamp::None {
+                let afloat = match (&self.sea, e.clamp) {
+                    (_, Clamp::None) | (None, _) => None,
+                    (Some(sea), _) => {
+                        let level = self
+                            .water_at(Geodetic::new(lat_deg, lon_deg, 0.0))
+                            .level_msl_m;
+                        crate::sea::SeaNow::covers(&query.hot(lat_deg, lon_deg), level).then(|| {
+                            sea.float(
+                                query,
+                                &e.model,
+                                e.orientation,
+                                e.clamp,
+                                [lat_deg, lon_deg, alt_m],
+                                level,
+                            )
+                        })
+                    }
+                };
+                let position = if let Some(afloat) = afloat {
+                    orientation = afloat.orientation;
+                    afloat.position
+                } else if e.clamp == Clamp::None {
                     geodetic_msl(lat_deg, lon_deg, alt_m, query)
                 } else {
                     let spec = cig_scene::snapshot::EntitySpec {
@@ -1720,7 +1814,10 @@ impl IgSession {
                 [r.lat_deg_or_x_m, r.lon_deg_or_y_m, r.alt_m_or_z_m],
                 query,
             );
-            let answer = point.and_then(|p| query.hat(p).ok());
+            let answer = point.and_then(|p| {
+                let s = self.surface_hot(query, p.lat_deg, p.lon_deg).ok()?;
+                Some((p.alt_m - s.height_ellipsoid_m(), s))
+            });
             match (r.request_type, answer) {
                 (2, Some((hat, s))) => {
                     let (az, el) = normal_az_el(&s);
@@ -1864,7 +1961,10 @@ impl IgSession {
                 alpha_threshold,
             } = job;
             self.counters.los_answered += 1;
-            let result = segment.and_then(|(a, b)| query.los(a, b).ok());
+            let (result, sea_normal) = match segment {
+                Some((a, b)) => self.los_with_sea(query, a, b),
+                None => (None, None),
+            };
             let hit = result.and_then(|r| r.hit);
             let mut visible = result.is_some_and(|r| r.visible);
             // Smoke, flame and dust on the clear part of the line are a translucent surface of
@@ -1913,8 +2013,7 @@ impl IgSession {
                         response.lon_deg_or_y_m,
                         response.alt_m_or_z_m,
                     ] = position;
-                    if let Some(c) = h.culture {
-                        let [e, n, u] = c.normal_enu;
+                    if let Some([e, n, u]) = h.culture.map(|c| c.normal_enu).or(sea_normal) {
                         let (az, el) = azimuth_elevation_deg(DVec3::new(e, n, u));
                         response.normal_azimuth_deg = az as f32;
                         response.normal_elevation_deg = el as f32;
@@ -1938,6 +2037,190 @@ impl IgSession {
                 }));
             }
         }
+    }
+
+    /// Line of sight from `a` to `b` (altitudes above the ellipsoid) seeing the terrain, its
+    /// culture and, where the session has a sea, the waves ([`crate::sea::SeaNow::first_hit`],
+    /// refracted, with the waves: the crests block what they would hide): the nearer of the
+    /// terrain's hit and the sea's, with the sea's normal when it is the sea's. Over the sea
+    /// the sea replaces the terrain's sea posts ([`crate::sea::SeaNow::covers`]), and a
+    /// sightline that misses the database is answered by the sea alone. `None`: no answer.
+    fn los_with_sea(
+        &self,
+        query: &mut QuerySession,
+        a: Geodetic,
+        b: Geodetic,
+    ) -> (Option<cig_terrain::LosResult>, Option<[f64; 3]>) {
+        let Some(sea) = &self.sea else {
+            return (query.los(a, b).ok(), None);
+        };
+        let terrain = match query.los(a, b) {
+            Ok(r) => r.hit,
+            Err(cig_terrain::QueryError::Misses { .. }) => None,
+            Err(_) => return (None, None),
+        };
+        let level_at = |lat_deg: f64, lon_deg: f64| {
+            self.water_at(Geodetic::new(lat_deg, lon_deg, 0.0))
+                .level_msl_m
+        };
+        let sea_post = terrain.is_some_and(|h| {
+            Self::is_sea_post(query, &h, level_at(h.point.lat_deg, h.point.lon_deg))
+        });
+        let land_hit = terrain.filter(|_| !sea_post);
+        let mid = Geodetic::from_ecef((a.to_ecef() + b.to_ecef()) * 0.5);
+        let sightline = crate::sea::SeaSightline {
+            level_msl_m: level_at(mid.lat_deg, mid.lon_deg),
+            geoid_m: [a, b].map(|p| query.geoid_undulation_m(p.lat_deg, p.lon_deg)),
+            refraction_k: crate::sea::STANDARD_REFRACTION_K,
+            with_waves: true,
+            // Nothing beyond the land's hit matters.
+            max_range_m: land_hit.map_or(f64::INFINITY, |h| h.range_m),
+        };
+        let sea_hit = sea.first_hit(a, b, &sightline, |lat_deg, lon_deg| {
+            crate::sea::SeaNow::covers(&query.hot(lat_deg, lon_deg), level_at(lat_deg, lon_deg))
+        });
+        let limit_m = sea_hit.map_or(f64::INFINITY, |h| h.range_m);
+        let land = match terrain {
+            // The terrain's sightline went under the sea posts: look for land beyond, up to
+            // the sea's own hit.
+            Some(h) if sea_post && h.range_m < limit_m => {
+                match Self::land_beyond_sea(query, a, b, h.range_m, limit_m, level_at) {
+                    Ok(land) => land,
+                    Err(_) => return (None, None),
+                }
+            }
+            _ => land_hit,
+        };
+        let hit = match (land, sea_hit) {
+            (Some(l), Some(s)) if l.range_m <= s.range_m => Ok(l),
+            (Some(l), None) => Ok(l),
+            (_, Some(s)) => Err(s),
+            (None, None) => {
+                return (
+                    Some(cig_terrain::LosResult {
+                        visible: true,
+                        hit: None,
+                    }),
+                    None,
+                )
+            }
+        };
+        let (hit, normal) = match hit {
+            Ok(l) => (l, None),
+            Err(s) => (
+                LosHit {
+                    point: s.point,
+                    range_m: s.range_m,
+                    material: cig_terrain::Material::Water,
+                    level: 0,
+                    culture: None,
+                },
+                Some(s.normal_enu),
+            ),
+        };
+        (
+            Some(cig_terrain::LosResult {
+                visible: false,
+                hit: Some(hit),
+            }),
+            normal,
+        )
+    }
+
+    /// Whether a terrain hit is on a sea post, where the sea answers instead.
+    fn is_sea_post(query: &mut QuerySession, hit: &LosHit, level_msl_m: f64) -> bool {
+        hit.culture.is_none()
+            && crate::sea::SeaNow::covers(
+                &query.hot(hit.point.lat_deg, hit.point.lon_deg),
+                level_msl_m,
+            )
+    }
+
+    /// The first land or culture the sightline from `a` to `b` meets between `from_m`, where
+    /// the terrain's sightline met a sea post (the sea answers there), and `limit_m` (the
+    /// sea's own hit): walks on along the sightline while it is under the sea posts' top, in
+    /// steps of half a post, watching for land (bisected to 1 cm), then asks the terrain again
+    /// from where the sightline rises above them (a few times at most).
+    fn land_beyond_sea(
+        query: &mut QuerySession,
+        a: Geodetic,
+        b: Geodetic,
+        from_m: f64,
+        limit_m: f64,
+        level_at: impl Fn(f64, f64) -> f64,
+    ) -> Result<Option<LosHit>, cig_terrain::QueryError> {
+        const RESTARTS: usize = 4;
+        let (ea, eb) = (a.to_ecef(), b.to_ecef());
+        let length_m = (eb - ea).length();
+        let end_m = length_m.min(limit_m);
+        let dir = (eb - ea) / length_m;
+        let grid = query.cache().database().layout().grid;
+        let (north, east) = cig_geo::metres_per_degree(a.lat_deg);
+        let step_m = (0.5 * (grid.dlat_deg * north).min(grid.dlon_deg * east)).max(1.0);
+        // Land above the sightline at `x`: the point on the sightline and the land's material.
+        let land_at = |query: &mut QuerySession, x: f64| {
+            let p = Geodetic::from_ecef(ea + dir * x);
+            let terrain = query.hot(p.lat_deg, p.lon_deg);
+            let sea = crate::sea::SeaNow::covers(&terrain, level_at(p.lat_deg, p.lon_deg));
+            match terrain {
+                Ok(s) if !sea && p.alt_m <= s.height_ellipsoid_m() => Some((p, s)),
+                _ => None,
+            }
+        };
+        let mut x = from_m;
+        for _ in 0..RESTARTS {
+            let mut last_sea = x;
+            while x < end_m {
+                x = (x + step_m).min(end_m);
+                if let Some((mut p, mut s)) = land_at(query, x) {
+                    while x - last_sea > 0.01 {
+                        let m = 0.5 * (last_sea + x);
+                        match land_at(query, m) {
+                            Some(found) => ((p, s), x) = (found, m),
+                            None => last_sea = m,
+                        }
+                    }
+                    return Ok(Some(LosHit {
+                        point: p,
+                        range_m: x,
+                        material: s.material,
+                        level: s.level,
+                        culture: None,
+                    }));
+                }
+                let p = Geodetic::from_ecef(ea + dir * x);
+                let level = level_at(p.lat_deg, p.lon_deg);
+                let sea = crate::sea::SeaNow::covers(&query.hot(p.lat_deg, p.lon_deg), level);
+                let above_m = p.alt_m - query.geoid_undulation_m(p.lat_deg, p.lon_deg);
+                if !sea || above_m > level.max(0.0) + crate::sea::SEA_POST_TOLERANCE_M {
+                    break;
+                }
+                last_sea = x;
+            }
+            if x >= end_m {
+                return Ok(None);
+            }
+            // The sightline is above the sea posts again (or over land below it): the terrain
+            // from here.
+            let start = Geodetic::from_ecef(ea + dir * x);
+            let hit = match query.los(start, b) {
+                Ok(r) => r.hit,
+                Err(cig_terrain::QueryError::Misses { .. }) => None,
+                Err(e) => return Err(e),
+            };
+            let Some(mut h) = hit else {
+                return Ok(None);
+            };
+            h.range_m += x;
+            if h.range_m >= limit_m {
+                return Ok(None);
+            }
+            if !Self::is_sea_post(query, &h, level_at(h.point.lat_deg, h.point.lon_deg)) {
+                return Ok(Some(h));
+            }
+            x = h.range_m;
+        }
+        Ok(None)
     }
 
     fn answer_positions(&mut self, query: &mut QuerySession, out: &mut Vec<Packet>) {
@@ -2046,18 +2329,15 @@ impl IgSession {
             }
             let point = Geodetic::new(r.latitude_deg, r.longitude_deg, r.altitude_m);
             if r.request_type & 1 != 0 {
-                let m = self
-                    .environment
-                    .maritime
-                    .get(&(SCOPE_GLOBAL, 0))
-                    .filter(|m| m.surface_conditions_enable);
+                // The water there: the host's region, its global conditions, the scenario's.
+                let water =
+                    self.water_at(Geodetic::new(r.latitude_deg, r.longitude_deg, r.altitude_m));
                 out.push(Packet::MaritimeSurfaceConditionsResponse(
                     MaritimeSurfaceConditionsResponse {
                         request_id: r.request_id,
-                        sea_surface_height_m: m.map_or(0.0, |m| m.sea_surface_height_m),
-                        surface_water_temperature_c: m
-                            .map_or(DEFAULT_TEMPERATURE_C, |m| m.surface_water_temperature_c),
-                        surface_clarity_pct: m.map_or(100.0, |m| m.surface_clarity_pct),
+                        sea_surface_height_m: water.level_msl_m as f32,
+                        surface_water_temperature_c: water.temperature_c as f32,
+                        surface_clarity_pct: water.clarity_pct as f32,
                     },
                 ));
             }

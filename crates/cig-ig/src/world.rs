@@ -153,6 +153,15 @@ impl Script {
 /// (a saccade of about 30 ms moves it a sixth of the way; a fixation of half a second, most).
 pub const POINT_OF_INTEREST_LAG_S: f64 = 0.15;
 
+/// The DIS exercise's ships are floated on the sea within this distance of an eye or of the
+/// database's centre, metres (beyond it they are below the horizon of any eye near the sea).
+const REMOTE_SHIPS_FLOATED_WITHIN_M: f64 = 400_000.0;
+
+/// This IG's ships' speed is sampled over at least this long, seconds.
+const SHIP_SPEED_SAMPLE_S: f64 = 0.5;
+/// A ship's last place older than this starts its speed over (a jump, a pause), seconds.
+const SHIP_SPEED_STALE_S: f64 = 5.0;
+
 /// Everything the IG simulates.
 pub struct IgWorld {
     session: IgSession,
@@ -227,6 +236,16 @@ pub struct IgWorld {
     /// The scenario's flares and the surface under each (above the ellipsoid) once the
     /// terrain query answered there.
     flares: Vec<(cig_scene::lights::Flare, Option<f64>)>,
+    /// The sea (the scenario's and the host's).
+    sea: crate::sea::WorldSea,
+    /// The DIS exercise's ships afloat this frame, by draw id (their dead-reckoned place on
+    /// the waves at the world time: the same on every IG).
+    remote_afloat: BTreeMap<u32, crate::pose::Pose>,
+    /// This IG's ships' last sampled place (monotonic time, position) and the speed (m/s) and
+    /// course (degrees) made good between samples, by entity.
+    ship_motion: BTreeMap<u16, (f64, Geodetic, f64, f64)>,
+    /// The wakes of the ships under way on the sea this frame.
+    wakes: Vec<cig_scene::sea::WakeDraw>,
 }
 
 /// A scenario smoke source and the plume it runs.
@@ -258,6 +277,8 @@ impl IgWorld {
         let thermal = crate::thermal::ThermalWorld::new(scenario.thermal.as_ref());
         let models = ModelTable::from_scenario(&scenario);
         let mut session = IgSession::new(config.session.clone(), models.clone());
+        session.set_scenario_water(crate::sea::Water::of_scenario(scenario.sea.as_ref()));
+        let sea = crate::sea::WorldSea::new(scenario.sea.as_ref());
         let mut scripts = BTreeMap::new();
         for e in &scenario.entities {
             let mut entity = IgEntity::new(
@@ -353,6 +374,10 @@ impl IgWorld {
             operator_sensor: None,
             operator_nvg: None,
             flares,
+            sea,
+            remote_afloat: BTreeMap::new(),
+            ship_motion: BTreeMap::new(),
+            wakes: Vec::new(),
         })
     }
 
@@ -612,7 +637,10 @@ impl IgWorld {
             script_velocity.insert(*id, velocity);
         }
         self.session.advance(dt, query);
+        self.update_sea(query);
         self.session.resolve_poses(query);
+        self.float_remote_ships(query);
+        self.track_own_ships(query);
         let effect_time_s = effect_time_s(self.clock.now().unix_seconds());
         if self
             .effects
@@ -1527,6 +1555,153 @@ impl IgWorld {
         }
     }
 
+    /// Computes the sea at the world time (before the poses: floating entities need it).
+    fn update_sea(&mut self, query: &mut QuerySession) {
+        let grid = query.cache().database().layout().grid;
+        let origin = cig_scene::sea::sea_origin(
+            0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
+            0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
+        );
+        let eye_msl = self
+            .first_eye
+            .map(|e| Geodetic::new(e.lat_deg, e.lon_deg, e.alt_m - self.eye_geoid_m));
+        // The session lets go of last frame's sea so that its surface is reused in place.
+        self.session.set_sea(None);
+        let result = self.sea.update(
+            self.session.environment(),
+            eye_msl,
+            origin,
+            self.clock.now().unix_seconds(),
+        );
+        match result {
+            Ok(told) => {
+                for text in told {
+                    self.session.tell_host(text);
+                }
+            }
+            Err(e) => self.session.tell_host(e.to_string()),
+        }
+        self.session.set_sea(self.sea.now().cloned());
+    }
+
+    /// Floats the DIS exercise's surface ships that have a hull on the sea.
+    fn float_remote_ships(&mut self, query: &mut QuerySession) {
+        self.remote_afloat.clear();
+        self.wakes.clear();
+        let (Some(sea), Some(x)) = (self.session.sea(), &self.exercise) else {
+            return;
+        };
+        // Around the views' eyes and the database (a caller's own view lies near it).
+        let grid = query.cache().database().layout().grid;
+        let centre = Geodetic::new(
+            0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
+            0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
+            0.0,
+        );
+        let mut eyes: Vec<DVec3> = self
+            .world_views(1, 1)
+            .iter()
+            .map(|v| v.eye.to_ecef())
+            .collect();
+        eyes.push(centre.to_ecef());
+        for r in x.remote_entities_near(self.monotonic_s, &eyes, REMOTE_SHIPS_FLOATED_WITHIN_M) {
+            // Surface platforms (DIS domain 3) float; others keep what their owner sends.
+            if r.entity_type.kind != 1 || r.entity_type.domain != 3 {
+                continue;
+            }
+            let model = self.session.models().model_for_dis(&r.entity_type);
+            if cig_scene::sea::builtin_hull(model).is_none() {
+                continue;
+            }
+            let (lat_deg, lon_deg) = (r.geodetic.lat_deg, r.geodetic.lon_deg);
+            let level = self
+                .session
+                .water_at(Geodetic::new(lat_deg, lon_deg, 0.0))
+                .level_msl_m;
+            if !crate::sea::SeaNow::covers(&query.hot(lat_deg, lon_deg), level) {
+                continue;
+            }
+            let [heading_deg, pitch_deg, roll_deg] = r.heading_pitch_roll_deg;
+            let pose = sea.float(
+                query,
+                model,
+                Hpr {
+                    heading_deg,
+                    pitch_deg,
+                    roll_deg,
+                },
+                cig_scene::snapshot::Clamp::HeightAndAttitude,
+                [lat_deg, lon_deg, 0.0],
+                level,
+            );
+            // Its wake, from the velocity its owner sends.
+            let v = EnuFrame::new(r.geodetic).ecef_vector_to_enu(r.velocity_ecef_mps);
+            let course_deg = v.x.atan2(v.y).to_degrees().rem_euclid(360.0);
+            self.wakes.extend(cig_scene::sea::WakeDraw::of_ship(
+                model,
+                pose.position,
+                course_deg,
+                v.x.hypot(v.y),
+            ));
+            self.remote_afloat.insert(remote_instance_id(r.key), pose);
+        }
+    }
+
+    /// This IG's own ships on the sea: their speed and course made good (sampled at least
+    /// [`SHIP_SPEED_SAMPLE_S`] apart), and their wakes.
+    fn track_own_ships(&mut self, query: &mut QuerySession) {
+        if self.session.sea().is_none() {
+            self.ship_motion.clear();
+            return;
+        }
+        let now = self.monotonic_s;
+        let mut seen = BTreeSet::new();
+        for (id, e) in self.session.entities() {
+            if e.life != EntityLife::Active || cig_scene::sea::builtin_hull(&e.model).is_none() {
+                continue;
+            }
+            let Some(pose) = self.session.poses().get(id) else {
+                continue;
+            };
+            let p = pose.position;
+            let level = self
+                .session
+                .water_at(Geodetic::new(p.lat_deg, p.lon_deg, 0.0))
+                .level_msl_m;
+            if !crate::sea::SeaNow::covers(&query.hot(p.lat_deg, p.lon_deg), level) {
+                continue;
+            }
+            seen.insert(*id);
+            let entry =
+                self.ship_motion
+                    .entry(*id)
+                    .or_insert((now, p, 0.0, pose.orientation.heading_deg));
+            let dt = now - entry.0;
+            if dt > SHIP_SPEED_STALE_S {
+                *entry = (now, p, 0.0, pose.orientation.heading_deg);
+            } else if dt >= SHIP_SPEED_SAMPLE_S {
+                let moved = EnuFrame::new(entry.1).geodetic_to_enu(p);
+                let speed = moved.x.hypot(moved.y) / dt;
+                let course = if speed > 0.1 {
+                    moved.x.atan2(moved.y).to_degrees().rem_euclid(360.0)
+                } else {
+                    pose.orientation.heading_deg
+                };
+                *entry = (now, p, speed, course);
+            }
+            let (_, _, speed_mps, course_deg) = *entry;
+            self.wakes.extend(cig_scene::sea::WakeDraw::of_ship(
+                &e.model, p, course_deg, speed_mps,
+            ));
+        }
+        self.ship_motion.retain(|id, _| seen.contains(id));
+    }
+
+    /// The sea at the world time, if there is one.
+    pub fn sea(&self) -> Option<&std::sync::Arc<crate::sea::SeaNow>> {
+        self.session.sea()
+    }
+
     /// The frame's message to the host (Start of Frame and answers).
     pub fn host_message(&mut self, query: &mut QuerySession, timestamp_10us: u32) -> Message {
         self.session
@@ -1653,6 +1828,10 @@ impl IgWorld {
                 .collect();
         }
         snapshot.sky = self.scenario.sky_settings();
+        snapshot.sea = self.session.sea().map(|s| std::sync::Arc::clone(s.draw()));
+        if snapshot.sea.is_some() {
+            snapshot.wakes.clone_from(&self.wakes);
+        }
         snapshot.thermal = self.thermal.scene();
         if snapshot.thermal.is_some() {
             let sensors = self.drawn_sensors();
@@ -1810,11 +1989,18 @@ impl IgWorld {
                 let models = self.session.models();
                 let model = models.model_for_dis(&r.entity_type);
                 let (kind, domain) = (r.entity_type.kind, r.entity_type.domain);
-                let orientation = Hpr {
-                    heading_deg,
-                    pitch_deg,
-                    roll_deg,
-                };
+                let id = remote_instance_id(r.key);
+                let (position, orientation) = self.remote_afloat.get(&id).map_or(
+                    (
+                        r.geodetic,
+                        Hpr {
+                            heading_deg,
+                            pitch_deg,
+                            roll_deg,
+                        },
+                    ),
+                    |p| (p.position, p.orientation),
+                );
                 crate::lights::add_entity_lights(
                     &crate::lights::LitEntity {
                         id: remote_instance_id(r.key),
@@ -1824,18 +2010,18 @@ impl IgWorld {
                             cig_dis::LightsRequested::from_appearance(r.appearance, kind, domain),
                         ),
                         burning: crate::thermal::appearance_heat(r.appearance).1,
-                        position: r.geodetic,
+                        position,
                         orientation,
                     },
                     now_unix_s,
                     &mut snapshot.lights,
                 );
                 snapshot.entities.push(EntityInstance {
-                    id: remote_instance_id(r.key),
+                    id,
                     model: model.to_string(),
                     cue_important: models.is_cue_important(model),
                     critical_radius_m: models.critical_radius_m(model),
-                    position: r.geodetic,
+                    position,
                     orientation,
                 });
             }

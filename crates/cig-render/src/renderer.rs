@@ -502,6 +502,9 @@ struct ShaderSwitches {
     ground_fog: bool,
     physical_sky: bool,
     ground_detail: bool,
+    /// The sea is drawn: the terrain leaves its sea posts to it (a discard, which costs the
+    /// early depth test, so only these frames pay it).
+    sea_cut: bool,
 }
 
 impl ShaderSwitches {
@@ -511,15 +514,17 @@ impl ShaderSwitches {
             ground_fog: drawn_ground_fog(snapshot).is_some(),
             physical_sky: snapshot.sky.model == SkyModel::Physical,
             ground_detail: snapshot.ground_detail,
+            sea_cut: snapshot.sea.is_some(),
         }
     }
 
-    fn constants(self) -> [(&'static str, f64); 4] {
+    fn constants(self) -> [(&'static str, f64); 5] {
         [
             ("FOG_MODE", f64::from(self.fog_mode)),
             ("GROUND_FOG", f64::from(u8::from(self.ground_fog))),
             ("PHYSICAL_SKY", f64::from(u8::from(self.physical_sky))),
             ("GROUND_DETAIL", f64::from(u8::from(self.ground_detail))),
+            ("SEA_CUT", f64::from(u8::from(self.sea_cut))),
         ]
     }
 }
@@ -914,7 +919,16 @@ impl Renderer {
         let light_points = crate::lights::LightPass::new(&gpu, HDR_FORMAT, &globals);
         let sea =
             crate::sea::SeaPass::new(&gpu, GeoidLookup::new(&cache.database().manifest().geoid));
-        let sea_module = atmosphere_shader(&gpu, "sea", include_str!("shaders/sea.wgsl"));
+        let sea_module = atmosphere_shader(
+            &gpu,
+            "sea",
+            &[
+                include_str!("shaders/thermal_common.wgsl"),
+                include_str!("shaders/thermal.wgsl"),
+                include_str!("shaders/sea.wgsl"),
+            ]
+            .concat(),
+        );
         let sea_pipeline = pipeline(
             &gpu,
             HDR_FORMAT,
@@ -1322,13 +1336,14 @@ impl Renderer {
             nvg.as_ref(),
         );
         self.drawn_scratch = drawn;
-        // The sea (not in a thermal sensor's view yet).
-        let sea_vertices = if sensor.is_none() {
-            self.sea
-                .prepare(&self.gpu, &self.globals, &camera, snapshot.sea.as_deref())
-        } else {
-            0
-        };
+        // The sea, in the visible and the sensors' views alike.
+        let sea_vertices = self.sea.prepare(
+            &self.gpu,
+            [&self.globals, &self.thermal],
+            &camera,
+            snapshot.sea.as_deref(),
+            &snapshot.wakes,
+        );
         self.write_globals(
             &camera,
             &lighting,
@@ -1840,7 +1855,19 @@ impl Renderer {
         let sea_level_m = self.sea.undulation_m(eye.lat_deg, eye.lon_deg)
             + snapshot.sea.as_ref().map_or(0.0, |sea| sea.level_m);
         let alt = (eye.alt_m - sea_level_m).max(0.0);
-        let dip = (2.0 * alt / cig_geo::WGS84_A_M).sqrt();
+        let refraction_k = snapshot.refraction_k.clamp(-1.0, 0.9);
+        let dip = (2.0 * alt * (1.0 - refraction_k) / cig_geo::WGS84_A_M).sqrt();
+        // The database's sea posts lie at mean sea level whatever the tide: water posts up to
+        // there or the sea's level (the higher) and half a metre are the sea's
+        // (`cig_scene::sea::SEA_POST_TOLERANCE_M`), drawn by the sea pass instead.
+        let sea_cut = snapshot.sea.is_some();
+        let sea_cut_rel_m = self.sea.undulation_m(eye.lat_deg, eye.lon_deg)
+            + snapshot
+                .sea
+                .as_ref()
+                .map_or(0.0, |sea| sea.level_m.max(0.0))
+            + cig_scene::sea::SEA_POST_TOLERANCE_M
+            - eye.alt_m;
         let fog = snapshot.fog;
         let mode = f32::from(fog_mode_index(fog.mode));
         // The detail noise lies in the database centre's tangent plane (world-fixed, the same
@@ -1922,12 +1949,15 @@ impl Renderer {
                 },
                 lighting.scotopic_fraction as f32,
                 lighting.natural_illuminance_lux as f32,
-                0.0,
+                // w: terrestrial refraction's coefficient (common.wgsl's `refracted`).
+                refraction_k as f32,
             ],
             sky_frame_x: [0.0; 4],
             sky_frame_y: [0.0; 4],
-            detail_east: v4(east, 0.0),
-            detail_north: v4(north, 0.0),
+            // w: whether the sea replaces the database's water posts at its level, and the
+            // height (relative to the eye, metres) at or below which a water post is sea.
+            detail_east: v4(east, if sea_cut { 1.0 } else { 0.0 }),
+            detail_north: v4(north, sea_cut_rel_m),
             ..Default::default()
         };
         if let Some((view, frame)) = sensor {

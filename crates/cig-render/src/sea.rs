@@ -33,6 +33,12 @@ const SEGMENTS: u32 = 256;
 /// Cascades the pass draws at most (texture array layers).
 pub const MAX_CASCADES: usize = 4;
 
+/// The most explicit waves (CIGI Wave Control) drawn: the highest.
+pub const MAX_EXPLICIT_WAVES: usize = 8;
+
+/// The most ships' wakes drawn: the nearest.
+pub const MAX_WAKES: usize = 8;
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct SeaUniform {
@@ -50,8 +56,18 @@ struct SeaUniform {
     cascades: [[f32; 4]; MAX_CASCADES],
     /// x: unresolved slope variance, y: the whitecaps' Jacobian, z: cascades, w: mip levels.
     shade: [f32; 4],
-    /// The water body's colour; w unused.
+    /// The water body's colour; w: explicit waves drawn.
     water: [f32; 4],
+    /// Per explicit wave: its direction in the sea plane's axes (xy), wave number (z), its
+    /// phase at the point under the eye (w, wrapped); then its amplitude and horizontal
+    /// displacement amplitude (xy).
+    waves: [[f32; 4]; 2 * MAX_EXPLICIT_WAVES],
+    /// x: the water's surface temperature (K), for a thermal sensor's view; y: wakes drawn.
+    thermal: [f32; 4],
+    /// Per wake: the stern's place relative to the eye (east, north, metres) and the unit
+    /// course (east, north); then speed (m/s), length and beam (m), the arms' half-angle
+    /// (radians); then the foam made (0..1), its e-folding time (s).
+    wakes: [[f32; 4]; 3 * MAX_WAKES],
 }
 
 /// The sea's GPU state: three texture arrays (displacement, LEAN slopes, displacement
@@ -101,6 +117,7 @@ impl SeaPass {
                 array_entry(3),
                 array_entry(4),
                 crate::pass::sampler_entry(5),
+                crate::pass::storage_entry(9),
             ],
         });
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
@@ -148,12 +165,14 @@ impl SeaPass {
     }
 
     /// Uploads the frame's sea for `camera`; returns the indices to draw (0: nothing).
+    /// `buffers`: the globals and the thermal tables (a sensor view's sea).
     pub(crate) fn prepare(
         &mut self,
         gpu: &Gpu,
-        globals: &wgpu::Buffer,
+        buffers: [&wgpu::Buffer; 2],
         camera: &Camera,
         sea: Option<&SeaDraw>,
+        wakes: &[cig_scene::sea::WakeDraw],
     ) -> u32 {
         let Some(sea) = sea else {
             return 0;
@@ -173,7 +192,7 @@ impl SeaPass {
             .as_ref()
             .is_none_or(|t| t.size != size || t.layers != layers)
         {
-            self.textures = Some(self.make_textures(gpu, globals, size, layers));
+            self.textures = Some(self.make_textures(gpu, buffers, size, layers));
         }
         let Some(textures) = self.textures.as_ref() else {
             return 0;
@@ -252,8 +271,68 @@ impl SeaPass {
                 textures.mips as f32,
             ],
             water: [sea.water_rgb[0], sea.water_rgb[1], sea.water_rgb[2], 0.0],
+            thermal: [(sea.water_temperature_c + 273.15) as f32, 0.0, 0.0, 0.0],
             ..SeaUniform::default()
         };
+        // The highest explicit waves, their phases worked out at the eye in double precision.
+        let mut explicit: Vec<_> = sea.explicit_waves.iter().collect();
+        explicit.sort_by(|a, b| b.amplitude_m.total_cmp(&a.amplitude_m));
+        explicit.truncate(MAX_EXPLICIT_WAVES);
+        uniform.water[3] = explicit.len() as f32;
+        for (slots, wave) in uniform.waves.chunks_exact_mut(2).zip(explicit) {
+            let [dx, dy] = wave.direction;
+            let phase = wave.k_rad_m * (dx * eye_in_plane.x + dy * eye_in_plane.y)
+                - wave.omega_rad_s * sea.time_s
+                + wave.phase_rad;
+            slots[0] = [
+                dx as f32,
+                dy as f32,
+                wave.k_rad_m as f32,
+                phase.rem_euclid(std::f64::consts::TAU) as f32,
+            ];
+            slots[1] = [
+                wave.amplitude_m as f32,
+                wave.displacement_m as f32,
+                0.0,
+                0.0,
+            ];
+        }
+        // The nearest wakes, their sterns relative to the eye in its east and north.
+        let mut near: Vec<(f64, [[f32; 4]; 3])> = wakes
+            .iter()
+            .map(|w| {
+                let centre = here.geodetic_to_enu(w.position);
+                let (s, c) = w.heading_deg.to_radians().sin_cos();
+                let stern = [
+                    centre.x - s * 0.5 * w.length_m,
+                    centre.y - c * 0.5 * w.length_m,
+                ];
+                (
+                    stern[0].hypot(stern[1]),
+                    [
+                        [stern[0] as f32, stern[1] as f32, s as f32, c as f32],
+                        [
+                            w.speed_mps as f32,
+                            w.length_m as f32,
+                            w.beam_m as f32,
+                            w.arm_half_angle_deg.to_radians() as f32,
+                        ],
+                        [
+                            w.foam_generation as f32,
+                            w.foam_e_folding_s as f32,
+                            0.0,
+                            0.0,
+                        ],
+                    ],
+                )
+            })
+            .collect();
+        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+        near.truncate(MAX_WAKES);
+        uniform.thermal[1] = near.len() as f32;
+        for (slots, (_, wake)) in uniform.wakes.chunks_exact_mut(3).zip(near) {
+            slots.copy_from_slice(&wake);
+        }
         for (slot, grid) in uniform.cascades.iter_mut().zip(cascades) {
             let frac = |x: f64| (x / grid.tile_m).rem_euclid(1.0) as f32;
             *slot = [
@@ -280,7 +359,7 @@ impl SeaPass {
     fn make_textures(
         &self,
         gpu: &Gpu,
-        globals: &wgpu::Buffer,
+        [globals, thermal]: [&wgpu::Buffer; 2],
         size: u32,
         layers: u32,
     ) -> SeaTextures {
@@ -337,6 +416,10 @@ impl SeaPass {
                 wgpu::BindGroupEntry {
                     binding: 5,
                     resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 9,
+                    resource: thermal.as_entire_binding(),
                 },
             ],
         });

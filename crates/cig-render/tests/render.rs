@@ -234,6 +234,8 @@ fn a_ship_thirty_km_away_sinks_hull_first_below_the_horizon() {
     let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![ship_view]);
     snapshot.fog = Fog::from_visibility(FogMode::Off, 1e6);
     snapshot.max_pixel_error = 0.5;
+    // The geometric earth (the sea's refraction is `cig`'s hull-down test's).
+    snapshot.refraction_k = 0.0;
     let (empty, _) = render(&mut renderer, &cache, &snapshot, true);
     snapshot.entities = vec![EntityInstance {
         id: 1,
@@ -267,7 +269,10 @@ fn a_ship_thirty_km_away_sinks_hull_first_below_the_horizon() {
         let p = ship_at.to_ecef() + up * height_m;
         camera.project_ecef(p).expect("in front").1
     };
-    let mast_top_row = row_of(37.0);
+    let masthead_m = cig_scene::models::ship_particulars("ship")
+        .expect("the ship's particulars")
+        .masthead_height_m;
+    let mast_top_row = row_of(masthead_m);
     let hidden_row = row_of(hidden_m);
     write_png(&with_ship, &out_dir().join("ship_30km.png"));
     assert!(
@@ -278,8 +283,8 @@ fn a_ship_thirty_km_away_sinks_hull_first_below_the_horizon() {
         (f64::from(bottom) - hidden_row).abs() < 3.0,
         "the ship disappears below row {bottom}; the horizon should hide it below row {hidden_row:.1} ({hidden_m:.1} m)"
     );
-    // The hull (keel to deck, 9 m) and the superstructure (to 17 m) are all hidden.
-    assert!(f64::from(bottom) < row_of(17.0) - 5.0);
+    // The hull and the superstructure (to 19.8 m) are all hidden.
+    assert!(f64::from(bottom) < row_of(19.8) - 5.0);
 }
 
 fn test_box() -> Model {

@@ -4,8 +4,8 @@
 //! so what it draws is the surface the height queries sample.
 //!
 //! Limits: one sea per frame (no regional conditions), at one level (mean sea level plus the
-//! host's sea surface height); explicit waves (CIGI Wave Control) are sampled by queries but not
-//! yet drawn.
+//! host's sea surface height); the renderer draws at most 8 explicit waves (CIGI Wave Control;
+//! the highest), where the height queries sample them all.
 
 use cig_geo::Geodetic;
 use cig_sea::motion::{HullParameters, ShipMotionModel, ShipPose};
@@ -19,6 +19,23 @@ pub fn cox_munk_slope_variance(wind_speed_mps: f64) -> f64 {
 /// Least slope variance left to the shading where the grids resolve almost everything: the
 /// capillary ripples no cascade carries.
 const MIN_UNRESOLVED_SLOPE_VARIANCE: f64 = 0.000_5;
+
+/// A database water post at most this far above mean sea level (or the sea's level, the
+/// higher) is sea, metres: the height queries answer the waves there and the renderer draws
+/// the sea instead of the post (a database's sea posts lie at MSL whatever the tide).
+pub const SEA_POST_TOLERANCE_M: f64 = 0.5;
+
+/// The waves' clock at a UTC instant: seconds since 2020-01-01T00:00:00Z, so every channel and
+/// IG given the same time draws the same waves, and the clock never wraps during a run.
+pub fn wave_clock_s(unix_time_s: f64) -> f64 {
+    unix_time_s - 1_577_836_800.0
+}
+
+/// The origin of the plane the waves lie in for a database or view centred at a point: its
+/// whole degrees, so nearby channels and IGs share one sea.
+pub fn sea_origin(lat_deg: f64, lon_deg: f64) -> Geodetic {
+    Geodetic::new(lat_deg.round().clamp(-89.0, 89.0), lon_deg.round(), 0.0)
+}
 
 /// One frame's sea.
 #[derive(Clone, Debug)]
@@ -37,6 +54,12 @@ pub struct SeaDraw {
     pub whitecap_jacobian: f64,
     /// The water body's colour (diffuse reflectance of the light scattered up from below).
     pub water_rgb: [f32; 3],
+    /// The water's surface temperature, °C (what a thermal sensor sees the sea emit).
+    pub water_temperature_c: f64,
+    /// The host's explicit waves (CIGI Wave Control), as the surface evaluates them.
+    pub explicit_waves: Vec<cig_sea::surface::GerstnerWave>,
+    /// The surface's wave clock ([`wave_clock_s`]) the grids and waves are at, seconds.
+    pub time_s: f64,
 }
 
 impl SeaDraw {
@@ -54,22 +77,27 @@ impl SeaDraw {
             // Open ocean: a deep blue-green of low reflectance (Morel's clear ocean water,
             // about 2 % in the blue, under 0.5 % in the red).
             water_rgb: [0.004, 0.016, 0.028],
+            water_temperature_c: 15.0,
+            explicit_waves: surface.gerstner_waves().to_vec(),
+            time_s: surface.time_s(),
         }
     }
 }
 
-/// The hull a built-in model floats on: the `ship` model's 90 m frigate (12 m beam, 3 m
-/// draft, 1.2 m metacentric height); other models do not float.
+/// The hull a built-in model floats on: the ships' (`destroyer` or `ship`, `merchant`,
+/// `patrol_craft`) as their meshes are built ([`crate::models::ship_particulars`]); other
+/// models do not float.
 pub fn builtin_hull(model: &str) -> Option<HullParameters> {
-    (model == "ship")
-        .then(|| HullParameters::new(90.0, 12.0, 3.0, 1.2))
-        .and_then(Result::ok)
+    crate::models::ship_particulars(model).and_then(|p| {
+        HullParameters::new(p.length_m, p.beam_m, p.draft_m, p.metacentric_height_m).ok()
+    })
 }
 
 /// Sets a floating entity on the sea at the surface's time: its waterline (the model's
-/// origin) at the sea level under it (`geoid_m`: the geoid's height above the ellipsoid there)
-/// plus the heave, pitched and rolled to the waves it spans, waves shorter than the hull
-/// filtered out (`cig_sea::motion`'s wave-following equilibrium: no dynamics of its own).
+/// origin) at the sea's mean level under it (`level_ellipsoid_m`: above the ellipsoid) plus the
+/// heave, pitched and rolled to the waves it spans, waves shorter than the hull filtered out
+/// (`cig_sea::motion`'s wave-following equilibrium: no dynamics of its own). `plane_origin` is
+/// the sea's origin ([`SeaDraw::origin`]).
 ///
 /// # Errors
 /// When the sea cannot be sampled there (a position thousands of kilometres from the origin).
@@ -77,10 +105,10 @@ pub fn ride_the_sea(
     entity: &mut crate::EntityInstance,
     hull: HullParameters,
     surface: &SeaSurface,
-    sea: &SeaDraw,
-    geoid_m: f64,
+    plane_origin: Geodetic,
+    level_ellipsoid_m: f64,
 ) -> Result<(), cig_sea::SeaError> {
-    let plane = cig_geo::EnuFrame::new(sea.origin);
+    let plane = cig_geo::EnuFrame::new(plane_origin);
     let at = plane.geodetic_to_enu(entity.position);
     let pose = ShipPose {
         x_east_m: at.x,
@@ -92,10 +120,61 @@ pub fn ride_the_sea(
         pose,
         surface.time_s(),
     )?;
-    entity.position.alt_m = geoid_m + sea.level_m + motion.heave_m;
+    entity.position.alt_m = level_ellipsoid_m + motion.heave_m;
     entity.orientation.pitch_deg = motion.pitch_deg;
     entity.orientation.roll_deg = motion.roll_deg;
     Ok(())
+}
+
+/// A ship's wake as the sea draws it (`cig_sea::wake`): the Kelvin arms from the bow, the bow
+/// wave and the foam of the turbulent wake astern, on a straight course.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WakeDraw {
+    /// The ship's reference point (the middle of its waterline), above the ellipsoid.
+    pub position: Geodetic,
+    /// The course made good, degrees true.
+    pub heading_deg: f64,
+    pub speed_mps: f64,
+    pub length_m: f64,
+    pub beam_m: f64,
+    /// The arms' apparent half-angle (`cig_sea::wake::kelvin_half_angle_deg`), degrees.
+    pub arm_half_angle_deg: f64,
+    /// The white water the hull makes at this speed, 0..=1 (`cig_sea::wake::foam_generation`).
+    pub foam_generation: f64,
+    /// The foam's e-folding time, seconds.
+    pub foam_e_folding_s: f64,
+}
+
+/// Ships under way slower than this leave no wake drawn, m/s (about 1 knot).
+pub const MIN_WAKE_SPEED_MPS: f64 = 0.5;
+
+impl WakeDraw {
+    /// The wake of a built-in ship (`model`, see [`crate::models::ship_particulars`]) at
+    /// `position` on `heading_deg` at `speed_mps`; `None` for other models, a ship slower than
+    /// [`MIN_WAKE_SPEED_MPS`] or values out of range.
+    pub fn of_ship(
+        model: &str,
+        position: Geodetic,
+        heading_deg: f64,
+        speed_mps: f64,
+    ) -> Option<WakeDraw> {
+        let hull = crate::models::ship_particulars(model)?;
+        if !(speed_mps.is_finite() && speed_mps >= MIN_WAKE_SPEED_MPS && heading_deg.is_finite()) {
+            return None;
+        }
+        let speed_mps = speed_mps.min(40.0);
+        Some(WakeDraw {
+            position,
+            heading_deg,
+            speed_mps,
+            length_m: hull.length_m,
+            beam_m: hull.beam_m,
+            arm_half_angle_deg: cig_sea::wake::kelvin_half_angle_deg(speed_mps, hull.length_m)
+                .ok()?,
+            foam_generation: cig_sea::wake::foam_generation(speed_mps).ok()?,
+            foam_e_folding_s: cig_sea::wake::DEFAULT_FOAM_E_FOLDING_S,
+        })
+    }
 }
 
 /// Mean square slope of one grid, both axes together.
@@ -162,7 +241,8 @@ mod tests {
                     cue_important: false,
                     critical_radius_m: None,
                 };
-                ride_the_sea(&mut ship, hull, &surface, &sea, -30.0).expect("ride");
+                ride_the_sea(&mut ship, hull, &surface, sea.origin, sea.level_m - 30.0)
+                    .expect("ride");
                 sum += (ship.position.alt_m + 30.0).abs()
                     + ship.orientation.pitch_deg.abs()
                     + ship.orientation.roll_deg.abs();

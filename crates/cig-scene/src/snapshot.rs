@@ -71,13 +71,8 @@ pub fn place_entity(
         let surface = session.hot(spec.position.lat_deg, spec.position.lon_deg)?;
         position.alt_m = surface.height_ellipsoid_m() + spec.position.alt_m;
         if spec.clamp == Clamp::HeightAndAttitude {
-            let [e, n, u] = surface.normal_enu;
-            let (sh, ch) = orientation.heading_deg.to_radians().sin_cos();
-            // Slope along the body's forward and right axes.
-            let forward_slope = -(e * sh + n * ch) / u.max(1e-6);
-            let right_slope = -(e * ch - n * sh) / u.max(1e-6);
-            orientation.pitch_deg = forward_slope.atan().to_degrees();
-            orientation.roll_deg = -right_slope.atan().to_degrees();
+            (orientation.pitch_deg, orientation.roll_deg) =
+                attitude_on_slope(surface.normal_enu, orientation.heading_deg);
         }
     }
     Ok(EntityInstance {
@@ -88,6 +83,20 @@ pub fn place_entity(
         position,
         orientation,
     })
+}
+
+/// Pitch and roll, degrees, of a body heading `heading_deg` resting on a surface whose unit
+/// normal (east, north, up) is `normal_enu`.
+pub fn attitude_on_slope(normal_enu: [f64; 3], heading_deg: f64) -> (f64, f64) {
+    let [e, n, u] = normal_enu;
+    let (sh, ch) = heading_deg.to_radians().sin_cos();
+    // Slope along the body's forward and right axes.
+    let forward_slope = -(e * sh + n * ch) / u.max(1e-6);
+    let right_slope = -(e * ch - n * sh) / u.max(1e-6);
+    (
+        forward_slope.atan().to_degrees(),
+        -right_slope.atan().to_degrees(),
+    )
 }
 
 /// Height above the terrain an eye found below it is lifted to, metres: above the near plane
@@ -246,6 +255,12 @@ pub struct FrameSnapshot {
     /// Per view, its night-vision goggle (index as `views`; missing entries are visible
     /// views). A view with a thermal sensor shows the thermal picture.
     pub nvg: Vec<Option<crate::nvg::NvgView>>,
+    /// The wakes of the ships under way on the sea (drawn with [`Self::sea`]).
+    pub wakes: Vec<crate::sea::WakeDraw>,
+    /// Terrestrial refraction's coefficient for what the eye sees (0.13 standard, 0 the
+    /// geometric earth): what stands `d` away is drawn raised by `k d² / 2R`, and the sea's
+    /// horizon dips by `√(2h (1 - k) / R)`.
+    pub refraction_k: f64,
     /// The thermal state the sensor views draw (needed when any view is a sensor).
     pub thermal: Option<std::sync::Arc<crate::thermal::ThermalScene>>,
     /// Trackers' gates to read back after drawing: (view index, `[x, y, width, height]`
@@ -319,6 +334,8 @@ impl FrameSnapshot {
             street_lights: None,
             thermal: None,
             sea: None,
+            wakes: Vec::new(),
+            refraction_k: cig_sea::horizon::STANDARD_REFRACTION_K,
             track_gates: Vec::new(),
         }
     }

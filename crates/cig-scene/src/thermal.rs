@@ -54,7 +54,7 @@ pub fn decode(code: u8) -> ThermalCode {
 /// steel, buildings concrete, trees foliage, anything else a vehicle's armour.
 pub fn default_material_for_model(name: &str) -> ThermalMaterial {
     match name {
-        "ship" => ThermalMaterial::HullPaint,
+        "ship" | "destroyer" | "merchant" | "patrol_craft" => ThermalMaterial::HullPaint,
         "building" => ThermalMaterial::BuildingWall,
         "tree" => ThermalMaterial::CanopyFoliage,
         _ => ThermalMaterial::VehicleArmour,

@@ -278,17 +278,21 @@ impl WaveComponent {
     }
 }
 
-/// An explicit wave ready to evaluate.
-#[derive(Clone, Copy, Debug)]
-struct GerstnerWave {
+/// An explicit wave ready to evaluate: at the undisplaced point `x` (east, north of the sea's
+/// origin) and time `t` its phase is `φ = k (d · x) − ω t + phase`, its height `a cos φ` and its
+/// horizontal displacement `−b d sin φ` (what [`SeaSurface::sample`] adds and the renderer
+/// draws).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GerstnerWave {
     /// Unit vector of travel (east, north).
-    direction: [f64; 2],
-    k_rad_m: f64,
-    omega_rad_s: f64,
-    amplitude_m: f64,
-    /// Horizontal displacement amplitude, metres.
-    displacement_m: f64,
-    phase_rad: f64,
+    pub direction: [f64; 2],
+    pub k_rad_m: f64,
+    pub omega_rad_s: f64,
+    /// Half the trough-to-crest height, metres.
+    pub amplitude_m: f64,
+    /// Horizontal displacement amplitude `b`, metres.
+    pub displacement_m: f64,
+    pub phase_rad: f64,
 }
 
 /// One cascade's grids at the current time, for the renderer (textures) and the sampler.
@@ -535,6 +539,11 @@ impl SeaSurface {
     /// The explicit waves.
     pub fn explicit_waves(&self) -> &[WaveComponent] {
         &self.explicit
+    }
+
+    /// The explicit waves as evaluated (their crests' displacement limited against looping).
+    pub fn gerstner_waves(&self) -> &[GerstnerWave] {
+        &self.gerstner
     }
 
     /// Replaces the explicit waves (CIGI Wave Control), added to what [`SeaSurface::sample`]

@@ -2,8 +2,9 @@
 //!
 //! # Algorithm
 //!
-//! 1. **Sea**: posts below 0 m connected to the grid edge through posts below 0 m are sea; they
-//!    are set to 0 m and become outlets.
+//! 1. **Sea**: posts below 0 m connected to the grid edge through posts below 0 m are sea (the
+//!    coast of [`crate::coast`]); they are set to 0 m, the sea's surface at mean sea level (as
+//!    lakes hold their surface), and become outlets.
 //! 2. **Depressions**: Priority-Flood (Barnes et al. 2014, see [`crate::flood`]) from the grid
 //!    edge and the sea fills every closed depression to its spill height. Each connected region of
 //!    raised posts is exactly flat. A region of at least [`LAKE_MIN_AREA_M2`] (and four posts) that

@@ -37,6 +37,9 @@
 //!    valley floors with catchments over 15 km^2, so that the hydrology finds lakes there
 //!    (tectonic basins, landslide dams).
 //!
+//! With a sea side ([`crate::coast`]), the base level falls by up to 250 m toward the sea, so
+//! the outlets and the valleys' mouths lie on the coast, and no basin is pressed in near it.
+//!
 //! All coordinates are metres from the database's south-west post. The coarse grid, warps,
 //! channels and octaves depend on the area size and seed but never on the post spacing, so
 //! databases of one area at different spacings show the same landscape.
@@ -47,6 +50,7 @@
 //! by construction, not by deposition. The landform depends on the area size (its boundary sets
 //! the outlets), so two adjacent databases do not join seamlessly.
 
+use crate::coast::Coast;
 use crate::flood::{accumulate, priority_flood, Dims, NO_RECEIVER};
 use crate::noise::{fast_floor, smoothstep, unit_from_hash, Layer};
 use rand::RngCore;
@@ -169,8 +173,14 @@ fn layer(rng: &mut ChaCha8Rng, wavelength_m: f64) -> Layer {
 
 impl Landform {
     /// Builds the coarse landform for a square area `size_m` on a side, whose posts may reach
-    /// `reach_m` (>= `size_m`) east and north of the origin.
-    pub(crate) fn new(size_m: f64, reach_m: f64, rng: &mut ChaCha8Rng) -> Landform {
+    /// `reach_m` (>= `size_m`) east and north of the origin; with a `coast`, its base level
+    /// falls toward the sea and no lake basin lies near the shore.
+    pub(crate) fn new(
+        size_m: f64,
+        reach_m: f64,
+        rng: &mut ChaCha8Rng,
+        coast: Option<&Coast>,
+    ) -> Landform {
         let cell_m = (size_m / 350.0).max(200.0);
         let scale = cell_m / 200.0;
         let uplift_ridges = layer(rng, 14_000.0 * scale);
@@ -219,6 +229,9 @@ impl Landform {
                 let hardness = 1.0 + 0.5 * erodibility.fbm(x, y, 3, 2.0, 0.5, coarse_spacing);
                 uplift[c] = (0.22 + 1.0 * ranges * (0.3 + 0.7 * m)) * hardness;
                 base_m[c] = 200.0 + 120.0 * base.fbm(x, y, 2, 2.0, 0.5, coarse_spacing);
+                if let Some(coast) = coast {
+                    base_m[c] -= coast.base_drop_m(x, y);
+                }
                 // Initial surface: base level, uplift-shaped relief and multi-scale roughness, so
                 // that the first routing already wanders.
                 height[c] = (base_m[c]
@@ -334,7 +347,7 @@ impl Landform {
             bowls: Vec::new(),
             channels: Vec::new(),
         };
-        landform.bowls = landform.choose_bowls(size_m, rng);
+        landform.bowls = landform.choose_bowls(size_m, rng, coast);
         landform.channels = landform.trace_channels(&receiver, &acc);
         landform
     }
@@ -531,8 +544,9 @@ impl Landform {
         }
     }
 
-    /// Lake basins on wide, gently sloping valley floors inside the area.
-    fn choose_bowls(&self, size_m: f64, rng: &mut ChaCha8Rng) -> Vec<Bowl> {
+    /// Lake basins on wide, gently sloping valley floors inside the area (and away from the
+    /// coast).
+    fn choose_bowls(&self, size_m: f64, rng: &mut ChaCha8Rng, coast: Option<&Coast>) -> Vec<Bowl> {
         let area_km2 = size_m * size_m * 1e-6;
         let wanted = ((area_km2 / 600.0).ceil() as usize).min(30);
         let min_ln_area = libm::log(15.0) as f32;
@@ -545,6 +559,9 @@ impl Landform {
                 let x = self.x0_m + i as f64 * self.cell_m;
                 let y = self.y0_m + j as f64 * self.cell_m;
                 if x < inset || y < inset || x > size_m - inset || y > size_m - inset {
+                    continue;
+                }
+                if coast.is_some_and(|k| !k.allows_lake_basin(x, y)) {
                     continue;
                 }
                 let [ln_area, slope] = self.area_slope.values[c];

@@ -7,7 +7,11 @@
 //!    landform on a coarse grid (Cordonnier et al. 2016), resampled with domain warping, dressed
 //!    with ridged-multifractal detail (Musgrave 2003) down to twice the post spacing, and cut by
 //!    smoothed valleys.
-//! 2. `hydro`: sea below 0 m, Priority-Flood depression filling (Barnes et al. 2014) into flat
+//!    On request ([`SynthOptions::sea_side`]), `coast`: the land falls into open sea on one
+//!    side, over a coastal plain with beaches or down cliffs, along a fractal shore about a third
+//!    of the way in (16-48 %), the sea floor 25-130 m deep at the edge; the landform's base
+//!    level is lowered toward that side, so its valleys and rivers run to the sea.
+//! 2. `hydro`: sea below 0 m (set to its surface, 0 m above mean sea level), Priority-Flood depression filling (Barnes et al. 2014) into flat
 //!    lakes of sensible size, D8 flow routing (O'Callaghan & Mark 1984) and accumulation, rivers
 //!    above a catchment threshold in km^2, incised and non-increasing downstream.
 //! 3. `roads`: settlements on flat low ground joined by least-cost paved roads (Dijkstra on a
@@ -28,7 +32,8 @@
 //!
 //! # Determinism
 //!
-//! The same [`SynthParams`] give byte-identical rasters on every machine and thread count: one
+//! The same [`SynthParams`] and [`SynthOptions`] give byte-identical rasters on every machine
+//! and thread count (the default options, the bytes of [`synthesize`]): one
 //! `ChaCha8` generator seeded from `seed` draws every random choice in a fixed order, noise is
 //! an integer-hashed lattice, every transcendental function comes from `libm`, queues break ties
 //! on the post index, and the only parallel work (per-post heights and materials) writes each
@@ -40,6 +45,7 @@
 //! coarse landform's outlets and the road network depend on the area's extent. The local metric
 //! frame is a flat square of `size_km` on a side about the area's centre latitude.
 
+mod coast;
 pub mod culture;
 mod features;
 mod flood;
@@ -59,6 +65,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 pub use cig_terrain::features::Feature;
+pub use coast::{SeaSide, UnknownSeaSide};
 pub use features::{DIRT_ROAD_WIDTH_M, PAVED_ROAD_WIDTH_M};
 pub use hydro::Lake;
 pub use roads::RoadKind;
@@ -89,6 +96,28 @@ impl SynthParams {
             spacing_m: 30.0,
             seed: 1,
         }
+    }
+}
+
+/// What a synthesis makes beyond the area and seed of [`SynthParams`]. The default is the
+/// landscape of [`synthesize`], unchanged: inland hills with no sea.
+///
+/// New options may be added: build one from [`SynthOptions::default`] and its `with_` methods.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct SynthOptions {
+    /// The side on which the land falls into open sea (`None`: no sea). The sea covers about
+    /// the outer third of the area on that side and goes on beyond its edge; its posts are
+    /// water at 0 m, the sea's surface at mean sea level (the heights' datum).
+    pub sea_side: Option<SeaSide>,
+}
+
+impl SynthOptions {
+    /// These options with the sea on `side` (`None`: no sea).
+    #[must_use]
+    pub fn with_sea_side(mut self, side: Option<SeaSide>) -> SynthOptions {
+        self.sea_side = side;
+        self
     }
 }
 
@@ -325,6 +354,9 @@ fn plan(p: &SynthParams) -> Result<Plan, SynthError> {
 
 /// Everything a run makes; tests look at the internals.
 pub(crate) struct Generated {
+    /// The ground before the hydrology (the sea's floor still below 0 m).
+    #[cfg(test)]
+    pub ground: Vec<f32>,
     pub raster: Raster,
     pub report: SynthReport,
     /// Lakes, rivers and roads as shapes.
@@ -343,7 +375,18 @@ pub fn synthesize(
     params: &SynthParams,
     progress: &mut dyn FnMut(&str, f32),
 ) -> Result<Raster, SynthError> {
-    Ok(generate(params, progress)?.raster)
+    Ok(generate(params, &SynthOptions::default(), progress)?.raster)
+}
+
+/// [`synthesize_with_features`] with `options` (a sea on one side); with the default options
+/// it makes the same bytes.
+pub fn synthesize_with_options(
+    params: &SynthParams,
+    options: &SynthOptions,
+    progress: &mut dyn FnMut(&str, f32),
+) -> Result<(Raster, SynthReport, Vec<Feature>), SynthError> {
+    let g = generate(params, options, progress)?;
+    Ok((g.raster, g.report, g.features))
 }
 
 /// [`synthesize_with_report`], also returning the roads, rivers and lakes as shapes: lakes
@@ -352,8 +395,7 @@ pub fn synthesize_with_features(
     params: &SynthParams,
     progress: &mut dyn FnMut(&str, f32),
 ) -> Result<(Raster, SynthReport, Vec<Feature>), SynthError> {
-    let g = generate(params, progress)?;
-    Ok((g.raster, g.report, g.features))
+    synthesize_with_options(params, &SynthOptions::default(), progress)
 }
 
 /// [`synthesize`], also returning a [`SynthReport`].
@@ -361,12 +403,13 @@ pub fn synthesize_with_report(
     params: &SynthParams,
     progress: &mut dyn FnMut(&str, f32),
 ) -> Result<(Raster, SynthReport), SynthError> {
-    let g = generate(params, progress)?;
+    let g = generate(params, &SynthOptions::default(), progress)?;
     Ok((g.raster, g.report))
 }
 
 pub(crate) fn generate(
     params: &SynthParams,
+    options: &SynthOptions,
     progress: &mut dyn FnMut(&str, f32),
 ) -> Result<Generated, SynthError> {
     let plan = plan(params)?;
@@ -377,10 +420,13 @@ pub(crate) fn generate(
     let size_m = params.size_km * 1000.0;
     let dims = flood::Dims { nx: cols, ny: rows };
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+    let coast = options
+        .sea_side
+        .map(|side| coast::Coast::new(side, size_m, params.seed));
 
     progress("landform", 0.0);
     let reach_m = (rows.max(cols) - 1) as f64 * s;
-    let landform = landform::Landform::new(size_m, reach_m.max(size_m), &mut rng);
+    let landform = landform::Landform::new(size_m, reach_m.max(size_m), &mut rng, coast.as_ref());
     progress("landform", 1.0);
 
     progress("elevation", 0.0);
@@ -402,7 +448,12 @@ pub(crate) fn generate(
         progress("elevation", 0.9 * r0 as f32 / rows as f32);
     }
     landform.carve(&mut h, cols, s);
+    if let Some(coast) = &coast {
+        coast.apply(&mut h, cols, s);
+    }
     progress("elevation", 1.0);
+    #[cfg(test)]
+    let ground = h.clone();
 
     let mut flags = vec![0u16; n];
     let hydrology = hydro::run(&mut h, &mut flags, dims, s, progress);
@@ -479,6 +530,8 @@ pub(crate) fn generate(
         roads: &report.roads,
     });
     Ok(Generated {
+        #[cfg(test)]
+        ground,
         features,
         raster: Raster {
             grid,

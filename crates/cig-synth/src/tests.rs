@@ -2,7 +2,10 @@
 
 use crate::flood::{Dims, NEIGHBOURS, NO_RECEIVER};
 use crate::hydro::{DIRT, LAKE, PAVED, RIVER, RIVER_CENTRE, SEA, WATER};
-use crate::{generate, synthesize, synthesize_with_report, Generated, SynthError, SynthParams};
+use crate::{
+    generate, synthesize, synthesize_with_report, Generated, SeaSide, SynthError, SynthOptions,
+    SynthParams,
+};
 use cig_terrain::material::Material;
 use std::collections::VecDeque;
 
@@ -16,7 +19,7 @@ fn params(size_km: f64, spacing_m: f64, seed: u64) -> SynthParams {
 }
 
 fn run(p: &SynthParams) -> Generated {
-    generate(p, &mut |_, _| {}).expect("valid parameters")
+    generate(p, &SynthOptions::default(), &mut |_, _| {}).expect("valid parameters")
 }
 
 fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
@@ -802,4 +805,262 @@ fn lake_shores_enclose_exactly_the_lake_posts_and_rivers_are_lines() {
     );
     let layer = cig_terrain::features::FeatureLayer::new(&g.features).expect("valid features");
     assert!(!layer.is_empty());
+}
+
+// ---------------------------------------------------------------- the sea
+
+fn coast_run(size_km: f64, spacing_m: f64, seed: u64, side: SeaSide) -> Generated {
+    let options = SynthOptions::default().with_sea_side(Some(side));
+    generate(&params(size_km, spacing_m, seed), &options, &mut |_, _| {}).expect("valid")
+}
+
+/// 3 km at 30 m with the sea to the west: the test case of the coast.
+fn west_coast() -> Generated {
+    coast_run(3.0, 30.0, 1, SeaSide::West)
+}
+
+/// Per row, the first column (from the west) that is not sea.
+fn shore_columns(g: &Generated) -> Vec<usize> {
+    let cols = g.raster.grid.cols;
+    (0..g.raster.grid.rows)
+        .map(|r| {
+            (0..cols)
+                .find(|&c| g.flags[r * cols + c] & SEA == 0)
+                .unwrap_or(cols)
+        })
+        .collect()
+}
+
+#[test]
+fn the_western_edge_is_sea_at_mean_sea_level_over_a_floor_deepening_outward() {
+    let g = west_coast();
+    let (rows, cols) = (g.raster.grid.rows, g.raster.grid.cols);
+    let material = g.raster.material.as_ref().expect("materials");
+    for r in 0..rows {
+        let k = r * cols;
+        assert!(g.flags[k] & SEA != 0, "edge post of row {r} is not sea");
+        assert_eq!(material[k], Material::Water);
+        // Stored as the water's surface, as lakes are: 0 m above mean sea level.
+        assert_eq!(g.raster.elevation_m[k], 0.0);
+        let depth = -g.ground[k];
+        assert!((20.0..150.0).contains(&depth), "floor {depth} m deep");
+    }
+    // Every sea post is water at 0 m over ground below it; every other post is at or above 0 m.
+    for (k, f) in g.flags.iter().enumerate() {
+        if f & SEA != 0 {
+            assert_eq!(material[k], Material::Water);
+            assert_eq!(g.raster.elevation_m[k], 0.0);
+            assert!(g.ground[k] < 0.0);
+        } else {
+            assert!(
+                g.raster.elevation_m[k] >= 0.0,
+                "land post {k} below the sea"
+            );
+        }
+    }
+    // The columns that are sea in every row: the floor's mean depth grows toward the edge.
+    let open_sea = shore_columns(&g).into_iter().min().expect("rows");
+    assert!(
+        open_sea >= 10,
+        "sea in every row only out to column {open_sea}"
+    );
+    let mean_depth = |c: usize| -> f64 {
+        (0..rows)
+            .map(|r| -f64::from(g.ground[r * cols + c]))
+            .sum::<f64>()
+            / rows as f64
+    };
+    let depths: Vec<f64> = (0..open_sea).map(mean_depth).collect();
+    for c in 1..open_sea {
+        assert!(
+            depths[c - 1] > depths[c],
+            "the floor does not deepen outward: {depths:?}"
+        );
+    }
+}
+
+#[test]
+fn a_west_coast_leaves_the_east_land_and_a_third_of_the_area_sea() {
+    let g = west_coast();
+    let (rows, cols) = (g.raster.grid.rows, g.raster.grid.cols);
+    let h = &g.raster.elevation_m;
+    let mut east = 0usize;
+    let mut east_land = 0usize;
+    for r in 0..rows {
+        for c in cols / 2..cols {
+            let k = r * cols + c;
+            east += 1;
+            east_land += usize::from(g.flags[k] & SEA == 0 && h[k] > 0.0);
+        }
+    }
+    assert!(
+        east_land as f64 >= 0.97 * east as f64,
+        "{east_land} of {east} eastern posts are land"
+    );
+    let sea = g.flags.iter().filter(|&&f| f & SEA != 0).count() as f64 / h.len() as f64;
+    assert!((0.2..=0.45).contains(&sea), "sea covers {sea}");
+    assert!((g.report.material_fraction(Material::Water) - sea).abs() < 0.05);
+}
+
+#[test]
+fn the_coastline_is_not_a_straight_line() {
+    let shore = shore_columns(&west_coast());
+    let (lo, hi) = (
+        shore.iter().min().copied().unwrap_or(0),
+        shore.iter().max().copied().unwrap_or(0),
+    );
+    assert!(hi - lo > 5, "the shore spans columns {lo}..{hi} only");
+    // Not a slanted line either: the shore turns back and forth along the coast.
+    let turns = shore
+        .windows(3)
+        .filter(|w| (w[1] > w[0] && w[2] < w[1]) || (w[1] < w[0] && w[2] > w[1]))
+        .count();
+    assert!(turns >= 3, "{turns} turns: {shore:?}");
+}
+
+#[test]
+fn each_side_puts_the_sea_on_that_side() {
+    for side in SeaSide::ALL {
+        let g = coast_run(3.0, 30.0, 4, side);
+        let (rows, cols) = (g.raster.grid.rows, g.raster.grid.cols);
+        let sea = |r: usize, c: usize| g.flags[r * cols + c] & SEA != 0;
+        // (the side's edge, the opposite edge) as post lists.
+        let edge = |west: bool, east: bool, south: bool| -> Vec<(usize, usize)> {
+            if west || east {
+                let c = if west { 0 } else { cols - 1 };
+                (0..rows).map(|r| (r, c)).collect()
+            } else {
+                let r = if south { 0 } else { rows - 1 };
+                (0..cols).map(|c| (r, c)).collect()
+            }
+        };
+        let (near, far) = match side {
+            SeaSide::West => (edge(true, false, false), edge(false, true, false)),
+            SeaSide::East => (edge(false, true, false), edge(true, false, false)),
+            SeaSide::South => (edge(false, false, true), edge(false, false, false)),
+            SeaSide::North => (edge(false, false, false), edge(false, false, true)),
+        };
+        assert!(near.iter().all(|&(r, c)| sea(r, c)), "{side}: edge not sea");
+        assert!(!far.iter().any(|&(r, c)| sea(r, c)), "{side}: sea opposite");
+        // The sea's centroid lies toward the side.
+        let (mut n, mut sr, mut sc) = (0.0, 0.0, 0.0);
+        for r in 0..rows {
+            for c in 0..cols {
+                if sea(r, c) {
+                    n += 1.0;
+                    sr += r as f64;
+                    sc += c as f64;
+                }
+            }
+        }
+        let (fr, fc) = (sr / n / (rows - 1) as f64, sc / n / (cols - 1) as f64);
+        let toward = match side {
+            SeaSide::West => 1.0 - fc,
+            SeaSide::East => fc,
+            SeaSide::South => 1.0 - fr,
+            SeaSide::North => fr,
+        };
+        assert!(
+            toward > 0.8,
+            "{side}: the sea's centroid at {fr:.2}, {fc:.2}"
+        );
+    }
+}
+
+#[test]
+fn the_coast_is_deterministic_and_follows_the_seed() {
+    let a = west_coast();
+    let b = west_coast();
+    assert_eq!(raster_hash(&a), raster_hash(&b));
+    assert_eq!(a.report, b.report);
+    assert_eq!(a.features, b.features);
+    let other = coast_run(3.0, 30.0, 2, SeaSide::West);
+    assert_ne!(shore_columns(&a), shore_columns(&other));
+    let inland = run(&params(3.0, 30.0, 1));
+    assert_ne!(raster_hash(&a), raster_hash(&inland));
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool")
+        .install(west_coast);
+    assert_eq!(raster_hash(&one), raster_hash(&a));
+}
+
+#[test]
+fn the_default_options_change_no_byte() {
+    let p = params(3.0, 60.0, 7);
+    let (raster, report, features) =
+        crate::synthesize_with_options(&p, &SynthOptions::default(), &mut |_, _| {})
+            .expect("valid");
+    let g = run(&p);
+    assert_eq!(raster_hash(&g), GOLDEN_HASH);
+    assert_eq!(raster.elevation_m, g.raster.elevation_m);
+    assert_eq!(raster.material, g.raster.material);
+    assert_eq!((report, features), (g.report, g.features));
+}
+
+#[test]
+fn no_culture_road_or_lake_lies_in_the_sea_and_rivers_reach_it() {
+    let g = coast_run(6.0, 30.0, 2, SeaSide::South);
+    let grid = g.raster.grid;
+    let dims = Dims {
+        nx: grid.cols,
+        ny: grid.rows,
+    };
+    let sea = |k: usize| g.flags[k] & SEA != 0;
+    let near_sea = |k: usize| {
+        sea(k)
+            || NEIGHBOURS
+                .iter()
+                .any(|&(dx, dy)| dims.offset(k, dx, dy).is_some_and(sea))
+    };
+    let post = |lat: f64, lon: f64| {
+        let (r, c) = grid.fractional_index(lat, lon);
+        let r = (r.round().max(0.0) as usize).min(grid.rows - 1);
+        let c = (c.round().max(0.0) as usize).min(grid.cols - 1);
+        r * grid.cols + c
+    };
+    for (k, f) in g.flags.iter().enumerate() {
+        assert!(
+            f & (LAKE | RIVER) == 0 || !sea(k),
+            "lake or river post {k} in the sea"
+        );
+        if f & LAKE != 0 {
+            assert!(!near_sea(k), "lake post {k} touches the sea");
+        }
+        if f & (PAVED | DIRT) != 0 {
+            assert!(!near_sea(k), "road post {k} on the shore");
+        }
+    }
+    assert!(!g.report.roads.is_empty(), "the case should hold roads");
+    for road in &g.report.roads {
+        for &(lat, lon) in &road.points_deg {
+            assert!(!sea(post(lat, lon)), "road point {lat}, {lon} at sea");
+        }
+    }
+    let culture = crate::culture::place_culture(
+        &g.raster,
+        &g.report,
+        &g.features,
+        &crate::culture::CultureRules::default(),
+        2,
+    )
+    .expect("default rules");
+    assert!(culture.len() > 1_000, "{} objects", culture.len());
+    for p in &culture {
+        let k = post(p.lat_deg, p.lon_deg);
+        assert!(
+            !near_sea(k),
+            "{:?} at {}, {} by the sea",
+            p.kind,
+            p.lat_deg,
+            p.lon_deg
+        );
+    }
+    // Rivers end in the sea.
+    let mouths = (0..dims.len())
+        .filter(|&k| g.flags[k] & RIVER_CENTRE != 0)
+        .filter(|&k| g.receiver[k] != NO_RECEIVER && sea(g.receiver[k] as usize))
+        .count();
+    assert!(mouths >= 1, "no river reaches the sea");
 }

@@ -1,9 +1,9 @@
-//! `cig bench db|imagery|particles|render|culture|net|env|channels|soak|sensor`: the arguments mapped onto `cig-bench`'s options,
+//! `cig bench db|imagery|particles|render|culture|net|env|channels|soak|sensor|sea`: the arguments mapped onto `cig-bench`'s options,
 //! the reports printed (figures as JSON, or the benchmark's summary).
 
 use crate::cli::{
     BenchChannelsArgs, BenchCultureArgs, BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs,
-    BenchParticlesArgs, BenchRenderArgs, BenchSensorArgs, BenchSoakArgs,
+    BenchParticlesArgs, BenchRenderArgs, BenchSeaArgs, BenchSensorArgs, BenchSoakArgs,
 };
 use crate::config::Config;
 use crate::output::build_progress;
@@ -201,5 +201,16 @@ pub fn sensor(args: &BenchSensorArgs, config: &Config) -> anyhow::Result<()> {
         commit: commit(),
     };
     let report = cig_bench::sensor::run(&options)?;
+    print_report(&report, args.json)
+}
+
+pub fn sea(args: &BenchSeaArgs, config: &Config) -> anyhow::Result<()> {
+    let options = cig_bench::sea::SeaOptions {
+        db: args.db.clone(),
+        size: parse_size(&args.size).context("--size")?,
+        paging: config.paging.clone(),
+        commit: commit(),
+    };
+    let report = cig_bench::sea::run(&options)?;
     print_report(&report, args.json)
 }

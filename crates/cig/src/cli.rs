@@ -184,6 +184,19 @@ pub struct BenchSensorArgs {
 }
 
 #[derive(Args)]
+pub struct BenchSeaArgs {
+    /// Terrain database directory (the sea is measured beyond its western edge).
+    #[arg(long)]
+    pub db: PathBuf,
+    /// Frame size, pixels.
+    #[arg(long, default_value = "640x360")]
+    pub size: String,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
 pub struct IrRadianceArgs {
     /// The band in micrometres: 8-12 (LWIR), 3-5 (MWIR) or any LO-HI.
     #[arg(long, value_name = "LO-HI")]
@@ -447,6 +460,10 @@ pub struct SynthArgs {
     /// Random seed: the same seed gives the same bytes.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Make the land fall into open sea on this side: west, east, north or south (a coast;
+    /// about the outer third of the area is sea, water at 0 m, and it goes on beyond the edge).
+    #[arg(long, value_name = "SIDE")]
+    pub sea_side: Option<String>,
     /// Replace the output if it exists.
     #[arg(long)]
     pub force: bool,
@@ -588,6 +605,9 @@ pub enum BenchCommand {
     /// The thermal sensor channel: an LWIR frame against the visible frame of the same view
     /// (50 vehicles), the surface table's spin-up and its advance by one second.
     Sensor(BenchSensorArgs),
+    /// The sea: the wave cascades' update, 1000 HOT over the sea, a periscope frame at sea
+    /// state 5 with three ships against a flat sea.
+    Sea(BenchSeaArgs),
 }
 
 #[derive(Args)]
@@ -888,9 +908,11 @@ pub struct RenderArgs {
     /// Draw the terrain as a wireframe.
     #[arg(long)]
     pub wireframe: bool,
-    /// Entities "MODEL,LAT,LON,ALT[,HEADING[,clamp]]" (altitude above the ellipsoid, or above
-    /// the terrain with "clamp"); built-in models: tank, truck, ship, building, tree; or a
-    /// glTF file path as MODEL.
+    /// Entities "MODEL,LAT,LON,ALT[,HEADING[,clamp][,speed=MPS]]" (altitude above the
+    /// ellipsoid, or above the terrain with "clamp"; a ship under way at speed MPS leaves its
+    /// wake on the sea); built-in models: tank, truck, destroyer (or ship), merchant,
+    /// patrol_craft, building, tree (ships float on the sea with --sea-state or --sea-wind);
+    /// or a glTF file path as MODEL.
     #[arg(long = "entity", value_name = "SPEC", allow_hyphen_values = true)]
     pub entities: Vec<String>,
     /// A fire "LAT,LON[,HEAT_MW[,SECONDS]]" on the terrain: a smoke plume and its flames,
@@ -991,6 +1013,23 @@ pub struct RenderArgs {
     /// wave over the head covers the view and drains off it.
     #[arg(long, value_name = "HEIGHT_M,MAG", allow_hyphen_values = true)]
     pub periscope: Option<String>,
+    /// Terrestrial refraction's coefficient k for what the eye sees: "standard" (0.13: a
+    /// distant ship shows more of itself over the horizon), "off" (the geometric earth) or a
+    /// number in -1..0.9 (ducting above about 0.5).
+    #[arg(
+        long,
+        value_name = "K",
+        default_value = "standard",
+        allow_hyphen_values = true
+    )]
+    pub refraction: String,
+    /// An explicit wave on the sea (as a host's CIGI Wave Control)
+    /// "HEIGHT_M,WAVELENGTH_M,PERIOD_S,TOWARD_DEG[,PHASE_DEG[,LEADING]]": trough-to-crest
+    /// height 0-30 m, wavelength 0.1-5000 m, period 0.1-100 s, the direction it travels
+    /// toward, its phase at the sea's origin and crest sharpness 0-1. Repeatable; needs
+    /// --sea-state or --sea-wind (0 for a swell alone).
+    #[arg(long = "sea-wave", value_name = "SPEC", allow_hyphen_values = true)]
+    pub sea_waves: Vec<String>,
     /// Thermal polarity: white-hot or black-hot.
     #[arg(long, default_value = "white-hot")]
     pub polarity: String,

@@ -32,8 +32,14 @@ pub fn parse_lat_lon(text: &str) -> anyhow::Result<(f64, f64)> {
     Ok((lat, lon))
 }
 
+/// `--sea-side SIDE`: west, east, north or south.
+fn parse_sea_side(text: &str) -> anyhow::Result<cig_synth::SeaSide> {
+    text.parse::<cig_synth::SeaSide>().context("--sea-side")
+}
+
 pub fn synth(args: &SynthArgs, config: &Config) -> anyhow::Result<()> {
     let (lat, lon) = parse_lat_lon(&args.origin)?;
+    let sea_side = args.sea_side.as_deref().map(parse_sea_side).transpose()?;
     let params = cig_synth::SynthParams {
         origin_lat_deg: lat,
         origin_lon_deg: lon,
@@ -42,7 +48,8 @@ pub fn synth(args: &SynthArgs, config: &Config) -> anyhow::Result<()> {
         seed: args.seed,
     };
     let started = Instant::now();
-    let summary = synthesize_database(&params, &args.out, args.force, config)?;
+    let options = cig_synth::SynthOptions::default().with_sea_side(sea_side);
+    let summary = synthesize_database(&params, &options, &args.out, args.force, config)?;
     eprintln!(
         "built {} tiles in {:.1} s: {}",
         summary.tile_count,
@@ -55,12 +62,14 @@ pub fn synth(args: &SynthArgs, config: &Config) -> anyhow::Result<()> {
 /// Generates and writes a synthetic database with progress bars (shared with `demo`).
 pub fn synthesize_database(
     params: &cig_synth::SynthParams,
+    options: &cig_synth::SynthOptions,
     out: &Path,
     force: bool,
     config: &Config,
 ) -> anyhow::Result<cig_terrain::Manifest> {
     Ok(cig_bench::database::synthesize_database(
         params,
+        options,
         out,
         force,
         config.database.tile_cells,

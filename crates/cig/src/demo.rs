@@ -2,7 +2,9 @@
 //! trainer relies on, then flies a scripted flight over it — a low pass through a village and
 //! its woods, a climb with the overload control holding a triangle budget,
 //! a view at dusk, then the environment: the full moon at night, cumulus from below and above, a
-//! thunderstorm with rain — rendered off-screen to PNG frames and a contact sheet.
+//! thunderstorm with rain, the valley at night through a thermal sight and goggles, and a
+//! periscope at sea (1.5x and 6x, three ships in a sea state 4) — rendered off-screen to PNG
+//! frames and a contact sheet.
 
 use crate::cli::DemoArgs;
 use crate::config::Config;
@@ -21,7 +23,13 @@ pub fn run(args: &DemoArgs, config: &Config) -> anyhow::Result<()> {
             args.db.display()
         );
         let started = Instant::now();
-        crate::db::synthesize_database(&demo_params(), &args.db, false, config)?;
+        crate::db::synthesize_database(
+            &demo_params(),
+            &cig_synth::SynthOptions::default(),
+            &args.db,
+            false,
+            config,
+        )?;
         println!("built in {:.1} s", started.elapsed().as_secs_f64());
     }
     crate::db::info(&crate::cli::InfoArgs {
@@ -228,8 +236,8 @@ fn fly(
     let cache = Arc::new(TileCache::new(Arc::clone(db), config.paging.clone())?);
     let gpu = cig_render::Gpu::headless()?;
     println!(
-        "flying: a low pass along the valley heading {heading:.0} deg, a climb to 1800 m, dusk; then the full moon, cumulus from below and above, a thunderstorm, the valley at night through a thermal sight ({} frames of {}x{} on {})",
-        shots.len() + weather.len(),
+        "flying: a low pass along the valley heading {heading:.0} deg, a climb to 1800 m, dusk; then the full moon, cumulus from below and above, a thunderstorm, the valley at night through a thermal sight, a periscope at sea ({} frames of {}x{} on {})",
+        shots.len() + weather.len() + 2,
         size.0,
         size.1,
         gpu.describe()
@@ -298,6 +306,34 @@ fn fly(
         );
         frames.push(image);
         previous = Some(snapshot);
+    }
+    // The periscope leg: out to sea west of the database at sea state 4, the head 2 m above
+    // the water, sweeping at 1.5x and then looking at 6x, three ships riding the waves.
+    renderer.set_overload(None)?;
+    let periscope_scenario =
+        cig_ig::Scenario::from_toml("[sea]\nsea_state = 4\n").context("the periscope leg's sea")?;
+    let mut sea = cig_ig::sea::WorldSea::new(periscope_scenario.sea.as_ref());
+    let geoid = cig_terrain::database::GeoidLookup::new(&db.manifest().geoid);
+    for (k, magnification) in [1.5, 6.0].into_iter().enumerate() {
+        let periscope = cig_bench::sea::Periscope {
+            head_height_m: 2.0,
+            magnification,
+            heading_deg: 265.0,
+            size,
+            unix_time_s: shots[0].0 + 2.0 * k as f64,
+        };
+        let snapshot = periscope.snapshot(&db.layout().grid, &geoid, &mut sea)?;
+        let (mut image, stats) = draw(&mut renderer, &snapshot)?;
+        crate::sea::draw_reticle(&mut image, &snapshot.views[0]);
+        let path = out_dir.join(format!("frame_{:03}.png", frames.len()));
+        crate::render::write_png(&image, &path)?;
+        println!(
+            "  {}: periscope {magnification}x, sea state 4, {} ships drawn, gpu {:6.1} ms",
+            path.display(),
+            stats.entities_drawn,
+            stats.gpu_ms
+        );
+        frames.push(image);
     }
     // Three channels of the low pass's eyepoint (left, centre, right) side by side: the
     // picture runs on across the seams. Their exposure is the natural light's, the same in

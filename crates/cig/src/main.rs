@@ -82,6 +82,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Bench(cli::BenchCommand::Channels(args)) => bench::channels(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Soak(args)) => bench::soak(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Sensor(args)) => bench::sensor(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Sea(args)) => bench::sea(&args, &config),
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),

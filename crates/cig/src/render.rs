@@ -85,22 +85,34 @@ pub fn parse_view(eye: &str, hpr: &str, fov: &str, size: &str) -> anyhow::Result
 }
 
 /// Parses "MODEL,LAT,LON,ALT[,HEADING[,clamp]]".
-pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<EntitySpec> {
+pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<(EntitySpec, f64)> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    if parts.len() < 4 || parts.len() > 6 {
-        bail!("--entity \"{text}\" is not MODEL,LAT,LON,ALT[,HEADING[,clamp]]");
+    if parts.len() < 4 || parts.len() > 7 {
+        bail!("--entity \"{text}\" is not MODEL,LAT,LON,ALT[,HEADING[,clamp][,speed=MPS]]");
     }
     let nums = parse_numbers(
         &parts[1..4.max(parts.len().min(5))].join(","),
         "--entity",
         &[3, 4],
     )?;
-    let clamp = match parts.get(5) {
-        None => Clamp::None,
-        Some(&"clamp") => Clamp::HeightAndAttitude,
-        Some(other) => bail!("--entity \"{text}\": unknown option \"{other}\" (only \"clamp\")"),
-    };
-    Ok(EntitySpec {
+    let mut clamp = Clamp::None;
+    let mut speed_mps = 0.0;
+    for option in parts.iter().skip(5) {
+        match option.split_once('=') {
+            None if *option == "clamp" => clamp = Clamp::HeightAndAttitude,
+            Some(("speed", value)) => {
+                speed_mps = value
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite() && (0.0..=40.0).contains(v))
+                    .with_context(|| {
+                        format!("--entity \"{text}\": speed \"{value}\" must be 0..40 m/s")
+                    })?;
+            }
+            _ => bail!("--entity \"{text}\": unknown option \"{option}\" (clamp or speed=MPS)"),
+        }
+    }
+    let spec = EntitySpec {
         id,
         model: parts[0].to_string(),
         position: Geodetic::new(nums[0], nums[1], nums[2]),
@@ -109,7 +121,8 @@ pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<EntitySpec> {
             ..Default::default()
         },
         clamp,
-    })
+    };
+    Ok((spec, speed_mps))
 }
 
 /// Parses `--light "LAT,LON,ALT_M,CANDELA[,COLOUR]"` into an all-round lamp.
@@ -361,6 +374,17 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         .as_deref()
         .map(crate::sea::parse_periscope)
         .transpose()?;
+    let refraction_k = crate::sea::parse_refraction(&args.refraction)?;
+    let sea_conditions =
+        crate::sea::conditions_from_args(args.sea_state, args.sea_wind.as_deref())?;
+    let sea_waves = args
+        .sea_waves
+        .iter()
+        .map(|text| crate::sea::parse_wave(text))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    if !sea_waves.is_empty() && sea_conditions.is_none() {
+        bail!("--sea-wave needs a sea: give --sea-state or --sea-wind (0 for a swell alone)");
+    }
     if !(args.max_pixel_error.is_finite() && args.max_pixel_error >= 0.0) {
         bail!(
             "--max-pixel-error {} must be 0 or more",
@@ -402,12 +426,14 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
             bail!("--fixed-exposure-ev {ev} must lie in -20..20");
         }
     }
-    let specs: Vec<EntitySpec> = args
+    let (specs, speeds): (Vec<EntitySpec>, Vec<f64>) = args
         .entities
         .iter()
         .enumerate()
         .map(|(i, text)| parse_entity(text, i as u32 + 1))
-        .collect::<anyhow::Result<_>>()?;
+        .collect::<anyhow::Result<Vec<_>>>()?
+        .into_iter()
+        .unzip();
     let fires: Vec<(String, FireSpec)> = args
         .smoke
         .iter()
@@ -578,13 +604,17 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         fixed_exposure_ev: args.fixed_exposure_ev,
     };
     snapshot.max_pixel_error = args.max_pixel_error;
+    snapshot.refraction_k = refraction_k;
     snapshot.wireframe = args.wireframe;
     // The share of a periscope's window under water.
     let mut wash = 0.0;
-    if let Some(conditions) =
-        crate::sea::conditions_from_args(args.sea_state, args.sea_wind.as_deref())?
-    {
-        let (surface, sea) = crate::sea::frame_sea(&conditions, view.eye, unix_time_s)?;
+    if let Some(conditions) = sea_conditions {
+        let grid = cache.database().layout().grid;
+        let origin = cig_scene::sea::sea_origin(
+            0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
+            0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
+        );
+        let (surface, sea) = crate::sea::frame_sea(&conditions, sea_waves, origin, unix_time_s)?;
         if let Some((height_m, _)) = periscope {
             wash = crate::sea::wash_over(&surface, &sea, view.eye, height_m)?;
         }
@@ -592,10 +622,29 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         for entity in &mut entities {
             if let Some(hull) = cig_scene::sea::builtin_hull(&entity.model) {
                 let geoid_m = geoid.undulation_m(entity.position.lat_deg, entity.position.lon_deg);
-                cig_scene::sea::ride_the_sea(entity, hull, &surface, &sea, geoid_m)
-                    .with_context(|| format!("--entity {} on the sea", entity.model))?;
+                cig_scene::sea::ride_the_sea(
+                    entity,
+                    hull,
+                    &surface,
+                    sea.origin,
+                    geoid_m + sea.level_m,
+                )
+                .with_context(|| format!("--entity {} on the sea", entity.model))?;
             }
         }
+        // Ships under way leave their wakes.
+        snapshot.wakes = entities
+            .iter()
+            .zip(&speeds)
+            .filter_map(|(e, speed_mps)| {
+                cig_scene::sea::WakeDraw::of_ship(
+                    &e.model,
+                    e.position,
+                    e.orientation.heading_deg,
+                    *speed_mps,
+                )
+            })
+            .collect();
         snapshot.sea = Some(Arc::new(sea));
     }
     snapshot.entities = entities;
@@ -646,16 +695,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     let (mut image, stats) = cig_render::render_image(&mut renderer, &cache, &snapshot, 0)?;
     if periscope.is_some() {
         crate::sea::draw_wash(&mut image.rgba, image.width, image.height, wash);
-        let bearing_deg = view.orientation.heading_deg;
-        cig_scene::reticle::draw_periscope_reticle(
-            &mut cig_scene::reticle::Canvas {
-                rgba: &mut image.rgba,
-                width: image.width,
-                height: image.height,
-            },
-            view.fov.left_deg + view.fov.right_deg,
-            bearing_deg,
-        );
+        crate::sea::draw_reticle(&mut image, &view);
     }
     write_png(&image, &args.out)?;
     if let Some(path) = &args.stats {

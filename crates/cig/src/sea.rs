@@ -41,22 +41,45 @@ fn sea_state_conditions(code: f64, wind_from_deg: f64) -> anyhow::Result<SeaCond
     SeaConditions::for_sea_state(code, wind_from_deg).context("--sea-state")
 }
 
-/// The sea one frame at `unix_time_s` draws: the surface (seed 1) at that time, its plane's
-/// origin the eye's whole degrees (the same waves for nearby eyes and every IG).
+/// The sea one frame at `unix_time_s` draws: the surface (seed 1) at the wave clock of that
+/// time, in the tangent plane of `origin` (`cig_scene::sea::sea_origin` of the database's
+/// centre: the waves `cig serve` draws and answers on that database at that time).
 pub fn frame_sea(
     conditions: &SeaConditions,
-    eye: cig_geo::Geodetic,
+    waves: Vec<cig_sea::surface::WaveComponent>,
+    origin: cig_geo::Geodetic,
     unix_time_s: f64,
 ) -> anyhow::Result<(SeaSurface, cig_scene::sea::SeaDraw)> {
     let mut surface =
         SeaSurface::new(conditions, 1, SurfaceConfig::default()).context("the sea surface")?;
-    // The waves' clock: seconds of the day, so the same instant gives the same sea anywhere.
+    surface.set_explicit_waves(waves).context("--sea-wave")?;
     surface
-        .update(unix_time_s.rem_euclid(86_400.0))
+        .update(cig_scene::sea::wave_clock_s(unix_time_s))
         .context("the sea surface")?;
-    let origin = cig_geo::Geodetic::new(eye.lat_deg.round(), eye.lon_deg.round(), 0.0);
     let draw = cig_scene::sea::SeaDraw::new(&surface, origin, 0.0);
     Ok((surface, draw))
+}
+
+/// `--sea-wave HEIGHT_M,WAVELENGTH_M,PERIOD_S,TOWARD_DEG[,PHASE_DEG[,LEADING]]`.
+pub fn parse_wave(text: &str) -> anyhow::Result<cig_sea::surface::WaveComponent> {
+    let v = crate::render::parse_numbers(text, "--sea-wave", &[4, 5, 6])?;
+    let at = |i: usize| v.get(i).copied().unwrap_or_default();
+    cig_sea::surface::WaveComponent::new(at(0), at(1), at(2), at(3), at(4), at(5))
+        .with_context(|| format!("--sea-wave \"{text}\""))
+}
+
+/// `--refraction K`: "standard" (0.13), "off" (0) or a coefficient in -1..0.9.
+pub fn parse_refraction(text: &str) -> anyhow::Result<f64> {
+    match text {
+        "standard" => Ok(cig_sea::horizon::STANDARD_REFRACTION_K),
+        "off" => Ok(0.0),
+        _ => match text.parse::<f64>() {
+            Ok(k) if k.is_finite() && (-1.0..=0.9).contains(&k) => Ok(k),
+            _ => {
+                bail!("--refraction \"{text}\": must be standard, off or a coefficient in -1..0.9")
+            }
+        },
+    }
 }
 
 /// A periscope asked for by `--periscope HEIGHT_M,MAG`: the head's height above mean sea
@@ -92,6 +115,20 @@ pub fn wash_over(
     cig_sea::periscope::WashOver::DEFAULT
         .coverage(head_height_m, &history, now_s)
         .context("the sea at the periscope")
+}
+
+/// Draws a periscope's reticle over a frame of `view`: the graduated line across its field and
+/// the true bearing of its centre.
+pub fn draw_reticle(image: &mut cig_render::Image, view: &cig_scene::View) {
+    cig_scene::reticle::draw_periscope_reticle(
+        &mut cig_scene::reticle::Canvas {
+            rgba: &mut image.rgba,
+            width: image.width,
+            height: image.height,
+        },
+        view.fov.left_deg + view.fov.right_deg,
+        view.orientation.heading_deg,
+    );
 }
 
 /// Covers the lower `coverage` of a frame with sea water seen from inside it (draining from

@@ -594,3 +594,64 @@ fn bench_imagery_reports_time_and_memory() {
     assert!(report["imagery"]["tiles"].as_u64().expect("tiles") >= 4);
     assert!(report["peak_rss_mb"].as_f64().is_some() || !cfg!(target_os = "linux"));
 }
+
+#[test]
+fn synth_sea_side_makes_a_coast_and_a_bad_side_is_one_line() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = dir.path().join("coast");
+    cig()
+        .args(synth_args(&db, &["--sea-side", "west"]))
+        .assert()
+        .success();
+    let info = json(
+        &cig()
+            .args(["db", "info"])
+            .arg(&db)
+            .arg("--json")
+            .assert()
+            .success()
+            .get_output()
+            .stdout,
+    );
+    let materials = &info["materials"];
+    let total: u64 = materials
+        .as_object()
+        .expect("materials")
+        .values()
+        .filter_map(Value::as_u64)
+        .sum();
+    let water = materials["water"].as_u64().expect("water") as f64 / total as f64;
+    assert!((0.2..0.45).contains(&water), "water {water}: {info}");
+    // The sea is stored as its surface, at mean sea level: nothing lies below 0 m.
+    assert_eq!(info["min_elev_m"].as_f64(), Some(0.0), "{info}");
+    assert!(
+        info["sources"].to_string().contains("sea_side=west"),
+        "{info}"
+    );
+    let hat = |lon: &str| {
+        json(
+            &cig()
+                .args(["query", "hat"])
+                .arg(&db)
+                .args(["35.993", lon, "--json"])
+                .assert()
+                .success()
+                .get_output()
+                .stdout,
+        )
+    };
+    let west = hat("-121.2295");
+    assert_eq!(west["material"].as_str(), Some("water"), "{west}");
+    assert_eq!(west["height_m"].as_f64(), Some(0.0), "{west}");
+    let east = hat("-121.204");
+    assert_ne!(east["material"].as_str(), Some("water"), "{east}");
+    assert!(east["height_m"].as_f64().expect("height") > 0.0, "{east}");
+
+    // A side that is none: one line naming the flag and the sides, and nothing written.
+    let bad = dir.path().join("bad");
+    let line = error_line(synth_args(&bad, &["--sea-side", "up"]));
+    assert!(line.contains("--sea-side"), "{line}");
+    assert!(line.contains("\"up\""), "{line}");
+    assert!(line.contains("west, east, north or south"), "{line}");
+    assert!(!bad.exists());
+}

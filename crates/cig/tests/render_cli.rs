@@ -441,8 +441,8 @@ fn demo_flies_to_png_frames_without_a_display_and_in_a_window_with_one() {
         .count();
     // 24 of the flight, then the environment: moon, cumulus from below and above, a storm, the
     // valley at night through a thermal sight (grey: a white display) and through night-vision
-    // goggles (green in a black circle).
-    assert_eq!(frames, 30);
+    // goggles (green in a black circle); then the periscope at sea, 1.5x and 6x.
+    assert_eq!(frames, 32);
     let (_, _, thermal) = common::read_png_rgba(&out.join("frame_028.png"));
     assert!(thermal.chunks(4).all(|p| p[0] == p[1] && p[1] == p[2]));
     let (w, h, goggles) = common::read_png_rgba(&out.join("frame_029.png"));
@@ -453,6 +453,32 @@ fn demo_flies_to_png_frames_without_a_display_and_in_a_window_with_one() {
     let centre = ((h / 2 * w + w / 2) * 4) as usize;
     let px = &goggles[centre..centre + 3];
     assert!(px[1] > px[0] && px[1] > px[2] && px[1] > 20, "{px:?}");
+    // The periscope: the sky above the reticle's line and the sea below it, bluer than grey,
+    // and the sea darker than the sky over it.
+    for frame in ["frame_030.png", "frame_031.png"] {
+        let (w, h, scope) = common::read_png_rgba(&out.join(frame));
+        let mean = |rows: std::ops::Range<u32>| {
+            let mut sum = [0.0_f64; 3];
+            let mut n = 0.0;
+            for y in rows {
+                for x in (0..w).step_by(7) {
+                    let i = ((y * w + x) * 4) as usize;
+                    for c in 0..3 {
+                        sum[c] += f64::from(scope[i + c]);
+                    }
+                    n += 1.0;
+                }
+            }
+            sum.map(|s| s / n)
+        };
+        let sky = mean(h / 20..h / 5);
+        let sea = mean(h * 3 / 4..h * 19 / 20);
+        assert!(sea[2] > sea[0] + 5.0, "{frame}: sea {sea:?}");
+        assert!(
+            sea.iter().sum::<f64>() < sky.iter().sum::<f64>(),
+            "{frame}: sea {sea:?} against sky {sky:?}"
+        );
+    }
     let sheet = std::fs::read(out.join("contact-sheet.png")).expect("contact sheet");
     assert_eq!(&sheet[1..4], b"PNG");
 

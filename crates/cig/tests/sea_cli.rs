@@ -266,8 +266,9 @@ fn a_periscope_sees_48_degrees_over_its_power_draws_its_reticle_and_washes_over(
     // 1.5x: 32 degrees.
     let (_, json) = periscope("low", "1.5,1.5", "2");
     assert!((json["fov_deg"][0].as_f64().expect("fov") - 32.0).abs() < 1e-9);
-    // A head 10 cm up in a very rough sea: under water, the view is the sea's inside.
-    let ((w, h, rgba), _) = periscope("washed", "0.1,6", "6");
+    // A head 3 m under the mean level of a very rough sea (Hs 4-6 m: the troughs seldom bare
+    // it): under water, the view is the sea's inside.
+    let ((w, h, rgba), _) = periscope("washed", "-3,6", "6");
     let teal = rgba
         .chunks_exact(4)
         .filter(|p| p[2] > p[0] + 10 && p[1] > p[0] + 10 && p[2] < 90)
@@ -293,4 +294,396 @@ fn a_periscope_sees_48_degrees_over_its_power_draws_its_reticle_and_washes_over(
         let line = one_line_error(&out);
         assert!(line.contains(needle), "{spec}: {line}");
     }
+    // Bad refraction and explicit waves.
+    for (args, needle) in [
+        (vec!["--refraction", "2"], "--refraction"),
+        (vec!["--refraction", "NaN"], "--refraction"),
+        (
+            vec!["--sea-state", "2", "--sea-wave", "40,100,8,0"],
+            "wave height",
+        ),
+        (
+            vec!["--sea-state", "2", "--sea-wave", "1,100"],
+            "--sea-wave",
+        ),
+        (
+            vec!["--sea-state", "2", "--sea-wave", "1,100,0,0"],
+            "wave period",
+        ),
+        (vec!["--sea-wave", "1,100,8,0"], "--sea-wave"),
+    ] {
+        let out = cig()
+            .args(["render", "--db"])
+            .arg(&db)
+            .args(["--eye", "35.99,-121.40,0", "--out"])
+            .arg(dir.path().join("bad.png"))
+            .args(&args)
+            .assert()
+            .failure();
+        let line = one_line_error(&out);
+        assert!(line.contains(needle), "{args:?}: {line}");
+    }
+}
+
+/// The altitude (above the ellipsoid) of a point `height_m` above mean sea level at
+/// 35.99 N 121.40 W, west of the small database: the geoid's height there from a periscope's
+/// stats.
+fn altitude_above_sea(db: &Path, dir: &Path, height_m: f64) -> f64 {
+    let stats = dir.join("eye.json");
+    cig()
+        .args(["render", "--db"])
+        .arg(db)
+        .args([
+            "--eye",
+            "35.99,-121.40,0",
+            "--size",
+            "64x32",
+            "--periscope",
+            &format!("{height_m},6"),
+            "--sea-state",
+            "0",
+            "--out",
+        ])
+        .arg(dir.join("eye.png"))
+        .arg("--stats")
+        .arg(&stats)
+        .assert()
+        .success();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).expect("stats")).expect("json");
+    json["eye"][2].as_f64().expect("eye altitude")
+}
+
+/// The rows a ship changes in a frame against the same frame without it: (top, bottom).
+fn changed_rows(with: &[u8], without: &[u8], width: u32) -> Option<(u32, u32)> {
+    let rows: Vec<u32> = with
+        .chunks_exact(width as usize * 4)
+        .zip(without.chunks_exact(width as usize * 4))
+        .enumerate()
+        .filter(|(_, (a, b))| {
+            a.iter()
+                .zip(*b)
+                .enumerate()
+                .any(|(i, (x, y))| i % 4 != 3 && x.abs_diff(*y) > 12)
+        })
+        .map(|(y, _)| y as u32)
+        .collect();
+    Some((*rows.first()?, *rows.last()?))
+}
+
+#[test]
+fn a_ship_past_the_horizon_shows_its_masts_sinks_hull_first_and_refraction_lifts_it() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    // The eye 1.5 m above a calm sea west of the database.
+    let eye_alt_m = altitude_above_sea(&db, dir.path(), 1.5);
+    let (eye_m, masthead_m) = (1.5, 40.0);
+    let (width, height, fov_deg) = (960_u32, 480_u32, 1.2_f64);
+    // Looking west; the destroyer a quarter of a degree right of the centre, broadside on.
+    let render = |name: &str, range_m: Option<f64>, refraction: &str| {
+        let out = dir.path().join(format!("{name}.png"));
+        let mut command = cig();
+        command
+            .args(["render", "--db"])
+            .arg(&db)
+            .args([
+                "--eye",
+                &format!("35.99,-121.40,{eye_alt_m}"),
+                "--hpr",
+                "270,0,0",
+                "--fov",
+                &fov_deg.to_string(),
+                "--size",
+                &format!("{width}x{height}"),
+                "--time",
+                "2026-06-21T19:00:00Z",
+                "--visibility",
+                "200000",
+                "--sea-state",
+                "0",
+                "--refraction",
+                refraction,
+                "--out",
+            ])
+            .arg(&out);
+        if let Some(range_m) = range_m {
+            let (north, east) = cig_geo::metres_per_degree(35.99);
+            let bearing = 270.25_f64.to_radians();
+            let lat = 35.99 + range_m * bearing.cos() / north;
+            let lon = -121.40 + range_m * bearing.sin() / east;
+            command.args(["--entity", &format!("destroyer,{lat},{lon},0,0")]);
+        }
+        command.assert().success();
+        let (w, _, rgba) = read_png_rgba(&out);
+        assert_eq!(w, width);
+        rgba
+    };
+    // Where a point `z_m` above the sea `range_m` away is drawn (row), for refraction `k`.
+    let radius_m = 6_371_000.0 / 1.0;
+    let row_of = |z_m: f64, range_m: f64, k: f64| {
+        let effective_m = radius_m / (1.0 - k);
+        let angle = (z_m - eye_m) / range_m - range_m / (2.0 * effective_m);
+        let half_v = (fov_deg.to_radians() / 2.0).tan() * f64::from(height) / f64::from(width);
+        f64::from(height) / 2.0 - angle.tan() / half_v * f64::from(height) / 2.0
+    };
+    let hidden_m = |range_m: f64, k: f64| {
+        let effective_m = radius_m / (1.0 - k);
+        let horizon_m = (2.0 * effective_m * eye_m).sqrt();
+        (range_m - horizon_m).max(0.0).powi(2) / (2.0 * effective_m)
+    };
+    let sinks_at_m = |k: f64| {
+        let effective_m = radius_m / (1.0 - k);
+        (2.0 * effective_m * eye_m).sqrt() + (2.0 * effective_m * masthead_m).sqrt()
+    };
+    for (refraction, k) in [("standard", 0.13), ("off", 0.0)] {
+        let empty = render(&format!("empty-{refraction}"), None, refraction);
+        // 20 km: the masts and the upper works over the horizon, drawn where the earth and
+        // the refraction put them.
+        let at_20km = render(&format!("20km-{refraction}"), Some(20_000.0), refraction);
+        let (top, bottom) = changed_rows(&at_20km, &empty, width).expect("the ship shows at 20 km");
+        let (want_top, want_bottom) = (
+            row_of(masthead_m, 20_000.0, k),
+            row_of(hidden_m(20_000.0, k), 20_000.0, k),
+        );
+        assert!(
+            (f64::from(top) - want_top).abs() < 3.0
+                && (f64::from(bottom) - want_bottom).abs() < 3.0,
+            "{refraction}: rows {top}-{bottom}, the geometry says {want_top:.1}-{want_bottom:.1}"
+        );
+        // Where the masthead sinks: seen a little nearer, gone a little farther.
+        let sinks_m = sinks_at_m(k);
+        let near = render(
+            &format!("near-{refraction}"),
+            Some(0.95 * sinks_m),
+            refraction,
+        );
+        assert!(
+            changed_rows(&near, &empty, width).is_some(),
+            "{refraction}: the masthead shows at {:.0} m",
+            0.95 * sinks_m
+        );
+        let far = render(
+            &format!("far-{refraction}"),
+            Some(1.05 * sinks_m),
+            refraction,
+        );
+        assert_eq!(
+            changed_rows(&far, &empty, width),
+            None,
+            "{refraction}: the ship is gone at {:.0} m",
+            1.05 * sinks_m
+        );
+        if k > 0.0 {
+            // 15 km: the masts show, the waterline is hidden (7.3 m down with refraction).
+            let at_15km = render("15km", Some(15_000.0), refraction);
+            let (top, bottom) =
+                changed_rows(&at_15km, &empty, width).expect("the ship shows at 15 km");
+            assert!((f64::from(top) - row_of(masthead_m, 15_000.0, k)).abs() < 3.0);
+            assert!(
+                f64::from(bottom) < row_of(5.0, 15_000.0, k),
+                "the hull shows to row {bottom}, below 5 m above the waterline ({:.1})",
+                row_of(5.0, 15_000.0, k)
+            );
+            // Refraction lifts the picture: the masthead higher than the geometric earth's.
+            assert!(row_of(masthead_m, 20_000.0, k) < row_of(masthead_m, 20_000.0, 0.0) - 5.0);
+        }
+    }
+}
+
+#[test]
+fn the_drawn_waves_stand_where_the_height_queries_put_them() {
+    use cig_sea::spectrum::SeaConditions;
+    use cig_sea::surface::{SeaSurface, SurfaceConfig, WaveComponent};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    // The eye 0.5 m above the mean sea, looking west (out to sea) along a lone 4 m swell
+    // travelling west: the nearest crest hides the horizon.
+    let (lat, lon) = (35.99, -121.40);
+    let eye_alt_m = altitude_above_sea(&db, dir.path(), 0.5);
+    let (width, height, fov_deg) = (200_u32, 400_u32, 4.0_f64);
+    let time = "2026-06-21T19:00:00Z";
+    let unix_s = 1_782_068_400.0;
+    // The same surface on the CPU, in the sea's plane (the database centre's whole degrees).
+    let mut surface = SeaSurface::new(
+        &SeaConditions::new(0.0, 270.0).expect("calm"),
+        1,
+        SurfaceConfig::default(),
+    )
+    .expect("surface");
+    surface
+        .set_explicit_waves(vec![
+            WaveComponent::new(4.0, 300.0, 13.9, 270.0, 0.0, 0.0).expect("wave")
+        ])
+        .expect("waves");
+    surface
+        .update(cig_scene::sea::wave_clock_s(unix_s))
+        .expect("time");
+    let plane = cig_geo::EnuFrame::new(cig_scene::sea::sea_origin(36.0, -121.2));
+    let (_, per_deg) = cig_geo::metres_per_degree(lat);
+    let height_at = |east_m: f64| {
+        let p = plane.geodetic_to_enu(cig_geo::Geodetic::new(lat, lon + east_m / per_deg, 0.0));
+        surface.sample(p.x, p.y).height_m
+    };
+    // The eye 1 m above the mean sea over the trough nearest the place: the next crest
+    // ahead stands a metre above it.
+    let trough_m = (-150..=150)
+        .map(f64::from)
+        .min_by(|a, b| height_at(*a).total_cmp(&height_at(*b)))
+        .expect("a trough");
+    let out = dir.path().join("swell.png");
+    cig()
+        .args(["render", "--db"])
+        .arg(&db)
+        .args([
+            "--eye",
+            &format!("{lat},{},{}", lon + trough_m / per_deg, eye_alt_m + 0.5),
+            "--hpr",
+            "270,0,0",
+            "--fov",
+            &fov_deg.to_string(),
+            "--size",
+            &format!("{width}x{height}"),
+            "--time",
+            time,
+            "--sea-wind",
+            "0",
+            "--sea-wave",
+            "4,300,13.9,270",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let (_, _, rgba) = read_png_rgba(&out);
+    // The highest sightline the sea reaches ahead: over the nearest crest.
+    let mut top = f64::MIN;
+    let mut x_m = 2.0;
+    while x_m < 3000.0 {
+        let h = height_at(trough_m - x_m);
+        let angle = (h - 1.0) / x_m - x_m * (1.0 - 0.13) / (2.0 * 6_371_000.0);
+        top = top.max(angle);
+        x_m += 0.5;
+    }
+    let half_v = (fov_deg.to_radians() / 2.0).tan() * f64::from(height) / f64::from(width);
+    let want_row = f64::from(height) / 2.0 - top.tan() / half_v * f64::from(height) / 2.0;
+    // The sea's top edge: the sharpest step in brightness down the middle columns (the sky
+    // above it and the sea below change smoothly).
+    let brightness = |y: u32| {
+        let mut sum = 0.0;
+        for x in width / 2 - 10..width / 2 + 10 {
+            let i = ((y * width + x) * 4) as usize;
+            sum += f64::from(rgba[i]) + f64::from(rgba[i + 1]) + f64::from(rgba[i + 2]);
+        }
+        sum / 60.0
+    };
+    let row = (1..height - 1)
+        .max_by(|a, b| {
+            let step = |y: u32| (brightness(y - 1) - brightness(y + 1)).abs();
+            step(*a).total_cmp(&step(*b))
+        })
+        .expect("rows");
+    assert!(
+        (f64::from(row) - want_row).abs() < 3.0,
+        "the sea's top at row {row}, the height queries say {want_row:.1} (rows: {:?})",
+        (row.saturating_sub(6)..row + 6)
+            .map(|y| brightness(y).round())
+            .collect::<Vec<_>>()
+    );
+    // Without the swell the edge is the horizon, well below the crest.
+    assert!(want_row > f64::from(height) / 2.0 - 30.0 && want_row < f64::from(height) / 2.0 - 10.0);
+}
+
+#[test]
+fn in_the_thermal_infrared_the_sea_is_colder_at_grazing_angles_where_it_mirrors_the_sky() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    // From about 30 m above a smooth sea at night, LWIR (white hot): looking 30 degrees down
+    // the water emits with an emissivity of 0.99 below the eye, less and less toward the
+    // horizon, where it reflects the cold sky.
+    let out = dir.path().join("lwir.png");
+    cig()
+        .args(["render", "--db"])
+        .arg(&db)
+        .args([
+            "--eye",
+            "35.99,-121.40,0",
+            "--hpr",
+            "270,-30,0",
+            "--fov",
+            "60",
+            "--size",
+            "160x120",
+            "--time",
+            "2026-06-22T06:00:00Z",
+            "--sea-state",
+            "1",
+            "--sensor",
+            "lwir",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let (w, h, grey) = read_png_rgba(&out);
+    // Rows toward the horizon (the frame's top edge lies 6.6 degrees below it), against rows
+    // below the eye.
+    let grazing = mean_rows(&grey, w, 2..h / 8);
+    let steep = mean_rows(&grey, w, h * 3 / 4..h);
+    assert!(
+        steep > grazing + 40.0,
+        "below the eye {steep:.0}, toward the horizon {grazing:.0}"
+    );
+    // And the grey falls steadily toward the horizon: no band where the sea goes missing.
+    let bands: Vec<f64> = (0..8)
+        .map(|k| mean_rows(&grey, w, k * h / 8..(k + 1) * h / 8))
+        .collect();
+    assert!(bands.windows(2).all(|p| p[1] >= p[0] - 3.0), "{bands:?}");
+}
+
+#[test]
+fn a_ship_under_way_draws_its_wake_astern() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    // Looking down from 200 m at a destroyer heading north 300 m ahead (north) of the eye.
+    let render = |name: &str, entity: &str| {
+        let out = dir.path().join(format!("{name}.png"));
+        cig()
+            .args(["render", "--db"])
+            .arg(&db)
+            .args([
+                "--eye",
+                "35.99,-121.40,170",
+                "--hpr",
+                "0,-50,0",
+                "--fov",
+                "60",
+                "--size",
+                "240x180",
+                "--time",
+                "2026-06-21T19:00:00Z",
+                "--sea-state",
+                "2",
+                "--entity",
+                entity,
+                "--out",
+            ])
+            .arg(&out)
+            .assert()
+            .success();
+        read_png_rgba(&out)
+    };
+    let ship = "destroyer,35.9927,-121.40,0,0";
+    let (w, h, still) = render("still", ship);
+    let (_, _, under_way) = render("under-way", &format!("{ship},speed=10"));
+    // Astern of the ship (below it in the frame, toward the eye): white water under way.
+    let astern = |rgba: &[u8]| mean_rect(rgba, w, h * 3 / 4..h, w / 2 - 6..w / 2 + 6);
+    let beside = |rgba: &[u8]| mean_rect(rgba, w, h * 3 / 4..h, 10..30);
+    assert!(
+        astern(&under_way) > astern(&still) + 40.0,
+        "astern: {:.0} under way, {:.0} still",
+        astern(&under_way),
+        astern(&still)
+    );
+    // Away from the track the sea is the same.
+    assert!((beside(&under_way) - beside(&still)).abs() < 3.0);
 }

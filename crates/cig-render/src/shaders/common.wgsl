@@ -42,7 +42,8 @@ struct Globals {
     atmos: vec4<f32>,
     // Night-sky background radiance (π L, light units).
     night_sky: vec4<f32>,
-    // x: encode sRGB in the tone map, y: scotopic blend, z: natural illuminance (lux).
+    // x: encode sRGB in the tone map, y: scotopic blend, z: natural illuminance (lux), w: the
+    // terrestrial refraction coefficient (`refracted`).
     tonemap: vec4<f32>,
     // The sky-view table's frame (its third axis is eye_up), worked out once per frame:
     // x axis with the horizon's zenith angle for the eye in w, and the y axis with the table
@@ -89,6 +90,7 @@ override FOG_MODE: i32 = -1;
 override GROUND_FOG: i32 = -1;
 override PHYSICAL_SKY: i32 = -1;
 override GROUND_DETAIL: i32 = -1;
+override SEA_CUT: i32 = -1;
 
 // 0 off, 1 linear, 2 exponential, 3 exponential-squared.
 fn fog_mode() -> i32 {
@@ -103,6 +105,26 @@ fn ground_fog_on() -> bool {
         return GROUND_FOG == 1;
     }
     return g.fog_layer.z > 0.5;
+}
+
+// Standard terrestrial refraction (coefficient k in g.tonemap.w; 0.13 standard, 0 off): a
+// sightline curves down with curvature k/R, so what stands at horizontal distance d appears
+// raised by k d^2 / (2R) (the effective earth radius R / (1 - k) of the navigation tables;
+// source 001's earth curvature). Only where things are drawn moves; their shading keeps the
+// true eye-relative position.
+fn refracted(rel: vec3<f32>) -> vec3<f32> {
+    let up = g.eye_up.xyz;
+    let along = dot(rel, up);
+    let across2 = max(dot(rel, rel) - along * along, 0.0);
+    return rel + up * (g.tonemap.w * across2 / (2.0 * 6371000.0));
+}
+
+// The sea is drawn and the terrain leaves its sea posts (water at or below the sea's level) to it.
+fn sea_cut_on() -> bool {
+    if (SEA_CUT >= 0) {
+        return SEA_CUT == 1 && g.detail_east.w > 0.5;
+    }
+    return g.detail_east.w > 0.5;
 }
 
 fn ground_detail_on() -> bool {

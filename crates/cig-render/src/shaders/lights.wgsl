@@ -35,7 +35,7 @@ struct LightOut {
 // The light's clip position, pulled half a metre toward the eye.
 fn light_clip(l: Light) -> vec4<f32> {
     let d = max(length(l.rel.xyz), 1e-3);
-    return g.view_proj * vec4<f32>(l.rel.xyz * max(1.0 - 0.5 / d, 0.0), 1.0);
+    return g.view_proj * vec4<f32>(refracted(l.rel.xyz) * max(1.0 - 0.5 / d, 0.0), 1.0);
 }
 
 @vertex

@@ -38,7 +38,7 @@ fn vs_main(
     let m = instances[instance];
     let rel = m.col0.xyz * position.x + m.col1.xyz * position.y + m.col2.xyz * position.z + m.origin.xyz;
     var out: ModelOut;
-    out.clip = g.view_proj * vec4<f32>(rel, 1.0);
+    out.clip = g.view_proj * vec4<f32>(refracted(rel), 1.0);
     out.rel = rel;
     out.normal = normalize(m.col0.xyz * normal.x + m.col1.xyz * normal.y + m.col2.xyz * normal.z);
     // origin.w: a culture instance's tint (0 for entities).

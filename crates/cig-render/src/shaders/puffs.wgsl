@@ -76,7 +76,7 @@ fn vs_main(
     );
     let k = corners[min(vertex, 5u)];
     let p = n * plane_m + (side * k.x + up * k.y) * half_size;
-    out.clip = g.view_proj * vec4<f32>(p, 1.0);
+    out.clip = g.view_proj * vec4<f32>(refracted(p), 1.0);
     out.ray = p;
     return out;
 }

@@ -9,8 +9,93 @@ struct SeaUniform {
     axes: vec4<f32>,
     cascades: array<vec4<f32>, 4>,
     shade: vec4<f32>,
+    // The water body's colour; w: explicit waves.
     water: vec4<f32>,
+    // Per explicit wave (sea.rs): direction in the plane's axes, wave number, phase at the
+    // eye; then amplitude and horizontal displacement amplitude.
+    waves: array<vec4<f32>, 16>,
+    // x: the water's surface temperature (K), y: wakes.
+    thermal: vec4<f32>,
+    // Per wake (sea.rs): stern relative to the eye and unit course (east, north); speed,
+    // length, beam, the arms' half-angle; foam made, its e-folding time.
+    wakes: array<vec4<f32>, 24>,
 };
+
+// The ships' wakes at `local` (east, north of the eye, metres), as foam cover 0..1
+// (cig_sea::wake, on straight courses): the turbulent wake's white water astern, a beam wide at
+// the stern and widening as s^(1/5), fading as exp(-age / tau); the bow wave's white water
+// along the bow's sides; the Kelvin arms' broken crests at the apparent half-angle, decaying
+// as (1 + r / L)^(-1/3) from the bow, never outside Kelvin's 19.47 degrees.
+fn wake_foam(local: vec2<f32>) -> f32 {
+    var foam = 0.0;
+    let count = u32(sea.thermal.y);
+    for (var w = 0u; w < count; w++) {
+        let a = sea.wakes[3u * w];
+        let b = sea.wakes[3u * w + 1u];
+        let c = sea.wakes[3u * w + 2u];
+        let q = local - a.xy;
+        let astern = -dot(q, a.zw);
+        let across = abs(a.z * q.y - a.w * q.x);
+        let speed = max(b.x, 0.1);
+        let hull_length = b.y;
+        let hull_beam = b.z;
+        // The turbulent wake.
+        if (astern > 0.0) {
+            let width = hull_beam * pow(max(1.0, astern / hull_beam), 0.2);
+            let x = clamp(2.0 * across / width, 0.0, 1.0);
+            let band = (1.0 - x * x) * (1.0 - x * x);
+            // Broken white water behind the stern, then the lasting trail.
+            let age = astern / speed;
+            foam = max(foam, c.x * (0.5 * exp(-age / 15.0) + 0.45 * exp(-age / c.y)) * band);
+        }
+        // The bow wave: white water hugging the fore body, as long as the hull's fore third.
+        let from_bow = hull_length + astern;
+        if (from_bow > -0.02 * hull_length && from_bow < 0.35 * hull_length) {
+            let side = across - 0.5 * hull_beam * clamp(from_bow / (0.2 * hull_length), 0.2, 1.0);
+            let spread = 0.08 * hull_beam + 0.1 * from_bow;
+            foam = max(foam, 0.9 * c.x * exp(-side * side / (spread * spread)) * (1.0 - from_bow / (0.35 * hull_length)));
+        }
+        // The Kelvin arms, from the bow: a narrow band of cusp waves whose crests (a transverse
+        // wavelength 2 pi U^2 / g apart along the arm) break white.
+        if (from_bow > 0.0) {
+            let angle = atan2(across, from_bow);
+            if (angle < 0.3398) {
+                let d = (angle - b.w) / (0.08 * b.w);
+                let crest = pow(0.5 + 0.5 * cos(6.2831853 * from_bow * 9.80665 / (6.2831853 * speed * speed)), 4.0);
+                let arm = exp(-d * d) * pow(1.0 + from_bow / hull_length, -1.0 / 3.0);
+                foam = max(foam, 0.3 * c.x * arm * crest * exp(-3.0 * from_bow / speed / c.y));
+            }
+        }
+    }
+    return clamp(foam, 0.0, 1.0);
+}
+
+// The explicit (Gerstner) waves at `local`: height (x), displacement in the plane's axes
+// (yz), and in `slopes` their slope (xy, plane axes) and displacement gradient (dxx, dyy,
+// dxy) for the shading.
+struct Explicit {
+    height_displacement: vec3<f32>,
+    slope: vec2<f32>,
+    gradient: vec3<f32>,
+};
+
+fn explicit_waves(local: vec2<f32>) -> Explicit {
+    var out = Explicit(vec3<f32>(0.0), vec2<f32>(0.0), vec3<f32>(0.0));
+    let p = to_plane(local);
+    let count = u32(sea.water.w);
+    for (var w = 0u; w < count; w++) {
+        let a = sea.waves[2u * w];
+        let b = sea.waves[2u * w + 1u];
+        let phase = a.w + a.z * dot(a.xy, p);
+        let s = sin(phase);
+        let c = cos(phase);
+        out.height_displacement += vec3<f32>(b.x * c, -b.y * a.xy * s);
+        out.slope += -b.x * a.z * s * a.xy;
+        let compression = -b.y * a.z * c;
+        out.gradient += compression * vec3<f32>(a.x * a.x, a.y * a.y, a.x * a.y);
+    }
+    return out;
+}
 
 @group(0) @binding(1) var<uniform> sea: SeaUniform;
 @group(0) @binding(2) var sea_displacement: texture_2d_array<f32>;
@@ -68,13 +153,14 @@ fn vs_main(@builtin(vertex_index) index: u32) -> SeaOut {
         let lod = clamp(log2(max(spacing, 1e-3) / sea.cascades[c].w), 0.0, sea.shade.w - 1.0);
         d += textureSampleLevel(sea_displacement, sea_sampler, cascade_uv(c, local), c, lod).xyz;
     }
+    d += explicit_waves(local).height_displacement;
     let p = local + from_plane(d.yz);
     // The round earth: the surface drops below the eye's horizontal plane by d^2 / 2R.
     let drop = dot(p, p) / (2.0 * sea.params.y);
     let up = g.eye_up.xyz;
     let rel = sea.east.xyz * p.x + sea.north.xyz * p.y + up * (sea.params.x + d.x - drop);
     var out: SeaOut;
-    out.clip = g.view_proj * vec4<f32>(rel, 1.0);
+    out.clip = g.view_proj * vec4<f32>(refracted(rel), 1.0);
     out.rel = rel;
     out.local = local;
     return out;
@@ -113,6 +199,31 @@ fn glint(e: vec3<f32>, l: vec3<f32>, v: vec3<f32>, n: vec3<f32>, s2: f32) -> vec
     return e * (fresnel(dot(v, h)) * p_pi / (4.0 * mu_v * mu_n * mu_n * mu_n * mu_n));
 }
 
+// Fresnel reflectance (unpolarised) of a dielectric of index `n_ir` at incidence cosine `c`.
+fn fresnel_dielectric(c: f32, n_ir: f32) -> f32 {
+    let cos_i = clamp(c, 1e-4, 1.0);
+    let sin_t = sqrt(1.0 - cos_i * cos_i) / n_ir;
+    let cos_t = sqrt(max(1.0 - sin_t * sin_t, 0.0));
+    let rs = (cos_i - n_ir * cos_t) / (cos_i + n_ir * cos_t);
+    let rp = (n_ir * cos_i - cos_t) / (n_ir * cos_i + cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// What a thermal sensor sees of the sea: the water's emission at its surface temperature with
+// the emissivity of water in the thermal infrared (Fresnel with n = 1.22 at 10 um: 0.99 looking
+// down, 0.83 at 75 degrees from the vertical, falling to 0 at grazing; Masuda et al. 1988
+// measured 0.88 there on a rough sea), the sky reflected specularly along `r`, the sun's glint,
+// then the path to the eye and a ground fog's droplets.
+fn sea_thermal(n: vec3<f32>, v: vec3<f32>, r: vec3<f32>, s2: f32, rel: vec3<f32>) -> vec4<f32> {
+    let reflectance = fresnel_dielectric(dot(n, v), 1.22);
+    var l = (1.0 - reflectance) * th_band_radiance(sea.thermal.x) + reflectance * th_sky(r);
+    l += glint(vec3<f32>(g.sensor.w), g.sun_dir.xyz, v, n, s2).x;
+    let p = th_path(rel);
+    let fog = sqrt(fog_layer_transmittance(rel));
+    let air = th_band_radiance(thermal[TH_OFF_SPOT_COUNT + 1u]);
+    return vec4<f32>(vec3<f32>(fog * (p.x * l + p.y) + (1.0 - fog) * air), 1.0);
+}
+
 @fragment
 fn fs_main(in: SeaOut) -> @location(0) vec4<f32> {
     let count = u32(sea.shade.z);
@@ -126,6 +237,9 @@ fn fs_main(in: SeaOut) -> @location(0) vec4<f32> {
         variance += max(s.z - s.x * s.x, 0.0) + max(s.w - s.y * s.y, 0.0);
         grad += textureSample(sea_gradient, sea_sampler, uv, c).xyz;
     }
+    let waves = explicit_waves(in.local);
+    slope += from_plane(waves.slope);
+    grad += waves.gradient;
     let up = g.eye_up.xyz;
     let n = normalize(up - sea.east.xyz * slope.x - sea.north.xyz * slope.y);
     let distance_m = max(length(in.rel), 1e-3);
@@ -135,8 +249,11 @@ fn fs_main(in: SeaOut) -> @location(0) vec4<f32> {
     let r = reflect(-v, n);
     // Whitecaps where the surface's Jacobian folds.
     let jacobian = (1.0 + grad.x) * (1.0 + grad.y) - grad.z * grad.z;
-    let foam = 1.0 - smoothstep(sea.shade.y - 0.2, sea.shade.y + 0.05, jacobian);
+    let foam = max(1.0 - smoothstep(sea.shade.y - 0.2, sea.shade.y + 0.05, jacobian), wake_foam(in.local));
     let s2 = max(variance, 1e-4);
+    if (sensor_on()) {
+        return sea_thermal(n, v, r, s2, in.rel);
+    }
     let light = glint(g.sun_colour.rgb, g.sun_dir.xyz, v, n, s2)
         + glint(g.moon_colour.rgb, g.moon_dir.xyz, v, n, s2);
     // The water body: light scattered up from below, leaving through the surface.

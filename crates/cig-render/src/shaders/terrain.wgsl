@@ -70,7 +70,7 @@ fn vs_main(
     // A skirt's foot hangs below its edge post by what neighbours can differ there.
     rel -= node.axis_u.xyz * (skirt * min(node.morph.z + node.offset.w * d, node.axis_u.w));
     var out: VertexOut;
-    out.clip = g.view_proj * vec4<f32>(rel, 1.0);
+    out.clip = g.view_proj * vec4<f32>(refracted(rel), 1.0);
     out.rel = rel;
     out.uv = node.atlas.xy + uv * node.atlas.zw;
     out.img = node.imagery.xy + uv * node.imagery.zw;
@@ -279,6 +279,17 @@ var<private> MACRO_TINT: array<vec3<f32>, 9> = array<vec3<f32>, 9>(
     vec3<f32>(1.06, 1.0, 0.90),
 );
 
+// Water posts at the sea's level are the sea's (the sea pass draws its waves there): the
+// fragment's height relative to the eye on the curved earth, against the cut.
+fn is_sea(kind: u32, rel: vec3<f32>) -> bool {
+    if (!sea_cut_on() || kind != 0u) {
+        return false;
+    }
+    let along = dot(rel, g.eye_up.xyz);
+    let across2 = max(dot(rel, rel) - along * along, 0.0);
+    return along + across2 / (2.0 * 6371000.0) <= g.detail_north.w;
+}
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if (g.flags.x > 0.5) {
@@ -313,6 +324,9 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         } else {
             let size = vec2<f32>(textureDimensions(colour_atlas));
             kind = u32(round(textureLoad(colour_atlas, vec2<i32>(in.uv * size), 0).a * 255.0)) >> 4u;
+        }
+        if (is_sea(kind, in.rel)) {
+            discard;
         }
         let t_k = th_surface_temp(kind, n) + texture_k + th_hot_spots(in.rel);
         return th_shown(t_k, th_emissivity(kind), n, in.rel);
@@ -374,6 +388,9 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
             tag >> 4u,
         );
         albedo = surface.albedo;
+    }
+    if (is_sea(surface.kind, in.rel)) {
+        discard;
     }
     if (nvg_on()) {
         albedo = nvg_terrain_albedo(surface.kind, albedo);

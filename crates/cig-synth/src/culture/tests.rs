@@ -38,7 +38,7 @@ fn synthetic(size_km: f64, seed: u64) -> crate::Generated {
         seed,
         ..SynthParams::demo()
     };
-    generate(&p, &mut |_, _| {}).expect("valid parameters")
+    generate(&p, &crate::SynthOptions::default(), &mut |_, _| {}).expect("valid parameters")
 }
 
 fn is_vegetation(k: CultureKind) -> bool {

@@ -1,0 +1,954 @@
+//! The sea in the IG's world: which waves the scenario and the host ask for, the surface at the
+//! frame's time, and the sea's answers to height and clamping questions.
+//!
+//! Algorithm, per frame ([`WorldSea::update`]):
+//! 1. The wind sea and swell are the scenario's `[sea]` (a WMO sea state or a wind with its
+//!    fetch); without one, a fully developed sea of the host's global wind (CIGI Atmosphere
+//!    Control), calm when it sets none. The sea exists when the scenario has a `[sea]` or the
+//!    host enables global Maritime Surface Conditions or a global Wave Control wave.
+//! 2. The host's enabled global Wave Control waves are added as explicit Gerstner waves
+//!    (`cig_sea::surface::WaveComponent`); CIGI's Leading (the phase angle of the crest, ±180°)
+//!    sharpens the crest, `|leading| / 90°` of a trochoid's displacement (a Gerstner wave has no
+//!    forward lean). Values outside the sea model's ranges are clamped and told to the host once.
+//! 3. The water's level, temperature, clarity and whitecaps: the host's Maritime Surface
+//!    Conditions (a region's where the point lies in an active region, else the global ones),
+//!    else the scenario's.
+//! 4. The surface (`cig_sea::surface::SeaSurface`, rebuilt only when the wind sea changes) is
+//!    computed at the wave clock of the world time ([`cig_scene::sea::wave_clock_s`]) in the
+//!    tangent plane of the database centre's whole degrees, so every channel and IG on the
+//!    database draws and answers the same waves.
+//!
+//! What is sea: every point off the database, and every water post at or below mean sea level
+//! or the sea's level, whichever is higher (plus [`SEA_POST_TOLERANCE_M`]); lakes and rivers
+//! above it keep the terrain's answer. Height
+//! of terrain there is the wave surface's height above MSL with the material water and the
+//! wave's normal; a clamped entity floats: its height is the sea's, and a ship's model (one
+//! with a hull, `cig_scene::sea::builtin_hull`) heaves, pitches and rolls with the waves it
+//! spans when clamped for attitude.
+//!
+//! Line of sight over the sea ([`SeaNow::first_hit`]): standard terrestrial refraction
+//! bends a nearly horizontal ray toward the earth with a curvature `k / R` (`k` =
+//! [`STANDARD_REFRACTION_K`], 0.13, the value behind the navigation tables' 3.83 √h km
+//! horizon, as `cig_sea::horizon` uses for the drawn horizon); the usual equivalent is a
+//! straight sightline over an earth of effective radius `R_e = R / (1 − k)`, `R` the
+//! ellipsoid's radius of curvature in the sightline's azimuth at its middle (Euler's formula).
+//! At the distance `x` along a sightline of length `D` (horizontal length `D_h`), its height
+//! above the sea's mean surface is `h₁ + (h₂ − h₁) x / D − (D_h / D)² x (D − x) / (2 R_e)`,
+//! `h₁` and `h₂` its ends' heights above the sea's level (the geoid interpolated between the
+//! ends). Without waves the first root of that parabola is the hit, exactly. With waves only
+//! the stretch where the parabola comes within the crest bound (the highest point of each
+//! cascade's grid, summed, plus the host's waves' amplitudes) of the mean surface is searched,
+//! front to back, like the terrain's min/max quadtrees: each cascade's heights are kept as a
+//! pyramid of maxima (built once per frame, when a sightline first asks: about 0.25 ms), a
+//! piece of the stretch whose lowest point is above the sum of the cascades' maxima under it
+//! (widened by the largest horizontal displacement, since the choppy crests move) is skipped
+//! whole, others are halved down to 8 m. There the sightline is marched in steps no crest can
+//! rise into: its clearance over the waves less what the shorter cascades can add (twice
+//! their largest height), over the longer ones' steepest slope (each over its own
+//! compression) plus the sightline's own, the best of the splits, at least 0.25 m; the first
+//! sample under the surface is bisected to 1 cm. A 30 km sightline over sea state 5 takes no
+//! sample of the surface where it clears the crest bound; grazing the waves for kilometres it
+//! took 160 samples on average and 630 at most over 150 such sightlines (each sample inverts
+//! the choppy displacement, about 0.4 µs), a CIGI answer about 0.1 to 0.2 ms in all. A hit
+//! counts only where the point is sea ([`SeaNow::covers`]), so over land the terrain answers
+//! (where land lies under the sightline below the crests the search goes on 8 m at a time, so
+//! a hit where the sea meets that land may be up to 8 m late).
+//!
+//! The IG's CIGI line-of-sight answers use the waves (a periscope or a boat's sensor just
+//! above the water is hidden by the crests that would hide it) and take the nearer of the
+//! sea's hit and the terrain's own (geometric) sightline's, the sea's search ending at the
+//! terrain's hit; the terrain's hits on sea posts give way to the sea's (the terrain is asked
+//! again beyond them), and a sightline that leaves the database is answered by the sea there.
+//!
+//! Limits: one wind sea for the whole world (regional and entity-scoped Wave Control waves are
+//! kept but not applied; regional Maritime Surface Conditions set the level, temperature and
+//! clarity where they apply, the drawn sea takes those at the eye); the sea over a water post
+//! does not test whether the post's water is connected to the open sea. Line of sight: one
+//! refraction coefficient along the ray (no ducting or mirage), the parabolic approximation
+//! of the earth (0.1 mm over 30 km), one sea level along the sightline (the level at its
+//! middle); a line of sight vector is bent between its two ends like a segment, not launched
+//! along its direction (they differ by `k x D / (2 R)`, 1 cm at 500 m of a 2 km vector); the
+//! slope bound is the grids' (the surface's steepest slope between grid points may be a
+//! little more), so the sightline may pass through a ripple's tip by millimetres to a
+//! centimetre; the search gives up (no hit) after [`MAX_LOS_SAMPLES`] samples. Over land the
+//! sightline is the terrain's, geometric (no refraction); where the terrain's sightline runs
+//! under the sea posts, land is looked for in steps of half a post (culture objects there are
+//! not seen).
+
+use cig_cigi::{MaritimeSurfaceConditionsControl, WaveControl};
+use cig_geo::{EnuFrame, Geodetic};
+use cig_scene::sea::SeaDraw;
+use cig_sea::spectrum::SeaConditions;
+use cig_sea::surface::{SeaSurface, SurfaceConfig, WaveComponent};
+use cig_terrain::{Material, QueryError, QuerySession, SurfacePoint};
+use std::sync::Arc;
+
+pub use cig_scene::sea::SEA_POST_TOLERANCE_M;
+/// The standard terrestrial refraction coefficient (0.13) the IG's line of sight over the sea
+/// uses ([`SeaNow::first_hit`]), the same as the drawn horizon's.
+pub use cig_sea::horizon::STANDARD_REFRACTION_K;
+
+/// The line-of-sight march over the waves gives up (no hit) after this many samples of the
+/// surface.
+pub const MAX_LOS_SAMPLES: usize = 4096;
+/// The search splits the sightline down to stretches of this, metres, then marches along
+/// them in steps of at least [`LOS_MIN_STEP_M`].
+const LOS_LEAF_M: f64 = 8.0;
+const LOS_MIN_STEP_M: f64 = 0.25;
+/// A hit is bisected to this, metres.
+const LOS_TOLERANCE_M: f64 = 0.01;
+/// Where the sightline is under the sea's level over land, the sea's edge is looked for in
+/// steps of this, metres.
+const LOS_SEA_SCAN_M: f64 = 10.0;
+
+/// The water's settings at a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Water {
+    /// The sea surface's mean level above MSL, metres.
+    pub level_msl_m: f64,
+    pub temperature_c: f64,
+    /// 0 turbid, 100 clear.
+    pub clarity_pct: f64,
+    pub whitecaps: bool,
+}
+
+impl Water {
+    /// The scenario's water, or the default open sea.
+    pub fn of_scenario(sea: Option<&crate::scenario::ScenarioSea>) -> Water {
+        sea.map_or(
+            Water {
+                level_msl_m: 0.0,
+                temperature_c: 15.0,
+                clarity_pct: 100.0,
+                whitecaps: true,
+            },
+            |s| Water {
+                level_msl_m: s.level_m,
+                temperature_c: s.water_temperature_c,
+                clarity_pct: s.clarity_pct,
+                whitecaps: s.whitecaps,
+            },
+        )
+    }
+
+    /// The host's conditions over `self` (values out of range clamped).
+    pub fn with_host(self, host: Option<&MaritimeSurfaceConditionsControl>) -> Water {
+        let Some(m) = host.filter(|m| m.surface_conditions_enable) else {
+            return self;
+        };
+        let or = |v: f32, lo: f64, hi: f64, fallback: f64| {
+            let v = f64::from(v);
+            if v.is_finite() {
+                v.clamp(lo, hi)
+            } else {
+                fallback
+            }
+        };
+        Water {
+            level_msl_m: or(m.sea_surface_height_m, -20.0, 20.0, self.level_msl_m),
+            temperature_c: or(
+                m.surface_water_temperature_c,
+                -2.0,
+                40.0,
+                self.temperature_c,
+            ),
+            clarity_pct: or(m.surface_clarity_pct, 0.0, 100.0, self.clarity_pct),
+            whitecaps: m.whitecap_enable,
+        }
+    }
+
+    /// The water body's colour: Morel's clear ocean (about 2 % reflectance in the blue, under
+    /// 0.5 % in the red) toward a turbid coastal green as the clarity falls.
+    pub fn body_rgb(&self) -> [f32; 3] {
+        let clear = [0.004_f32, 0.016, 0.028];
+        let turbid = [0.020_f32, 0.036, 0.030];
+        let t = (self.clarity_pct / 100.0).clamp(0.0, 1.0) as f32;
+        [0, 1, 2].map(|i| turbid[i] + (clear[i] - turbid[i]) * t)
+    }
+}
+
+/// A host wave as the sea model takes it, and whether any value had to be clamped.
+pub fn wave_component(w: &WaveControl) -> (WaveComponent, bool) {
+    let mut clamped = false;
+    let mut fit = |v: f32, lo: f64, hi: f64, fallback: f64| {
+        let v = f64::from(v);
+        let fitted = if v.is_finite() {
+            v.clamp(lo, hi)
+        } else {
+            fallback
+        };
+        clamped |= fitted != v;
+        fitted
+    };
+    let height_m = fit(w.height_m, 0.0, 30.0, 0.0);
+    let wavelength_m = fit(w.wavelength_m, 0.1, 5000.0, 100.0);
+    let period_s = fit(w.period_s, 0.1, 100.0, 8.0);
+    let direction_deg = fit(w.direction_deg, -1.0e6, 1.0e6, 0.0);
+    let phase_deg = fit(w.phase_offset_deg, -1.0e6, 1.0e6, 0.0);
+    let leading_deg = fit(w.leading_deg, -180.0, 180.0, 0.0);
+    let wave = WaveComponent {
+        height_m,
+        wavelength_m,
+        period_s,
+        direction_deg: direction_deg.rem_euclid(360.0),
+        phase_deg: phase_deg.rem_euclid(360.0),
+        leading: (leading_deg.abs() / 90.0).min(1.0),
+    };
+    (wave, clamped)
+}
+
+/// The sea at the frame's time.
+pub struct SeaNow {
+    surface: SeaSurface,
+    draw: Arc<SeaDraw>,
+    plane: EnuFrame,
+    /// The scenario's water under the host's global conditions.
+    water: Water,
+    /// The surface's bounds for the line of sight, computed when first asked.
+    bounds: std::sync::OnceLock<WaveBounds>,
+}
+
+impl SeaNow {
+    /// What the renderer draws.
+    pub fn draw(&self) -> &Arc<SeaDraw> {
+        &self.draw
+    }
+
+    /// The wave surface at the frame's time.
+    pub fn surface(&self) -> &SeaSurface {
+        &self.surface
+    }
+
+    /// The water where no region sets its own.
+    pub fn water(&self) -> Water {
+        self.water
+    }
+
+    /// The sea's surface at a point (its mean level `level_msl_m`), as a terrain answer: the
+    /// wave height above MSL, material water, the wave's normal.
+    pub fn surface_point(
+        &self,
+        lat_deg: f64,
+        lon_deg: f64,
+        level_msl_m: f64,
+        geoid_m: f64,
+    ) -> SurfacePoint {
+        let at = self
+            .plane
+            .geodetic_to_enu(Geodetic::new(lat_deg, lon_deg, 0.0));
+        let sample = self.surface.sample(at.x, at.y);
+        SurfacePoint {
+            lat_deg,
+            lon_deg,
+            height_msl_m: level_msl_m + sample.height_m,
+            geoid_undulation_m: geoid_m,
+            normal_enu: sample.normal,
+            material: Material::Water,
+            level: 0,
+        }
+    }
+
+    /// Whether the terrain's answer at a point (`Err` off the database) is sea when the sea
+    /// stands at `level_msl_m`: off the database, or a water post no higher than MSL or the
+    /// level (a database's sea posts lie at MSL whatever the tide).
+    pub fn covers(terrain: &Result<SurfacePoint, QueryError>, level_msl_m: f64) -> bool {
+        match terrain {
+            Err(QueryError::Outside { .. }) => true,
+            Ok(s) => {
+                s.material == Material::Water
+                    && s.height_msl_m <= level_msl_m.max(0.0) + SEA_POST_TOLERANCE_M
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// Height of the surface at a point: the sea's where it is sea, else the terrain's.
+    ///
+    /// # Errors
+    /// The terrain's, where the point is not sea.
+    pub fn hot(
+        &self,
+        query: &mut QuerySession,
+        lat_deg: f64,
+        lon_deg: f64,
+        level_msl_m: f64,
+    ) -> Result<SurfacePoint, QueryError> {
+        let terrain = query.hot(lat_deg, lon_deg);
+        if SeaNow::covers(&terrain, level_msl_m) && lat_deg.abs() <= 90.0 && lon_deg.is_finite() {
+            let geoid_m = query.geoid_undulation_m(lat_deg, lon_deg);
+            return Ok(self.surface_point(lat_deg, lon_deg, level_msl_m, geoid_m));
+        }
+        terrain
+    }
+}
+
+/// How a sightline sees the sea ([`SeaNow::first_hit`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeaSightline {
+    /// The sea's mean level above MSL along the sightline, metres.
+    pub level_msl_m: f64,
+    /// The geoid's undulation at the sightline's start and end, metres (linear between).
+    pub geoid_m: [f64; 2],
+    /// The refraction coefficient `k`, `-1..=0.9` (0: a geometric sightline; the IG answers
+    /// with [`STANDARD_REFRACTION_K`]).
+    pub refraction_k: f64,
+    /// Whether the waves stop the sightline (else the sea's calm mean surface).
+    pub with_waves: bool,
+    /// How far from the start to look, metres (`f64::INFINITY`: to the end), e.g. to the
+    /// terrain's own hit.
+    pub max_range_m: f64,
+}
+
+/// Where a sightline first meets the sea.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeaHit {
+    /// The point on the sea's surface; altitude above the ellipsoid.
+    pub point: Geodetic,
+    /// Distance from the sightline's start, metres.
+    pub range_m: f64,
+    /// The surface's height above MSL there, metres.
+    pub height_msl_m: f64,
+    /// The surface's unit normal there (east, north, up).
+    pub normal_enu: [f64; 3],
+}
+
+/// Bounds of the surface at the frame's time, for the line-of-sight search.
+#[derive(Debug)]
+struct WaveBounds {
+    /// No point of the surface is higher than this above its mean, metres.
+    crest_m: f64,
+    /// Each cascade's heights as a pyramid of maxima.
+    pyramids: Vec<MaxPyramid>,
+    /// The host's waves' amplitudes, summed, metres.
+    explicit_m: f64,
+    /// No surface point is displaced further than this horizontally, metres.
+    displacement_m: f64,
+    /// How far the surface may rise along a step of `s` metres: by `rise + slope · s` for
+    /// each pair; the first cascades' steepest slopes (each over its own compression) and the
+    /// host's waves' summed, the others' (shorter) waves by twice their largest height.
+    rises: Vec<(f64, f64)>,
+}
+
+/// A cascade's heights as a pyramid of maxima: level 0 the grid's points, each next level the
+/// maximum of 2 × 2 nodes of the one below, to one node (the tile is periodic).
+#[derive(Debug)]
+struct MaxPyramid {
+    tile_m: f64,
+    size: usize,
+    levels: Vec<Vec<f32>>,
+}
+
+impl MaxPyramid {
+    fn new(grid: &cig_sea::surface::CascadeGrid) -> MaxPyramid {
+        let mut levels = vec![grid
+            .height_displacement
+            .iter()
+            .map(|v| v[0])
+            .collect::<Vec<f32>>()];
+        let mut side = grid.size;
+        while side > 1 {
+            let below = levels.last().map_or(&[][..], |l| l.as_slice());
+            let half = side / 2;
+            let mut level = Vec::with_capacity(half * half);
+            for j in 0..half {
+                for i in 0..half {
+                    let at = |di: usize, dj: usize| below[(2 * j + dj) * side + 2 * i + di];
+                    level.push(at(0, 0).max(at(1, 0)).max(at(0, 1)).max(at(1, 1)));
+                }
+            }
+            levels.push(level);
+            side = half;
+        }
+        MaxPyramid {
+            tile_m: grid.tile_m,
+            size: grid.size,
+            levels,
+        }
+    }
+
+    /// The highest the cascade's surface reaches anywhere.
+    fn top(&self) -> f32 {
+        self.levels
+            .last()
+            .and_then(|l| l.first())
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    /// The highest the cascade's (bilinear) surface reaches at undisplaced positions in the box
+    /// `x0..=x1` east, `y0..=y1` north (metres).
+    fn max_in(&self, [x0, x1, y0, y1]: [f64; 4]) -> f32 {
+        let top = self.top();
+        let cell = self.tile_m / self.size as f64;
+        // The points the box's cells interpolate from.
+        let (px0, px1) = ((x0 / cell).floor(), (x1 / cell).floor() + 1.0);
+        let (py0, py1) = ((y0 / cell).floor(), (y1 / cell).floor() + 1.0);
+        let span = (px1 - px0).max(py1 - py0) + 1.0;
+        let inside = span < self.size as f64 && px0.abs() < 1e12 && py0.abs() < 1e12;
+        if !inside {
+            return top;
+        }
+        // Nodes at least half the span: up to 3 × 3 of them.
+        let level = ((span.log2().ceil() as usize).max(1) - 1).min(self.levels.len() - 1);
+        let side = (1_i64 << level) as f64;
+        let nodes = (self.size >> level) as i64;
+        let grid = &self.levels[level];
+        let (ix0, ix1) = ((px0 / side).floor() as i64, (px1 / side).floor() as i64);
+        let (iy0, iy1) = ((py0 / side).floor() as i64, (py1 / side).floor() as i64);
+        let mut max = f32::NEG_INFINITY;
+        for iy in iy0..=iy1 {
+            for ix in ix0..=ix1 {
+                let k = iy.rem_euclid(nodes) * nodes + ix.rem_euclid(nodes);
+                max = max.max(grid[k as usize]);
+            }
+        }
+        max
+    }
+}
+
+/// A straight sightline over the effective earth, by the distance `x` along it.
+struct Chord {
+    a: glam::DVec3,
+    dir: glam::DVec3,
+    length_m: f64,
+    /// Height of the start above the sea's mean surface, and its rate along the chord.
+    h1: f64,
+    slope: f64,
+    /// The bulge's coefficient: the earth rises `curvature · x (D − x)` under the chord.
+    curvature: f64,
+    geoid_m: f64,
+    geoid_rate: f64,
+}
+
+impl Chord {
+    fn height(&self, x: f64) -> f64 {
+        self.h1 + self.slope * x - self.curvature * x * (self.length_m - x)
+    }
+
+    /// The lowest the chord is over `x0..=x1` (it is convex).
+    fn lowest(&self, x0: f64, x1: f64) -> f64 {
+        let vertex = if self.curvature > 0.0 {
+            0.5 * (self.length_m - self.slope / self.curvature)
+        } else {
+            x0
+        };
+        self.height(x0)
+            .min(self.height(x1))
+            .min(self.height(vertex.clamp(x0, x1)))
+    }
+
+    fn height_rate(&self, x: f64) -> f64 {
+        self.slope - self.curvature * (self.length_m - 2.0 * x)
+    }
+
+    fn at(&self, x: f64) -> Geodetic {
+        Geodetic::from_ecef(self.a + self.dir * x)
+    }
+
+    /// The stretch of the chord (`0..=D`) no higher than `top` above the mean surface.
+    fn below(&self, top: f64) -> Option<(f64, f64)> {
+        // curvature x² + (slope − curvature D) x + (h1 − top) ≤ 0.
+        let (qa, qb, qc) = (
+            self.curvature,
+            self.slope - self.curvature * self.length_m,
+            self.h1 - top,
+        );
+        let (lo, hi) = if qa > 1e-15 {
+            let disc = qb * qb - 4.0 * qa * qc;
+            if disc < 0.0 {
+                return None;
+            }
+            let q = -0.5 * (qb + disc.sqrt().copysign(qb));
+            if q == 0.0 {
+                (0.0, 0.0)
+            } else {
+                let (r1, r2) = (q / qa, qc / q);
+                (r1.min(r2), r1.max(r2))
+            }
+        } else if qb > 0.0 {
+            (f64::NEG_INFINITY, -qc / qb)
+        } else if qb < 0.0 {
+            (-qc / qb, f64::INFINITY)
+        } else if qc <= 0.0 {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        } else {
+            return None;
+        };
+        let (lo, hi) = (lo.max(0.0), hi.min(self.length_m));
+        (lo <= hi).then_some((lo, hi))
+    }
+}
+
+/// The WGS84 ellipsoid's radius of curvature, metres, at `lat_deg` in the azimuth of the
+/// horizontal direction (`east`, `north`) (Euler's formula; the Gaussian mean radius for no
+/// horizontal direction).
+fn radius_of_curvature_m(lat_deg: f64, east: f64, north: f64) -> f64 {
+    let s = lat_deg.to_radians().sin();
+    let w2 = 1.0 - cig_geo::WGS84_E2 * s * s;
+    let prime_vertical = cig_geo::WGS84_A_M / w2.sqrt();
+    let meridian = prime_vertical * (1.0 - cig_geo::WGS84_E2) / w2;
+    let h2 = east * east + north * north;
+    if h2 > 0.0 {
+        1.0 / (north * north / h2 / meridian + east * east / h2 / prime_vertical)
+    } else {
+        (meridian * prime_vertical).sqrt()
+    }
+}
+
+impl SeaNow {
+    /// The surface's bounds (computed once per frame's sea, when a sightline first asks).
+    fn bounds(&self) -> &WaveBounds {
+        self.bounds.get_or_init(|| {
+            let grids = self.surface.grids();
+            let pyramids: Vec<MaxPyramid> = grids.iter().map(MaxPyramid::new).collect();
+            let mut bounds = WaveBounds {
+                crest_m: pyramids.iter().map(|p| f64::from(p.top())).sum(),
+                pyramids,
+                explicit_m: 0.0,
+                displacement_m: 0.0,
+                rises: Vec::new(),
+            };
+            let mut cascades = Vec::new();
+            for grid in grids {
+                // Squares, rooted once: the largest displacement, the displaced surface's
+                // steepest slope (the height's over the compression), the largest height.
+                let (mut displaced, mut steepest, mut highest) = (0.0_f32, 0.0_f32, 0.0_f32);
+                for (v, s) in grid.height_displacement.iter().zip(&grid.slopes) {
+                    let compression = v[3].max(0.3);
+                    displaced = displaced.max(v[1] * v[1] + v[2] * v[2]);
+                    steepest =
+                        steepest.max((s[0] * s[0] + s[1] * s[1]) / (compression * compression));
+                    highest = highest.max(v[0].abs());
+                }
+                let (displaced, steepest) = (displaced.sqrt(), steepest.sqrt());
+                bounds.displacement_m += f64::from(displaced);
+                cascades.push((2.0 * f64::from(highest), f64::from(steepest)));
+            }
+            let mut explicit_slope = 0.0;
+            let waves = self.surface.explicit_waves();
+            let compression: f64 = waves
+                .iter()
+                .map(|w| std::f64::consts::PI * w.height_m * w.leading / w.wavelength_m)
+                .sum();
+            for w in waves {
+                bounds.explicit_m += 0.5 * w.height_m;
+                bounds.displacement_m += 0.5 * w.height_m * w.leading;
+                explicit_slope += std::f64::consts::PI * w.height_m
+                    / w.wavelength_m
+                    / (1.0 - compression).max(0.1);
+            }
+            bounds.rises = (0..=cascades.len())
+                .map(|m| {
+                    let (long, short) = cascades.split_at(m);
+                    (
+                        short.iter().map(|c| c.0).sum(),
+                        explicit_slope + long.iter().map(|c| c.1).sum::<f64>(),
+                    )
+                })
+                .collect();
+            bounds.crest_m += bounds.explicit_m;
+            bounds
+        })
+    }
+
+    /// The highest the surface reaches over the plane's segment from `p` to `q` (east, north,
+    /// metres): each cascade's maximum in the box around the segment widened by the largest
+    /// displacement, plus the host's waves' amplitudes.
+    fn highest_over(&self, bounds: &WaveBounds, p: glam::DVec3, q: glam::DVec3) -> f64 {
+        // A margin for the ground's plane coordinates taken as linear along the sightline.
+        let widen = bounds.displacement_m + 1.0;
+        let bbox = [
+            p.x.min(q.x) - widen,
+            p.x.max(q.x) + widen,
+            p.y.min(q.y) - widen,
+            p.y.max(q.y) + widen,
+        ];
+        bounds
+            .pyramids
+            .iter()
+            .map(|pyramid| f64::from(pyramid.max_in(bbox)))
+            .sum::<f64>()
+            + bounds.explicit_m
+    }
+
+    /// Where the sightline from `from` to `to` (altitudes above the ellipsoid) first meets the
+    /// sea, as the module doc describes: the refracted sightline against the waves (or the calm
+    /// mean surface), counted only where `is_sea(lat_deg, lon_deg)`. `None`: it does not meet
+    /// the sea (or the march gave up after [`MAX_LOS_SAMPLES`] samples).
+    pub fn first_hit(
+        &self,
+        from: Geodetic,
+        to: Geodetic,
+        sightline: &SeaSightline,
+        mut is_sea: impl FnMut(f64, f64) -> bool,
+    ) -> Option<SeaHit> {
+        let (a, b) = (from.to_ecef(), to.to_ecef());
+        let length_m = (b - a).length();
+        let k = sightline.refraction_k;
+        let [g1, g2] = sightline.geoid_m;
+        let level = sightline.level_msl_m;
+        if !(length_m > 1e-3
+            && length_m.is_finite()
+            && sightline.max_range_m >= 0.0
+            && (-1.0..=0.9).contains(&k)
+            && g1.is_finite()
+            && g2.is_finite()
+            && level.is_finite())
+        {
+            return None;
+        }
+        let h1 = from.alt_m - g1 - level;
+        let h2 = to.alt_m - g2 - level;
+        // The earth under the sightline: the ellipsoid's curvature in its azimuth at its
+        // middle, on its horizontal length, over the effective radius R / (1 - k).
+        let mid = Geodetic::from_ecef((a + b) * 0.5);
+        let along = EnuFrame::new(mid).ecef_vector_to_enu(b - a);
+        let horizontal = (along.x * along.x + along.y * along.y) / (length_m * length_m);
+        let radius = radius_of_curvature_m(mid.lat_deg, along.x, along.y);
+        let chord = Chord {
+            a,
+            dir: (b - a) / length_m,
+            length_m,
+            h1,
+            slope: (h2 - h1) / length_m,
+            curvature: (1.0 - k) * horizontal / (2.0 * radius),
+            geoid_m: g1,
+            geoid_rate: (g2 - g1) / length_m,
+        };
+        let hit = |x: f64, p: Geodetic, height_m: f64, normal_enu: [f64; 3]| SeaHit {
+            point: Geodetic::new(
+                p.lat_deg,
+                p.lon_deg,
+                level + height_m + chord.geoid_m + chord.geoid_rate * x,
+            ),
+            range_m: x,
+            height_msl_m: level + height_m,
+            normal_enu,
+        };
+        let waves = if sightline.with_waves {
+            Some(self.bounds()).filter(|b| b.crest_m > 0.0)
+        } else {
+            None
+        };
+        let Some(bounds) = waves else {
+            // The mean surface: the parabola's first root, then the sea's edge if it is land.
+            let (lo, hi) = chord.below(0.0)?;
+            let hi = hi.min(sightline.max_range_m);
+            if lo > hi {
+                return None;
+            }
+            let mut sea_at = |x: f64| {
+                let p = chord.at(x);
+                is_sea(p.lat_deg, p.lon_deg)
+            };
+            let mut x = lo;
+            if !sea_at(lo) {
+                let mut land = lo;
+                let steps = ((hi - lo) / LOS_SEA_SCAN_M)
+                    .ceil()
+                    .min(MAX_LOS_SAMPLES as f64);
+                let found = (1..=steps as usize).find_map(|i| {
+                    let next = (lo + i as f64 * LOS_SEA_SCAN_M).min(hi);
+                    if sea_at(next) {
+                        Some(next)
+                    } else {
+                        land = next;
+                        None
+                    }
+                });
+                x = found?;
+                while x - land > LOS_TOLERANCE_M {
+                    let m = 0.5 * (land + x);
+                    if sea_at(m) {
+                        x = m;
+                    } else {
+                        land = m;
+                    }
+                }
+            }
+            return Some(hit(x, chord.at(x), 0.0, [0.0, 0.0, 1.0]));
+        };
+        let (lo, hi) = chord.below(bounds.crest_m)?;
+        let hi = hi.min(sightline.max_range_m);
+        if lo > hi {
+            return None;
+        }
+        let plane_at = |x: f64| {
+            let p = chord.at(x);
+            let ground = Geodetic::new(p.lat_deg, p.lon_deg, 0.0);
+            (p, self.plane.geodetic_to_enu(ground))
+        };
+        // The plane's coordinates of the ground under the chord: linear between the stretch's
+        // ends (the chord is within metres of the sea there, so this is off by about a
+        // centimetre over 30 km: the margin in `highest_over` covers it; a hit is sampled
+        // again at its exact place).
+        let (start, end) = (plane_at(lo).1, plane_at(hi).1);
+        let ground = |x: f64| start + (end - start) * ((x - lo) / (hi - lo).max(1e-9));
+        let samples = std::cell::Cell::new(0);
+        let gap_at = |x: f64| {
+            samples.set(samples.get() + 1);
+            let at = ground(x);
+            chord.height(x) - self.surface.sample(at.x, at.y).height_m
+        };
+        // The last point known clear of the waves.
+        let mut clear: Option<f64> = None;
+        // Front to back: the stretches still to search, the nearest on top.
+        let mut stack = vec![(lo, hi)];
+        while let Some((x0, x1)) = stack.pop() {
+            if samples.get() >= MAX_LOS_SAMPLES {
+                return None;
+            }
+            let highest = self.highest_over(bounds, ground(x0), ground(x1));
+            if chord.lowest(x0, x1) > highest {
+                clear = Some(x1);
+                continue;
+            }
+            if x1 - x0 > LOS_LEAF_M {
+                let m = 0.5 * (x0 + x1);
+                stack.push((m, x1));
+                stack.push((x0, m));
+                continue;
+            }
+            // A leaf: march in steps no crest can rise into (the slope bound), bisect a hit.
+            let mut x = x0;
+            loop {
+                let gap = gap_at(x);
+                if gap <= 0.0 {
+                    let mut under = x;
+                    if let Some(mut over) = clear {
+                        while under - over > LOS_TOLERANCE_M && samples.get() < MAX_LOS_SAMPLES {
+                            let m = 0.5 * (over + under);
+                            if gap_at(m) <= 0.0 {
+                                under = m;
+                            } else {
+                                over = m;
+                            }
+                        }
+                    }
+                    let (p, at) = plane_at(under);
+                    if is_sea(p.lat_deg, p.lon_deg) {
+                        let s = self.surface.sample(at.x, at.y);
+                        return Some(hit(under, p, s.height_m, s.normal));
+                    }
+                    // Land under the sightline: the terrain answers there; search on, a leaf
+                    // at a time.
+                    clear = None;
+                    if x >= x1 || samples.get() >= MAX_LOS_SAMPLES {
+                        break;
+                    }
+                    x = (x + LOS_LEAF_M).min(x1);
+                    continue;
+                }
+                clear = Some(x);
+                if x >= x1 || samples.get() >= MAX_LOS_SAMPLES {
+                    break;
+                }
+                let rate = chord.height_rate(x).abs();
+                let step = bounds
+                    .rises
+                    .iter()
+                    .map(|&(rise, slope)| (gap - rise) / (rate + slope).max(1e-9))
+                    .fold(f64::NEG_INFINITY, f64::max);
+                x = (x + step.clamp(LOS_MIN_STEP_M, LOS_LEAF_M)).min(x1);
+            }
+        }
+        None
+    }
+}
+
+/// The sea's state over a run.
+pub struct WorldSea {
+    /// The scenario's wind sea and swell, if it has a `[sea]`.
+    scenario_conditions: Option<SeaConditions>,
+    scenario_water: Water,
+    seed: u64,
+    /// Waves already told to the host as clamped.
+    told_waves: std::collections::BTreeSet<(u8, u16, u8)>,
+    now: Option<Arc<SeaNow>>,
+}
+
+/// Why the sea could not be updated (told to the host once by the caller).
+#[derive(Debug, thiserror::Error)]
+pub enum WorldSeaError {
+    #[error("the sea: {0}")]
+    Sea(#[from] cig_sea::SeaError),
+}
+
+impl WorldSea {
+    /// The sea a scenario describes (checked when it was parsed).
+    pub fn new(scenario: Option<&crate::scenario::ScenarioSea>) -> WorldSea {
+        WorldSea {
+            scenario_conditions: scenario.and_then(|s| s.conditions().ok()),
+            scenario_water: Water::of_scenario(scenario),
+            seed: scenario.map_or(1, |s| s.seed),
+            told_waves: std::collections::BTreeSet::new(),
+            now: None,
+        }
+    }
+
+    /// The sea at the frame's time (after [`WorldSea::update`]), if there is one.
+    pub fn now(&self) -> Option<&Arc<SeaNow>> {
+        self.now.as_ref()
+    }
+
+    /// Computes the sea at `unix_time_s` for the host's environment, in the tangent plane of
+    /// `origin`; returns the host waves whose values had to be clamped (each told once). The
+    /// surface is rebuilt only when the wind sea changes, and reused in place when no one else
+    /// holds the last frame's sea.
+    ///
+    /// # Errors
+    /// When the surface cannot be built or computed (the sea is then gone this frame).
+    pub fn update(
+        &mut self,
+        environment: &crate::session::EnvironmentState,
+        eye_msl: Option<Geodetic>,
+        origin: Geodetic,
+        unix_time_s: f64,
+    ) -> Result<Vec<String>, WorldSeaError> {
+        let host_global = environment
+            .maritime
+            .get(&(0, 0))
+            .filter(|m| m.surface_conditions_enable);
+        let host_waves: Vec<(&(u8, u16, u8), &WaveControl)> = environment
+            .waves
+            .iter()
+            .filter(|(key, w)| key.0 == 0 && w.wave_enable)
+            .collect();
+        let present =
+            self.scenario_conditions.is_some() || host_global.is_some() || !host_waves.is_empty();
+        if !present {
+            self.now = None;
+            return Ok(Vec::new());
+        }
+        let conditions = match &self.scenario_conditions {
+            Some(c) => c.clone(),
+            None => {
+                let (speed, from) = environment.atmosphere.as_ref().map_or((0.0, 270.0), |a| {
+                    (
+                        f64::from(a.horizontal_wind_speed_mps),
+                        f64::from(a.wind_direction_deg),
+                    )
+                });
+                let speed = if speed.is_finite() {
+                    speed.clamp(0.0, 60.0)
+                } else {
+                    0.0
+                };
+                let from = if from.is_finite() {
+                    from.rem_euclid(360.0)
+                } else {
+                    270.0
+                };
+                SeaConditions::new(speed, from)?
+            }
+        };
+        let mut told = Vec::new();
+        let mut waves = Vec::with_capacity(host_waves.len());
+        for (key, w) in host_waves {
+            let (wave, clamped) = wave_component(w);
+            if clamped && self.told_waves.insert(*key) {
+                told.push(format!(
+                    "Wave Control {}: clamped to height 0-30 m, length 0.1-5000 m, period 0.1-100 s",
+                    key.2
+                ));
+            }
+            waves.push(wave);
+        }
+        let last = self.now.take().map(|now| {
+            Arc::try_unwrap(now).map_or_else(|shared| shared.surface.clone(), |own| own.surface)
+        });
+        let mut surface = match last {
+            Some(s) if *s.conditions() == conditions => s,
+            _ => SeaSurface::new(&conditions, self.seed, SurfaceConfig::default())?,
+        };
+        if surface.explicit_waves() != waves.as_slice() {
+            surface.set_explicit_waves(waves)?;
+        }
+        surface.update(cig_scene::sea::wave_clock_s(unix_time_s))?;
+        let water = self.scenario_water.with_host(host_global);
+        let at_eye = eye_msl
+            .and_then(|eye| environment.maritime_at(eye))
+            .map_or(water, |m| self.scenario_water.with_host(Some(m)));
+        let mut draw = SeaDraw::new(&surface, origin, at_eye.level_msl_m);
+        draw.water_rgb = at_eye.body_rgb();
+        draw.water_temperature_c = at_eye.temperature_c;
+        if !at_eye.whitecaps {
+            draw.whitecap_jacobian = f64::NEG_INFINITY;
+        }
+        self.now = Some(Arc::new(SeaNow {
+            surface,
+            draw: Arc::new(draw),
+            plane: EnuFrame::new(origin),
+            water,
+            bounds: std::sync::OnceLock::new(),
+        }));
+        Ok(told)
+    }
+
+    /// The water at a point (the host's region there, else its global conditions, else the
+    /// scenario's).
+    pub fn water_at(
+        &self,
+        environment: &crate::session::EnvironmentState,
+        point_msl: Geodetic,
+    ) -> Water {
+        self.scenario_water
+            .with_host(environment.maritime_at(point_msl))
+    }
+}
+
+impl SeaNow {
+    /// An entity of `model` afloat at `at` (latitude, longitude, degrees; the height above the
+    /// surface, metres): on the waves at the sea's level `level_msl_m`; a ship (a model with a
+    /// hull) heaves, pitches and rolls with the waves it spans, anything else follows the wave
+    /// under it; pitch and roll come from the sea only when `clamp` asks for the attitude.
+    pub fn float(
+        &self,
+        query: &QuerySession,
+        model: &str,
+        orientation: cig_scene::Hpr,
+        clamp: cig_scene::snapshot::Clamp,
+        at: [f64; 3],
+        level_msl_m: f64,
+    ) -> crate::pose::Pose {
+        let [lat_deg, lon_deg, above_m] = at;
+        let level_ellipsoid_m = level_msl_m + query.geoid_undulation_m(lat_deg, lon_deg);
+        let mut instance = cig_scene::EntityInstance {
+            id: 0,
+            model: String::new(),
+            position: Geodetic::new(lat_deg, lon_deg, level_ellipsoid_m),
+            orientation,
+            cue_important: false,
+            critical_radius_m: None,
+        };
+        let attitude = clamp == cig_scene::snapshot::Clamp::HeightAndAttitude;
+        let rode = cig_scene::sea::builtin_hull(model).is_some_and(|hull| {
+            cig_scene::sea::ride_the_sea(
+                &mut instance,
+                hull,
+                &self.surface,
+                self.draw.origin,
+                level_ellipsoid_m,
+            )
+            .is_ok()
+        });
+        if !rode {
+            let xy = self.plane.geodetic_to_enu(instance.position);
+            let wave = self.surface.sample(xy.x, xy.y);
+            instance.position.alt_m = level_ellipsoid_m + wave.height_m;
+            (
+                instance.orientation.pitch_deg,
+                instance.orientation.roll_deg,
+            ) = cig_scene::snapshot::attitude_on_slope(wave.normal, orientation.heading_deg);
+        }
+        if !attitude {
+            instance.orientation.pitch_deg = orientation.pitch_deg;
+            instance.orientation.roll_deg = orientation.roll_deg;
+        }
+        instance.position.alt_m += above_m;
+        crate::pose::Pose {
+            position: instance.position,
+            orientation: instance.orientation,
+        }
+    }
+}
