@@ -70,7 +70,7 @@
 //! along its direction (they differ by `k x D / (2 R)`, 1 cm at 500 m of a 2 km vector); the
 //! slope bound is the grids' (the surface's steepest slope between grid points may be a
 //! little more), so the sightline may pass through a ripple's tip by millimetres to a
-//! centimetre; the search gives up (no hit) after [`MAX_LOS_SAMPLES`] samples. Over land the
+//! centimetre; after [`MAX_LOS_SAMPLES`] samples the search gives up and counts the sightline blocked where its unresolved stretch begins. Over land the
 //! sightline is the terrain's, geometric (no refraction); where the terrain's sightline runs
 //! under the sea posts, land is looked for in steps of half a post (culture objects there are
 //! not seen).
@@ -88,8 +88,8 @@ pub use cig_scene::sea::SEA_POST_TOLERANCE_M;
 /// uses ([`SeaNow::first_hit`]), the same as the drawn horizon's.
 pub use cig_sea::horizon::STANDARD_REFRACTION_K;
 
-/// The line-of-sight march over the waves gives up (no hit) after this many samples of the
-/// surface.
+/// The line-of-sight march over the waves gives up after this many samples of the surface
+/// (the sightline counts as blocked where it stands).
 pub const MAX_LOS_SAMPLES: usize = 4096;
 /// The search splits the sightline down to stretches of this, metres, then marches along
 /// them in steps of at least [`LOS_MIN_STEP_M`].
@@ -233,10 +233,8 @@ impl SeaNow {
         level_msl_m: f64,
         geoid_m: f64,
     ) -> SurfacePoint {
-        let at = self
-            .plane
-            .geodetic_to_enu(Geodetic::new(lat_deg, lon_deg, 0.0));
-        let sample = self.surface.sample(at.x, at.y);
+        let [x, y] = cig_scene::sea::sea_plane_xy(&self.plane, lat_deg, lon_deg);
+        let sample = self.surface.sample(x, y);
         SurfacePoint {
             lat_deg,
             lon_deg,
@@ -574,7 +572,8 @@ impl SeaNow {
     /// Where the sightline from `from` to `to` (altitudes above the ellipsoid) first meets the
     /// sea, as the module doc describes: the refracted sightline against the waves (or the calm
     /// mean surface), counted only where `is_sea(lat_deg, lon_deg)`. `None`: it does not meet
-    /// the sea (or the march gave up after [`MAX_LOS_SAMPLES`] samples).
+    /// the sea (after [`MAX_LOS_SAMPLES`] samples the march gives up: blocked where the
+    /// stretch it could not resolve begins).
     pub fn first_hit(
         &self,
         from: Geodetic,
@@ -696,6 +695,13 @@ impl SeaNow {
         let mut stack = vec![(lo, hi)];
         while let Some((x0, x1)) = stack.pop() {
             if samples.get() >= MAX_LOS_SAMPLES {
+                // Given up: blocked (the safe answer for a sightline that grazes the crests
+                // this long) where the unresolved stretch begins, over the sea.
+                let (p, at) = plane_at(x0);
+                if is_sea(p.lat_deg, p.lon_deg) {
+                    let s = self.surface.sample(at.x, at.y);
+                    return Some(hit(x0, p, s.height_m, s.normal));
+                }
                 return None;
             }
             let highest = self.highest_over(bounds, ground(x0), ground(x1));
@@ -839,7 +845,12 @@ impl WorldSea {
                 } else {
                     270.0
                 };
-                SeaConditions::new(speed, from)?
+                // In steps of 0.5 m/s and 5 degrees: a gusting host wind does not rebuild
+                // the surface (and make its waves jump) every frame.
+                SeaConditions::new(
+                    (speed * 2.0).round() / 2.0,
+                    ((from / 5.0).round() * 5.0).rem_euclid(360.0),
+                )?
             }
         };
         let mut told = Vec::new();
@@ -933,8 +944,8 @@ impl SeaNow {
             .is_ok()
         });
         if !rode {
-            let xy = self.plane.geodetic_to_enu(instance.position);
-            let wave = self.surface.sample(xy.x, xy.y);
+            let [x, y] = cig_scene::sea::sea_plane_xy(&self.plane, lat_deg, lon_deg);
+            let wave = self.surface.sample(x, y);
             instance.position.alt_m = level_ellipsoid_m + wave.height_m;
             (
                 instance.orientation.pitch_deg,

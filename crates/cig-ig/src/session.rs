@@ -36,9 +36,11 @@
 //! - HAT/HOT, LOS Segment and Vector, Position and Environmental Conditions requests and
 //!   Collision Detection Segment and Volume definitions: answered in the next frame's message
 //!   (standing requests with an update period every that many frames), from the terrain
-//!   database's query service, the surface the renderer draws at full detail; over the sea
-//!   (off the database, or its water posts at mean sea level) from the wave surface at the
-//!   frame's time (material water, the wave's normal), and a clamped entity there floats.
+//!   database's query service, the surface the renderer draws at full detail. Over the sea
+//!   (off the database, or its water posts at mean sea level) HAT/HOT and line of sight answer
+//!   the wave surface at the frame's time (material water, the wave's normal), and a clamped
+//!   entity there floats; collision segments and volumes test the terrain only (its sea posts
+//!   at mean sea level, not the waves).
 //! - User-defined packets: kept for the caller (`take_user_packets`).
 //!
 //! Line of sight also sees the obscurants: the smoke, flame and dust on the clear part of the

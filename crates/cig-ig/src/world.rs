@@ -157,6 +157,16 @@ pub const POINT_OF_INTEREST_LAG_S: f64 = 0.15;
 /// database's centre, metres (beyond it they are below the horizon of any eye near the sea).
 const REMOTE_SHIPS_FLOATED_WITHIN_M: f64 = 400_000.0;
 
+/// A ship's last sampled place and the speed and course it made good between samples.
+#[derive(Clone, Copy, Debug)]
+struct MadeGood {
+    /// Monotonic time of the sample, seconds.
+    at_s: f64,
+    position: Geodetic,
+    speed_mps: f64,
+    course_deg: f64,
+}
+
 /// This IG's ships' speed is sampled over at least this long, seconds.
 const SHIP_SPEED_SAMPLE_S: f64 = 0.5;
 /// A ship's last place older than this starts its speed over (a jump, a pause), seconds.
@@ -241,9 +251,8 @@ pub struct IgWorld {
     /// The DIS exercise's ships afloat this frame, by draw id (their dead-reckoned place on
     /// the waves at the world time: the same on every IG).
     remote_afloat: BTreeMap<u32, crate::pose::Pose>,
-    /// This IG's ships' last sampled place (monotonic time, position) and the speed (m/s) and
-    /// course (degrees) made good between samples, by entity.
-    ship_motion: BTreeMap<u16, (f64, Geodetic, f64, f64)>,
+    /// This IG's ships' speed and course made good, by entity.
+    ship_motion: BTreeMap<u16, MadeGood>,
     /// The wakes of the ships under way on the sea this frame.
     wakes: Vec<cig_scene::sea::WakeDraw>,
 }
@@ -1672,26 +1681,34 @@ impl IgWorld {
                 continue;
             }
             seen.insert(*id);
-            let entry =
-                self.ship_motion
-                    .entry(*id)
-                    .or_insert((now, p, 0.0, pose.orientation.heading_deg));
-            let dt = now - entry.0;
-            if dt > SHIP_SPEED_STALE_S {
-                *entry = (now, p, 0.0, pose.orientation.heading_deg);
-            } else if dt >= SHIP_SPEED_SAMPLE_S {
-                let moved = EnuFrame::new(entry.1).geodetic_to_enu(p);
-                let speed = moved.x.hypot(moved.y) / dt;
-                let course = if speed > 0.1 {
-                    moved.x.atan2(moved.y).to_degrees().rem_euclid(360.0)
-                } else {
-                    pose.orientation.heading_deg
+            let at_rest = MadeGood {
+                at_s: now,
+                position: p,
+                speed_mps: 0.0,
+                course_deg: pose.orientation.heading_deg,
+            };
+            let entry = self.ship_motion.entry(*id).or_insert(at_rest);
+            let dt_s = now - entry.at_s;
+            if dt_s > SHIP_SPEED_STALE_S {
+                *entry = at_rest;
+            } else if dt_s >= SHIP_SPEED_SAMPLE_S {
+                let moved = EnuFrame::new(entry.position).geodetic_to_enu(p);
+                let speed_mps = moved.x.hypot(moved.y) / dt_s;
+                *entry = MadeGood {
+                    speed_mps,
+                    course_deg: if speed_mps > 0.1 {
+                        moved.x.atan2(moved.y).to_degrees().rem_euclid(360.0)
+                    } else {
+                        pose.orientation.heading_deg
+                    },
+                    ..at_rest
                 };
-                *entry = (now, p, speed, course);
             }
-            let (_, _, speed_mps, course_deg) = *entry;
             self.wakes.extend(cig_scene::sea::WakeDraw::of_ship(
-                &e.model, p, course_deg, speed_mps,
+                &e.model,
+                p,
+                entry.course_deg,
+                entry.speed_mps,
             ));
         }
         self.ship_motion.retain(|id, _| seen.contains(id));

@@ -619,6 +619,15 @@ impl TerrainPipelines {
     }
 }
 
+/// The earth's radius the sea, the terrain's sea cut and the refraction take at a latitude,
+/// metres: the ellipsoid's Gaussian mean radius of curvature there, `√(M N)` (within 0.35 % of
+/// its radius in any direction).
+pub(crate) fn earth_radius_m(lat_deg: f64) -> f64 {
+    let (a, e2) = (cig_geo::WGS84_A_M, cig_geo::WGS84_E2);
+    let w2 = 1.0 - e2 * lat_deg.to_radians().sin().powi(2);
+    a * (1.0 - e2).sqrt() / w2
+}
+
 /// An IEEE half-precision value as f32.
 fn f16_to_f32(bits: u16) -> f32 {
     half::f16::from_bits(bits).to_f32()
@@ -1341,14 +1350,14 @@ impl Renderer {
             &self.gpu,
             [&self.globals, &self.thermal],
             &camera,
-            snapshot.sea.as_deref(),
+            snapshot.sea.as_ref(),
             &snapshot.wakes,
         );
         self.write_globals(
             &camera,
             &lighting,
             snapshot,
-            (options.key_background, wire),
+            (options.key_background, wire, sea_vertices > 0),
             sensor.as_ref(),
             (nvg.as_ref(), &local),
         );
@@ -1842,7 +1851,7 @@ impl Renderer {
         camera: &Camera,
         lighting: &Lighting,
         snapshot: &FrameSnapshot,
-        (key_background, wire): (bool, bool),
+        (key_background, wire, sea_drawn): (bool, bool, bool),
         sensor: Option<&(SensorView, crate::sensor::SensorFrame)>,
         (nvg, local): (Option<&NvgView>, &[cig_scene::lights::LocalLight]),
     ) {
@@ -1860,7 +1869,7 @@ impl Renderer {
         // The database's sea posts lie at mean sea level whatever the tide: water posts up to
         // there or the sea's level (the higher) and half a metre are the sea's
         // (`cig_scene::sea::SEA_POST_TOLERANCE_M`), drawn by the sea pass instead.
-        let sea_cut = snapshot.sea.is_some();
+        let sea_cut = sea_drawn;
         let sea_cut_rel_m = self.sea.undulation_m(eye.lat_deg, eye.lon_deg)
             + snapshot
                 .sea
@@ -1912,14 +1921,15 @@ impl Renderer {
                 if key_background { 1.0 } else { 0.0 },
                 camera.pixels_per_tangent as f32,
             ],
+            // w: the earth's radius at the eye (the sea, its cut and the refraction).
             fog_layer: match drawn_ground_fog(snapshot) {
                 Some(layer) => [
                     (layer.top_m - camera.view.eye.alt_m) as f32,
                     layer.extinction_per_m() as f32,
                     1.0,
-                    0.0,
+                    earth_radius_m(eye.lat_deg) as f32,
                 ],
-                _ => [0.0; 4],
+                _ => [0.0, 0.0, 0.0, earth_radius_m(eye.lat_deg) as f32],
             },
             moon_dir: v4(lighting.moon_direction, lighting.moon_elevation_deg),
             moon_colour: c4(lighting.moon_colour),

@@ -13,12 +13,19 @@
 //! Far off, where the waves are finer than a pixel, the sea therefore turns into the smooth
 //! glitter pattern of its slope statistics instead of aliasing into shimmering noise. Sun glint
 //! after Cox and Munk: `π L = π E F p(slope) / (4 μ_v μ_n⁴)`, with Schlick's Fresnel (water,
-//! F0 = 0.02).
+//! F0 = 0.02). Up to [`MAX_EXPLICIT_WAVES`] of the host's explicit waves are added as Gerstner
+//! waves (their phases worked out at the eye in double precision), and up to [`MAX_WAKES`]
+//! ships' wakes as foam. In a thermal sensor's view the water emits at its temperature with
+//! water's infrared Fresnel emissivity (n = 1.22) and mirrors the sky's band radiance. The
+//! terrain's pipelines built for a frame with a sea leave the database's water posts at sea
+//! level to it (`terrain.wgsl`'s `is_sea`), so the waves show there.
 //!
-//! Limits: the sea lies at mean sea level plus the scene's level everywhere (the database's
-//! water posts beneath it are drawn too and may show through in troughs); no refraction of
-//! what lies below the surface, no shadows on the water, no explicit (Wave Control) waves in
-//! the picture yet; thermal sensor views do not draw it yet.
+//! Limits: the sea lies at mean sea level plus the scene's level everywhere, the geoid taken at
+//! the eye for the whole view (where it differs by more than half a metre the cut leaves the
+//! posts drawn); the earth's curvature is its Gaussian radius at the eye (the posts' true
+//! curvature differs by up to 0.35 % with direction: half a metre at about 40 km); no
+//! refraction of what lies below the surface, no shadows on the water; wakes lie along the
+//! ships' present course.
 
 use crate::gpu::Gpu;
 use crate::pass::uniform_entry;
@@ -81,6 +88,8 @@ pub(crate) struct SeaPass {
     textures: Option<SeaTextures>,
     scratch: MipScratch,
     geoid: GeoidLookup,
+    /// The sea whose grids the textures hold.
+    uploaded: Option<std::sync::Arc<SeaDraw>>,
 }
 
 /// The mip chains' memory, kept from frame to frame: every level of one layer after another
@@ -161,6 +170,7 @@ impl SeaPass {
             textures: None,
             scratch: MipScratch::default(),
             geoid,
+            uploaded: None,
         }
     }
 
@@ -171,12 +181,13 @@ impl SeaPass {
         gpu: &Gpu,
         buffers: [&wgpu::Buffer; 2],
         camera: &Camera,
-        sea: Option<&SeaDraw>,
+        sea: Option<&std::sync::Arc<SeaDraw>>,
         wakes: &[cig_scene::sea::WakeDraw],
     ) -> u32 {
-        let Some(sea) = sea else {
+        let Some(sea_arc) = sea else {
             return 0;
         };
+        let sea: &SeaDraw = sea_arc;
         let cascades = &sea.cascades[..sea.cascades.len().min(MAX_CASCADES)];
         let Some(size) = cascades.first().map(|c| c.size) else {
             return 0;
@@ -193,12 +204,19 @@ impl SeaPass {
             .is_none_or(|t| t.size != size || t.layers != layers)
         {
             self.textures = Some(self.make_textures(gpu, buffers, size, layers));
+            self.uploaded = None;
         }
         let Some(textures) = self.textures.as_ref() else {
             return 0;
         };
+        // The grids go up once per sea: the frame's other views reuse them.
+        let uploaded = self
+            .uploaded
+            .as_ref()
+            .is_some_and(|last| std::sync::Arc::ptr_eq(last, sea_arc));
+        self.uploaded = Some(std::sync::Arc::clone(sea_arc));
         let scratch = &mut self.scratch;
-        for (layer, grid) in (0u32..).zip(cascades) {
+        for (layer, grid) in (0u32..).zip(cascades).filter(|_| !uploaded) {
             let mut upload = |texture, texels: &mut dyn Iterator<Item = [f32; 4]>| {
                 scratch.upload(gpu, texture, layer, size, textures.mips, texels);
             };
@@ -229,20 +247,20 @@ impl SeaPass {
         let eye = camera.view.eye;
         let sea_level_m = self.geoid.undulation_m(eye.lat_deg, eye.lon_deg) + sea.level_m;
         let plane = cig_geo::EnuFrame::new(sea.origin);
-        let eye_in_plane = plane.geodetic_to_enu(cig_geo::Geodetic {
-            alt_m: sea_level_m,
-            ..eye
-        });
+        let [eye_x, eye_y] = cig_scene::sea::sea_plane_xy(&plane, eye.lat_deg, eye.lon_deg);
         let here = cig_geo::EnuFrame::new(eye);
         let east = here.enu_vector_to_ecef(glam::DVec3::X);
         let north = here.enu_vector_to_ecef(glam::DVec3::Y);
+        // Projected, not normalised: the eye's axes shorten by the cosine of its distance from
+        // the origin over the earth's radius, as the plane's coordinates of its ground do.
         let axis = |v: glam::DVec3| {
-            let p = plane.ecef_vector_to_enu(v).truncate().normalize_or_zero();
+            let p = plane.ecef_vector_to_enu(v).truncate();
             [p.x as f32, p.y as f32]
         };
         let ([ex, ey], [nx, ny]) = (axis(east), axis(north));
         let height_m = (eye.alt_m - sea_level_m).max(0.5);
-        let radius_m = cig_geo::WGS84_A_M;
+        // The earth's radius the terrain's sea cut and the refraction use too.
+        let radius_m = crate::renderer::earth_radius_m(eye.lat_deg);
         let far_m = ((2.0 * radius_m * height_m).sqrt() * 1.5 + 2_000.0).min(400_000.0);
         let mut uniform = SeaUniform {
             east: [east.x as f32, east.y as f32, east.z as f32, RINGS as f32],
@@ -281,8 +299,7 @@ impl SeaPass {
         uniform.water[3] = explicit.len() as f32;
         for (slots, wave) in uniform.waves.chunks_exact_mut(2).zip(explicit) {
             let [dx, dy] = wave.direction;
-            let phase = wave.k_rad_m * (dx * eye_in_plane.x + dy * eye_in_plane.y)
-                - wave.omega_rad_s * sea.time_s
+            let phase = wave.k_rad_m * (dx * eye_x + dy * eye_y) - wave.omega_rad_s * sea.time_s
                 + wave.phase_rad;
             slots[0] = [
                 dx as f32,
@@ -336,8 +353,8 @@ impl SeaPass {
         for (slot, grid) in uniform.cascades.iter_mut().zip(cascades) {
             let frac = |x: f64| (x / grid.tile_m).rem_euclid(1.0) as f32;
             *slot = [
-                frac(eye_in_plane.x),
-                frac(eye_in_plane.y),
+                frac(eye_x),
+                frac(eye_y),
                 grid.tile_m as f32,
                 (grid.tile_m / f64::from(size)) as f32,
             ];

@@ -25,10 +25,22 @@ const MIN_UNRESOLVED_SLOPE_VARIANCE: f64 = 0.000_5;
 /// the sea instead of the post (a database's sea posts lie at MSL whatever the tide).
 pub const SEA_POST_TOLERANCE_M: f64 = 0.5;
 
-/// The waves' clock at a UTC instant: seconds since 2020-01-01T00:00:00Z, so every channel and
-/// IG given the same time draws the same waves, and the clock never wraps during a run.
+/// The waves' clock at a UTC instant: seconds since 2020-01-01T00:00:00Z modulo 2^29 s (17
+/// years, inside the surface's ±1e9 s), so every channel and IG given the same time draws the
+/// same waves at any date; the waves jump once every 17 years (next in 2037).
 pub fn wave_clock_s(unix_time_s: f64) -> f64 {
-    unix_time_s - 1_577_836_800.0
+    (unix_time_s - 1_577_836_800.0).rem_euclid(WAVE_CLOCK_PERIOD_S)
+}
+
+/// The period of [`wave_clock_s`], seconds (2^29).
+pub const WAVE_CLOCK_PERIOD_S: f64 = 536_870_912.0;
+
+/// Where a latitude and longitude lies in the sea's plane (east, north of its origin, metres):
+/// its foot on the ellipsoid in the origin's tangent plane. The renderer, the height queries,
+/// line of sight and the floating ships all sample the waves there.
+pub fn sea_plane_xy(plane: &cig_geo::EnuFrame, lat_deg: f64, lon_deg: f64) -> [f64; 2] {
+    let at = plane.geodetic_to_enu(Geodetic::new(lat_deg, lon_deg, 0.0));
+    [at.x, at.y]
 }
 
 /// The origin of the plane the waves lie in for a database or view centred at a point: its
@@ -109,10 +121,11 @@ pub fn ride_the_sea(
     level_ellipsoid_m: f64,
 ) -> Result<(), cig_sea::SeaError> {
     let plane = cig_geo::EnuFrame::new(plane_origin);
-    let at = plane.geodetic_to_enu(entity.position);
+    let [x_east_m, y_north_m] =
+        sea_plane_xy(&plane, entity.position.lat_deg, entity.position.lon_deg);
     let pose = ShipPose {
-        x_east_m: at.x,
-        y_north_m: at.y,
+        x_east_m,
+        y_north_m,
         heading_deg: entity.orientation.heading_deg,
     };
     let motion = ShipMotionModel::new(hull).equilibrium(

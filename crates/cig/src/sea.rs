@@ -105,12 +105,16 @@ pub fn wash_over(
 ) -> anyhow::Result<f64> {
     let mut past = surface.clone();
     let now_s = surface.time_s();
-    let at = cig_geo::EnuFrame::new(sea.origin).geodetic_to_enu(head);
+    let [x, y] = cig_scene::sea::sea_plane_xy(
+        &cig_geo::EnuFrame::new(sea.origin),
+        head.lat_deg,
+        head.lon_deg,
+    );
     let mut history = Vec::with_capacity(21);
     for k in 0..=20 {
         let t_s = now_s - 1.0 + f64::from(k) * 0.05;
         past.update(t_s).context("the sea at the periscope")?;
-        history.push((t_s, past.sample(at.x, at.y).height_m + sea.level_m));
+        history.push((t_s, past.sample(x, y).height_m + sea.level_m));
     }
     cig_sea::periscope::WashOver::DEFAULT
         .coverage(head_height_m, &history, now_s)

@@ -28,7 +28,8 @@ struct Globals {
     // x: wireframe flag, y: exposure, z: key the background (and a linear tone map), w: pixels
     // per unit tangent.
     flags: vec4<f32>,
-    // Ground fog layer: top height relative to the eye (m), extinction (1/m), enabled, unused.
+    // Ground fog layer: top height relative to the eye (m), extinction (1/m), enabled; w: the
+    // earth's radius at the eye (m).
     fog_layer: vec4<f32>,
     // Towards the moon; w = moon elevation (degrees). Direct moonlight (light units).
     moon_dir: vec4<f32>,
@@ -116,7 +117,7 @@ fn refracted(rel: vec3<f32>) -> vec3<f32> {
     let up = g.eye_up.xyz;
     let along = dot(rel, up);
     let across2 = max(dot(rel, rel) - along * along, 0.0);
-    return rel + up * (g.tonemap.w * across2 / (2.0 * 6371000.0));
+    return rel + up * (g.tonemap.w * across2 / (2.0 * max(g.fog_layer.w, 1.0e6)));
 }
 
 // The sea is drawn and the terrain leaves its sea posts (water at or below the sea's level) to it.

@@ -217,7 +217,8 @@ fn fresnel_dielectric(c: f32, n_ir: f32) -> f32 {
 fn sea_thermal(n: vec3<f32>, v: vec3<f32>, r: vec3<f32>, s2: f32, rel: vec3<f32>) -> vec4<f32> {
     let reflectance = fresnel_dielectric(dot(n, v), 1.22);
     var l = (1.0 - reflectance) * th_band_radiance(sea.thermal.x) + reflectance * th_sky(r);
-    l += glint(vec3<f32>(g.sensor.w), g.sun_dir.xyz, v, n, s2).x;
+    // glint() gives pi L (the visible light's units); band radiances here are L.
+    l += glint(vec3<f32>(g.sensor.w), g.sun_dir.xyz, v, n, s2).x / 3.14159265;
     let p = th_path(rel);
     let fog = sqrt(fog_layer_transmittance(rel));
     let air = th_band_radiance(thermal[TH_OFF_SPOT_COUNT + 1u]);

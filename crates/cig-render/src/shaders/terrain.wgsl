@@ -287,7 +287,7 @@ fn is_sea(kind: u32, rel: vec3<f32>) -> bool {
     }
     let along = dot(rel, g.eye_up.xyz);
     let across2 = max(dot(rel, rel) - along * along, 0.0);
-    return along + across2 / (2.0 * 6371000.0) <= g.detail_north.w;
+    return along + across2 / (2.0 * max(g.fog_layer.w, 1.0e6)) <= g.detail_north.w;
 }
 
 @fragment
