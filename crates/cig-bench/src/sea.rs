@@ -48,18 +48,11 @@ pub fn run(options: &SeaOptions) -> Result<Report, BenchError> {
     let size = options.size;
     let database = Arc::new(cig_terrain_io::store::open_database(&options.db)?);
     let grid = database.layout().grid;
-    let centre = (
-        0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
-        0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
-    );
+    let centre = grid.centre_deg();
     let origin = cig_scene::sea::sea_origin(centre.0, centre.1);
     let time = cig_environment::UtcTime::parse_iso8601(TIME_ISO)?;
-    let scenario = cig_ig::Scenario::from_toml("[sea]\nsea_state = 5\nwind_from_deg = 250\n")
-        .map_err(|e| sea_error("the sea", e))?;
-    let mut sea = cig_ig::sea::WorldSea::new(scenario.sea.as_ref());
-    let calm = cig_ig::Scenario::from_toml("[sea]\nsea_state = 0\n")
-        .map_err(|e| sea_error("the flat sea", e))?;
-    let mut flat = cig_ig::sea::WorldSea::new(calm.sea.as_ref());
+    let mut sea = sea_state(5, 250.0)?;
+    let mut flat = sea_state(0, 250.0)?;
     let environment = cig_ig::session::EnvironmentState::default();
 
     // 1. The cascades, and the frame's sea built from them.
@@ -204,6 +197,21 @@ pub fn run(options: &SeaOptions) -> Result<Report, BenchError> {
     Ok(Report { json, summary })
 }
 
+/// A fully developed sea of WMO sea state `code` with its wind from `wind_from_deg`, seed 1,
+/// the open ocean's water.
+///
+/// # Errors
+/// A code outside 0-9.
+pub fn sea_state(code: u8, wind_from_deg: f64) -> Result<cig_ig::sea::WorldSea, BenchError> {
+    let conditions = cig_sea::spectrum::SeaConditions::for_sea_state(code, wind_from_deg)
+        .map_err(|e| sea_error("the sea", e))?;
+    Ok(cig_ig::sea::WorldSea::of_conditions(
+        Some(conditions),
+        cig_ig::sea::Water::of_scenario(None),
+        1,
+    ))
+}
+
 /// A periscope's look out to sea 12 km west of a database (beyond its edge): the head's height
 /// above the sea, the magnification, where it looks, the frame and its time.
 #[derive(Clone, Copy, Debug)]
@@ -235,9 +243,8 @@ impl Periscope {
         geoid: &cig_terrain::database::GeoidLookup,
         sea: &mut cig_ig::sea::WorldSea,
     ) -> Result<FrameSnapshot, BenchError> {
-        let centre_lat = 0.5 * (grid.south_lat_deg + grid.north_lat_deg());
-        let origin =
-            cig_scene::sea::sea_origin(centre_lat, 0.5 * (grid.west_lon_deg + grid.east_lon_deg()));
+        let (centre_lat, centre_lon) = grid.centre_deg();
+        let origin = cig_scene::sea::sea_origin(centre_lat, centre_lon);
         let (_, m_lon) = cig_geo::metres_per_degree(centre_lat);
         let eye_lon = grid.west_lon_deg - 12_000.0 / m_lon;
         let geoid_m = geoid.undulation_m(centre_lat, eye_lon);

@@ -136,23 +136,15 @@ impl Water {
         let Some(m) = host.filter(|m| m.surface_conditions_enable) else {
             return self;
         };
-        let or = |v: f32, lo: f64, hi: f64, fallback: f64| {
-            let v = f64::from(v);
-            if v.is_finite() {
-                v.clamp(lo, hi)
-            } else {
-                fallback
-            }
-        };
         Water {
-            level_msl_m: or(m.sea_surface_height_m, -20.0, 20.0, self.level_msl_m),
-            temperature_c: or(
+            level_msl_m: host_value(m.sea_surface_height_m, -20.0, 20.0, self.level_msl_m),
+            temperature_c: host_value(
                 m.surface_water_temperature_c,
                 -2.0,
                 40.0,
                 self.temperature_c,
             ),
-            clarity_pct: or(m.surface_clarity_pct, 0.0, 100.0, self.clarity_pct),
+            clarity_pct: host_value(m.surface_clarity_pct, 0.0, 100.0, self.clarity_pct),
             whitecaps: m.whitecap_enable,
         }
     }
@@ -167,17 +159,22 @@ impl Water {
     }
 }
 
+/// A host's value inside `lo..=hi` (clamped into it), or `fallback` where it is not finite.
+fn host_value(v: f32, lo: f64, hi: f64, fallback: f64) -> f64 {
+    let v = f64::from(v);
+    if v.is_finite() {
+        v.clamp(lo, hi)
+    } else {
+        fallback
+    }
+}
+
 /// A host wave as the sea model takes it, and whether any value had to be clamped.
 pub fn wave_component(w: &WaveControl) -> (WaveComponent, bool) {
     let mut clamped = false;
     let mut fit = |v: f32, lo: f64, hi: f64, fallback: f64| {
-        let v = f64::from(v);
-        let fitted = if v.is_finite() {
-            v.clamp(lo, hi)
-        } else {
-            fallback
-        };
-        clamped |= fitted != v;
+        let fitted = host_value(v, lo, hi, fallback);
+        clamped |= fitted != f64::from(v);
         fitted
     };
     let height_m = fit(w.height_m, 0.0, 30.0, 0.0);
@@ -768,6 +765,8 @@ pub struct WorldSea {
     scenario_conditions: Option<SeaConditions>,
     scenario_water: Water,
     seed: u64,
+    /// Explicit waves of the sea's own (`cig render --sea-wave`), before the host's.
+    own_waves: Vec<WaveComponent>,
     /// Waves already told to the host as clamped.
     told_waves: std::collections::BTreeSet<(u8, u16, u8)>,
     now: Option<Arc<SeaNow>>,
@@ -783,13 +782,36 @@ pub enum WorldSeaError {
 impl WorldSea {
     /// The sea a scenario describes (checked when it was parsed).
     pub fn new(scenario: Option<&crate::scenario::ScenarioSea>) -> WorldSea {
+        WorldSea::of_conditions(
+            scenario.and_then(|s| s.conditions().ok()),
+            Water::of_scenario(scenario),
+            scenario.map_or(1, |s| s.seed),
+        )
+    }
+
+    /// A sea of these waves and water (`conditions`: the wind sea and swell; `None`: only
+    /// when the host asks for one), its random amplitudes from `seed`.
+    pub fn of_conditions(conditions: Option<SeaConditions>, water: Water, seed: u64) -> WorldSea {
         WorldSea {
-            scenario_conditions: scenario.and_then(|s| s.conditions().ok()),
-            scenario_water: Water::of_scenario(scenario),
-            seed: scenario.map_or(1, |s| s.seed),
+            scenario_conditions: conditions,
+            scenario_water: water,
+            seed,
+            own_waves: Vec::new(),
             told_waves: std::collections::BTreeSet::new(),
             now: None,
         }
+    }
+
+    /// Adds explicit waves of the sea's own (the host's are added to them).
+    ///
+    /// # Errors
+    /// A wave out of range (see `cig_sea::surface::WaveComponent::new`).
+    pub fn with_waves(mut self, waves: Vec<WaveComponent>) -> Result<WorldSea, WorldSeaError> {
+        for wave in &waves {
+            wave.validate()?;
+        }
+        self.own_waves = waves;
+        Ok(self)
     }
 
     /// The sea at the frame's time (after [`WorldSea::update`]), if there is one.
@@ -820,8 +842,10 @@ impl WorldSea {
             .iter()
             .filter(|(key, w)| key.0 == 0 && w.wave_enable)
             .collect();
-        let present =
-            self.scenario_conditions.is_some() || host_global.is_some() || !host_waves.is_empty();
+        let present = self.scenario_conditions.is_some()
+            || host_global.is_some()
+            || !host_waves.is_empty()
+            || !self.own_waves.is_empty();
         if !present {
             self.now = None;
             return Ok(Vec::new());
@@ -831,20 +855,10 @@ impl WorldSea {
             None => {
                 let (speed, from) = environment.atmosphere.as_ref().map_or((0.0, 270.0), |a| {
                     (
-                        f64::from(a.horizontal_wind_speed_mps),
-                        f64::from(a.wind_direction_deg),
+                        host_value(a.horizontal_wind_speed_mps, 0.0, 60.0, 0.0),
+                        host_value(a.wind_direction_deg, -1.0e6, 1.0e6, 270.0),
                     )
                 });
-                let speed = if speed.is_finite() {
-                    speed.clamp(0.0, 60.0)
-                } else {
-                    0.0
-                };
-                let from = if from.is_finite() {
-                    from.rem_euclid(360.0)
-                } else {
-                    270.0
-                };
                 // In steps of 0.5 m/s and 5 degrees: a gusting host wind does not rebuild
                 // the surface (and make its waves jump) every frame.
                 SeaConditions::new(
@@ -854,7 +868,7 @@ impl WorldSea {
             }
         };
         let mut told = Vec::new();
-        let mut waves = Vec::with_capacity(host_waves.len());
+        let mut waves = self.own_waves.clone();
         for (key, w) in host_waves {
             let (wave, clamped) = wave_component(w);
             if clamped && self.told_waves.insert(*key) {

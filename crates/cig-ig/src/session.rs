@@ -853,6 +853,21 @@ impl IgSession {
         }
     }
 
+    /// The sea's level above MSL at a point where the session has a sea and the point is sea
+    /// (off the database, or a water post at sea level: [`crate::sea::SeaNow::covers`]).
+    pub fn sea_level_at(
+        &self,
+        query: &mut QuerySession,
+        lat_deg: f64,
+        lon_deg: f64,
+    ) -> Option<f64> {
+        self.sea.as_ref()?;
+        let level = self
+            .water_at(Geodetic::new(lat_deg, lon_deg, 0.0))
+            .level_msl_m;
+        crate::sea::SeaNow::covers(&query.hot(lat_deg, lon_deg), level).then_some(level)
+    }
+
     pub fn models(&self) -> &ModelTable {
         &self.models
     }
@@ -1642,21 +1657,16 @@ impl IgSession {
                 let mut orientation = e.orientation;
                 let afloat = match (&self.sea, e.clamp) {
                     (_, Clamp::None) | (None, _) => None,
-                    (Some(sea), _) => {
-                        let level = self
-                            .water_at(Geodetic::new(lat_deg, lon_deg, 0.0))
-                            .level_msl_m;
-                        crate::sea::SeaNow::covers(&query.hot(lat_deg, lon_deg), level).then(|| {
-                            sea.float(
-                                query,
-                                &e.model,
-                                e.orientation,
-                                e.clamp,
-                                [lat_deg, lon_deg, alt_m],
-                                level,
-                            )
-                        })
-                    }
+                    (Some(sea), _) => self.sea_level_at(query, lat_deg, lon_deg).map(|level| {
+                        sea.float(
+                            query,
+                            &e.model,
+                            e.orientation,
+                            e.clamp,
+                            [lat_deg, lon_deg, alt_m],
+                            level,
+                        )
+                    }),
                 };
                 let position = if let Some(afloat) = afloat {
                     orientation = afloat.orientation;

@@ -1566,11 +1566,8 @@ impl IgWorld {
 
     /// Computes the sea at the world time (before the poses: floating entities need it).
     fn update_sea(&mut self, query: &mut QuerySession) {
-        let grid = query.cache().database().layout().grid;
-        let origin = cig_scene::sea::sea_origin(
-            0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
-            0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
-        );
+        let (lat_deg, lon_deg) = query.cache().database().layout().grid.centre_deg();
+        let origin = cig_scene::sea::sea_origin(lat_deg, lon_deg);
         let eye_msl = self
             .first_eye
             .map(|e| Geodetic::new(e.lat_deg, e.lon_deg, e.alt_m - self.eye_geoid_m));
@@ -1601,12 +1598,8 @@ impl IgWorld {
             return;
         };
         // Around the views' eyes and the database (a caller's own view lies near it).
-        let grid = query.cache().database().layout().grid;
-        let centre = Geodetic::new(
-            0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
-            0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
-            0.0,
-        );
+        let (lat_deg, lon_deg) = query.cache().database().layout().grid.centre_deg();
+        let centre = Geodetic::new(lat_deg, lon_deg, 0.0);
         let mut eyes: Vec<DVec3> = self
             .world_views(1, 1)
             .iter()
@@ -1623,13 +1616,9 @@ impl IgWorld {
                 continue;
             }
             let (lat_deg, lon_deg) = (r.geodetic.lat_deg, r.geodetic.lon_deg);
-            let level = self
-                .session
-                .water_at(Geodetic::new(lat_deg, lon_deg, 0.0))
-                .level_msl_m;
-            if !crate::sea::SeaNow::covers(&query.hot(lat_deg, lon_deg), level) {
+            let Some(level) = self.session.sea_level_at(query, lat_deg, lon_deg) else {
                 continue;
-            }
+            };
             let [heading_deg, pitch_deg, roll_deg] = r.heading_pitch_roll_deg;
             let pose = sea.float(
                 query,
@@ -1673,11 +1662,11 @@ impl IgWorld {
                 continue;
             };
             let p = pose.position;
-            let level = self
+            if self
                 .session
-                .water_at(Geodetic::new(p.lat_deg, p.lon_deg, 0.0))
-                .level_msl_m;
-            if !crate::sea::SeaNow::covers(&query.hot(p.lat_deg, p.lon_deg), level) {
+                .sea_level_at(query, p.lat_deg, p.lon_deg)
+                .is_none()
+            {
                 continue;
             }
             seen.insert(*id);

@@ -39,6 +39,14 @@ impl GeoGrid {
         }
     }
 
+    /// The grid's centre (latitude, longitude), degrees.
+    pub fn centre_deg(&self) -> (f64, f64) {
+        (
+            0.5 * (self.south_lat_deg + self.north_lat_deg()),
+            0.5 * (self.west_lon_deg + self.east_lon_deg()),
+        )
+    }
+
     /// Latitude of the northernmost row, degrees.
     pub fn north_lat_deg(&self) -> f64 {
         self.south_lat_deg + (self.rows.saturating_sub(1)) as f64 * self.dlat_deg

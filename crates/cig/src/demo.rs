@@ -310,9 +310,7 @@ fn fly(
     // The periscope leg: out to sea west of the database at sea state 4, the head 2 m above
     // the water, sweeping at 1.5x and then looking at 6x, three ships riding the waves.
     renderer.set_overload(None)?;
-    let periscope_scenario =
-        cig_ig::Scenario::from_toml("[sea]\nsea_state = 4\n").context("the periscope leg's sea")?;
-    let mut sea = cig_ig::sea::WorldSea::new(periscope_scenario.sea.as_ref());
+    let mut sea = cig_bench::sea::sea_state(4, 270.0)?;
     let geoid = cig_terrain::database::GeoidLookup::new(&db.manifest().geoid);
     for (k, magnification) in [1.5, 6.0].into_iter().enumerate() {
         let periscope = cig_bench::sea::Periscope {

@@ -5,6 +5,7 @@ use crate::config::Config;
 use anyhow::{bail, Context};
 use cig_geo::Geodetic;
 use cig_ig::scenes::{fire_puffs, lightning_bolt, FireSpec, MAX_BURN_S, MAX_HEAT_MW};
+use cig_ig::sea::WorldSea;
 use cig_render::{FrameStats, Gpu, Image, Renderer};
 use cig_scene::lighting::{Fog, FogMode};
 use cig_scene::snapshot::{place_entity, Clamp, EntitySpec};
@@ -609,27 +610,38 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     // The share of a periscope's window under water.
     let mut wash = 0.0;
     if let Some(conditions) = sea_conditions {
-        let grid = cache.database().layout().grid;
-        let origin = cig_scene::sea::sea_origin(
-            0.5 * (grid.south_lat_deg + grid.north_lat_deg()),
-            0.5 * (grid.west_lon_deg + grid.east_lon_deg()),
-        );
-        let (surface, sea) = crate::sea::frame_sea(&conditions, sea_waves, origin, unix_time_s)?;
+        // The sea `cig serve` draws and answers on this database at this time (seed 1).
+        let (lat_deg, lon_deg) = cache.database().layout().grid.centre_deg();
+        let mut world_sea =
+            WorldSea::of_conditions(Some(conditions), cig_ig::sea::Water::of_scenario(None), 1)
+                .with_waves(sea_waves)
+                .context("--sea-wave")?;
+        world_sea
+            .update(
+                &cig_ig::session::EnvironmentState::default(),
+                None,
+                cig_scene::sea::sea_origin(lat_deg, lon_deg),
+                unix_time_s,
+            )
+            .context("the sea")?;
+        let sea = world_sea.now().context("the sea")?;
         if let Some((height_m, _)) = periscope {
-            wash = crate::sea::wash_over(&surface, &sea, view.eye, height_m)?;
+            wash = crate::sea::wash_over(sea.surface(), sea.draw(), view.eye, height_m)?;
         }
         // Ships float: on the sea under them, pitched and rolled by its waves.
         for entity in &mut entities {
-            if let Some(hull) = cig_scene::sea::builtin_hull(&entity.model) {
-                let geoid_m = geoid.undulation_m(entity.position.lat_deg, entity.position.lon_deg);
-                cig_scene::sea::ride_the_sea(
-                    entity,
-                    hull,
-                    &surface,
-                    sea.origin,
-                    geoid_m + sea.level_m,
-                )
-                .with_context(|| format!("--entity {} on the sea", entity.model))?;
+            if cig_scene::sea::builtin_hull(&entity.model).is_some() {
+                let p = entity.position;
+                let pose = sea.float(
+                    &session,
+                    &entity.model,
+                    entity.orientation,
+                    Clamp::HeightAndAttitude,
+                    [p.lat_deg, p.lon_deg, 0.0],
+                    sea.draw().level_m,
+                );
+                entity.position = pose.position;
+                entity.orientation = pose.orientation;
             }
         }
         // Ships under way leave their wakes.
@@ -645,7 +657,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
                 )
             })
             .collect();
-        snapshot.sea = Some(Arc::new(sea));
+        snapshot.sea = Some(Arc::clone(sea.draw()));
     }
     snapshot.entities = entities;
     snapshot.cloud_cover_fraction = cig_environment::cloud_cover_fraction(&clouds);

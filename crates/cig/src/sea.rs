@@ -41,25 +41,6 @@ fn sea_state_conditions(code: f64, wind_from_deg: f64) -> anyhow::Result<SeaCond
     SeaConditions::for_sea_state(code, wind_from_deg).context("--sea-state")
 }
 
-/// The sea one frame at `unix_time_s` draws: the surface (seed 1) at the wave clock of that
-/// time, in the tangent plane of `origin` (`cig_scene::sea::sea_origin` of the database's
-/// centre: the waves `cig serve` draws and answers on that database at that time).
-pub fn frame_sea(
-    conditions: &SeaConditions,
-    waves: Vec<cig_sea::surface::WaveComponent>,
-    origin: cig_geo::Geodetic,
-    unix_time_s: f64,
-) -> anyhow::Result<(SeaSurface, cig_scene::sea::SeaDraw)> {
-    let mut surface =
-        SeaSurface::new(conditions, 1, SurfaceConfig::default()).context("the sea surface")?;
-    surface.set_explicit_waves(waves).context("--sea-wave")?;
-    surface
-        .update(cig_scene::sea::wave_clock_s(unix_time_s))
-        .context("the sea surface")?;
-    let draw = cig_scene::sea::SeaDraw::new(&surface, origin, 0.0);
-    Ok((surface, draw))
-}
-
 /// `--sea-wave HEIGHT_M,WAVELENGTH_M,PERIOD_S,TOWARD_DEG[,PHASE_DEG[,LEADING]]`.
 pub fn parse_wave(text: &str) -> anyhow::Result<cig_sea::surface::WaveComponent> {
     let v = crate::render::parse_numbers(text, "--sea-wave", &[4, 5, 6])?;
