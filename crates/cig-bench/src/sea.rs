@@ -12,6 +12,10 @@
 //!    from the database) at sea state 5 with three ships riding the waves, against the same
 //!    view over a flat sea, interleaved, 9 of each after a warm-up (`sea_over_flat`). Frames
 //!    are timed from the start of the draw until the image is read back.
+//! 4. A ship's motion (`cig_sea::response`): making a hull's response to the sea state 5
+//!    waves at one heading and speed (`ship_response_make_ms`, median over the three built-in
+//!    hulls at 36 headings, 8 m/s; the IG makes one when a ship's heading or velocity enters
+//!    a new step) and a ship's heave, pitch and roll from it each frame (`ship_ride_us`).
 
 use crate::report::{date_utc, machine, median};
 use crate::{BenchError, Report};
@@ -86,6 +90,41 @@ pub fn run(options: &SeaOptions) -> Result<Report, BenchError> {
         .now()
         .cloned()
         .ok_or_else(|| BenchError::Scene("no sea".into()))?;
+
+    // 4. The ships' responses: made once per hull, heading and velocity, then ridden.
+    let waves = surface.linear_waves();
+    let hulls = [
+        cig_sea::motion::HullParameters::DESTROYER,
+        cig_sea::motion::HullParameters::MERCHANT,
+        cig_sea::motion::HullParameters::PATROL_CRAFT,
+    ];
+    let (mut make_ms, mut ride_us, mut kept) = (Vec::new(), Vec::new(), Vec::new());
+    let mut ride_checksum = 0.0;
+    for i in 0..36_u32 {
+        let heading = f64::from(i) * 10.0_f64;
+        let velocity = [
+            8.0 * heading.to_radians().sin(),
+            8.0 * heading.to_radians().cos(),
+        ];
+        let started = Instant::now();
+        let response = cig_sea::response::SeawayResponse::new(
+            &hulls[i as usize % hulls.len()],
+            &waves,
+            heading,
+            velocity,
+        );
+        make_ms.push(started.elapsed().as_secs_f64() * 1e3);
+        #[expect(clippy::cast_precision_loss, reason = "a few thousand waves")]
+        kept.push(response.wave_count() as f64);
+        let started = Instant::now();
+        for k in 0..100 {
+            let t_s = surface.time_s() + f64::from(k) / 60.0;
+            ride_checksum += response
+                .motion_at(8.0 * f64::from(k) / 60.0, 0.0, t_s)
+                .roll_deg;
+        }
+        ride_us.push(started.elapsed().as_secs_f64() * 1e6 / 100.0);
+    }
 
     // 2. Height answers over the sea (west of the database) and over its land.
     let cache = Arc::new(TileCache::new(
@@ -177,6 +216,11 @@ pub fn run(options: &SeaOptions) -> Result<Report, BenchError> {
         "periscope_flat_ms": flat_ms,
         "periscope_sea_state_5_ms": sea_ms,
         "ships_drawn": ships_drawn,
+        "sea_waves": waves.len(),
+        "ship_waves_kept": median(&kept),
+        "ship_response_make_ms": median(&make_ms),
+        "ship_ride_us": median(&ride_us),
+        "ship_ride_checksum_deg": ride_checksum,
         "sea_over_flat": sea_ms / flat_ms,
         "targets": {
             "sea_over_flat": 1.5,
@@ -187,12 +231,17 @@ pub fn run(options: &SeaOptions) -> Result<Report, BenchError> {
     let summary = format!(
         "wave cascades: {:.3} ms per update (target <= 2), the frame's sea {:.3} ms\n\
          1000 HOT over the sea: {:.3} ms (target <= 1); over land {:.3} ms\n\
-         periscope frame, sea state 5, 3 ships ({ships_drawn} drawn): {sea_ms:.1} ms against a flat sea's {flat_ms:.1} ms: ratio {:.3} (target <= 1.5)",
+         periscope frame, sea state 5, 3 ships ({ships_drawn} drawn): {sea_ms:.1} ms against a flat sea's {flat_ms:.1} ms: ratio {:.3} (target <= 1.5)\n\
+         a ship's response to the sea: made in {:.2} ms ({:.0} of {} waves kept), ridden in {:.1} us a frame",
         median(&update_ms),
         median(&frame_ms),
         median(&hot_ms),
         median(&land_ms),
         sea_ms / flat_ms,
+        median(&make_ms),
+        median(&kept),
+        waves.len(),
+        median(&ride_us),
     );
     Ok(Report { json, summary })
 }
@@ -296,8 +345,7 @@ impl Periscope {
                 critical_radius_m: None,
             };
             if let Some(hull) = cig_scene::sea::builtin_hull(model) {
-                cig_scene::sea::ride_the_sea(&mut ship, hull, now.surface(), origin, level_m)
-                    .map_err(|e| sea_error("a ship", e))?;
+                now.ride(&mut ship, &hull, [0.0, 0.0], level_m);
             }
             snapshot.entities.push(ship);
         }

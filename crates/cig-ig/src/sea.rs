@@ -78,6 +78,7 @@
 use cig_cigi::{MaritimeSurfaceConditionsControl, WaveControl};
 use cig_geo::{EnuFrame, Geodetic};
 use cig_scene::sea::SeaDraw;
+use cig_sea::response::ResponseCache;
 use cig_sea::spectrum::SeaConditions;
 use cig_sea::surface::{SeaSurface, SurfaceConfig, WaveComponent};
 use cig_terrain::{Material, QueryError, QuerySession, SurfacePoint};
@@ -203,6 +204,8 @@ pub struct SeaNow {
     water: Water,
     /// The surface's bounds for the line of sight, computed when first asked.
     bounds: std::sync::OnceLock<WaveBounds>,
+    /// The ships' responses to these waves, kept from frame to frame while the waves last.
+    responses: Arc<std::sync::Mutex<ResponseCache>>,
 }
 
 impl SeaNow {
@@ -770,6 +773,8 @@ pub struct WorldSea {
     /// Waves already told to the host as clamped.
     told_waves: std::collections::BTreeSet<(u8, u16, u8)>,
     now: Option<Arc<SeaNow>>,
+    /// The ships' responses to the present waves (made anew when they change).
+    responses: Option<Arc<std::sync::Mutex<ResponseCache>>>,
 }
 
 /// Why the sea could not be updated (told to the host once by the caller).
@@ -799,6 +804,7 @@ impl WorldSea {
             own_waves: Vec::new(),
             told_waves: std::collections::BTreeSet::new(),
             now: None,
+            responses: None,
         }
     }
 
@@ -884,9 +890,13 @@ impl WorldSea {
         });
         let mut surface = match last {
             Some(s) if *s.conditions() == conditions => s,
-            _ => SeaSurface::new(&conditions, self.seed, SurfaceConfig::default())?,
+            _ => {
+                self.responses = None;
+                SeaSurface::new(&conditions, self.seed, SurfaceConfig::default())?
+            }
         };
         if surface.explicit_waves() != waves.as_slice() {
+            self.responses = None;
             surface.set_explicit_waves(waves)?;
         }
         surface.update(cig_scene::sea::wave_clock_s(unix_time_s))?;
@@ -900,12 +910,17 @@ impl WorldSea {
         if !at_eye.whitecaps {
             draw.whitecap_jacobian = f64::NEG_INFINITY;
         }
+        let responses =
+            Arc::clone(self.responses.get_or_insert_with(|| {
+                Arc::new(std::sync::Mutex::new(ResponseCache::of(&surface)))
+            }));
         self.now = Some(Arc::new(SeaNow {
             surface,
             draw: Arc::new(draw),
             plane: EnuFrame::new(origin),
             water,
             bounds: std::sync::OnceLock::new(),
+            responses,
         }));
         Ok(told)
     }
@@ -923,10 +938,40 @@ impl WorldSea {
 }
 
 impl SeaNow {
+    /// A ship of `hull` rides the sea: `entity` (its position, heading) is set on the waves
+    /// at the sea's mean level `level_ellipsoid_m` (above the ellipsoid) with the heave, pitch
+    /// and roll of its response to them at its heading and `velocity_enu_mps` (east, north,
+    /// the velocity it makes good), at the sea's time.
+    pub fn ride(
+        &self,
+        entity: &mut cig_scene::EntityInstance,
+        hull: &cig_sea::motion::HullParameters,
+        velocity_enu_mps: [f64; 2],
+        level_ellipsoid_m: f64,
+    ) {
+        let response = self
+            .responses
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .response(hull, entity.orientation.heading_deg, velocity_enu_mps);
+        cig_scene::sea::ride_the_sea(
+            entity,
+            &response,
+            self.surface.time_s(),
+            self.draw.origin,
+            level_ellipsoid_m,
+        );
+    }
+
     /// An entity of `model` afloat at `at` (latitude, longitude, degrees; the height above the
     /// surface, metres): on the waves at the sea's level `level_msl_m`; a ship (a model with a
-    /// hull) heaves, pitches and rolls with the waves it spans, anything else follows the wave
-    /// under it; pitch and roll come from the sea only when `clamp` asks for the attitude.
+    /// hull) heaves, pitches and rolls as it responds to the waves at its heading and
+    /// `velocity_enu_mps` (east, north: the velocity it makes good), anything else follows the
+    /// wave under it; pitch and roll come from the sea only when `clamp` asks for the attitude.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "an entity's model, attitude, clamp, place, velocity and the sea's level: each needed, none grouped elsewhere"
+    )]
     pub fn float(
         &self,
         query: &QuerySession,
@@ -934,6 +979,7 @@ impl SeaNow {
         orientation: cig_scene::Hpr,
         clamp: cig_scene::snapshot::Clamp,
         at: [f64; 3],
+        velocity_enu_mps: [f64; 2],
         level_msl_m: f64,
     ) -> crate::pose::Pose {
         let [lat_deg, lon_deg, above_m] = at;
@@ -947,16 +993,11 @@ impl SeaNow {
             critical_radius_m: None,
         };
         let attitude = clamp == cig_scene::snapshot::Clamp::HeightAndAttitude;
-        let rode = cig_scene::sea::builtin_hull(model).is_some_and(|hull| {
-            cig_scene::sea::ride_the_sea(
-                &mut instance,
-                hull,
-                &self.surface,
-                self.draw.origin,
-                level_ellipsoid_m,
-            )
-            .is_ok()
-        });
+        let hull = cig_scene::sea::builtin_hull(model);
+        if let Some(hull) = &hull {
+            self.ride(&mut instance, hull, velocity_enu_mps, level_ellipsoid_m);
+        }
+        let rode = hull.is_some();
         if !rode {
             let [x, y] = cig_scene::sea::sea_plane_xy(&self.plane, lat_deg, lon_deg);
             let wave = self.surface.sample(x, y);

@@ -741,6 +741,8 @@ pub struct IgSession {
     /// The sea at the frame's time (set by the world each frame), and the scenario's water.
     sea: Option<std::sync::Arc<crate::sea::SeaNow>>,
     scenario_water: crate::sea::Water,
+    /// The velocity (east, north, m/s) each ship made good, as the world last measured it.
+    ship_velocities: BTreeMap<u16, [f64; 2]>,
 }
 
 fn geodetic_msl(lat_deg: f64, lon_deg: f64, alt_msl_m: f64, query: &QuerySession) -> Geodetic {
@@ -806,6 +808,7 @@ impl IgSession {
             poses: BTreeMap::new(),
             counters: SessionCounters::default(),
             sea: None,
+            ship_velocities: BTreeMap::new(),
             scenario_water: crate::sea::Water::of_scenario(None),
         }
     }
@@ -813,6 +816,12 @@ impl IgSession {
     /// The sea at the frame's time (`None`: no sea), for the height answers and the clamping.
     pub fn set_sea(&mut self, sea: Option<std::sync::Arc<crate::sea::SeaNow>>) {
         self.sea = sea;
+    }
+
+    /// The velocity (east, north, m/s) each of this IG's ships made good (the others are taken
+    /// at rest): their motion in the seaway depends on it (the encounter frequency).
+    pub fn set_ship_velocities(&mut self, velocities: BTreeMap<u16, [f64; 2]>) {
+        self.ship_velocities = velocities;
     }
 
     /// The scenario's water, which the host's Maritime Surface Conditions override.
@@ -1664,6 +1673,7 @@ impl IgSession {
                             e.orientation,
                             e.clamp,
                             [lat_deg, lon_deg, alt_m],
+                            self.ship_velocities.get(&id).copied().unwrap_or_default(),
                             level,
                         )
                     }),

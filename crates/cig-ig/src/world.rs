@@ -1620,6 +1620,8 @@ impl IgWorld {
                 continue;
             };
             let [heading_deg, pitch_deg, roll_deg] = r.heading_pitch_roll_deg;
+            // The velocity its owner sends: the ship's encounter with the waves, its wake.
+            let v = EnuFrame::new(r.geodetic).ecef_vector_to_enu(r.velocity_ecef_mps);
             let pose = sea.float(
                 query,
                 model,
@@ -1630,10 +1632,10 @@ impl IgWorld {
                 },
                 cig_scene::snapshot::Clamp::HeightAndAttitude,
                 [lat_deg, lon_deg, 0.0],
+                [v.x, v.y],
                 level,
             );
-            // Its wake, from the velocity its owner sends.
-            let v = EnuFrame::new(r.geodetic).ecef_vector_to_enu(r.velocity_ecef_mps);
+            // Its wake, from the same velocity.
             let course_deg = v.x.atan2(v.y).to_degrees().rem_euclid(360.0);
             self.wakes.extend(cig_scene::sea::WakeDraw::of_ship(
                 model,
@@ -1650,6 +1652,7 @@ impl IgWorld {
     fn track_own_ships(&mut self, query: &mut QuerySession) {
         if self.session.sea().is_none() {
             self.ship_motion.clear();
+            self.session.set_ship_velocities(BTreeMap::new());
             return;
         }
         let now = self.monotonic_s;
@@ -1701,6 +1704,18 @@ impl IgWorld {
             ));
         }
         self.ship_motion.retain(|id, _| seen.contains(id));
+        let velocities = self
+            .ship_motion
+            .iter()
+            .map(|(id, m)| {
+                let course = m.course_deg.to_radians();
+                (
+                    *id,
+                    [m.speed_mps * course.sin(), m.speed_mps * course.cos()],
+                )
+            })
+            .collect();
+        self.session.set_ship_velocities(velocities);
     }
 
     /// The sea at the world time, if there is one.

@@ -8,7 +8,8 @@
 //! the highest), where the height queries sample them all.
 
 use cig_geo::Geodetic;
-use cig_sea::motion::{HullParameters, ShipMotionModel, ShipPose};
+use cig_sea::motion::HullParameters;
+use cig_sea::response::SeawayResponse;
 use cig_sea::surface::{CascadeGrid, SeaSurface};
 
 /// Cox and Munk's (1954) total mean square slope of a wind sea, `0.003 + 0.00512 U10`.
@@ -105,38 +106,25 @@ pub fn builtin_hull(model: &str) -> Option<HullParameters> {
     })
 }
 
-/// Sets a floating entity on the sea at the surface's time: its waterline (the model's
-/// origin) at the sea's mean level under it (`level_ellipsoid_m`: above the ellipsoid) plus the
-/// heave, pitched and rolled to the waves it spans, waves shorter than the hull filtered out
-/// (`cig_sea::motion`'s wave-following equilibrium: no dynamics of its own). `plane_origin` is
-/// the sea's origin ([`SeaDraw::origin`]).
-///
-/// # Errors
-/// When the sea cannot be sampled there (a position thousands of kilometres from the origin).
+/// Sets a floating ship on the sea: its waterline (the model's origin) at the sea's mean level
+/// under it (`level_ellipsoid_m`: above the ellipsoid) plus its heave, pitched and rolled by
+/// `response` (the hull's response to the sea at its heading and velocity,
+/// `cig_sea::response`) at the sea's time `sea_time_s`. `plane_origin` is the sea's origin
+/// ([`SeaDraw::origin`]).
 pub fn ride_the_sea(
     entity: &mut crate::EntityInstance,
-    hull: HullParameters,
-    surface: &SeaSurface,
+    response: &SeawayResponse,
+    sea_time_s: f64,
     plane_origin: Geodetic,
     level_ellipsoid_m: f64,
-) -> Result<(), cig_sea::SeaError> {
+) {
     let plane = cig_geo::EnuFrame::new(plane_origin);
     let [x_east_m, y_north_m] =
         sea_plane_xy(&plane, entity.position.lat_deg, entity.position.lon_deg);
-    let pose = ShipPose {
-        x_east_m,
-        y_north_m,
-        heading_deg: entity.orientation.heading_deg,
-    };
-    let motion = ShipMotionModel::new(hull).equilibrium(
-        |x, y, _| surface.sample(x, y).height_m,
-        pose,
-        surface.time_s(),
-    )?;
+    let motion = response.motion_at(x_east_m, y_north_m, sea_time_s);
     entity.position.alt_m = level_ellipsoid_m + motion.heave_m;
     entity.orientation.pitch_deg = motion.pitch_deg;
     entity.orientation.roll_deg = motion.roll_deg;
-    Ok(())
 }
 
 /// A ship's wake as the sea draws it (`cig_sea::wake`): the Kelvin arms from the bow, the bow
@@ -239,6 +227,8 @@ mod tests {
             let conditions = SeaConditions::for_sea_state(code, 270.0).expect("sea state");
             let mut surface =
                 SeaSurface::new(&conditions, 5, SurfaceConfig::default()).expect("surface");
+            let response =
+                cig_sea::response::ResponseCache::of(&surface).response(&hull, 30.0, [2.0, 3.0]);
             let mut sum = 0.0;
             for k in 0..12 {
                 surface.update(f64::from(k) * 1.7).expect("update");
@@ -254,8 +244,13 @@ mod tests {
                     cue_important: false,
                     critical_radius_m: None,
                 };
-                ride_the_sea(&mut ship, hull, &surface, sea.origin, sea.level_m - 30.0)
-                    .expect("ride");
+                ride_the_sea(
+                    &mut ship,
+                    &response,
+                    surface.time_s(),
+                    sea.origin,
+                    sea.level_m - 30.0,
+                );
                 sum += (ship.position.alt_m + 30.0).abs()
                     + ship.orientation.pitch_deg.abs()
                     + ship.orientation.roll_deg.abs();

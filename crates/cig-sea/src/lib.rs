@@ -6,7 +6,9 @@
 //! - [`surface`]: the wave surface, deterministic in (seed, time): FFT cascades with choppy
 //!   (horizontally displaced) crests plus the host's explicit waves (CIGI Wave Control), sampled
 //!   on the CPU for height queries and handed to the renderer as grids; its measured statistics;
-//! - [`motion`]: ships riding the surface (heave, pitch, roll);
+//! - [`response`]: ships' heave, pitch and roll in the seaway in closed form (the hull's filter
+//!   and its natural periods, per wave);
+//! - [`motion`]: the hull's particulars, and the same oscillators integrated in time;
 //! - [`wake`]: the Kelvin wake and the foam trail;
 //! - [`horizon`]: earth curvature with standard terrestrial refraction (hull-down);
 //! - [`periscope`]: magnifications, field of view and the stadimeter.
@@ -17,6 +19,7 @@
 pub mod horizon;
 pub mod motion;
 pub mod periscope;
+pub mod response;
 pub mod spectrum;
 pub mod surface;
 pub mod wake;

@@ -1,5 +1,11 @@
-//! Ships riding the sea: heave, pitch and roll from the wave surface, deterministic in
-//! (sea, track, time).
+//! Ships riding the sea in the time domain: a hull's particulars ([`HullParameters`]: its
+//! natural periods), and heave, pitch and roll integrated in time from the wave surface,
+//! deterministic in (sea, track, time).
+//!
+//! The IG's ships use the same oscillators in closed form ([`crate::response`]: no history,
+//! microseconds a frame); this integration checks it, and follows a recorded track whose
+//! course and speed change (the transients the closed form leaves out), at the cost of the
+//! sea sampled over minutes of the past.
 //!
 //! Algorithm:
 //!
@@ -193,6 +199,20 @@ impl HullParameters {
         })
     }
 
+    /// The parameters' bits, to key a cache by hull.
+    pub fn bits(&self) -> [u64; 7] {
+        [
+            self.length_m,
+            self.beam_m,
+            self.draft_m,
+            self.gm_m,
+            self.roll_damping,
+            self.heave_damping,
+            self.pitch_damping,
+        ]
+        .map(f64::to_bits)
+    }
+
     /// Waterline length, m.
     pub fn length_m(&self) -> f64 {
         self.length_m
@@ -300,6 +320,15 @@ impl StraightCourse {
             speed_mps: checked("speed_mps", speed_mps, 0.0, 40.0, "0..=40 m/s")?,
             t_s: checked("t_s", t_s, -MAX_TIME_S, MAX_TIME_S, "-1e9..=1e9 s")?,
         })
+    }
+
+    /// The velocity (east, north), m/s.
+    pub fn velocity_enu_mps(&self) -> [f64; 2] {
+        let heading = self.pose.heading_deg.to_radians();
+        [
+            self.speed_mps * heading.sin(),
+            self.speed_mps * heading.cos(),
+        ]
     }
 
     /// Where the ship is at `t_s` on this course.
@@ -664,7 +693,7 @@ impl ShipMotionTracker {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::G_MPS2;
 
@@ -688,7 +717,7 @@ mod tests {
     }
 
     /// Heave, pitch and roll series at `n` times from `t0` every `dt`.
-    fn series(
+    pub(crate) fn series(
         hull: HullParameters,
         sea: &impl Fn(f64, f64, f64) -> f64,
         course: StraightCourse,

@@ -295,6 +295,26 @@ pub struct GerstnerWave {
     pub phase_rad: f64,
 }
 
+/// One travelling linear wave: at the undisplaced point `x` (east, north of the sea's origin)
+/// and time `t` its height is `Re(A e^(i (k·x − ω t)))`, `A` its complex amplitude.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearWave {
+    /// Wave vector (east, north), rad/m: the wave travels toward it.
+    pub k_rad_m: [f64; 2],
+    pub omega_rad_s: f64,
+    /// Complex amplitude `A` (real, imaginary), metres.
+    pub amplitude_m: [f64; 2],
+}
+
+impl LinearWave {
+    /// The height, metres, at (`x_m`, `y_m`) at `t_s`.
+    pub fn height_m(&self, x_m: f64, y_m: f64, t_s: f64) -> f64 {
+        let phase = self.k_rad_m[0] * x_m + self.k_rad_m[1] * y_m - self.omega_rad_s * t_s;
+        let (sin, cos) = phase.sin_cos();
+        self.amplitude_m[0] * cos - self.amplitude_m[1] * sin
+    }
+}
+
 /// One cascade's grids at the current time, for the renderer (textures) and the sampler.
 ///
 /// Layout: row-major, `size × size`; the value at index `j * size + i` is at `x = i tile / size`
@@ -544,6 +564,45 @@ impl SeaSurface {
     /// The explicit waves as evaluated (their crests' displacement limited against looping).
     pub fn gerstner_waves(&self) -> &[GerstnerWave] {
         &self.gerstner
+    }
+
+    /// The surface as travelling linear waves (the cascades' modes, each `k` and `-k`, then the
+    /// explicit waves): the height of the undisplaced point `x` at time `t` is the sum of their
+    /// [`LinearWave::height_m`] (the choppy displacement and the grids' bilinear interpolation
+    /// aside). For what responds to the sea as a whole, such as a ship's motions
+    /// ([`crate::response`]).
+    pub fn linear_waves(&self) -> Vec<LinearWave> {
+        let mut waves = Vec::new();
+        for synth in &self.synths {
+            for mode in &synth.modes {
+                let (kx, ky) = (f64::from(mode.kx_rad_m), f64::from(mode.ky_rad_m));
+                // h = Σ 2 Re(a e^{i(k·x − ωt)}) + 2 Re(b e^{i(k·x + ωt)}); the second is the wave
+                // toward −k with amplitude 2 conj(b).
+                let (a, b) = (mode.a, mode.b.conj());
+                for (k, amplitude) in [([kx, ky], a), ([-kx, -ky], b)] {
+                    if amplitude.norm_sqr() > 0.0 {
+                        waves.push(LinearWave {
+                            k_rad_m: k,
+                            omega_rad_s: mode.omega_rad_s,
+                            amplitude_m: [
+                                2.0 * f64::from(amplitude.re),
+                                2.0 * f64::from(amplitude.im),
+                            ],
+                        });
+                    }
+                }
+            }
+        }
+        for wave in &self.gerstner {
+            let [ex, ey] = wave.direction;
+            let (sin, cos) = wave.phase_rad.sin_cos();
+            waves.push(LinearWave {
+                k_rad_m: [wave.k_rad_m * ex, wave.k_rad_m * ey],
+                omega_rad_s: wave.omega_rad_s,
+                amplitude_m: [wave.amplitude_m * cos, wave.amplitude_m * sin],
+            });
+        }
+        waves
     }
 
     /// Replaces the explicit waves (CIGI Wave Control), added to what [`SeaSurface::sample`]

@@ -629,15 +629,17 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
             wash = crate::sea::wash_over(sea.surface(), sea.draw(), view.eye, height_m)?;
         }
         // Ships float: on the sea under them, pitched and rolled by its waves.
-        for entity in &mut entities {
+        for (entity, speed_mps) in entities.iter_mut().zip(&speeds) {
             if cig_scene::sea::builtin_hull(&entity.model).is_some() {
                 let p = entity.position;
+                let course = entity.orientation.heading_deg.to_radians();
                 let pose = sea.float(
                     &session,
                     &entity.model,
                     entity.orientation,
                     Clamp::HeightAndAttitude,
                     [p.lat_deg, p.lon_deg, 0.0],
+                    [speed_mps * course.sin(), speed_mps * course.cos()],
                     sea.draw().level_m,
                 );
                 entity.position = pose.position;
