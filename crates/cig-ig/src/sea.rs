@@ -56,7 +56,8 @@
 //!
 //! The IG's CIGI line-of-sight answers use the waves (a periscope or a boat's sensor just
 //! above the water is hidden by the crests that would hide it) and take the nearer of the
-//! sea's hit and the terrain's own (geometric) sightline's, the sea's search ending at the
+//! sea's hit and the terrain's own sightline's (bent by the same refraction,
+//! [`sightline_refraction`]), the sea's search ending at the
 //! terrain's hit; the terrain's hits on sea posts give way to the sea's (the terrain is asked
 //! again beyond them), and a sightline that leaves the database is answered by the sea there.
 //!
@@ -474,6 +475,19 @@ impl Chord {
         };
         let (lo, hi) = (lo.max(0.0), hi.min(self.length_m));
         (lo <= hi).then_some((lo, hi))
+    }
+}
+
+/// The standard refraction ([`STANDARD_REFRACTION_K`]) of the sightline from `a` to `b`, with
+/// the earth's radius of curvature in its azimuth at its middle: what the terrain's line of
+/// sight bends by where the sea's does.
+pub fn sightline_refraction(a: Geodetic, b: Geodetic) -> cig_terrain::Refraction {
+    let (ea, eb) = (a.to_ecef(), b.to_ecef());
+    let mid = Geodetic::from_ecef((ea + eb) * 0.5);
+    let along = EnuFrame::new(mid).ecef_vector_to_enu(eb - ea);
+    cig_terrain::Refraction {
+        k: STANDARD_REFRACTION_K,
+        earth_radius_m: radius_of_curvature_m(mid.lat_deg, along.x, along.y),
     }
 }
 

@@ -2076,11 +2076,14 @@ impl IgSession {
         let Some(sea) = &self.sea else {
             return (query.los(a, b).ok(), None);
         };
-        let terrain = match query.los(a, b) {
-            Ok(r) => r.hit,
-            Err(cig_terrain::QueryError::Misses { .. }) => None,
-            Err(_) => return (None, None),
-        };
+        // The terrain's sightline bends as the sea's does.
+        let refraction = crate::sea::sightline_refraction(a, b);
+        let terrain =
+            match query.los_refracted(a, b, cig_terrain::CultureTest::LineOfSight, refraction) {
+                Ok(r) => r.hit,
+                Err(cig_terrain::QueryError::Misses { .. }) => None,
+                Err(_) => return (None, None),
+            };
         let level_at = |lat_deg: f64, lon_deg: f64| {
             self.water_at(Geodetic::new(lat_deg, lon_deg, 0.0))
                 .level_msl_m
@@ -2106,7 +2109,8 @@ impl IgSession {
             // The terrain's sightline went under the sea posts: look for land beyond, up to
             // the sea's own hit.
             Some(h) if sea_post && h.range_m < limit_m => {
-                match Self::land_beyond_sea(query, a, b, h.range_m, limit_m, level_at) {
+                match Self::land_beyond_sea(query, (a, b, refraction), h.range_m, limit_m, level_at)
+                {
                     Ok(land) => land,
                     Err(_) => return (None, None),
                 }
@@ -2165,8 +2169,7 @@ impl IgSession {
     /// from where the sightline rises above them (a few times at most).
     fn land_beyond_sea(
         query: &mut QuerySession,
-        a: Geodetic,
-        b: Geodetic,
+        (a, b, refraction): (Geodetic, Geodetic, cig_terrain::Refraction),
         from_m: f64,
         limit_m: f64,
         level_at: impl Fn(f64, f64) -> f64,
@@ -2174,14 +2177,21 @@ impl IgSession {
         const RESTARTS: usize = 4;
         let (ea, eb) = (a.to_ecef(), b.to_ecef());
         let length_m = (eb - ea).length();
+        // The refracted path's height over the chord `x` metres along it.
+        let bow_m = refraction.bow_m(length_m);
+        let on_path = |x: f64| {
+            let mut p = Geodetic::from_ecef(ea + (eb - ea) * (x / length_m));
+            let t = x / length_m;
+            p.alt_m += bow_m * 4.0 * t * (1.0 - t);
+            p
+        };
         let end_m = length_m.min(limit_m);
-        let dir = (eb - ea) / length_m;
         let grid = query.cache().database().layout().grid;
         let (north, east) = cig_geo::metres_per_degree(a.lat_deg);
         let step_m = (0.5 * (grid.dlat_deg * north).min(grid.dlon_deg * east)).max(1.0);
         // Land above the sightline at `x`: the point on the sightline and the land's material.
         let land_at = |query: &mut QuerySession, x: f64| {
-            let p = Geodetic::from_ecef(ea + dir * x);
+            let p = on_path(x);
             let terrain = query.hot(p.lat_deg, p.lon_deg);
             let sea = crate::sea::SeaNow::covers(&terrain, level_at(p.lat_deg, p.lon_deg));
             match terrain {
@@ -2210,7 +2220,7 @@ impl IgSession {
                         culture: None,
                     }));
                 }
-                let p = Geodetic::from_ecef(ea + dir * x);
+                let p = on_path(x);
                 let level = level_at(p.lat_deg, p.lon_deg);
                 let sea = crate::sea::SeaNow::covers(&query.hot(p.lat_deg, p.lon_deg), level);
                 let above_m = p.alt_m - query.geoid_undulation_m(p.lat_deg, p.lon_deg);
@@ -2224,8 +2234,14 @@ impl IgSession {
             }
             // The sightline is above the sea posts again (or over land below it): the terrain
             // from here.
-            let start = Geodetic::from_ecef(ea + dir * x);
-            let hit = match query.los(start, b) {
+            // The rest of the same arc: the path of the same curvature from here to `b`.
+            let start = on_path(x);
+            let hit = match query.los_refracted(
+                start,
+                b,
+                cig_terrain::CultureTest::LineOfSight,
+                refraction,
+            ) {
                 Ok(r) => r.hit,
                 Err(cig_terrain::QueryError::Misses { .. }) => None,
                 Err(e) => return Err(e),

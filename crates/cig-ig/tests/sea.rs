@@ -655,7 +655,10 @@ fn the_sea_replaces_the_databases_sea_posts_and_the_coast_still_blocks() {
             coast.range_m
         );
     }
-    assert!((with_sea[&2].range_m - without[&2].range_m).abs() < 0.01);
+    // With a sea the terrain's sightline is refracted as the sea's is: 3.4 cm higher where
+    // it meets the coast, a few centimetres further on the rising shore.
+    let later_m = with_sea[&2].range_m - without[&2].range_m;
+    assert!((0.0..0.5).contains(&later_m), "{later_m}");
 }
 
 #[test]

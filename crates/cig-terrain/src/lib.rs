@@ -35,5 +35,7 @@ pub use database::{Manifest, TerrainDatabase, TileStore};
 pub use imagery::{ImageryKey, ImageryLayout, ImageryManifest, ImageryTile};
 pub use material::Material;
 pub use pyramid::{PyramidLayout, TileKey};
-pub use query::{CultureSurface, LosHit, LosResult, QueryError, QuerySession, SurfacePoint};
+pub use query::{
+    CultureSurface, LosHit, LosResult, QueryError, QuerySession, Refraction, SurfacePoint,
+};
 pub use raster::{GeoGrid, Raster};

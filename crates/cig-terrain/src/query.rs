@@ -205,6 +205,38 @@ struct TileSlots {
 /// 128-cell tiles).
 pub const SESSION_TILES: usize = 64;
 
+/// How the air bends a sightline: the coefficient of refraction `k` (the ratio of the earth's
+/// radius to the light path's; 0.13 is the standard terrestrial value) and the earth's radius
+/// of curvature along the sightline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Refraction {
+    pub k: f64,
+    pub earth_radius_m: f64,
+}
+
+impl Refraction {
+    /// Straight sightlines.
+    pub const NONE: Refraction = Refraction {
+        k: 0.0,
+        earth_radius_m: 6_371_000.0,
+    };
+
+    /// How far, metres, a path of chord `length_m` bows above its chord at its middle:
+    /// `k D² / 8R` (0 for a `k` or radius that is not finite, a `k` outside `-1..1` or a
+    /// radius under 1 km).
+    pub fn bow_m(&self, length_m: f64) -> f64 {
+        let usable = self.k.is_finite()
+            && self.k.abs() < 1.0
+            && self.earth_radius_m.is_finite()
+            && self.earth_radius_m >= 1_000.0;
+        if usable {
+            self.k * length_m * length_m / (8.0 * self.earth_radius_m)
+        } else {
+            0.0
+        }
+    }
+}
+
 const PIECE_M: f64 = 2_000.0;
 /// Lowest end-point altitude a sightline may have (below the deepest ocean trench).
 pub const LOS_MIN_ALT_M: f64 = -12_000.0;
@@ -423,6 +455,20 @@ impl QuerySession {
         to: Geodetic,
         test: CultureTest,
     ) -> Result<LosResult, QueryError> {
+        self.los_refracted(from, to, test, Refraction::NONE)
+    }
+
+    /// Line of sight along the path light takes through the air: bent by `refraction` (the
+    /// sightline bows up from the chord by `k s (D − s) / 2R` at `s` along its length `D`,
+    /// which is the straight line over an earth of radius `R / (1 − k)`), seeing the culture
+    /// objects `test` counts. A hit's point and range are on that path.
+    pub fn los_refracted(
+        &mut self,
+        from: Geodetic,
+        to: Geodetic,
+        test: CultureTest,
+        refraction: Refraction,
+    ) -> Result<LosResult, QueryError> {
         for p in [from, to] {
             if !(p.lat_deg.is_finite() && p.lon_deg.is_finite())
                 || p.lat_deg.abs() > 90.0
@@ -440,6 +486,9 @@ impl QuerySession {
         let a = from.to_ecef();
         let b = to.to_ecef();
         let length_m = (b - a).length();
+        // The path's height over the chord at parameter t.
+        let bow = refraction.bow_m(length_m);
+        let lifted = |t: f64| bow * 4.0 * t * (1.0 - t);
         let pieces = ((length_m / PIECE_M).ceil() as usize).max(1);
         let g = self.layout.grid;
         let mut start = from;
@@ -459,9 +508,11 @@ impl QuerySession {
                 x1: (end.lon_deg - g.west_lon_deg) / g.dlon_deg,
                 y1: (end.lat_deg - g.south_lat_deg) / g.dlat_deg,
                 alt: quadratic(
-                    start.alt_m - self.geoid.undulation_m(start.lat_deg, start.lon_deg),
-                    mid.alt_m - self.geoid.undulation_m(mid.lat_deg, mid.lon_deg),
-                    end.alt_m - self.geoid.undulation_m(end.lat_deg, end.lon_deg),
+                    start.alt_m - self.geoid.undulation_m(start.lat_deg, start.lon_deg)
+                        + lifted(t0),
+                    mid.alt_m - self.geoid.undulation_m(mid.lat_deg, mid.lon_deg)
+                        + lifted(0.5 * (t0 + t1)),
+                    end.alt_m - self.geoid.undulation_m(end.lat_deg, end.lon_deg) + lifted(t1),
                 ),
             };
             let terrain = self.trace_piece(&piece, &mut crosses)?;
@@ -473,10 +524,12 @@ impl QuerySession {
             };
             if let Some((s, material, level, culture)) = hit {
                 let t = t0 + s * (t1 - t0);
+                let mut point = Geodetic::from_ecef(a + (b - a) * t);
+                point.alt_m += lifted(t);
                 return Ok(LosResult {
                     visible: false,
                     hit: Some(LosHit {
-                        point: Geodetic::from_ecef(a + (b - a) * t),
+                        point,
                         range_m: t * length_m,
                         material,
                         level,

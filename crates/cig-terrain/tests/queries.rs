@@ -4,7 +4,7 @@ mod common;
 use cig_geo::Geodetic;
 use cig_terrain::material::Material;
 use cig_terrain::raster::{triangulated_height, Diagonal};
-use cig_terrain::{PagingConfig, QueryError, QuerySession};
+use cig_terrain::{CultureTest, PagingConfig, QueryError, QuerySession, Refraction};
 use common::*;
 use proptest::prelude::*;
 
@@ -216,6 +216,57 @@ fn long_sightlines_drop_below_a_flat_plain_with_earth_curvature() {
         )
         .expect("los");
     assert!(high.visible);
+}
+
+#[test]
+fn refraction_lifts_a_sightline_over_the_curve_of_the_earth() {
+    // A flat plain at 0 m, two points 25 km apart: the chord's middle lies D²/8R = 12.3 m
+    // under the plain, the standard refracted path's (1 − 0.13) of that, 10.7 m.
+    let g = grid(60, 1000, 30.0);
+    let (db, _) = database(&raster(g, |_, _| 0.0), 64, 0.0);
+    let mut q = QuerySession::new(cache(&db, PagingConfig::default()));
+    let (lat, lon_a) = g.post_lat_lon_deg(30, 50);
+    let (_, lon_b) = g.post_lat_lon_deg(30, 50 + 833);
+    let standard = Refraction {
+        k: 0.13,
+        earth_radius_m: 6_371_000.0,
+    };
+    let mut sight = |alt_m: f64, refraction: Refraction| {
+        q.los_refracted(
+            Geodetic::new(lat, lon_a, alt_m),
+            Geodetic::new(lat, lon_b, alt_m),
+            CultureTest::LineOfSight,
+            refraction,
+        )
+        .expect("los")
+    };
+    assert!(!sight(11.5, Refraction::NONE).visible);
+    assert!(sight(11.5, standard).visible);
+    assert!(!sight(10.0, standard).visible);
+    // A hit lies on the bent path, which meets the plain there.
+    let hit = sight(9.0, standard).hit.expect("a hit");
+    assert!(hit.point.alt_m.abs() < 0.3, "{:?}", hit.point);
+    let straight = sight(9.0, Refraction::NONE).hit.expect("a hit");
+    assert!(
+        hit.range_m > straight.range_m + 500.0,
+        "{} {}",
+        hit.range_m,
+        straight.range_m
+    );
+    // Values that make no sense bend nothing.
+    for (k, r) in [
+        (f64::NAN, 6.4e6),
+        (1.5, 6.4e6),
+        (0.13, 0.0),
+        (0.13, f64::INFINITY),
+    ] {
+        let odd = Refraction {
+            k,
+            earth_radius_m: r,
+        };
+        assert_eq!(odd.bow_m(25_000.0), 0.0);
+        assert!(!sight(11.5, odd).visible);
+    }
 }
 
 proptest! {
