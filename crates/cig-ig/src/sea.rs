@@ -1007,12 +1007,9 @@ impl SeaNow {
             critical_radius_m: None,
         };
         let attitude = clamp == cig_scene::snapshot::Clamp::HeightAndAttitude;
-        let hull = cig_scene::sea::builtin_hull(model);
-        if let Some(hull) = &hull {
-            self.ride(&mut instance, hull, velocity_enu_mps, level_ellipsoid_m);
-        }
-        let rode = hull.is_some();
-        if !rode {
+        if let Some(hull) = cig_scene::sea::builtin_hull(model) {
+            self.ride(&mut instance, &hull, velocity_enu_mps, level_ellipsoid_m);
+        } else {
             let [x, y] = cig_scene::sea::sea_plane_xy(&self.plane, lat_deg, lon_deg);
             let wave = self.surface.sample(x, y);
             instance.position.alt_m = level_ellipsoid_m + wave.height_m;

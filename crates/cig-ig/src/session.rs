@@ -2096,7 +2096,7 @@ impl IgSession {
         let sightline = crate::sea::SeaSightline {
             level_msl_m: level_at(mid.lat_deg, mid.lon_deg),
             geoid_m: [a, b].map(|p| query.geoid_undulation_m(p.lat_deg, p.lon_deg)),
-            refraction_k: crate::sea::STANDARD_REFRACTION_K,
+            refraction_k: refraction.k,
             with_waves: true,
             // Nothing beyond the land's hit matters.
             max_range_m: land_hit.map_or(f64::INFINITY, |h| h.range_m),
@@ -2177,12 +2177,11 @@ impl IgSession {
         const RESTARTS: usize = 4;
         let (ea, eb) = (a.to_ecef(), b.to_ecef());
         let length_m = (eb - ea).length();
-        // The refracted path's height over the chord `x` metres along it.
-        let bow_m = refraction.bow_m(length_m);
+        // The point of the refracted path `x` metres along its chord.
         let on_path = |x: f64| {
-            let mut p = Geodetic::from_ecef(ea + (eb - ea) * (x / length_m));
             let t = x / length_m;
-            p.alt_m += bow_m * 4.0 * t * (1.0 - t);
+            let mut p = Geodetic::from_ecef(ea + (eb - ea) * t);
+            p.alt_m += refraction.lift_m(length_m, t);
             p
         };
         let end_m = length_m.min(limit_m);

@@ -235,6 +235,12 @@ impl Refraction {
             0.0
         }
     }
+
+    /// How far, metres, the path of chord `length_m` lies above its chord at the fraction
+    /// `t` of its length: `k s (D − s) / 2R`.
+    pub fn lift_m(&self, length_m: f64, t: f64) -> f64 {
+        self.bow_m(length_m) * 4.0 * t * (1.0 - t)
+    }
 }
 
 const PIECE_M: f64 = 2_000.0;
@@ -486,9 +492,7 @@ impl QuerySession {
         let a = from.to_ecef();
         let b = to.to_ecef();
         let length_m = (b - a).length();
-        // The path's height over the chord at parameter t.
-        let bow = refraction.bow_m(length_m);
-        let lifted = |t: f64| bow * 4.0 * t * (1.0 - t);
+        let lifted = |t: f64| refraction.lift_m(length_m, t);
         let pieces = ((length_m / PIECE_M).ceil() as usize).max(1);
         let g = self.layout.grid;
         let mut start = from;
