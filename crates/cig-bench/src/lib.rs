@@ -36,6 +36,7 @@ pub mod culture;
 pub mod database;
 pub mod db;
 pub mod demo;
+pub mod dynterrain;
 pub mod env;
 pub mod flight;
 pub mod imagery;

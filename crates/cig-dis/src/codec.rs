@@ -10,8 +10,8 @@
 //!
 //! * Entity State (1), Fire (2), Detonation (3), Remove Entity (12), Data Query (18),
 //!   Set Data (19) and Data (20): the `dis-rs` crate (0.13), which implements both versions;
-//! * Environmental Process (41): [`crate::environmental`], written here because `dis-rs`
-//!   lacks it;
+//! * Environmental Process (41): [`crate::environmental`], and Point (43) and Linear (44)
+//!   Object State: [`crate::object_state`], written here because `dis-rs` lacks them;
 //! * any other type: reported as [`DisMessage::Unsupported`] with its header, never parsed
 //!   further (this also keeps the rest of `dis-rs`'s parsers away from untrusted input).
 //!
@@ -31,6 +31,7 @@ use dis_rs::remove_entity::model::RemoveEntity;
 use dis_rs::set_data::model::SetData;
 
 use crate::environmental::{self, EnvironmentalProcess};
+use crate::object_state::{self, LinearObjectState, PointObjectState};
 
 /// Octets in a PDU header (both versions).
 pub const PDU_HEADER_OCTETS: usize = 12;
@@ -114,6 +115,10 @@ pub enum DisMessage {
     Data(Data),
     /// Environmental Process PDU (type 41).
     EnvironmentalProcess(EnvironmentalProcess),
+    /// Point Object State PDU (type 43).
+    PointObjectState(Box<PointObjectState>),
+    /// Linear Object State PDU (type 44).
+    LinearObjectState(Box<LinearObjectState>),
     /// A PDU of another type: header only.
     Unsupported,
 }
@@ -268,6 +273,20 @@ pub fn decode_pdu(bytes: &[u8]) -> Result<DecodedPdu, DecodeError> {
                 environmental::decode_body(body).map_err(|e| malformed(e.to_string()))?,
             )
         }
+        object_state::PDU_TYPE_POINT_OBJECT_STATE => {
+            let body = pdu.get(PDU_HEADER_OCTETS..).unwrap_or_default();
+            DisMessage::PointObjectState(Box::new(
+                object_state::decode_point_object_state_body(body)
+                    .map_err(|e| malformed(e.to_string()))?,
+            ))
+        }
+        object_state::PDU_TYPE_LINEAR_OBJECT_STATE => {
+            let body = pdu.get(PDU_HEADER_OCTETS..).unwrap_or_default();
+            DisMessage::LinearObjectState(Box::new(
+                object_state::decode_linear_object_state_body(body)
+                    .map_err(|e| malformed(e.to_string()))?,
+            ))
+        }
         _ => DisMessage::Unsupported,
     };
     Ok(DecodedPdu { header, message })
@@ -381,6 +400,26 @@ pub fn encode_pdu(header: EncodeHeader, message: &DisMessage) -> Result<Vec<u8>,
             return wrap_raw_body(
                 header,
                 PDU_TYPE_ENVIRONMENTAL_PROCESS,
+                PROTOCOL_FAMILY_SYNTHETIC_ENVIRONMENT,
+                &body,
+            );
+        }
+        DisMessage::PointObjectState(pdu) => {
+            let body = object_state::encode_point_object_state_body(pdu)
+                .map_err(|e| EncodeError::Serialise(e.to_string()))?;
+            return wrap_raw_body(
+                header,
+                object_state::PDU_TYPE_POINT_OBJECT_STATE,
+                PROTOCOL_FAMILY_SYNTHETIC_ENVIRONMENT,
+                &body,
+            );
+        }
+        DisMessage::LinearObjectState(pdu) => {
+            let body = object_state::encode_linear_object_state_body(pdu)
+                .map_err(|e| EncodeError::Serialise(e.to_string()))?;
+            return wrap_raw_body(
+                header,
+                object_state::PDU_TYPE_LINEAR_OBJECT_STATE,
                 PROTOCOL_FAMILY_SYNTHETIC_ENVIRONMENT,
                 &body,
             );

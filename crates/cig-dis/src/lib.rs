@@ -10,7 +10,9 @@
 //! [`appearance`] maps appearance bits to obscurant effects (thesis 000 §VI.E.2-3) and to
 //! the lights an entity has on (SISO-REF-010 land, air, surface and subsurface layouts);
 //! [`detonation`] turns ground and building impacts into seeded effect starts (§VI.E.2);
-//! [`time_sync`] shares the simulation world time and lightning (§VI.E.4-5) over Data PDUs.
+//! [`time_sync`] shares the simulation world time and lightning (§VI.E.4-5) over Data PDUs;
+//! [`object_state`] encodes and decodes the Point and Linear Object State PDUs (§7.10.4-7.10.5,
+//! dynamic terrain: craters, fighting positions, ruts, ditches) by hand.
 //!
 //! Limits: see each module. Nothing here opens a socket or reads a clock; the `cig` binary owns
 //! the network edge.
@@ -20,6 +22,7 @@ pub mod codec;
 pub mod dead_reckoning;
 pub mod detonation;
 pub mod environmental;
+pub mod object_state;
 pub mod publisher;
 pub mod remote;
 pub mod time_sync;
@@ -35,6 +38,11 @@ pub use dead_reckoning::{extrapolate, DrAlgorithm, DrInput, DrModel, DrPose, Eul
 pub use detonation::{impact_effect, EventIdentity, ImpactEffectStart, ImpactSize, ImpactSurface};
 pub use environmental::{
     EnvironmentGeometry, EnvironmentRecord, EnvironmentalProcess, GaussianPlume, GaussianPuff,
+};
+pub use object_state::{
+    decode_linear_object_state, decode_point_object_state, encode_linear_object_state,
+    encode_point_object_state, LinearObjectState, LinearSegment, ObjectId, ObjectStateError,
+    ObjectType, PointObjectState, SimulationAddress,
 };
 pub use publisher::{OwnedEntityPublisher, OwnedEntityState, PublisherConfig, SendReason};
 pub use remote::{

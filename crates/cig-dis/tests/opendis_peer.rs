@@ -3,7 +3,9 @@
 //! that this crate decodes, and parses the ones this crate encodes. Skipped, with a message,
 //! when `python3` or `opendis` is missing (`pip install opendis`).
 
-use std::process::Command;
+mod common;
+
+use common::{hex, unhex};
 
 use cig_dis::codec::{decode_pdu, encode_pdu, DisMessage, DisVersion, EncodeHeader};
 use cig_dis::detonation::impact_effect;
@@ -38,43 +40,7 @@ def finish(pdu, pdu_type, family):
 
 /// Runs a Python script with opendis; `None` (and a message) when the peer is unavailable.
 fn python(script: &str, arg: &str) -> Option<String> {
-    let probe = Command::new("python3")
-        .args(["-c", "import opendis"])
-        .output();
-    match probe {
-        Ok(out) if out.status.success() => {}
-        _ => {
-            eprintln!("SKIPPED: python3 with the `opendis` package (pip install opendis) is not available");
-            return None;
-        }
-    }
-    let full = format!("{PREAMBLE}\n{script}");
-    let out = Command::new("python3")
-        .args(["-c", &full, arg])
-        .output()
-        .expect("python3 runs");
-    assert!(
-        out.status.success(),
-        "python failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    Some(
-        String::from_utf8(out.stdout)
-            .expect("utf-8")
-            .trim()
-            .to_string(),
-    )
-}
-
-fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
-}
-
-fn unhex(s: &str) -> Vec<u8> {
-    (0..s.len())
-        .step_by(2)
-        .map(|i| u8::from_str_radix(&s[i..i + 2], 16).expect("hex"))
-        .collect()
+    common::python(PREAMBLE, script, arg)
 }
 
 #[test]

@@ -24,6 +24,7 @@
 //! articulated parts of remote entities are not read.
 
 use crate::scenario::{parse_dis_id, parse_hex_u32, DisSettings, DisTypePattern, Scenario};
+use crate::terrain_edits;
 use cig_dis::dis_rs::model::EntityId;
 use cig_dis::{
     decode_datagram, encode_pdu, impact_effect, DisMessage, DisVersion, EncodeHeader, EntityEffect,
@@ -32,14 +33,17 @@ use cig_dis::{
     OwnedEntityState, PublisherConfig, RemoteEntitySnapshot, RemoteEntityTable, RemoteTableConfig,
     TableEvent, TimeMessage, TimeSync, TimeSyncConfig,
 };
+use cig_dynterrain::soil::SoilMoisture;
 use cig_effects::{
     DustTrailSpec, EffectHandle, EffectId, EffectSystem, PlumeKind, PlumeSource, PlumeSpec,
     VehicleUpdate,
 };
 use cig_geo::{EnuFrame, Geodetic};
+use cig_terrain::edits::{Applied, TerrainEdit};
 use cig_terrain::{Material, QuerySession};
 use glam::DVec3;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use cig_effects::effect_time_s;
 
@@ -57,6 +61,14 @@ pub struct ExerciseCounters {
     pub remote_processes_started: u64,
     pub lightning_strikes: u64,
     pub pdus_sent: u64,
+    /// Craters made from Detonations (not counting ones already held).
+    pub craters_made: u64,
+    /// Terrain edits taken from other nodes' Object State PDUs (new ones only).
+    pub terrain_edits_received: u64,
+    /// Object State PDUs whose edit the database refused (outside it, bad sizes).
+    pub terrain_edits_refused: u64,
+    /// Object State PDUs sent (first announcements and re-announcements).
+    pub terrain_edits_sent: u64,
 }
 
 /// A smoke or fire process this IG owns and publishes.
@@ -112,6 +124,11 @@ pub struct Exercise {
     impacts: Vec<(f64, DVec3, ImpactSize)>,
     outgoing: Vec<Vec<u8>>,
     counters: ExerciseCounters,
+    /// Re-announcement of the terrain edits: the next edit's place in the list, the edits
+    /// owed (fractional), and when the last tick was.
+    edit_cursor: usize,
+    edits_owed: f64,
+    last_tick_s: Option<f64>,
 }
 
 /// At most this many received lightning strikes wait for the renderer.
@@ -216,6 +233,9 @@ impl Exercise {
             impacts: Vec::new(),
             outgoing: Vec::new(),
             counters: ExerciseCounters::default(),
+            edit_cursor: 0,
+            edits_owed: 0.0,
+            last_tick_s: None,
         };
         exercise.queue_time(now_s, &first);
         exercise
@@ -301,6 +321,69 @@ impl Exercise {
         self.queue_time(now_s, &[set]);
     }
 
+    /// This node's DIS simulation address, as a terrain edit's author.
+    pub fn address(&self) -> cig_terrain::edits::EditAuthor {
+        cig_terrain::edits::EditAuthor {
+            site: self.settings.site,
+            application: self.settings.application,
+        }
+    }
+
+    /// Sends a terrain edit this node made (its first announcement); it is announced again
+    /// with the others every [`terrain_edits::REANNOUNCE_S`].
+    pub fn announce_edit(&mut self, now_s: f64, edit: &TerrainEdit, query: &mut QuerySession) {
+        self.send_edit(now_s, edit, query);
+    }
+
+    fn send_edit(&mut self, now_s: f64, edit: &TerrainEdit, query: &mut QuerySession) {
+        let anchor = edit.shape.anchor();
+        let height_m = query
+            .hot(anchor.lat_deg, anchor.lon_deg)
+            .map_or(0.0, |s| s.height_ellipsoid_m());
+        let Some(message) = terrain_edits::pdu_of_edit(edit, height_m) else {
+            return;
+        };
+        if let Ok(bytes) = encode_pdu(self.header(now_s), &message) {
+            self.outgoing.push(bytes);
+            self.counters.terrain_edits_sent += 1;
+            self.counters.pdus_sent += 1;
+        }
+    }
+
+    /// Announces the held terrain edits again, spread evenly over the period, so that a node
+    /// that joined late gets them all.
+    fn reannounce_edits(&mut self, now_s: f64, query: &mut QuerySession) {
+        let dt_s = self
+            .last_tick_s
+            .map_or(0.0, |t| (now_s - t).clamp(0.0, 1.0));
+        self.last_tick_s = Some(now_s);
+        let edits = Arc::clone(query.edits());
+        if edits.is_empty() {
+            self.edits_owed = 0.0;
+            return;
+        }
+        self.edits_owed += dt_s * edits.len() as f64 / terrain_edits::REANNOUNCE_S;
+        let due = (self.edits_owed.floor() as usize).min(edits.len());
+        if due == 0 {
+            return;
+        }
+        self.edits_owed -= due as f64;
+        if self.edit_cursor >= edits.len() {
+            self.edit_cursor = 0;
+        }
+        let batch: Vec<TerrainEdit> = edits
+            .edits()
+            .chain(edits.edits())
+            .skip(self.edit_cursor)
+            .take(due)
+            .cloned()
+            .collect();
+        self.edit_cursor = (self.edit_cursor + due) % edits.len();
+        for edit in &batch {
+            self.send_edit(now_s, edit, query);
+        }
+    }
+
     /// Handles one received datagram at `now_s`.
     pub fn receive(
         &mut self,
@@ -333,6 +416,16 @@ impl Exercise {
                 },
                 DisMessage::Detonation(d) => {
                     self.counters.detonations += 1;
+                    let event_s = self.event_time_unix_s(now_s, pdu.header.timestamp);
+                    if let Some(crater) =
+                        terrain_edits::crater_of_detonation(d, event_s, query, SoilMoisture::Dry)
+                    {
+                        if let Ok(Applied::Added) =
+                            query.cache().update_edits(|layer| layer.apply(crater))
+                        {
+                            self.counters.craters_made += 1;
+                        }
+                    }
                     if let Some(start) = impact_effect(d) {
                         let at_s =
                             effect_time_s(self.event_time_unix_s(now_s, pdu.header.timestamp));
@@ -348,6 +441,23 @@ impl Exercise {
                 DisMessage::EnvironmentalProcess(process) => {
                     self.counters.environmental_processes += 1;
                     self.receive_process(now_s, process, effects);
+                }
+                DisMessage::PointObjectState(_) | DisMessage::LinearObjectState(_) => {
+                    let time_s = self.event_time_unix_s(now_s, pdu.header.timestamp);
+                    match terrain_edits::edit_of_pdu(&pdu.message, time_s) {
+                        Some(edit)
+                            if (edit.author.site, edit.author.application)
+                                != (self.settings.site, self.settings.application)
+                                || !query.edits().contains(edit.id()) =>
+                        {
+                            match query.cache().update_edits(|layer| layer.apply(edit)) {
+                                Ok(Applied::Added) => self.counters.terrain_edits_received += 1,
+                                Ok(Applied::Known) => {}
+                                Err(_) => self.counters.terrain_edits_refused += 1,
+                            }
+                        }
+                        _ => self.counters.ignored += 1,
+                    }
                 }
                 other => {
                     if let Some(strike) = LightningStrike::from_message(other) {
@@ -614,6 +724,7 @@ impl Exercise {
         }
         let replies = self.time.tick(now_s);
         self.queue_time(now_s, &replies);
+        self.reannounce_edits(now_s, query);
         let ids: Vec<u16> = self.owned.keys().copied().collect();
         for id in ids {
             let Some(truth) = owned.get(&id) else {

@@ -34,6 +34,7 @@ pub mod scenario;
 pub mod scenes;
 pub mod sea;
 pub mod session;
+pub mod terrain_edits;
 pub mod thermal;
 pub mod tracker;
 pub mod weather;

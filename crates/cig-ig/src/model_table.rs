@@ -13,6 +13,7 @@
 
 use crate::scenario::{DisTypePattern, Scenario};
 use cig_dis::EntityTypeCode;
+use cig_dynterrain::soil::{RunningGear, VehicleLoad};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
@@ -35,7 +36,15 @@ pub struct ModelTable {
     cue_important: BTreeSet<String>,
     critical_radius_m: BTreeMap<String, f32>,
     dust: BTreeMap<String, bool>,
+    loads: BTreeMap<String, VehicleLoad>,
 }
+
+/// The ruts' vehicles when no row says: an M1-class tank (62 t on two 4.6 x 0.635 m tracks)
+/// and a 10 t six-wheeled truck (six 0.35 x 0.38 m tyre patches).
+const DEFAULT_LOADS: [(&str, f64, f64, RunningGear); 2] = [
+    ("tank", 62_000.0, 5.8, RunningGear::Tracked),
+    ("truck", 10_000.0, 0.8, RunningGear::Wheeled),
+];
 
 /// Models of ground vehicles that raise dust when they move on soil, unless a row says not.
 const DUST_MODELS: [&str; 2] = ["tank", "truck"];
@@ -50,6 +59,7 @@ impl Default for ModelTable {
             cue_important: BTreeSet::new(),
             critical_radius_m: BTreeMap::new(),
             dust: BTreeMap::new(),
+            loads: BTreeMap::new(),
         }
     }
 }
@@ -79,6 +89,15 @@ impl ModelTable {
             }
             if let Some(dust) = row.dust {
                 table.dust.entry(row.model.clone()).or_insert(dust);
+            }
+            if let (Some(mass_kg), Some(area_m2)) = (row.mass_kg, row.contact_area_m2) {
+                let gear = match row.running_gear.as_deref() {
+                    Some("wheeled") => RunningGear::Wheeled,
+                    _ => RunningGear::Tracked,
+                };
+                if let Ok(load) = VehicleLoad::new(mass_kg, area_m2, gear) {
+                    table.loads.entry(row.model.clone()).or_insert(load);
+                }
             }
             if let Some(path) = &row.gltf {
                 if !table.gltf.iter().any(|(name, _)| *name == row.model) {
@@ -130,6 +149,19 @@ impl ModelTable {
             .get(model)
             .copied()
             .unwrap_or_else(|| DUST_MODELS.contains(&model))
+    }
+
+    /// The load a vehicle drawn with `model` puts on the ground, for its ruts: the first row
+    /// that gives one, else the tank's and truck's defaults; `None` for models that leave none.
+    pub fn vehicle_load(&self, model: &str) -> Option<VehicleLoad> {
+        self.loads.get(model).copied().or_else(|| {
+            DEFAULT_LOADS
+                .iter()
+                .find(|(name, ..)| *name == model)
+                .and_then(|(_, mass_kg, area_m2, gear)| {
+                    VehicleLoad::new(*mass_kg, *area_m2, *gear).ok()
+                })
+        })
     }
 
     /// glTF files to load: (model name, path relative to the scenario).

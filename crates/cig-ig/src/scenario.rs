@@ -39,6 +39,9 @@
 //!                                      # model's bounding radius)
 //! dust = false                         # entities of this model raise no dust trail on soil
 //!                                      # (default: on for tank and truck)
+//! mass_kg = 62000.0                    # with contact_area_m2: the ruts its vehicles leave
+//! contact_area_m2 = 5.8                # (Bekker sinkage; default: tank 62 t on 5.8 m2,
+//! running_gear = "tracked"             # truck 10 t on 0.8 m2 wheeled; others none)
 //!
 //! [[entities]]                         # entities this IG owns (drawn, and published on DIS)
 //! id = 1                               # CIGI entity id space (0 is the ownship)
@@ -689,6 +692,16 @@ pub struct ModelMapping {
     /// vehicles, tank and truck). Like `cue_important` it belongs to the model.
     #[serde(default)]
     pub dust: Option<bool>,
+    /// The vehicle's mass, kg, for the ruts it leaves (with `contact_area_m2`; default: the
+    /// tank's and truck's in `ModelTable::vehicle_load`).
+    #[serde(default)]
+    pub mass_kg: Option<f64>,
+    /// Its ground contact area, all tracks or wheels together, square metres.
+    #[serde(default)]
+    pub contact_area_m2: Option<f64>,
+    /// "tracked" or "wheeled" (default tracked).
+    #[serde(default)]
+    pub running_gear: Option<String>,
 }
 
 /// An entity the IG owns.
@@ -1078,6 +1091,32 @@ impl Scenario {
                         format!("{key}.critical_radius_m"),
                         format!("{r} must be more than 0 and at most 100 km"),
                     ));
+                }
+            }
+            if let Some(gear) = &m.running_gear {
+                if !matches!(gear.as_str(), "tracked" | "wheeled") {
+                    return Err(value_error(
+                        format!("{key}.running_gear"),
+                        format!("\"{gear}\" is not tracked or wheeled"),
+                    ));
+                }
+            }
+            match (m.mass_kg, m.contact_area_m2) {
+                (None, None) => {}
+                (Some(mass_kg), Some(area_m2)) => {
+                    if let Err(e) = cig_dynterrain::soil::VehicleLoad::new(
+                        mass_kg,
+                        area_m2,
+                        cig_dynterrain::soil::RunningGear::Tracked,
+                    ) {
+                        return Err(value_error(format!("{key}.mass_kg"), e.to_string()));
+                    }
+                }
+                _ => {
+                    return Err(value_error(
+                        key,
+                        "gives one of mass_kg and contact_area_m2 without the other",
+                    ))
                 }
             }
             if let Some(t) = &m.dis_type {

@@ -210,6 +210,8 @@ pub struct IgWorld {
     operator_plumes_started: u32,
     /// Dust trails of the ground vehicles this IG moves, by entity.
     dust_trails: BTreeMap<u16, cig_effects::EffectHandle>,
+    /// Ruts behind the ground vehicles this IG moves.
+    ruts: crate::terrain_edits::RutTracker,
     /// The effects could not advance to the world time (told once until they can again).
     effects_stalled: bool,
     /// This frame's cloud layers (bases above MSL): the operator's, else the host's (CIGI
@@ -370,6 +372,7 @@ impl IgWorld {
             operator_plumes: Vec::new(),
             operator_plumes_started: 0,
             dust_trails: BTreeMap::new(),
+            ruts: crate::terrain_edits::RutTracker::default(),
             effects_stalled: false,
             lightning: crate::weather::Lightning::new(scenario_storm),
             received_strikes: Vec::new(),
@@ -733,6 +736,7 @@ impl IgWorld {
             .collect();
         self.run_owned_effects(query, effect_time_s, &world_velocities);
         self.run_vehicle_dust(query, effect_time_s, &world_velocities);
+        self.run_vehicle_ruts(query, now);
         if let Some(x) = self.exercise.as_mut() {
             if now - self.last_process_publish_s >= 1.0 && !self.smoke.is_empty() {
                 self.last_process_publish_s = now;
@@ -1420,6 +1424,55 @@ impl IgWorld {
                         self.dust_trails.insert(id, h);
                     }
                 }
+            }
+        }
+    }
+
+    /// Ruts behind the ground vehicles this IG moves (its scenario's and its host's) on the
+    /// ground (`crate::terrain_edits::RutTracker`), added to the terrain's edits and announced
+    /// to the exercise; the soil is wet while it rains or snows.
+    fn run_vehicle_ruts(&mut self, query: &mut QuerySession, now_s: f64) {
+        let mut vehicles = Vec::new();
+        for (id, e) in self.session.entities() {
+            if e.life != EntityLife::Active {
+                continue;
+            }
+            let Some(load) = self.session.models().vehicle_load(&e.model) else {
+                continue;
+            };
+            let Some(pose) = self.session.poses().get(id) else {
+                continue;
+            };
+            if query.hat(pose.position).is_ok_and(|(hat, _)| hat < 1.5) {
+                vehicles.push(crate::terrain_edits::RutVehicle {
+                    id: *id,
+                    position: pose.position,
+                    load,
+                });
+            }
+        }
+        let author = self.exercise.as_ref().map_or(
+            cig_terrain::edits::EditAuthor {
+                site: 0,
+                application: 1,
+            },
+            |x| x.address(),
+        );
+        let moisture = if self.precipitation().is_some_and(|p| p.rate_mm_per_h > 0.5) {
+            cig_dynterrain::soil::SoilMoisture::Wet
+        } else {
+            cig_dynterrain::soil::SoilMoisture::Dry
+        };
+        let time_s = self.unix_time_s();
+        let ruts = self
+            .ruts
+            .advance(&vehicles, author, time_s, moisture, query);
+        for rut in ruts {
+            let added = query.cache().update_edits(|layer| layer.apply(rut.clone()));
+            if let (Ok(cig_terrain::edits::Applied::Added), Some(x)) =
+                (added, self.exercise.as_mut())
+            {
+                x.announce_edit(now_s, &rut, query);
             }
         }
     }

@@ -1372,6 +1372,11 @@ impl Renderer {
         }
         self.terrain
             .write_indices(&self.gpu, &terrain_frame.indices);
+        self.terrain.write_patches(
+            &self.gpu,
+            &terrain_frame.patch_vertices,
+            &terrain_frame.patch_indices,
+        );
         let klod_nominal = self.detail.klod_for(&camera.view);
         let klod = self
             .overload_control(view_index)
@@ -1583,7 +1588,19 @@ impl Renderer {
                 pass.draw_indexed(0..terrain_frame.indices.len() as u32, 0, 0..1);
                 stats.draw_calls += 1;
             }
-            stats.terrain_triangles = terrain_frame.indices.len() as u64 / 3;
+            if let (false, Some(vertices), Some(indices)) = (
+                terrain_frame.patch_indices.is_empty(),
+                self.terrain.patch_vertices.as_ref(),
+                self.terrain.patch_indices.as_ref(),
+            ) {
+                // The terrain edits' patches, in the cells the nodes leave to them.
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..terrain_frame.patch_indices.len() as u32, 0, 0..1);
+                stats.draw_calls += 1;
+            }
+            stats.terrain_triangles =
+                (terrain_frame.indices.len() + terrain_frame.patch_indices.len()) as u64 / 3;
 
             if !draws.is_empty() || !culture_draws.is_empty() {
                 pass.set_pipeline(&self.model_pipeline);

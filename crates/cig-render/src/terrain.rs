@@ -17,6 +17,7 @@
 //! its statistics.
 
 use crate::gpu::Gpu;
+use cig_scene::edit_patch::{build_node_patch, NodePatch};
 use cig_scene::lod::{NodeKey, SelectedNode, TerrainLod};
 use cig_scene::terrain_mesh::{self, NodeCut, TerrainVertex};
 use cig_terrain::TileCache;
@@ -33,6 +34,10 @@ pub struct NodeRecord {
     pub morph: [f32; 4],
     pub atlas: [f32; 4],
     pub imagery: [f32; 4],
+    /// The node's cells replaced by terrain-edit patches: bit `row * cells + col`.
+    pub refined: [u32; 8],
+    /// x: the node's cells a side when it has patches (0: none).
+    pub edit: [f32; 4],
 }
 
 struct Slot {
@@ -46,6 +51,10 @@ struct Slot {
     centre_ecef: glam::DVec3,
     axes: [glam::DVec3; 3],
     last_used_frame: u64,
+    /// The terrain edits' patches over the node (finest-level data only), as of the cache's
+    /// edits revision `patch_revision`.
+    patch: Option<std::sync::Arc<NodePatch>>,
+    patch_revision: Option<u64>,
 }
 
 /// The terrain's GPU resources.
@@ -64,6 +73,9 @@ pub struct TerrainGpu {
     index_capacity: u64,
     pub normal_atlas: wgpu::Texture,
     pub colour_atlas: wgpu::Texture,
+    /// A view's terrain-edit patches (made when there are any).
+    pub patch_vertices: Option<wgpu::Buffer>,
+    pub patch_indices: Option<wgpu::Buffer>,
     slots: Vec<Option<Slot>>,
     by_key: HashMap<NodeKey, usize>,
     /// Where this view's records place nodes in the draped imagery (none without imagery).
@@ -90,6 +102,10 @@ pub struct TerrainFrame {
     pub indices: Vec<u32>,
     /// Nodes drawn (stand-ins included).
     pub nodes: usize,
+    /// The drawn nodes' terrain-edit patches: vertices whose skirt field names their slot
+    /// (`-(slot + 1)`, less a half at a skirt's foot), and their triangles.
+    pub patch_vertices: Vec<TerrainVertex>,
+    pub patch_indices: Vec<u32>,
 }
 
 /// Skirt depth of a node drawn from its own level's data, metres: the floor under the depth
@@ -153,6 +169,8 @@ impl TerrainGpu {
             index_capacity,
             normal_atlas: atlas("terrain normals", wgpu::TextureFormat::Rgba8Unorm),
             colour_atlas: atlas("terrain colours", wgpu::TextureFormat::Rgba8UnormSrgb),
+            patch_vertices: None,
+            patch_indices: None,
             slots: (0..capacity).map(|_| None).collect(),
             by_key: HashMap::new(),
             imagery_frame: None,
@@ -253,6 +271,8 @@ impl TerrainGpu {
                                 centre_ecef: mesh.centre_ecef,
                                 axes: mesh.axes,
                                 last_used_frame: frame,
+                                patch: None,
+                                patch_revision: None,
                             });
                             self.by_key.insert(node.key, index);
                             stats.built += 1;
@@ -269,6 +289,25 @@ impl TerrainGpu {
             };
             if let Some(slot) = slot_index.and_then(|i| self.slots[i].as_mut()) {
                 slot.last_used_frame = frame;
+                // The edits' patches, remade when the edits change.
+                let revision = cache.edits_revision();
+                if slot.data_level == 0 && slot.patch_revision != Some(revision) {
+                    slot.patch_revision = Some(revision);
+                    slot.patch = lod
+                        .resident_source(cache, slot.key)
+                        .filter(|(k, _)| k.level == 0)
+                        .and_then(|(k, tile)| {
+                            build_node_patch(
+                                &lod.layout,
+                                lod.geoid(),
+                                slot.key,
+                                (k, &tile),
+                                slot.centre_ecef,
+                                &cache.edits(),
+                            )
+                        })
+                        .map(std::sync::Arc::new);
+                }
             }
             slot_of.push(slot_index);
         }
@@ -318,6 +357,8 @@ impl TerrainGpu {
         // The caller's buffers, kept from frame to frame.
         out.records.clear();
         out.indices.clear();
+        out.patch_vertices.clear();
+        out.patch_indices.clear();
         out.nodes = 0;
         for (i, (node, slot)) in nodes.iter().zip(&slot_of).enumerate() {
             if let Some(index) = slot {
@@ -377,18 +418,67 @@ impl TerrainGpu {
     }
 
     /// Adds slot `index`'s triangles and record to a view's frame.
-    fn add_to_frame(&self, out: &mut TerrainFrame, index: usize, record: NodeRecord) {
+    fn add_to_frame(&self, out: &mut TerrainFrame, index: usize, mut record: NodeRecord) {
         let Some(slot) = self.slots.get(index).and_then(|s| s.as_ref()) else {
             return;
         };
         if out.records.len() <= index {
             out.records.resize(index + 1, NodeRecord::default());
         }
+        if let Some(patch) = slot.patch.as_ref().filter(|_| slot.data_level == 0) {
+            record.refined = patch.refined_mask;
+            record.edit[0] = self.node_cells as f32;
+            let first = out.patch_vertices.len() as u32;
+            let tag = -(index as f32 + 1.0);
+            out.patch_vertices
+                .extend(patch.vertices.iter().map(|v| TerrainVertex {
+                    skirt: tag - 0.5 * v.skirt,
+                    ..*v
+                }));
+            out.patch_indices
+                .extend(patch.indices.iter().map(|&i| first + i));
+        }
         out.records[index] = record;
         let base = index as u32 * self.vertices_per_node;
         out.indices
             .extend(slot.indices.iter().map(|&i| base + u32::from(i)));
         out.nodes += 1;
+    }
+
+    /// Writes a view's terrain-edit patches to their buffers, growing them when they do not
+    /// fit.
+    pub fn write_patches(&mut self, gpu: &Gpu, vertices: &[TerrainVertex], indices: &[u32]) {
+        if indices.is_empty() {
+            return;
+        }
+        let vertex_bytes = std::mem::size_of_val(vertices) as u64;
+        let index_bytes = std::mem::size_of_val(indices) as u64;
+        let grow = |buffer: &mut Option<wgpu::Buffer>, bytes: u64, usage, label| {
+            if buffer.as_ref().is_none_or(|b| b.size() < bytes) {
+                *buffer = Some(gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: bytes.next_power_of_two().max(1024),
+                    usage: usage | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }));
+            }
+        };
+        grow(
+            &mut self.patch_vertices,
+            vertex_bytes,
+            wgpu::BufferUsages::VERTEX,
+            "terrain edit patch vertices",
+        );
+        grow(
+            &mut self.patch_indices,
+            index_bytes,
+            wgpu::BufferUsages::INDEX,
+            "terrain edit patch indices",
+        );
+        if let (Some(v), Some(i)) = (&self.patch_vertices, &self.patch_indices) {
+            gpu.queue.write_buffer(v, 0, bytemuck::cast_slice(vertices));
+            gpu.queue.write_buffer(i, 0, bytemuck::cast_slice(indices));
+        }
     }
 
     /// Writes a view's triangles to the index buffer, growing it when they do not fit.
@@ -463,6 +553,8 @@ impl TerrainGpu {
                     span,
                 )
             }),
+            refined: [0; 8],
+            edit: [0.0; 4],
         })
     }
 

@@ -1210,3 +1210,120 @@ fn a_slowly_approached_model_never_pops() {
     eprintln!("{frames} frames; largest growth between frames {largest_step:.3}");
     assert!(previous > 200.0, "the tank ends large: {previous} px");
 }
+
+/// Terrain edits around a point of the hills: three craters (6, 3.7 and 1.5 m across), a
+/// 40 m tank ditch with its spoil, a berm and a tank's fighting position.
+fn dig_in(cache: &cig_terrain::TileCache, centre: Geodetic) {
+    use cig_terrain::edits::{EditAuthor, EditShape, GeoPoint, SpoilSide, TerrainEdit};
+    let frame = EnuFrame::new(centre);
+    let at = |east_m: f64, north_m: f64| {
+        let g = frame.enu_to_geodetic(DVec3::new(east_m, north_m, 0.0));
+        GeoPoint {
+            lat_deg: g.lat_deg,
+            lon_deg: g.lon_deg,
+        }
+    };
+    let crater = |east_m, north_m, radius_m: f64, depth_m: f64| EditShape::Crater {
+        centre: at(east_m, north_m),
+        radius_m,
+        depth_m,
+        lip_radius_m: 1.25 * radius_m,
+        lip_height_m: 0.25 * depth_m,
+    };
+    let shapes = [
+        crater(0.0, 0.0, 3.07, 1.53),
+        crater(9.0, 4.0, 1.85, 0.93),
+        crater(-6.0, 7.0, 0.77, 0.38),
+        EditShape::Ditch {
+            from: at(-20.0, -15.0),
+            to: at(20.0, -18.0),
+            width_m: 4.0,
+            depth_m: 2.5,
+            spoil: SpoilSide::Left,
+        },
+        EditShape::Berm {
+            from: at(25.0, -5.0),
+            to: at(30.0, 25.0),
+            width_m: 3.0,
+            height_m: 1.5,
+        },
+        EditShape::Position {
+            centre: at(-25.0, 12.0),
+            heading_deg: 30.0,
+            length_m: 9.0,
+            width_m: 4.5,
+            depth_m: 2.0,
+        },
+    ];
+    for (sequence, shape) in shapes.into_iter().enumerate() {
+        cache
+            .update_edits(|layer| {
+                layer.apply(TerrainEdit {
+                    author: EditAuthor::default(),
+                    sequence: sequence as u32,
+                    time_utc_s: MORNING_UNIX_S,
+                    shape,
+                })
+            })
+            .expect("an edit");
+    }
+}
+
+#[test]
+fn terrain_edits_are_drawn_without_holes_at_every_level_of_detail() {
+    let db = hills();
+    let plain_cache = cache(&db);
+    let edited_cache = cache(&db);
+    let centre = hills_point(0.0, 0.0, 0.0);
+    dig_in(&edited_cache, centre);
+    let mut plain_renderer = renderer(&plain_cache);
+    let mut edited_renderer = renderer(&edited_cache);
+    let size = (256, 192);
+    // Close and grazing, looking down, and far enough for coarser nodes around the edits.
+    for (k, (n, e, agl, heading, pitch)) in [
+        (-25.0, -10.0, 12.0, 20.0, -25.0),
+        (-8.0, 0.0, 30.0, 0.0, -70.0),
+        (30.0, 40.0, 4.0, 220.0, -30.0),
+        (-300.0, -200.0, 120.0, 35.0, -35.0),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let snapshot_view = view(hills_point(n, e, agl), (heading, pitch, 0.0), 60.0, size);
+        for max_pixel_error in [0.0, 1.0, 4.0] {
+            let mut snapshot = FrameSnapshot::new(MORNING_UNIX_S, vec![snapshot_view]);
+            snapshot.max_pixel_error = max_pixel_error;
+            let (edited, stats) = render(&mut edited_renderer, &edited_cache, &snapshot, true);
+            let holes = key_pixels(&edited);
+            if holes > 0 {
+                write_png(
+                    &edited,
+                    &out_dir().join(format!("edit_hole_{k}_{max_pixel_error}.png")),
+                );
+            }
+            assert_eq!(
+                holes, 0,
+                "view {k} at {max_pixel_error} px: background shows through"
+            );
+            if k < 3 && max_pixel_error <= 1.0 {
+                // Up close the edits change the picture: their patches are drawn.
+                let (plain, plain_stats) =
+                    render(&mut plain_renderer, &plain_cache, &snapshot, true);
+                assert!(
+                    stats.terrain_triangles > plain_stats.terrain_triangles + 500,
+                    "view {k}: {} vs {} triangles",
+                    stats.terrain_triangles,
+                    plain_stats.terrain_triangles
+                );
+                let changed = mean_abs_diff(&edited, &plain);
+                assert!(
+                    changed > 0.3,
+                    "view {k}: the edits change {changed} per channel"
+                );
+                if max_pixel_error == 1.0 {
+                    write_png(&edited, &out_dir().join(format!("edits_{k}.png")));
+                }
+            }
+        }
+    }
+}

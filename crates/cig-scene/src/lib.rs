@@ -12,6 +12,7 @@ pub mod bolt;
 pub mod culture;
 pub mod detail;
 pub mod display;
+pub mod edit_patch;
 pub mod horizon;
 pub mod lighting;
 pub mod lights;

@@ -3,6 +3,7 @@
 //! directory on disk ([`store`]).
 
 pub mod culture;
+pub mod edits;
 pub mod features;
 pub mod imagery;
 pub mod import;

@@ -25,6 +25,7 @@
 //! alive for a moment after it is evicted.
 
 use crate::database::{LoadError, TerrainDatabase};
+use crate::edits::EditLayer;
 use crate::pyramid::TileKey;
 use crate::tile::{quadtree_depth_for, tile_memory_bytes, Tile};
 use cig_geo::Geodetic;
@@ -207,6 +208,10 @@ pub struct TileCache {
     eviction_epoch: AtomicU64,
     /// Metres per degree (north, east) at the database centre: the paging frame.
     metres_per_deg: (f64, f64),
+    /// The terrain edits on top of the tiles (`crate::edits`), swapped whole.
+    edits: parking_lot::RwLock<Arc<EditLayer>>,
+    /// Grows by one each time the edits are swapped.
+    edits_revision: AtomicU64,
 }
 
 impl TileCache {
@@ -265,7 +270,37 @@ impl TileCache {
             reserved: Arc::new(AtomicU64::new(0)),
             eviction_epoch: AtomicU64::new(0),
             metres_per_deg: cig_geo::metres_per_degree(centre_lat),
+            edits: parking_lot::RwLock::new(Arc::new(EditLayer::new(
+                layout.grid,
+                layout.tile_cells,
+            ))),
+            edits_revision: AtomicU64::new(0),
         })
+    }
+
+    /// The terrain edits every query and mesh of this database sees.
+    pub fn edits(&self) -> Arc<EditLayer> {
+        Arc::clone(&self.edits.read())
+    }
+
+    /// Replaces the terrain edits: queries see them from their next call.
+    pub fn set_edits(&self, edits: Arc<EditLayer>) {
+        *self.edits.write() = edits;
+        self.edits_revision.fetch_add(1, Ordering::Release);
+    }
+
+    /// Changes the edits in place (applies or heals under the lock, so concurrent changes are
+    /// not lost) and returns what `change` returned.
+    pub fn update_edits<T>(&self, change: impl FnOnce(&mut EditLayer) -> T) -> T {
+        let mut guard = self.edits.write();
+        let result = change(Arc::make_mut(&mut guard));
+        self.edits_revision.fetch_add(1, Ordering::Release);
+        result
+    }
+
+    /// Grows by one each time the edits change.
+    pub fn edits_revision(&self) -> u64 {
+        self.edits_revision.load(Ordering::Acquire)
     }
 
     pub fn database(&self) -> &Arc<TerrainDatabase> {

@@ -47,6 +47,7 @@ use crate::cache::TileCache;
 use crate::culture::CULTURE_BLOCK_CELLS;
 use crate::culture_hit::{segment_entry, top_at, CultureHit, CultureIndex, CultureTest, ItemFrame};
 use crate::database::{GeoidLookup, LoadError, TerrainDatabase};
+use crate::edits::{EditLayer, RefinedCell, BLOCK_SUB_CELLS};
 use crate::material::Material;
 use crate::pyramid::{quadtree_index, PyramidLayout, TileKey};
 use crate::raster::{triangulated_height, triangulated_slopes, Diagonal};
@@ -148,6 +149,9 @@ pub struct QuerySession {
     geoid: GeoidLookup,
     /// The database's culture as the queries bound it; `None` without culture.
     culture: Option<CultureBounds>,
+    /// The terrain edits as of `edits_revision` of the cache.
+    edits: Arc<EditLayer>,
+    edits_revision: u64,
 }
 
 /// How far the database's culture may reach: the culture queries load every finest tile
@@ -289,6 +293,8 @@ impl QuerySession {
             }
         });
         QuerySession {
+            edits_revision: cache.edits_revision(),
+            edits: cache.edits(),
             geoid: GeoidLookup::new(&cache.database().manifest().geoid),
             db: Arc::clone(cache.database()),
             layout,
@@ -308,6 +314,22 @@ impl QuerySession {
 
     pub fn cache(&self) -> &Arc<TileCache> {
         &self.tiles.cache
+    }
+
+    /// Takes the cache's terrain edits when they changed since the last query.
+    #[inline]
+    fn refresh_edits(&mut self) {
+        let revision = self.tiles.cache.edits_revision();
+        if revision != self.edits_revision {
+            self.edits = self.tiles.cache.edits();
+            self.edits_revision = revision;
+        }
+    }
+
+    /// The terrain edits this session answers on.
+    pub fn edits(&mut self) -> &Arc<EditLayer> {
+        self.refresh_edits();
+        &self.edits
     }
 
     /// The finest cell holding a point (snapped onto a post when within [`POST_SNAP`] of one),
@@ -352,14 +374,26 @@ impl QuerySession {
     /// material (CIGI's basic HAT/HOT response).
     #[inline]
     pub fn height_msl_m(&mut self, lat_deg: f64, lon_deg: f64) -> Result<f64, QueryError> {
+        self.refresh_edits();
         let cell = self.cell(lat_deg, lon_deg)?;
         let tile = self.tiles.get(cell.key)?;
-        Ok(triangulated_height(
-            tile.cell_corners(cell.i, cell.j),
-            cell.u,
-            cell.v,
-            Tile::cell_diagonal(cell.i, cell.j),
-        ))
+        let diagonal = Tile::cell_diagonal(cell.i, cell.j);
+        let height =
+            triangulated_height(tile.cell_corners(cell.i, cell.j), cell.u, cell.v, diagonal);
+        Ok(match self.edits.cell(self.global_cell(&cell)) {
+            Some(refined) => height + refined.delta_m(cell.u, cell.v, diagonal),
+            None => height,
+        })
+    }
+
+    /// The finest lattice's (row, column) of a cell.
+    #[inline]
+    fn global_cell(&self, cell: &CellRef) -> (u32, u32) {
+        let shift = self.fast.tile_shift;
+        (
+            (cell.key.row << shift) + cell.i as u32,
+            (cell.key.col << shift) + cell.j as u32,
+        )
     }
 
     /// Heights above terrain of many points (a frame's worth of host requests), height only:
@@ -408,15 +442,24 @@ impl QuerySession {
 
     /// Height of terrain at a point, with normal and material.
     pub fn hot(&mut self, lat_deg: f64, lon_deg: f64) -> Result<SurfacePoint, QueryError> {
-        let CellRef { key, i, j, u, v } = self.cell(lat_deg, lon_deg)?;
+        self.refresh_edits();
+        let cell = self.cell(lat_deg, lon_deg)?;
+        let global = self.global_cell(&cell);
+        let CellRef { key, i, j, u, v } = cell;
         let g = self.layout.grid;
         let tile = self.tiles.get(key)?;
         let n = tile.posts_per_side;
         let corners = tile.cell_corners(i, j);
         let diagonal = Tile::cell_diagonal(i, j);
-        let height = triangulated_height(corners, u, v, diagonal);
+        let mut height = triangulated_height(corners, u, v, diagonal);
         // Slopes of the cell's triangle, per post, then per metre.
-        let (dh_du, dh_dv) = triangulated_slopes(corners, u, v, diagonal);
+        let (mut dh_du, mut dh_dv) = triangulated_slopes(corners, u, v, diagonal);
+        if let Some(refined) = self.edits.cell(global) {
+            height += refined.delta_m(u, v, diagonal);
+            let (du, dv) = refined.slopes(u, v, diagonal);
+            dh_du += du * f64::from(refined.split);
+            dh_dv += dv * f64::from(refined.split);
+        }
         let (north_m_per_deg, east_m_per_deg) = cig_geo::metres_per_degree(lat_deg);
         let dx_m = g.dlon_deg * east_m_per_deg;
         let dy_m = g.dlat_deg * north_m_per_deg;
@@ -489,6 +532,7 @@ impl QuerySession {
                 return Err(QueryError::Altitude { alt_m: p.alt_m });
             }
         }
+        self.refresh_edits();
         let a = from.to_ecef();
         let b = to.to_ecef();
         let length_m = (b - a).length();
@@ -581,7 +625,8 @@ impl QuerySession {
             return Ok(None);
         };
         *crosses = true;
-        let db_max = f64::from(self.db.manifest().max_elevation_m);
+        let edits = Arc::clone(&self.edits);
+        let db_max = f64::from(self.db.manifest().max_elevation_m) + f64::from(edits.max_raise_m());
         if piece.alt.min_on(s, s_end) > db_max {
             return Ok(None);
         }
@@ -602,6 +647,7 @@ impl QuerySession {
             let tile = self.tiles.get(key)?;
             let (ti0, tj0) = ((cy >> shift) << shift, (cx >> shift) << shift);
             let depth = tile.quadtree_depth;
+            let raise_m = edits.tile_range_m(key.row, key.col).0;
             // Descend the quadtree to the largest node that can be skipped, or to a leaf.
             let mut leaf_end = s_end;
             let mut leaf_lo = (tj0, ti0);
@@ -619,7 +665,7 @@ impl QuerySession {
                     )
                     .min(s_end);
                 let bounds = tile.nodes[quadtree_index(d, nx, ny)];
-                if piece.alt.min_on(s, out) > f64::from(bounds.max_m) {
+                if piece.alt.min_on(s, out) > f64::from(bounds.max_m + raise_m) {
                     s = out.max(s + nudge);
                     skipped = true;
                     break;
@@ -649,10 +695,16 @@ impl QuerySession {
                     .max(sc + nudge);
                 let (i, j) = (cy - ti0, cx - tj0);
                 let corners = tile.cell_corners(i, j);
-                let top = corners.iter().fold(f32::NEG_INFINITY, |m, &h| m.max(h));
+                let refined = edits.cell((cy as u32, cx as u32));
+                let top = corners.iter().fold(f32::NEG_INFINITY, |m, &h| m.max(h))
+                    + refined.map_or(0.0, |r| r.max_m);
                 if piece.alt.min_on(sc, cell_out) <= f64::from(top) {
-                    if let Some(hit) = cell_hit(corners, piece, cx as f64, cy as f64, sc, cell_out)
-                    {
+                    let (fx, fy) = (cx as f64, cy as f64);
+                    let hit = match refined {
+                        Some(r) => refined_cell_hit(corners, r, piece, fx, fy, sc, cell_out),
+                        None => cell_hit(corners, piece, fx, fy, sc, cell_out),
+                    };
+                    if let Some(hit) = hit {
                         let (hx, hy) = (piece.x0 + dx * hit, piece.y0 + dy * hit);
                         let ni = ((hy - ti0 as f64).round().max(0.0) as usize)
                             .min(tile.posts_per_side - 1);
@@ -1288,7 +1340,170 @@ impl Walk {
 /// south-west post is `(cx, cy)` and whose corners are `[h00, h01, h10, h11]`.
 #[inline]
 fn cell_hit(corners: [f32; 4], piece: &Piece, cx: f64, cy: f64, s0: f64, s1: f64) -> Option<f64> {
-    match Diagonal::of_cell(cy as usize, cx as usize) {
+    split_cell_hit(
+        corners,
+        Diagonal::of_cell(cy as usize, cx as usize),
+        piece,
+        cx,
+        cy,
+        s0,
+        s1,
+    )
+}
+
+/// [`cell_hit`] on a refined cell (`crate::edits`): the cell's own triangles outside the
+/// refined window, the window's sub-cells (split along the cell's diagonal, carrying the cell's
+/// height plus the edits' change) inside it, in the order the piece meets them.
+fn refined_cell_hit(
+    corners: [f32; 4],
+    refined: &RefinedCell,
+    piece: &Piece,
+    cx: f64,
+    cy: f64,
+    s0: f64,
+    s1: f64,
+) -> Option<f64> {
+    let diagonal = Diagonal::of_cell(cy as usize, cx as usize);
+    let f = f64::from(refined.split);
+    let (ox, oy) = (
+        cx + f64::from(refined.origin.0) / f,
+        cy + f64::from(refined.origin.1) / f,
+    );
+    let (na, nb) = (refined.posts.0 as usize, refined.posts.1 as usize);
+    // The piece in the window's sub-cells.
+    let fine = Piece {
+        x0: (piece.x0 - ox) * f,
+        y0: (piece.y0 - oy) * f,
+        x1: (piece.x1 - ox) * f,
+        y1: (piece.y1 - oy) * f,
+        alt: piece.alt,
+    };
+    let (dx, dy) = (fine.x1 - fine.x0, fine.y1 - fine.y0);
+    let Some((w0, w1)) = clip(fine.x0, dx, 0.0, (na - 1) as f64, s0, s1)
+        .and_then(|(a, b)| clip(fine.y0, dy, 0.0, (nb - 1) as f64, a, b))
+    else {
+        return cell_hit(corners, piece, cx, cy, s0, s1);
+    };
+    // Outside the window the cell's own triangles; a stretch shorter than a hair (a piece
+    // entering the window across the cell's edge, by rounding) is the window's border, which
+    // lies on the cell's triangles or its edge, and is not tested.
+    const HAIR: f64 = 1e-6;
+    let sub_cells = dx.abs() + dy.abs();
+    if let Some(hit) = ((w0 - s0) * sub_cells > HAIR)
+        .then(|| cell_hit(corners, piece, cx, cy, s0, w0))
+        .flatten()
+    {
+        return Some(hit);
+    }
+    let base = |a: usize, b: usize| {
+        triangulated_height(
+            corners,
+            (f64::from(refined.origin.0) + a as f64) / f,
+            (f64::from(refined.origin.1) + b as f64) / f,
+            diagonal,
+        ) as f32
+    };
+    let walk = Walk::new(&fine);
+    let nudge = 1e-9 / (dx.abs() + dy.abs()).max(1.0);
+    // The highest the cell's own triangles reach over a block of the window: at its corners
+    // or where the cell's diagonal crosses its sides (the surface is linear on each side).
+    let (ox_f, oy_f) = (f64::from(refined.origin.0), f64::from(refined.origin.1));
+    let block_base_top = |a_lo: usize, a_hi: usize, b_lo: usize, b_hi: usize| -> f64 {
+        let (x0, x1) = (ox_f + a_lo as f64, ox_f + a_hi as f64);
+        let (y0, y1) = (oy_f + b_lo as f64, oy_f + b_hi as f64);
+        let at = |x: f64, y: f64| triangulated_height(corners, x / f, y / f, diagonal);
+        let mut top = at(x0, y0).max(at(x1, y0)).max(at(x0, y1)).max(at(x1, y1));
+        // The diagonal: y = x (south-west to north-east) or y = f - x.
+        let on = |x: f64| match diagonal {
+            Diagonal::SouthWestNorthEast => x,
+            Diagonal::NorthWestSouthEast => f - x,
+        };
+        for x in [x0, x1] {
+            let y = on(x);
+            if (y0..=y1).contains(&y) {
+                top = top.max(at(x, y));
+            }
+        }
+        for y in [y0, y1] {
+            let x = on(y);
+            if (x0..=x1).contains(&x) {
+                top = top.max(at(x, y));
+            }
+        }
+        top
+    };
+    let bs = BLOCK_SUB_CELLS as usize;
+    let blocks_east = refined.blocks.0 as usize;
+    let mut s = w0;
+    while s < w1 {
+        let probe = (s + nudge).min(w1);
+        let a = ((fine.x0 + dx * probe).max(0.0) as usize).min(na - 2);
+        let b = ((fine.y0 + dy * probe).max(0.0) as usize).min(nb - 2);
+        let (ba, bb) = (a / bs, b / bs);
+        let (a_lo, a_hi) = (ba * bs, ((ba + 1) * bs).min(na - 1));
+        let (b_lo, b_hi) = (bb * bs, ((bb + 1) * bs).min(nb - 1));
+        let block_out = walk
+            .exit(a_lo as f64, a_hi as f64, b_lo as f64, b_hi as f64, s)
+            .min(w1)
+            .max(s + nudge);
+        let block_max = refined
+            .block_max_m
+            .get(bb * blocks_east + ba)
+            .copied()
+            .unwrap_or(refined.max_m);
+        // The sightline passes over a block above the cell's own triangles there plus the
+        // block's highest rise; a block that only lowers the ground is met only where the
+        // cell's own triangles are.
+        let lowest = piece.alt.min_on(s, block_out);
+        let skip = lowest > block_base_top(a_lo, a_hi, b_lo, b_hi) + f64::from(block_max.max(0.0))
+            || (block_max <= 0.0 && cell_hit(corners, piece, cx, cy, s, block_out).is_none());
+        if !skip {
+            let mut sc = s;
+            while sc < block_out {
+                let probe = (sc + nudge).min(block_out);
+                let a = ((fine.x0 + dx * probe).max(0.0) as usize).clamp(a_lo, a_hi - 1);
+                let b = ((fine.y0 + dy * probe).max(0.0) as usize).clamp(b_lo, b_hi - 1);
+                let out = walk
+                    .exit(a as f64, a as f64 + 1.0, b as f64, b as f64 + 1.0, sc)
+                    .min(block_out)
+                    .max(sc + nudge);
+                let change = refined.corners(a, b);
+                let sub = [
+                    base(a, b) + change[0],
+                    base(a + 1, b) + change[1],
+                    base(a, b + 1) + change[2],
+                    base(a + 1, b + 1) + change[3],
+                ];
+                let top = sub.iter().fold(f32::NEG_INFINITY, |m, &h| m.max(h));
+                if piece.alt.min_on(sc, out) <= f64::from(top) {
+                    if let Some(hit) =
+                        split_cell_hit(sub, diagonal, &fine, a as f64, b as f64, sc, out)
+                    {
+                        return Some(hit);
+                    }
+                }
+                sc = out;
+            }
+        }
+        s = block_out;
+    }
+    ((s1 - w1) * sub_cells > HAIR)
+        .then(|| cell_hit(corners, piece, cx, cy, w1, s1))
+        .flatten()
+}
+
+/// [`cell_hit`] on a unit cell at `(cx, cy)` split along `diagonal`.
+#[inline]
+fn split_cell_hit(
+    corners: [f32; 4],
+    diagonal: Diagonal,
+    piece: &Piece,
+    cx: f64,
+    cy: f64,
+    s0: f64,
+    s1: f64,
+) -> Option<f64> {
+    match diagonal {
         Diagonal::SouthWestNorthEast => south_west_split_hit(corners, piece, cx, cy, s0, s1),
         Diagonal::NorthWestSouthEast => {
             // Mirrored east-west about the cell's middle, the cell is split south-west to

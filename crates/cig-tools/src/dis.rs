@@ -312,6 +312,38 @@ pub fn pdu_json(pdu: &DecodedPdu, from: SocketAddr) -> Value {
                 },
             );
         }
+        DisMessage::PointObjectState(o) => {
+            put("object_id", json!(o.object_id.to_string()));
+            put("object_type", json!(o.object_type.to_string()));
+            put("update_number", json!(o.update_number));
+            put(
+                "position",
+                geodetic_json(DVec3::from_array(o.location_ecef_m)),
+            );
+            put(
+                "specific_appearance",
+                json!(format!("0x{:08x}", o.specific_appearance)),
+            );
+        }
+        DisMessage::LinearObjectState(o) => {
+            put("object_id", json!(o.object_id.to_string()));
+            put("object_type", json!(o.object_type.to_string()));
+            put("update_number", json!(o.update_number));
+            let segments: Vec<Value> = o
+                .segments
+                .iter()
+                .map(|s| {
+                    json!({
+                        "position": geodetic_json(DVec3::from_array(s.location_ecef_m)),
+                        "length_m": num(f64::from(s.length_m)),
+                        "width_m": num(f64::from(s.width_m)),
+                        "height_m": num(f64::from(s.height_m)),
+                        "depth_m": num(f64::from(s.depth_m)),
+                    })
+                })
+                .collect();
+            put("segments", json!(segments));
+        }
         DisMessage::EnvironmentalProcess(e) => {
             put("process_id", json!(id_text(&e.process_id)));
             put("environment_type", json!(type_text(&e.environment_type)));
@@ -483,6 +515,18 @@ pub fn pdu_line(pdu: &DecodedPdu, from: SocketAddr) -> String {
             id_text(&r.originating_id),
             id_text(&r.receiving_id),
             r.request_id
+        ),
+        DisMessage::PointObjectState(o) => format!(
+            "{head}: point object {} type {} at {}",
+            o.object_id,
+            o.object_type,
+            where_(DVec3::from_array(o.location_ecef_m))
+        ),
+        DisMessage::LinearObjectState(o) => format!(
+            "{head}: linear object {} type {} {} segments",
+            o.object_id,
+            o.object_type,
+            o.segments.len()
         ),
         DisMessage::EnvironmentalProcess(e) => format!(
             "{head}: process {} type {} {} records{}",

@@ -2,8 +2,9 @@
 //! the reports printed (figures as JSON, or the benchmark's summary).
 
 use crate::cli::{
-    BenchChannelsArgs, BenchCultureArgs, BenchDbArgs, BenchEnvArgs, BenchImageryArgs, BenchNetArgs,
-    BenchParticlesArgs, BenchRenderArgs, BenchSeaArgs, BenchSensorArgs, BenchSoakArgs,
+    BenchChannelsArgs, BenchCultureArgs, BenchDbArgs, BenchDynterrainArgs, BenchEnvArgs,
+    BenchImageryArgs, BenchNetArgs, BenchParticlesArgs, BenchRenderArgs, BenchSeaArgs,
+    BenchSensorArgs, BenchSoakArgs,
 };
 use crate::config::Config;
 use crate::output::build_progress;
@@ -201,6 +202,16 @@ pub fn sensor(args: &BenchSensorArgs, config: &Config) -> anyhow::Result<()> {
         commit: commit(),
     };
     let report = cig_bench::sensor::run(&options)?;
+    print_report(&report, args.json)
+}
+
+pub fn dynterrain(args: &BenchDynterrainArgs, config: &Config) -> anyhow::Result<()> {
+    let options = cig_bench::dynterrain::DynTerrainOptions {
+        db: args.db.clone(),
+        paging: config.paging.clone(),
+        commit: commit(),
+    };
+    let report = cig_bench::dynterrain::run(&options)?;
     print_report(&report, args.json)
 }
 

@@ -356,6 +356,12 @@ pub struct ServeArgs {
     /// serving began), so tests and soak runs end with their host.
     #[arg(long, value_name = "SECONDS")]
     pub idle_exit_s: Option<f64>,
+    /// Terrain edits journal: start from the edits in FILE (made with `cig db edits
+    /// --export` or an earlier `serve --edits`; created when missing) and append every edit
+    /// made while serving (craters from detonations, other nodes' edits), so the terrain's
+    /// state survives a restart. The database's tiles are never changed.
+    #[arg(long, value_name = "FILE")]
+    pub edits: Option<PathBuf>,
     /// Exposure: `view` adapts to what the view shows; `natural` keeps the natural
     /// illuminance's, the same in every channel (so no seam). Default: natural when --view
     /// is given or the role is slave, else view.
@@ -441,6 +447,55 @@ pub enum DbCommand {
     Culture(CultureArgs),
     /// Describe a database.
     Info(InfoArgs),
+    /// Add a crater to a database's terrain edits (kept in DB/edits.jsonl beside its tiles,
+    /// which are never changed): from a charge by cube-root scaling in the soil there, or of
+    /// an explicit size.
+    #[command(allow_negative_numbers = true)]
+    Crater(CraterArgs),
+    /// List, export, import (merge) or clear a database's terrain edits.
+    Edits(EditsArgs),
+}
+
+#[derive(Args)]
+pub struct CraterArgs {
+    pub db: PathBuf,
+    /// Where: "LAT,LON" in degrees.
+    #[arg(long, value_name = "LAT,LON", allow_hyphen_values = true)]
+    pub at: String,
+    /// TNT-equivalent charge, kg: the crater's radius and depth follow cube-root scaling with
+    /// the coefficients of the ground's material there.
+    #[arg(long, allow_negative_numbers = true)]
+    pub charge_kg: Option<f64>,
+    /// An explicit crater radius, metres (with --depth-m).
+    #[arg(long, allow_negative_numbers = true)]
+    pub radius_m: Option<f64>,
+    /// An explicit crater depth, metres (with --radius-m).
+    #[arg(long, allow_negative_numbers = true)]
+    pub depth_m: Option<f64>,
+    /// The soil is wet (wet soils crater more).
+    #[arg(long)]
+    pub wet: bool,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct EditsArgs {
+    pub db: PathBuf,
+    /// Write the database's edits to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub export: Option<PathBuf>,
+    /// Add the edits of FILE (one written by --export or `cig serve --edits`) to the
+    /// database's; all or nothing.
+    #[arg(long, value_name = "FILE")]
+    pub import: Option<PathBuf>,
+    /// Remove every edit.
+    #[arg(long, conflicts_with_all = ["export", "import"])]
+    pub clear: bool,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]
@@ -542,6 +597,33 @@ pub enum QueryCommand {
     /// Line of sight between two points (altitudes above the WGS84 ellipsoid).
     #[command(allow_negative_numbers = true)]
     Los(LosArgs),
+    /// The soil under a point for a vehicle: Bekker sinkage, compaction resistance, go/no-go.
+    #[command(allow_negative_numbers = true)]
+    Soil(SoilArgs),
+}
+
+#[derive(Args)]
+pub struct SoilArgs {
+    pub db: PathBuf,
+    /// Latitude, degrees.
+    pub lat: f64,
+    /// Longitude, degrees.
+    pub lon: f64,
+    /// The vehicle's mass, kg.
+    #[arg(long, allow_negative_numbers = true)]
+    pub vehicle_mass_kg: f64,
+    /// Its ground contact area (all tracks, wheels or feet together), square metres.
+    #[arg(long, allow_negative_numbers = true)]
+    pub contact_area_m2: f64,
+    /// Running gear: tracked, wheeled or foot.
+    #[arg(long, default_value = "tracked")]
+    pub gear: String,
+    /// The soil is wet.
+    #[arg(long)]
+    pub wet: bool,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]
@@ -608,6 +690,20 @@ pub enum BenchCommand {
     /// The sea: the wave cascades' update, 1000 HOT over the sea, a periscope frame at sea
     /// state 5 with three ships against a flat sea.
     Sea(BenchSeaArgs),
+    /// Dynamic terrain: a crater applied, and HAT and LOS inside an area of 1000 edits
+    /// against the same queries on the unedited terrain.
+    Dynterrain(BenchDynterrainArgs),
+}
+
+#[derive(Args)]
+pub struct BenchDynterrainArgs {
+    /// Terrain database directory (edits are made in memory around its centre; its edit
+    /// file is not read or changed).
+    #[arg(long)]
+    pub db: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]

@@ -10,6 +10,7 @@ mod db;
 mod demo;
 mod dis;
 mod display;
+mod dynterrain;
 mod ephem;
 mod host;
 mod ir;
@@ -68,8 +69,11 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Db(cli::DbCommand::Info(args)) => db::info(&args),
         cli::Command::Db(cli::DbCommand::Imagery(args)) => db::imagery(&args),
         cli::Command::Db(cli::DbCommand::Culture(args)) => db::culture(&args),
+        cli::Command::Db(cli::DbCommand::Crater(args)) => dynterrain::crater(&args, &config),
+        cli::Command::Db(cli::DbCommand::Edits(args)) => dynterrain::edits(&args, &config),
         cli::Command::Query(cli::QueryCommand::Hat(args)) => query::hat(&args, &config),
         cli::Command::Query(cli::QueryCommand::Los(args)) => query::los(&args, &config),
+        cli::Command::Query(cli::QueryCommand::Soil(args)) => dynterrain::soil(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Db(args)) => bench::db(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Imagery(args)) => bench::imagery(&args, &config),
         cli::Command::Render(args) => render::run(&args, &config),
@@ -83,6 +87,9 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Bench(cli::BenchCommand::Soak(args)) => bench::soak(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Sensor(args)) => bench::sensor(&args, &config),
         cli::Command::Bench(cli::BenchCommand::Sea(args)) => bench::sea(&args, &config),
+        cli::Command::Bench(cli::BenchCommand::Dynterrain(args)) => {
+            bench::dynterrain(&args, &config)
+        }
         cli::Command::Plume(args) => plume::run(&args),
         cli::Command::Demo(args) => demo::run(&args, &config),
         cli::Command::Ephem(args) => ephem::run(&args),

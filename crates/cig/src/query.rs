@@ -4,16 +4,15 @@ use crate::cli::{HatArgs, LosArgs};
 use crate::config::Config;
 use anyhow::Context;
 use cig_geo::Geodetic;
-use cig_terrain::{QuerySession, TileCache};
-use cig_terrain_io::store::open_database;
+use cig_terrain::QuerySession;
 use std::path::Path;
-use std::sync::Arc;
 
 /// Opens a database with a paging cache and a query session.
 pub fn session(db: &Path, config: &Config) -> anyhow::Result<QuerySession> {
-    let db = Arc::new(open_database(db)?);
-    let cache = TileCache::new(db, config.paging.clone())?;
-    Ok(QuerySession::new(Arc::new(cache)))
+    Ok(QuerySession::new(crate::dynterrain::open_cache(
+        db,
+        &config.paging,
+    )?))
 }
 
 pub fn surface_json(s: &cig_terrain::SurfacePoint) -> serde_json::Value {

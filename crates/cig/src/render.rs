@@ -12,7 +12,6 @@ use cig_scene::snapshot::{place_entity, Clamp, EntitySpec};
 use cig_scene::{FovDeg, FrameSnapshot, Hpr, View};
 use cig_terrain::database::GeoidLookup;
 use cig_terrain::{QuerySession, TileCache};
-use cig_terrain_io::store::open_database;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -359,8 +358,7 @@ pub fn write_png(image: &Image, path: &Path) -> anyhow::Result<()> {
 
 /// Opens a database with its cache, the GPU and a renderer.
 pub fn open(db: &Path, config: &Config) -> anyhow::Result<(Arc<TileCache>, Renderer)> {
-    let database = Arc::new(open_database(db)?);
-    let cache = Arc::new(TileCache::new(database, config.paging.clone())?);
+    let cache = crate::dynterrain::open_cache(db, &config.paging)?;
     let gpu = Gpu::headless()?;
     let mut renderer = Renderer::new(gpu, &cache, cig_render::FRAME_FORMAT);
     config.configure_renderer(&mut renderer)?;

@@ -29,7 +29,6 @@ use cig_net::{
 use cig_scene::lighting::FogMode;
 use cig_scene::{FovDeg, Hpr, View};
 use cig_terrain::{QuerySession, TileCache};
-use cig_terrain_io::store::open_database;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -166,9 +165,13 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
         .map(|h| resolve(h, "--cigi-host"))
         .transpose()?;
     let models = scenario_models(&scenario, args.scenario.as_deref())?;
-    let database = Arc::new(open_database(&args.db)?);
-    let cache = Arc::new(TileCache::new(database, config.paging.clone())?);
+    let cache = crate::dynterrain::open_cache(&args.db, &config.paging)?;
     let mut query = QuerySession::new(Arc::clone(&cache));
+    let mut journal = args
+        .edits
+        .as_deref()
+        .map(|path| crate::dynterrain::EditJournal::open(path, &cache))
+        .transpose()?;
 
     let mut dis_settings = scenario.dis.clone();
     if let Some(port) = args.dis_port {
@@ -325,6 +328,9 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
             // Synchronous mode and no host frame within a period: nothing new to draw.
             continue;
         };
+        if let Some(journal) = journal.as_mut() {
+            journal.record(&cache)?;
+        }
         totals.lights = snapshot.lights.len();
         totals.lights_max = totals.lights_max.max(totals.lights);
         if let Output::Offscreen { renderer, out_dir } = &mut output {

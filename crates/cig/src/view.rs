@@ -9,8 +9,6 @@ use cig_render::{ViewerError, ViewerOptions};
 use cig_scene::lighting::FogMode;
 use cig_scene::Hpr;
 use cig_terrain::TileCache;
-use cig_terrain_io::store::open_database;
-use std::sync::Arc;
 
 /// Near the south edge of the database, a little above its highest point, in the middle.
 pub fn default_eye(cache: &TileCache) -> Geodetic {
@@ -60,8 +58,7 @@ pub fn run(args: &ViewArgs, config: &Config) -> anyhow::Result<()> {
         .with_context(|| format!("--fog \"{}\" is not off, linear, exp or exp2", args.fog))?;
     let correction =
         crate::display::read_display_correction(args.warp.as_deref(), args.blend.as_deref())?;
-    let database = Arc::new(open_database(&args.db)?);
-    let cache = Arc::new(TileCache::new(database, config.paging.clone())?);
+    let cache = crate::dynterrain::open_cache(&args.db, &config.paging)?;
     let eye = eye.unwrap_or_else(|| default_eye(&cache));
     let mut options = ViewerOptions::new(eye, orientation);
     options.title = format!("cig view: {}", args.db.display());

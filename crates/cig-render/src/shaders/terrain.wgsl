@@ -15,6 +15,11 @@ struct Node {
     // Imagery rectangle: level-0 imagery texel coordinates (column, row) of the node's
     // south-west post relative to the view's anchor, and the node's extent in those texels.
     imagery: vec4<f32>,
+    // The node's cells replaced by terrain-edit patches: bit row * cells + col.
+    refined_lo: vec4<u32>,
+    refined_hi: vec4<u32>,
+    // x: the node's cells a side when it has patches (0: none).
+    edit: vec4<f32>,
 };
 
 // One imagery clipmap level (imagery.rs LevelParams).
@@ -49,6 +54,12 @@ struct VertexOut {
     @location(2) @interpolate(flat) node: u32,
     // Level-0 imagery texel coordinates (column, row) relative to the view's anchor.
     @location(3) img: vec2<f32>,
+    // 1 for a terrain-edit patch's fragment, 0 for a node's.
+    @location(4) @interpolate(flat) patched: u32,
+    // The place on the node's grid (east, north; 0 to 1).
+    @location(5) grid: vec2<f32>,
+    // A patch's normal (ECEF), interpolated from its posts'.
+    @location(6) patch_normal: vec3<f32>,
 };
 
 @vertex
@@ -59,22 +70,37 @@ fn vs_main(
     @location(3) skirt: f32,
     @builtin(vertex_index) vertex_index: u32,
 ) -> VertexOut {
-    // One draw covers every node: a vertex's slot of the pool is its node.
-    let slot = vertex_index / u32(g.cam_forward.w + 0.5);
+    // One draw covers every node: a vertex's slot of the pool is its node. A terrain-edit
+    // patch's vertex names its node's slot in its skirt field: -(slot + 1), less a half at a
+    // skirt's foot.
+    var slot = vertex_index / u32(g.cam_forward.w + 0.5);
+    var hang = skirt;
+    var patched = 0u;
+    if (skirt < 0.0) {
+        let tag = -skirt;
+        slot = u32(floor(tag)) - 1u;
+        hang = select(0.0, 1.0, fract(tag) > 0.25);
+        patched = 1u;
+    }
     let node = nodes[slot];
-    let target_rel = morph_target + node.offset.xyz;
+    // A patch does not morph; its morph target field is its normal.
+    let morph_to = select(morph_target, position, patched == 1u);
+    let target_rel = morph_to + node.offset.xyz;
     let d = length(target_rel);
     // Morph by distance, and never less than the node's fade-in floor (finer data arriving).
     let m = max(clamp((d - node.morph.x) / max(node.morph.y - node.morph.x, 1e-3), 0.0, 1.0), node.morph.w);
-    var rel = mix(position, morph_target, m) + node.offset.xyz;
+    var rel = mix(position, morph_to, m) + node.offset.xyz;
     // A skirt's foot hangs below its edge post by what neighbours can differ there.
-    rel -= node.axis_u.xyz * (skirt * min(node.morph.z + node.offset.w * d, node.axis_u.w));
+    rel -= node.axis_u.xyz * (hang * min(node.morph.z + node.offset.w * d, node.axis_u.w));
     var out: VertexOut;
     out.clip = g.view_proj * vec4<f32>(refracted(rel), 1.0);
     out.rel = rel;
     out.uv = node.atlas.xy + uv * node.atlas.zw;
     out.img = node.imagery.xy + uv * node.imagery.zw;
     out.node = slot;
+    out.patched = patched;
+    out.patch_normal = select(vec3<f32>(0.0), morph_target, patched == 1u);
+    out.grid = uv;
     return out;
 }
 
@@ -290,6 +316,28 @@ fn is_sea(kind: u32, rel: vec3<f32>) -> bool {
     return along + across2 / (2.0 * max(g.fog_layer.w, 1.0e6)) <= g.detail_north.w;
 }
 
+// Linear albedo of freshly turned earth (dark loam, about 0.06).
+const DISTURBED_SOIL: vec3<f32> = vec3<f32>(0.075, 0.055, 0.038);
+
+// Whether the node's cell at `grid` is drawn by a terrain-edit patch instead.
+fn patched_cell(node: Node, grid: vec2<f32>) -> bool {
+    let cells = node.edit.x;
+    if (cells < 0.5) {
+        return false;
+    }
+    let last = u32(cells) - 1u;
+    let cell = min(vec2<u32>(max(floor(grid * cells), vec2<f32>(0.0))), vec2<u32>(last));
+    let bit = cell.y * u32(cells) + cell.x;
+    let word = bit / 32u;
+    var w = 0u;
+    if (word < 4u) {
+        w = node.refined_lo[word];
+    } else {
+        w = node.refined_hi[word - 4u];
+    }
+    return ((w >> (bit % 32u)) & 1u) == 1u;
+}
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if (g.flags.x > 0.5) {
@@ -301,8 +349,15 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let img_dx = length(dpdx(in.img));
     let img_dy = length(dpdy(in.img));
     let img_lambda = log2(max(max(min(img_dx, img_dy), 0.5 * max(img_dx, img_dy)), 1e-6));
+    if (in.patched == 0u && patched_cell(node, in.grid)) {
+        discard;
+    }
     let ne = textureSample(normal_atlas, atlas_sampler, in.uv).xyz * 2.0 - 1.0;
-    let n = normalize(node.axis_e.xyz * ne.x + node.axis_n.xyz * ne.y + node.axis_u.xyz * ne.z);
+    var n = normalize(node.axis_e.xyz * ne.x + node.axis_n.xyz * ne.y + node.axis_u.xyz * ne.z);
+    // A patch's own normal: its fine posts carry the edits' shape, the node's normals do not.
+    if (in.patched == 1u && dot(in.patch_normal, in.patch_normal) > 0.0) {
+        n = normalize(in.patch_normal);
+    }
     let distance_m = length(in.rel);
     if (sensor_on()) {
         // A thermal sensor: the material's temperature for this normal, as band radiance.
@@ -391,6 +446,14 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     }
     if (is_sea(surface.kind, in.rel)) {
         discard;
+    }
+    if (in.patched == 1u) {
+        // Earth the edits moved: bare, dark soil (the patch normal's length is one plus how
+        // disturbed the ground is).
+        let disturbed = clamp(length(in.patch_normal) - 1.0, 0.0, 1.0);
+        let plane = vec2<f32>(dot(in.rel, g.detail_east.xyz), dot(in.rel, g.detail_north.xyz));
+        let soil = DISTURBED_SOIL * (0.75 + 0.5 * value_noise(plane / 0.6 + vec2<f32>(17.0, 5.0)));
+        albedo = mix(albedo, soil, 0.85 * disturbed);
     }
     if (nvg_on()) {
         albedo = nvg_terrain_albedo(surface.kind, albedo);

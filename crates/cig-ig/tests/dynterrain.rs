@@ -1,0 +1,357 @@
+//! Dynamic terrain in a DIS exercise: a Detonation makes the same crater on every IG, a late
+//! joiner gets the earlier edits from the others' re-announcements, and edits survive their
+//! Object State PDUs.
+
+use cig_dis::codec::{encode_pdu, DisMessage, DisVersion, EncodeHeader};
+use cig_dis::dis_rs::detonation::model::{Detonation, DetonationDescriptor};
+use cig_dis::dis_rs::enumerations::{
+    Country, DetonationResult, EntityKind, MunitionDescriptorWarhead, PlatformDomain,
+};
+use cig_dis::dis_rs::model::{
+    EntityId, EntityType, EventId, Location, MunitionDescriptor, VectorF32,
+};
+use cig_dis::dis_rs::BodyRaw;
+use cig_effects::EffectsConfig;
+use cig_environment::UtcTime;
+use cig_geo::Geodetic;
+use cig_ig::terrain_edits::{edit_of_pdu, pdu_of_edit};
+use cig_ig::{IgWorld, Scenario, SessionConfig, WorldConfig};
+use cig_scene::lighting::FogMode;
+use cig_terrain::build::build_pyramid;
+use cig_terrain::database::{GeoidGrid, Manifest, MemoryTileStore, TerrainDatabase};
+use cig_terrain::edits::{EditAuthor, EditShape, GeoPoint, SpoilSide, TerrainEdit};
+use cig_terrain::material::Material;
+use cig_terrain::raster::{GeoGrid, Raster};
+use cig_terrain::{PagingConfig, QuerySession, TileCache};
+use std::sync::Arc;
+
+const SOUTH: f64 = 36.0;
+const WEST: f64 = -121.0;
+
+/// 129 x 129 posts 30 m apart, gently sloping, sand in the west half and paved road east.
+fn query() -> QuerySession {
+    let (n, e) = cig_geo::metres_per_degree(SOUTH);
+    let grid = GeoGrid {
+        south_lat_deg: SOUTH,
+        west_lon_deg: WEST,
+        dlat_deg: 30.0 / n,
+        dlon_deg: 30.0 / e,
+        rows: 129,
+        cols: 129,
+    };
+    let elevation_m = (0..grid.len())
+        .map(|k| 100.0 + 0.05 * (k % grid.cols) as f32 + 0.03 * (k / grid.cols) as f32)
+        .collect();
+    let material = (0..grid.len())
+        .map(|k| {
+            if k % grid.cols < 64 {
+                Material::Sand
+            } else {
+                Material::PavedRoad
+            }
+        })
+        .collect();
+    let raster = Raster {
+        grid,
+        elevation_m,
+        material: Some(material),
+    };
+    let store = Arc::new(MemoryTileStore::new());
+    let summary = build_pyramid::<cig_terrain::build::BuildError>(&raster, 64, &mut |t| {
+        store.insert(t.key, t.encode());
+        Ok(())
+    })
+    .expect("build");
+    let mut geoid = GeoidGrid::zero();
+    geoid.undulation_m.iter_mut().for_each(|v| *v = -30.0);
+    let manifest = Manifest::from_build(&summary, geoid, 0, vec!["test".into()]);
+    let db = TerrainDatabase::new(manifest, store as Arc<dyn cig_terrain::TileStore>).expect("db");
+    let cache = TileCache::new(Arc::new(db), PagingConfig::default()).expect("cache");
+    QuerySession::new(Arc::new(cache))
+}
+
+fn at(row: f64, col: f64) -> (f64, f64) {
+    let (n, e) = cig_geo::metres_per_degree(SOUTH);
+    (SOUTH + row * 30.0 / n, WEST + col * 30.0 / e)
+}
+
+fn world(application: u16) -> IgWorld {
+    let scenario = format!(
+        "start_time = \"2026-06-21T12:00:00Z\"\n[dis]\nsite = 1\napplication = {application}\nexercise = 3\n{}",
+        if application == 10 { "time_master = true\n" } else { "" }
+    );
+    IgWorld::new(
+        Scenario::from_toml(&scenario).expect("scenario"),
+        WorldConfig {
+            session: SessionConfig::default(),
+            start: UtcTime::from_calendar(2026, 6, 21, 12, 0, 0.0).expect("time"),
+            fog_mode: FogMode::Exponential,
+            effects: EffectsConfig::default(),
+            join_exercise: true,
+        },
+    )
+    .expect("world")
+}
+
+/// A 155 mm HE round (SISO-REF-010 2.9.225.2.14.2) bursting `above_m` over the ground.
+fn shell(q: &mut QuerySession, event: u16, row: f64, col: f64, above_m: f64) -> Vec<u8> {
+    let (lat, lon) = at(row, col);
+    let ground = q.hot(lat, lon).expect("hot").height_ellipsoid_m();
+    let impact = Geodetic::new(lat, lon, ground + above_m).to_ecef();
+    let munition = MunitionDescriptor {
+        entity_type: EntityType {
+            kind: EntityKind::from(2),
+            domain: PlatformDomain::from(9),
+            country: Country::from(225),
+            category: 2,
+            subcategory: 14,
+            specific: 2,
+            extra: 0,
+        },
+        warhead: MunitionDescriptorWarhead::from(1000),
+        quantity: 1,
+        ..MunitionDescriptor::default()
+    };
+    let detonation = Detonation::builder()
+        .with_source_entity_id(EntityId::new(7, 8, 1))
+        .with_target_entity_id(EntityId::new(0, 0, 0))
+        .with_exploding_entity_id(EntityId::new(7, 8, 2))
+        .with_event_id(EventId::new(7, 8, event))
+        .with_velocity(VectorF32::new(0.0, 0.0, -300.0))
+        .with_world_location(Location::new(impact.x, impact.y, impact.z))
+        .with_descriptor(DetonationDescriptor::Munition(munition))
+        .with_entity_location(VectorF32::new(0.0, 0.0, 0.0))
+        .with_detonation_result(DetonationResult::from(3))
+        .build();
+    encode_pdu(
+        EncodeHeader {
+            version: DisVersion::V7,
+            exercise_id: 3,
+            timestamp: cig_dis::codec::timestamp_from_seconds_past_hour(1.0, true),
+        },
+        &DisMessage::Detonation(Box::new(detonation)),
+    )
+    .expect("encode")
+}
+
+#[test]
+fn a_detonation_makes_the_same_crater_on_every_ig_and_a_late_joiner_gets_it() {
+    let (mut qa, mut qb, mut qc) = (query(), query(), query());
+    let (mut a, mut b, mut c) = (world(10), world(11), world(12));
+    let sand = shell(&mut qa, 41, 60.3, 30.6, 0.0);
+    let road = shell(&mut qa, 42, 60.3, 100.4, 0.0);
+    let air = shell(&mut qa, 43, 80.0, 30.0, 40.0);
+    let (lat, lon) = at(60.3, 30.6);
+    let (road_lat, road_lon) = at(60.3, 100.4);
+    let before = qa.hot(lat, lon).expect("hot").height_msl_m;
+    let before_road = qa.hot(road_lat, road_lon).expect("hot").height_msl_m;
+    for frame in 0..60 * 12 {
+        if frame == 5 {
+            for pdu in [&sand, &road, &air] {
+                a.receive_dis(pdu, &mut qa);
+            }
+        }
+        if frame == 9 {
+            for pdu in [&sand, &road, &air] {
+                b.receive_dis(pdu, &mut qb);
+            }
+        }
+        a.step(1.0 / 60.0, &mut qa);
+        b.step(1.0 / 60.0, &mut qb);
+        c.step(1.0 / 60.0, &mut qc);
+        // C joins after the shots: it hears only A's and B's re-announcements.
+        let from_a = a.take_dis_outgoing();
+        let from_b = b.take_dis_outgoing();
+        for d in from_a.iter().chain(&from_b) {
+            if frame > 60 {
+                c.receive_dis(d, &mut qc);
+            }
+        }
+        for d in from_a {
+            b.receive_dis(&d, &mut qb);
+        }
+        for d in from_b {
+            a.receive_dis(&d, &mut qa);
+        }
+        let _ = c.take_dis_outgoing();
+    }
+    let ca = a.exercise().expect("a").counters();
+    assert_eq!(ca.craters_made, 2, "sand and road, no air burst: {ca:?}");
+    assert!(ca.terrain_edits_sent >= 2, "{ca:?}");
+    let hot = |q: &mut QuerySession, lat, lon| q.hot(lat, lon).expect("hot").height_msl_m;
+    let (ha, hb, hc) = (
+        hot(&mut qa, lat, lon),
+        hot(&mut qb, lat, lon),
+        hot(&mut qc, lat, lon),
+    );
+    assert!(
+        (ha - hb).abs() < 1e-3 && (ha - hc).abs() < 1e-3,
+        "{ha} {hb} {hc}"
+    );
+    // 155 mm in dry sand: the table's 7 kg, C_D 0.149: about 0.28 m deep.
+    let depth = before - ha;
+    assert!(depth > 0.2 && depth < 0.45, "{depth}");
+    // On the paved road the crater is shallower than in the sand.
+    let road_depth = before_road - hot(&mut qa, road_lat, road_lon);
+    assert!(
+        road_depth > 0.05 && road_depth < 0.6 * depth,
+        "{road_depth} vs {depth}"
+    );
+    let cc = c.exercise().expect("c").counters();
+    assert_eq!(cc.terrain_edits_received, 2, "{cc:?}");
+    assert_eq!(cc.craters_made, 0);
+    assert_eq!(qc.edits().len(), 2);
+}
+
+fn edit(shape: EditShape) -> TerrainEdit {
+    TerrainEdit {
+        author: EditAuthor {
+            site: 4,
+            application: 9,
+        },
+        sequence: 300,
+        time_utc_s: 1.9e9,
+        shape,
+    }
+}
+
+#[test]
+fn edits_survive_their_object_state_pdus() {
+    let (lat, lon) = at(40.0, 40.0);
+    let p = |dlat_m: f64, dlon_m: f64| {
+        let (n, e) = cig_geo::metres_per_degree(lat);
+        GeoPoint {
+            lat_deg: lat + dlat_m / n,
+            lon_deg: lon + dlon_m / e,
+        }
+    };
+    let shapes = [
+        EditShape::Crater {
+            centre: p(0.0, 0.0),
+            radius_m: 2.5,
+            depth_m: 0.8,
+            lip_radius_m: 3.125,
+            lip_height_m: 0.2,
+        },
+        EditShape::Position {
+            centre: p(5.0, 5.0),
+            heading_deg: 35.0,
+            length_m: 9.0,
+            width_m: 4.5,
+            depth_m: 2.2,
+        },
+        EditShape::Rut {
+            from: p(0.0, 0.0),
+            to: p(30.0, 40.0),
+            width_m: 0.6,
+            depth_m: 0.12,
+        },
+        EditShape::Ditch {
+            from: p(-20.0, 0.0),
+            to: p(-20.0, 80.0),
+            width_m: 4.0,
+            depth_m: 2.5,
+            spoil: SpoilSide::Left,
+        },
+        EditShape::Berm {
+            from: p(10.0, 0.0),
+            to: p(-10.0, -50.0),
+            width_m: 3.0,
+            height_m: 1.8,
+        },
+    ];
+    for shape in shapes {
+        let original = edit(shape);
+        let message = pdu_of_edit(&original, 70.0).expect("sent");
+        // Through the bytes.
+        let bytes = encode_pdu(
+            EncodeHeader {
+                version: DisVersion::V7,
+                exercise_id: 1,
+                timestamp: 0,
+            },
+            &message,
+        )
+        .expect("encode");
+        let decoded = cig_dis::decode_pdu(&bytes).expect("decode");
+        let back = edit_of_pdu(&decoded.message, 1.9e9).expect("read");
+        assert_eq!(back.id(), original.id());
+        // The same surface within a centimetre over the footprint.
+        for dy in (-60..=60).step_by(3) {
+            for dx in (-60..=90).step_by(3) {
+                let q = p(f64::from(dy), f64::from(dx));
+                let (x, y) = (
+                    original.shape.delta_m(q.lat_deg, q.lon_deg),
+                    back.shape.delta_m(q.lat_deg, q.lon_deg),
+                );
+                assert!((x - y).abs() < 0.01, "{:?}: {x} vs {y}", original.shape);
+            }
+        }
+    }
+    // A height patch is not sent; hostile PDUs are refused by the codec.
+    let patch = edit(EditShape::HeightPatch {
+        south_west: p(0.0, 0.0),
+        spacing_m: 1.0,
+        cols: 2,
+        rows: 2,
+        deltas_m: vec![0.0; 4],
+    });
+    assert!(pdu_of_edit(&patch, 0.0).is_none());
+}
+
+#[test]
+fn a_tank_driven_across_sand_onto_a_paved_road_leaves_ruts_only_in_the_sand() {
+    let mut q = query();
+    // From column 40 (sand) east to column 90 (paved road) along row 50, at 10 m/s.
+    let (lat, lon) = at(50.0, 40.0);
+    let (_, lon_end) = at(50.0, 90.0);
+    let scenario = format!(
+        "start_time = \"2026-06-21T12:00:00Z\"\n\
+         [[entities]]\nid = 1\nmodel = \"tank\"\nlat_deg = {lat}\nlon_deg = {lon}\n\
+         clamp = \"height_and_attitude\"\nspeed_mps = 10.0\npath = [[{lat}, {lon_end}]]\n"
+    );
+    let mut w = IgWorld::new(
+        Scenario::from_toml(&scenario).expect("scenario"),
+        WorldConfig {
+            session: SessionConfig::default(),
+            start: UtcTime::from_calendar(2026, 6, 21, 12, 0, 0.0).expect("time"),
+            fog_mode: FogMode::Exponential,
+            effects: EffectsConfig::default(),
+            join_exercise: false,
+        },
+    )
+    .expect("world");
+    for _ in 0..60 * 160 {
+        w.step(1.0 / 60.0, &mut q);
+    }
+    let edits = Arc::clone(q.edits());
+    let ruts: Vec<&TerrainEdit> = edits.edits().collect();
+    assert!(ruts.len() >= 10, "{} ruts", ruts.len());
+    let (_, lon_road) = at(50.0, 64.0);
+    for r in &ruts {
+        let EditShape::Rut {
+            from, to, depth_m, ..
+        } = &r.shape
+        else {
+            panic!("{:?}", r.shape);
+        };
+        // 62 t on 5.8 m2 in dry sand: a rut of some centimetres.
+        assert!(*depth_m > 0.02 && *depth_m < 0.3, "{depth_m}");
+        assert!(
+            from.lon_deg.min(to.lon_deg) < lon_road,
+            "a rut on the road: {r:?}"
+        );
+    }
+    // HOT sees the ruts: somewhere under the tracks the ground is lower than before.
+    let track = ruts[2].shape.anchor();
+    let mut fresh = query();
+    let before = fresh
+        .hot(track.lat_deg, track.lon_deg)
+        .expect("hot")
+        .height_msl_m;
+    let after = q
+        .hot(track.lat_deg, track.lon_deg)
+        .expect("hot")
+        .height_msl_m;
+    assert!(after < before - 0.01, "{before} -> {after}");
+}
