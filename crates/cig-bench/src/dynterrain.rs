@@ -10,8 +10,8 @@
 //!    HAT: 200 000 points; LOS: 4000 sightlines 200-900 m long, 2 m above the ground at both
 //!    ends, in the square.
 //!
-//! Limits: the mesh rebuild and the picture's stall under 100 craters a second are not
-//! measured here (the renderer does not draw edits yet).
+//! Limits: the renderer's rebuild of the patches over a new crater and the picture's stall
+//! under 100 craters a second during `cig bench render`'s pass are not measured yet.
 
 use crate::report::{date_utc, machine, median};
 use crate::{BenchError, Report};

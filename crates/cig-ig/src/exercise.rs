@@ -65,7 +65,8 @@ pub struct ExerciseCounters {
     pub craters_made: u64,
     /// Terrain edits taken from other nodes' Object State PDUs (new ones only).
     pub terrain_edits_received: u64,
-    /// Object State PDUs whose edit the database refused (outside it, bad sizes).
+    /// Edits refused: Object State PDUs whose edit the database refused (outside it, bad
+    /// sizes) or that came beyond `MAX_REMOTE_EDITS_PER_S`, and Detonations' craters refused.
     pub terrain_edits_refused: u64,
     /// Object State PDUs sent (first announcements and re-announcements).
     pub terrain_edits_sent: u64,
@@ -129,7 +130,13 @@ pub struct Exercise {
     edit_cursor: usize,
     edits_owed: f64,
     last_tick_s: Option<f64>,
+    /// Other nodes' new edits taken in the current second: (the second, how many).
+    edit_second: (f64, u32),
 }
+
+/// Other nodes' new terrain edits taken a second at most; more are counted refused (the
+/// re-announcements bring them again).
+pub const MAX_REMOTE_EDITS_PER_S: u32 = 400;
 
 /// At most this many received lightning strikes wait for the renderer.
 const MAX_PENDING_STRIKES: usize = 64;
@@ -236,6 +243,7 @@ impl Exercise {
             edit_cursor: 0,
             edits_owed: 0.0,
             last_tick_s: None,
+            edit_second: (f64::NEG_INFINITY, 0),
         };
         exercise.queue_time(now_s, &first);
         exercise
@@ -319,6 +327,17 @@ impl Exercise {
         #[expect(clippy::cast_possible_truncation, reason = "a small factor")]
         let set = self.time.set_time(now_s, ms, rate as f32);
         self.queue_time(now_s, &[set]);
+    }
+
+    /// Whether another node's new edit may be taken now: at most [`MAX_REMOTE_EDITS_PER_S`]
+    /// a second, so a flood of Object State PDUs cannot stall the frame.
+    fn edit_budget(&mut self, now_s: f64) -> bool {
+        let second = now_s.floor();
+        if self.edit_second.0 != second {
+            self.edit_second = (second, 0);
+        }
+        self.edit_second.1 += 1;
+        self.edit_second.1 <= MAX_REMOTE_EDITS_PER_S
     }
 
     /// This node's DIS simulation address, as a terrain edit's author.
@@ -420,10 +439,10 @@ impl Exercise {
                     if let Some(crater) =
                         terrain_edits::crater_of_detonation(d, event_s, query, SoilMoisture::Dry)
                     {
-                        if let Ok(Applied::Added) =
-                            query.cache().update_edits(|layer| layer.apply(crater))
-                        {
-                            self.counters.craters_made += 1;
+                        match query.cache().update_edits(|layer| layer.apply(crater)) {
+                            Ok(Applied::Added) => self.counters.craters_made += 1,
+                            Ok(Applied::Known) => {}
+                            Err(_) => self.counters.terrain_edits_refused += 1,
                         }
                     }
                     if let Some(start) = impact_effect(d) {
@@ -445,18 +464,18 @@ impl Exercise {
                 DisMessage::PointObjectState(_) | DisMessage::LinearObjectState(_) => {
                     let time_s = self.event_time_unix_s(now_s, pdu.header.timestamp);
                     match terrain_edits::edit_of_pdu(&pdu.message, time_s) {
-                        Some(edit)
-                            if (edit.author.site, edit.author.application)
-                                != (self.settings.site, self.settings.application)
-                                || !query.edits().contains(edit.id()) =>
-                        {
+                        // Re-announcements of edits held (every node's, this one's echoed back)
+                        // change nothing and cost nothing.
+                        Some(edit) if query.edits().contains(edit.id()) => {}
+                        Some(edit) if self.edit_budget(now_s) => {
                             match query.cache().update_edits(|layer| layer.apply(edit)) {
                                 Ok(Applied::Added) => self.counters.terrain_edits_received += 1,
                                 Ok(Applied::Known) => {}
                                 Err(_) => self.counters.terrain_edits_refused += 1,
                             }
                         }
-                        _ => self.counters.ignored += 1,
+                        Some(_) => self.counters.terrain_edits_refused += 1,
+                        None => self.counters.ignored += 1,
                     }
                 }
                 other => {

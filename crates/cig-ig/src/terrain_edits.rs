@@ -9,8 +9,10 @@
 //! effective charge for the Munition descriptor's entity type and warhead
 //! (`cig_dynterrain::munitions`). Its identity is the detonation's event (site, application,
 //! event number) and its time the event's, so every IG on the same database that hears the PDU
-//! makes the same crater, and hearing it twice changes nothing. An air burst (more than
-//! [`AIR_BURST_M`] above the ground), a burst on water, or an expendable makes none.
+//! makes the same crater, and hearing it twice changes nothing (its sequence number is the
+//! event number over [`DETONATION_SEQUENCES`], apart from the edits a simulation sends as
+//! objects). An air burst (more than [`AIR_BURST_M`] above the database's own ground), a burst
+//! on water, or an expendable makes none.
 //!
 //! Edits travel as Object State PDUs (`cig_dis::object_state`): a crater is a Point Object of
 //! SISO-REF-010 type crater (1.1.3, subcategory by size) whose specific appearance carries its
@@ -20,15 +22,17 @@
 //! into the specific appearance (9, 9 and 10 bits) and its heading in the orientation; ruts,
 //! ditches and berms are one-segment Linear Objects (rut 1.1.5; tank ditch 1.1.1, a berm being
 //! a tank ditch of no depth) whose segment gives the centre, the heading (orientation), length,
-//! width, height (the spoil's or the berm's) and depth, the spoil's side in the specific
-//! appearance's low two bits. An edit's identity is its object identifier (site, application,
+//! width, height (the berm's; a ditch's spoil follows from its cut) and depth, the spoil's side
+//! in the specific appearance's low two bits. An edit's identity is its object identifier (site, application,
 //! object number = sequence). A node applies the edit as decoded from its own PDU, so sender
 //! and receivers draw the same numbers. Every edit a node holds is announced again every
 //! [`REANNOUNCE_S`] (spread over the period), so a node that joins late gets every earlier
 //! edit; receivers ignore the ones they hold.
 //!
 //! Limits: height patches are not sent (the Gridded Data PDU is not implemented); healing is
-//! not sent; sequence numbers above 65535 are not sent (DIS object numbers are 16-bit).
+//! not sent; other sequence numbers above 65535 are not sent (DIS object numbers are 16-bit),
+//! and event numbers wrap at 65536 (a later crater with a reused event number is taken for
+//! the earlier one).
 //! The specific appearance fields for sizes are cig's use of bits the standard leaves to the
 //! object type: another IG reads the object's type and place but not its size.
 
@@ -67,7 +71,10 @@ pub fn crater_of_detonation(
     }
     let at = Geodetic::from_ecef(ecef);
     let ground = query.hot(at.lat_deg, at.lon_deg).ok()?;
-    let above_m = at.alt_m - ground.height_ellipsoid_m();
+    // Against the database's own ground, not the edited one: whether a crater is made does
+    // not depend on the edits an IG already holds.
+    let edited_m = query.edits().delta_m(at.lat_deg, at.lon_deg);
+    let above_m = at.alt_m - (ground.height_ellipsoid_m() - edited_m);
     if !(-50.0..=AIR_BURST_M).contains(&above_m) {
         return None;
     }
@@ -98,7 +105,7 @@ pub fn crater_of_detonation(
             site: event.simulation_address.site_id,
             application: event.simulation_address.application_id,
         },
-        sequence: u32::from(event.event_id),
+        sequence: DETONATION_SEQUENCES | u32::from(event.event_id),
         time_utc_s,
         shape: EditShape::Crater {
             centre: GeoPoint {
@@ -111,9 +118,25 @@ pub fn crater_of_detonation(
             lip_height_m: dims.lip_height_m,
         },
     };
-    // Sent and received craters are the decoded form, so this one is too.
-    pdu_of_edit(&edit, ground.height_ellipsoid_m()).and_then(|m| edit_of_pdu(&m, time_utc_s))
+    Some(as_sent(edit))
 }
+
+/// An edit as every node that gets it over DIS has it (sizes through their PDU fields), or
+/// itself when it is not sent: nodes apply the decoded form of their own edits, so sender and
+/// receivers draw the same numbers.
+pub fn as_sent(edit: TerrainEdit) -> TerrainEdit {
+    pdu_of_edit(&edit, 0.0)
+        .and_then(|m| edit_of_pdu(&m, edit.time_utc_s))
+        .unwrap_or(edit)
+}
+
+/// Sequence numbers of craters made from Detonations: this bit over the event number, so they
+/// never meet the object numbers of edits sent as Object State PDUs by the same simulation
+/// (sent with [`DETONATION_MODIFICATION`] set in the Point Object's modifications).
+pub const DETONATION_SEQUENCES: u32 = 0x1_0000;
+/// cig's mark, in a Point Object State's modifications octet, of a crater named by its
+/// Detonation's event.
+pub const DETONATION_MODIFICATION: u8 = 0x80;
 
 /// DIS Euler angles of a level heading at a place.
 fn orientation_of_heading(at: Geodetic, heading_rad: f64) -> [f32; 3] {
@@ -143,7 +166,13 @@ fn centimetres(m: f64) -> u32 {
 /// The Object State PDU that carries an edit (placed at `height_ellipsoid_m`), or `None` for
 /// an edit that is not sent (see the module's limits).
 pub fn pdu_of_edit(edit: &TerrainEdit, height_ellipsoid_m: f64) -> Option<DisMessage> {
-    let object = u16::try_from(edit.sequence).ok()?;
+    let from_detonation = matches!(edit.shape, EditShape::Crater { .. })
+        && edit.sequence & !0xffff == DETONATION_SEQUENCES;
+    let object = if from_detonation {
+        (edit.sequence & 0xffff) as u16
+    } else {
+        u16::try_from(edit.sequence).ok()?
+    };
     let id = ObjectId {
         site: edit.author.site,
         application: edit.author.application,
@@ -160,7 +189,11 @@ pub fn pdu_of_edit(edit: &TerrainEdit, height_ellipsoid_m: f64) -> Option<DisMes
             referenced_object_id: id,
             update_number: 1,
             force_id: 0,
-            modifications: 0,
+            modifications: if from_detonation {
+                DETONATION_MODIFICATION
+            } else {
+                0
+            },
             object_type,
             location_ecef_m: at.to_ecef().to_array(),
             orientation_rad: orientation,
@@ -330,7 +363,7 @@ pub fn edit_of_pdu(message: &DisMessage, time_utc_s: f64) -> Option<TerrainEdit>
             if (t.domain, t.kind, t.category) == (crater.domain, crater.kind, crater.category) {
                 let radius_m = f64::from(s & 0xffff) / 100.0;
                 let depth_m = f64::from(s >> 16) / 100.0;
-                return Some(edit(
+                let mut made = edit(
                     p.object_id,
                     EditShape::Crater {
                         centre,
@@ -339,7 +372,11 @@ pub fn edit_of_pdu(message: &DisMessage, time_utc_s: f64) -> Option<TerrainEdit>
                         lip_radius_m: 1.25 * radius_m,
                         lip_height_m: 0.25 * depth_m,
                     },
-                ));
+                );
+                if p.modifications & DETONATION_MODIFICATION != 0 {
+                    made.sequence |= DETONATION_SEQUENCES;
+                }
+                return Some(made);
             }
             let tank = ObjectType::POINT_VEHICLE_DEFILADE_TANK;
             let infantry = ObjectType::POINT_INFANTRY_FIGHTING_POSITION;
@@ -497,18 +534,18 @@ impl RutTracker {
             };
             // Across the travel, to the right.
             let (rx, ry) = (dy / moved_m, -dx / moved_m);
-            let sequence = self.next_sequence.get_or_insert_with(|| {
-                query
-                    .edits()
-                    .last_sequence(author)
-                    .map_or(1, |s| s.saturating_add(1))
-            });
+            let held = query
+                .edits()
+                .last_sequence(author)
+                .map_or(1, |s| s.saturating_add(1));
+            let sequence = self.next_sequence.get_or_insert(held);
+            *sequence = (*sequence).max(held);
             for side in [-0.5, 0.5] {
                 let shift = |p: GeoPoint| GeoPoint {
                     lat_deg: p.lat_deg + side * gauge_m * ry / mn,
                     lon_deg: p.lon_deg + side * gauge_m * rx / me,
                 };
-                ruts.push(TerrainEdit {
+                ruts.push(as_sent(TerrainEdit {
                     author,
                     sequence: *sequence,
                     time_utc_s,
@@ -518,7 +555,7 @@ impl RutTracker {
                         width_m: v.load.contact_width_m().clamp(0.1, 1.5),
                         depth_m,
                     },
-                });
+                }));
                 *sequence = sequence.wrapping_add(1);
             }
         }

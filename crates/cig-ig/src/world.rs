@@ -1467,12 +1467,25 @@ impl IgWorld {
         let ruts = self
             .ruts
             .advance(&vehicles, author, time_s, moisture, query);
-        for rut in ruts {
-            let added = query.cache().update_edits(|layer| layer.apply(rut.clone()));
-            if let (Ok(cig_terrain::edits::Applied::Added), Some(x)) =
-                (added, self.exercise.as_mut())
-            {
-                x.announce_edit(now_s, &rut, query);
+        if ruts.is_empty() {
+            return;
+        }
+        // One change of the edits a frame, whatever the number of ruts.
+        let added: Vec<bool> = query.cache().update_edits(|layer| {
+            ruts.iter()
+                .map(|rut| {
+                    matches!(
+                        layer.apply(rut.clone()),
+                        Ok(cig_terrain::edits::Applied::Added)
+                    )
+                })
+                .collect()
+        });
+        if let Some(x) = self.exercise.as_mut() {
+            for (rut, added) in ruts.iter().zip(added) {
+                if added {
+                    x.announce_edit(now_s, rut, query);
+                }
             }
         }
     }

@@ -288,6 +288,21 @@ fn edits_survive_their_object_state_pdus() {
             }
         }
     }
+    // A crater named by its Detonation's event keeps that name through its PDU, apart from an
+    // object of the same number.
+    let mut named = edit(EditShape::Crater {
+        centre: p(0.0, 0.0),
+        radius_m: 1.0,
+        depth_m: 0.3,
+        lip_radius_m: 1.25,
+        lip_height_m: 0.075,
+    });
+    named.sequence = cig_ig::terrain_edits::DETONATION_SEQUENCES | 77;
+    let back = edit_of_pdu(&pdu_of_edit(&named, 0.0).expect("sent"), 0.0).expect("read");
+    assert_eq!(back.sequence, named.sequence);
+    named.sequence = 77;
+    let back = edit_of_pdu(&pdu_of_edit(&named, 0.0).expect("sent"), 0.0).expect("read");
+    assert_eq!(back.sequence, 77);
     // A height patch is not sent; hostile PDUs are refused by the codec.
     let patch = edit(EditShape::HeightPatch {
         south_west: p(0.0, 0.0),

@@ -217,6 +217,7 @@ impl TerrainGpu {
     ) -> MeshStats {
         let skirt_per_m = (SKIRT_OVER_ALLOWED_ERROR * allowed_error_per_m) as f32;
         let mut stats = MeshStats::default();
+        let edits = cache.edits();
         // Pass 1: a slot for every node that can have one this frame.
         let mut slot_of: Vec<Option<usize>> = Vec::with_capacity(nodes.len());
         for node in nodes {
@@ -289,24 +290,27 @@ impl TerrainGpu {
             };
             if let Some(slot) = slot_index.and_then(|i| self.slots[i].as_mut()) {
                 slot.last_used_frame = frame;
-                // The edits' patches, remade when the edits change.
-                let revision = cache.edits_revision();
-                if slot.data_level == 0 && slot.patch_revision != Some(revision) {
-                    slot.patch_revision = Some(revision);
-                    slot.patch = lod
-                        .resident_source(cache, slot.key)
-                        .filter(|(k, _)| k.level == 0)
-                        .and_then(|(k, tile)| {
-                            build_node_patch(
+                // The edits' patches, remade when the edits in the node's tile change.
+                if slot.data_level == 0 {
+                    let tile = lod.layout.tile_of(slot.key, 0);
+                    let revision = edits.tile_revision(tile.row, tile.col);
+                    if slot.patch_revision != Some(revision) {
+                        if let Some((k, data)) = lod
+                            .resident_source(cache, slot.key)
+                            .filter(|(k, _)| k.level == 0)
+                        {
+                            slot.patch_revision = Some(revision);
+                            slot.patch = build_node_patch(
                                 &lod.layout,
                                 lod.geoid(),
                                 slot.key,
-                                (k, &tile),
+                                (k, &data),
                                 slot.centre_ecef,
-                                &cache.edits(),
+                                &edits,
                             )
-                        })
-                        .map(std::sync::Arc::new);
+                            .map(std::sync::Arc::new);
+                        }
+                    }
                 }
             }
             slot_of.push(slot_index);

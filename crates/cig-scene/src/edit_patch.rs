@@ -15,7 +15,9 @@
 //! node's own fragments over the patched cells ([`NodePatch::refined_mask`]).
 //!
 //! Limits: patches are made for nodes drawn from the finest level's data only; a coarser node
-//! over an edit draws the unedited ground (the edit is then a few pixels at most). Patch
+//! over an edit draws the unedited ground while the queries answer on the edited one. For
+//! craters and positions a few metres across that is a few pixels at the distances where the
+//! finest level gives way; a long ditch or a large crater seen from afar is not drawn. Patch
 //! vertices do not morph: while a node morphs to its parent, its skirts cover the difference;
 //! their morph target field carries their normal instead (ECEF, from the fine posts around),
 //! its length one plus how disturbed the ground is (bare earth where the edits moved it by

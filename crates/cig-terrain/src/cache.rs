@@ -293,8 +293,13 @@ impl TileCache {
     /// not lost) and returns what `change` returned.
     pub fn update_edits<T>(&self, change: impl FnOnce(&mut EditLayer) -> T) -> T {
         let mut guard = self.edits.write();
+        let before = guard.revision();
         let result = change(Arc::make_mut(&mut guard));
-        self.edits_revision.fetch_add(1, Ordering::Release);
+        // Queries and meshes move on only when the surface changed (a re-announced edit does
+        // not change it).
+        if guard.revision() != before {
+            self.edits_revision.fetch_add(1, Ordering::Release);
+        }
         result
     }
 

@@ -8,8 +8,8 @@
 //! is a continuous height change ([`EditShape::delta_m`]) that is zero on and outside its
 //! footprint's edge, and edits add (a second crater in a first deepens it), so the surface
 //! does not depend on the order edits arrive in and any tile loaded later sees the same change.
-//! The change is carried on a finer lattice where the edit needs it: every finest cell an edit's
-//! footprint touches is split `f x f` (`f` a power of two from the edit's smallest feature, the
+//! The change is carried on a finer lattice where the edit needs it: every finest cell the
+//! edit's shape reaches (its footprint's part over the cell, conservatively) is split `f x f` (`f` a power of two from the edit's smallest feature, the
 //! source's 1-to-4 tessellation applied `log2 f` times), over the window of the cell the
 //! footprints cover ([`RefinedCell`]). The sub-cells are split along the same diagonal as their
 //! cell, so each sub-triangle lies inside one of the cell's two triangles and the surface is
@@ -22,6 +22,10 @@
 //! map), so the two surfaces meet exactly.
 //! Removing an edit (healing) recomputes its cells from the edits left; a cell left with none
 //! returns to its coarse form.
+//!
+//! An edit may add at most [`MAX_EDIT_POSTS`] fine posts (its split is lowered until it fits,
+//! or it is refused), and a database holds at most [`MAX_EDITS`] edits, so no edit from outside
+//! (a file, a DIS PDU) can take unbounded memory or time.
 //!
 //! Limits: shapes are laid out in the tangent metres of their reference point (east and north
 //! scaled by the metres per degree there), exact to a few parts per million over the hundreds
@@ -42,6 +46,10 @@ pub const MAX_EDIT_HEIGHT_M: f64 = 50.0;
 pub const MAX_EDIT_EXTENT_M: f64 = 2000.0;
 /// Most posts a height patch may carry.
 pub const MAX_PATCH_POSTS: u32 = 1 << 20;
+/// Most fine posts one edit may add to the lattice: its split is lowered until it fits.
+pub const MAX_EDIT_POSTS: u64 = 1 << 21;
+/// Most edits a database holds.
+pub const MAX_EDITS: usize = 200_000;
 
 /// Who made an edit: the DIS simulation address of the node (site, application).
 #[derive(
@@ -170,6 +178,10 @@ pub enum EditError {
     PatchSize { got: usize, cols: u32, rows: u32 },
     #[error("terrain edit: the edit reaches {lat_deg:.6}, {lon_deg:.6}, outside the database")]
     OutsideDatabase { lat_deg: f64, lon_deg: f64 },
+    #[error("terrain edit: it would carry {posts} fine posts even at the coarsest split, more than {MAX_EDIT_POSTS}")]
+    TooLarge { posts: u64 },
+    #[error("terrain edit: the database already holds {MAX_EDITS} edits")]
+    TooMany,
     #[error("terrain edit: {author_site}:{author_application} #{sequence} is not in the edits")]
     Unknown {
         author_site: u16,
@@ -712,6 +724,53 @@ impl Local {
         }
     }
 
+    /// The part of the footprint over a rectangle (south, north, west, east, degrees), as a
+    /// rectangle in degrees, or `None` when the shape changes nothing there. Conservative: a
+    /// rectangle the shape changes anywhere, edges included, always has one.
+    fn footprint_in(&self, [south, north, west, east]: [f64; 4]) -> Option<[f64; 4]> {
+        const EPS_M: f64 = 1e-6;
+        let (mn, me) = self.m_per_deg;
+        let (x0, x1) = ((west - self.lon0_deg) * me, (east - self.lon0_deg) * me);
+        let (y0, y1) = ((south - self.lat0_deg) * mn, (north - self.lat0_deg) * mn);
+        let [bx0, bx1, by0, by1] = self.bounds_m;
+        let (mut fx0, mut fx1, mut fy0, mut fy1) =
+            (bx0.max(x0), bx1.min(x1), by0.max(y0), by1.min(y1));
+        if fx0 > fx1 + EPS_M || fy0 > fy1 + EPS_M {
+            return None;
+        }
+        match &self.form {
+            Form::Crater { lip_radius_m, .. } => {
+                let dx = (x0 - 0.0).max(0.0 - x1).max(0.0);
+                let dy = (y0 - 0.0).max(0.0 - y1).max(0.0);
+                if dx.hypot(dy) > lip_radius_m + EPS_M {
+                    return None;
+                }
+            }
+            Form::Run { end, .. } => {
+                // Every changed point lies within the pad (the bounds' margin) of the run's
+                // segment along both axes, so within sqrt(2) pad of it.
+                let pad = (bx1 - end.0.max(0.0)).max(0.0) * std::f64::consts::SQRT_2 + EPS_M;
+                let (dx, dy) = (end.0, end.1);
+                let clipped = clip_segment(dx, x0 - pad, x1 + pad, 0.0, 1.0)
+                    .and_then(|(a, b)| clip_segment(dy, y0 - pad, y1 + pad, a, b));
+                let (t0, t1) = clipped?;
+                fx0 = fx0.max((dx * t0).min(dx * t1) - pad);
+                fx1 = fx1.min((dx * t0).max(dx * t1) + pad);
+                fy0 = fy0.max((dy * t0).min(dy * t1) - pad);
+                fy1 = fy1.min((dy * t0).max(dy * t1) + pad);
+            }
+            Form::Position { .. } | Form::Patch { .. } => {}
+        }
+        (fx0 <= fx1 + EPS_M && fy0 <= fy1 + EPS_M).then(|| {
+            [
+                self.lat0_deg + fy0 / mn,
+                self.lat0_deg + fy1.max(fy0) / mn,
+                self.lon0_deg + fx0 / me,
+                self.lon0_deg + fx1.max(fx0) / me,
+            ]
+        })
+    }
+
     /// The footprint in degrees: (south, north, west, east).
     fn bounds_deg(&self) -> [f64; 4] {
         let [x0, x1, y0, y1] = self.bounds_m;
@@ -722,6 +781,17 @@ impl Local {
             self.lon0_deg + x1 / self.m_per_deg.1,
         ]
     }
+}
+
+/// Clips `t` in `[t0, t1]` to `lo <= d t <= hi` (a segment from the origin along one axis).
+fn clip_segment(d: f64, lo: f64, hi: f64, t0: f64, t1: f64) -> Option<(f64, f64)> {
+    if d.abs() < 1e-12 {
+        return (lo <= 0.0 && 0.0 <= hi).then_some((t0, t1));
+    }
+    let (a, b) = (lo / d, hi / d);
+    let (a, b) = if a < b { (a, b) } else { (b, a) };
+    let (t0, t1) = (t0.max(a), t1.min(b));
+    (t0 <= t1).then_some((t0, t1))
 }
 
 /// An edit with its shape laid out.
@@ -866,6 +936,11 @@ pub struct EditLayer {
     /// Per finest tile (row, column): the highest change in it (0 or more) and the lowest
     /// (0 or less).
     tiles: CellMap<(f32, f32)>,
+    /// The refined cells of each finest tile, and the revision that last changed them.
+    tile_members: CellMap<Arc<HashSet<CellKey>>>,
+    tile_revisions: CellMap<u64>,
+    /// Each author's highest sequence number.
+    last_sequences: HashMap<EditAuthor, u32>,
     max_raise_m: f32,
     revision: u64,
 }
@@ -892,6 +967,9 @@ impl EditLayer {
             entries: HashMap::new(),
             cells: CellMap::default(),
             tiles: CellMap::default(),
+            tile_members: CellMap::default(),
+            tile_revisions: CellMap::default(),
+            last_sequences: HashMap::new(),
             max_raise_m: 0.0,
             revision: 0,
         }
@@ -923,11 +1001,12 @@ impl EditLayer {
 
     /// The highest sequence number an author has used, if any.
     pub fn last_sequence(&self, author: EditAuthor) -> Option<u32> {
-        self.entries
-            .keys()
-            .filter(|id| id.author == author)
-            .map(|id| id.sequence)
-            .max()
+        self.last_sequences.get(&author).copied()
+    }
+
+    /// The revision that last changed a finest tile's refined cells (0: never).
+    pub fn tile_revision(&self, row: u32, col: u32) -> u64 {
+        self.tile_revisions.get(&(row, col)).copied().unwrap_or(0)
     }
 
     /// The refined cell at a finest cell, if any.
@@ -1017,10 +1096,45 @@ impl EditLayer {
                 ((hi + EPS).floor().max(0.0) as u32).min(last),
             )
         };
+        if self.entries.len() >= MAX_EDITS {
+            return Err(EditError::TooMany);
+        }
         let (row_lo, row_hi) = cell_range(r0, r1, max_r);
         let (col_lo, col_hi) = cell_range(c0, c1, max_c);
+        // The cells the shape itself reaches, with the share of each its footprint covers.
+        let mut reached = Vec::new();
+        for r in row_lo..=row_hi {
+            for c in col_lo..=col_hi {
+                let rect = self.cell_rect((r, c));
+                if let Some([s0, s1, w0, w1]) = local.footprint_in(rect) {
+                    let share = ((s1 - s0) / g.dlat_deg).clamp(0.0, 1.0)
+                        * ((w1 - w0) / g.dlon_deg).clamp(0.0, 1.0);
+                    reached.push(((r, c), share));
+                }
+                if reached.len() > (MAX_EDIT_POSTS / 4) as usize {
+                    return Err(EditError::TooLarge {
+                        posts: 4 * reached.len() as u64,
+                    });
+                }
+            }
+        }
         let wanted = (self.post_spacing_m / (local.feature_m / 4.0).max(0.02)).max(1.0);
-        let split = wanted.log2().ceil().exp2().clamp(1.0, f64::from(MAX_SPLIT)) as u32;
+        let mut split = wanted.log2().ceil().exp2().clamp(1.0, f64::from(MAX_SPLIT)) as u32;
+        let posts = |split: u32| -> u64 {
+            let f = f64::from(split);
+            reached
+                .iter()
+                .map(|(_, share)| ((share.sqrt() * f + 2.0) * (share.sqrt() * f + 2.0)) as u64)
+                .sum()
+        };
+        while split > 1 && posts(split) > MAX_EDIT_POSTS {
+            split /= 2;
+        }
+        if posts(split) > MAX_EDIT_POSTS {
+            return Err(EditError::TooLarge {
+                posts: posts(split),
+            });
+        }
         let entry = Arc::new(Entry {
             edit,
             local,
@@ -1029,9 +1143,11 @@ impl EditLayer {
         });
         self.entries.insert(id, Arc::clone(&entry));
         self.order.push(id);
+        let last = self.last_sequences.entry(id.author).or_insert(id.sequence);
+        *last = (*last).max(id.sequence);
         let mut touched = Vec::new();
-        for r in row_lo..=row_hi {
-            for c in col_lo..=col_hi {
+        for ((r, c), _) in reached {
+            {
                 let cell = self.cells.entry((r, c)).or_insert_with(|| {
                     Arc::new(RefinedCell {
                         split: 1,
@@ -1063,6 +1179,18 @@ impl EditLayer {
             });
         };
         self.order.retain(|k| *k != id);
+        if self.last_sequences.get(&id.author) == Some(&id.sequence) {
+            match self
+                .entries
+                .keys()
+                .filter(|k| k.author == id.author)
+                .map(|k| k.sequence)
+                .max()
+            {
+                Some(s) => self.last_sequences.insert(id.author, s),
+                None => self.last_sequences.remove(&id.author),
+            };
+        }
         let [r0, r1, c0, c1] = entry.cells;
         let mut touched = Vec::new();
         for r in r0..=r1 {
@@ -1077,8 +1205,8 @@ impl EditLayer {
         Ok(())
     }
 
-    /// Recomputes the touched cells and every refined cell connected to them by an edge,
-    /// all at the largest split among them.
+    /// Recomputes the touched cells and their refined edge neighbours (whose T-junction maps
+    /// depend on the touched cells' splits), each at its own edits' split.
     fn rebuild(&mut self, touched: Vec<CellKey>) {
         self.revision += 1;
         let mut tiles_changed: HashSet<(u32, u32)> = HashSet::new();
@@ -1086,7 +1214,11 @@ impl EditLayer {
         for key in touched {
             if self.cells.get(&key).is_some_and(|c| c.edits.is_empty()) {
                 self.cells.remove(&key);
-                tiles_changed.insert(self.tile_of(key));
+                let tile = self.tile_of(key);
+                if let Some(members) = self.tile_members.get_mut(&tile) {
+                    Arc::make_mut(members).remove(&key);
+                }
+                tiles_changed.insert(tile);
             }
             // The cell and its edge neighbours, whose edges meet its fine posts.
             for n in edge_neighbours(key).into_iter().flatten().chain([key]) {
@@ -1106,20 +1238,27 @@ impl EditLayer {
                 });
                 let cell = self.compute_cell(key, split, coarser, edits);
                 self.cells.insert(key, Arc::new(cell));
-                tiles_changed.insert(self.tile_of(key));
+                let tile = self.tile_of(key);
+                let members = self.tile_members.entry(tile).or_default();
+                if !members.contains(&key) {
+                    Arc::make_mut(members).insert(key);
+                }
+                tiles_changed.insert(tile);
             }
         }
         for tile in tiles_changed {
-            let (tr, tc) = tile;
-            let t = self.tile_cells;
+            self.tile_revisions.insert(tile, self.revision);
             let mut range = (0.0f32, 0.0f32);
-            for r in tr * t..(tr + 1) * t {
-                for c in tc * t..(tc + 1) * t {
-                    if let Some(cell) = self.cells.get(&(r, c)) {
+            if let Some(members) = self.tile_members.get(&tile) {
+                for key in members.iter() {
+                    if let Some(cell) = self.cells.get(key) {
                         range.0 = range.0.max(cell.max_m);
                         range.1 = range.1.min(cell.min_m);
                     }
                 }
+            }
+            if self.tile_members.get(&tile).is_some_and(|m| m.is_empty()) {
+                self.tile_members.remove(&tile);
             }
             if range == (0.0, 0.0) {
                 self.tiles.remove(&tile);
@@ -1140,6 +1279,17 @@ impl EditLayer {
             .unwrap_or(1)
     }
 
+    /// A finest cell as (south, north, west, east), degrees.
+    fn cell_rect(&self, (r, c): CellKey) -> [f64; 4] {
+        let g = &self.grid;
+        [
+            g.south_lat_deg + f64::from(r) * g.dlat_deg,
+            g.south_lat_deg + f64::from(r + 1) * g.dlat_deg,
+            g.west_lon_deg + f64::from(c) * g.dlon_deg,
+            g.west_lon_deg + f64::from(c + 1) * g.dlon_deg,
+        ]
+    }
+
     fn tile_of(&self, (r, c): CellKey) -> (u32, u32) {
         (r / self.tile_cells, c / self.tile_cells)
     }
@@ -1156,14 +1306,19 @@ impl EditLayer {
     ) -> RefinedCell {
         let g = &self.grid;
         let f = f64::from(split);
-        let entries: Vec<&Entry> = edits
+        // In the edits' identity order, so every IG sums a cell's changes the same way.
+        let mut entries: Vec<&Entry> = edits
             .iter()
             .filter_map(|id| self.entries.get(id).map(|e| &**e))
             .collect();
+        entries.sort_by_key(|e| e.edit.id());
+        let rect = self.cell_rect((r, c));
         // The window: the footprints' union clipped to the cell, in sub-cells.
         let (mut a0, mut a1, mut b0, mut b1) = (split, 0u32, split, 0u32);
         for e in &entries {
-            let [south, north, west, east] = e.local.bounds_deg();
+            let Some([south, north, west, east]) = e.local.footprint_in(rect) else {
+                continue;
+            };
             let to_fine_col = |lon: f64| ((lon - g.west_lon_deg) / g.dlon_deg - f64::from(c)) * f;
             let to_fine_row = |lat: f64| ((lat - g.south_lat_deg) / g.dlat_deg - f64::from(r)) * f;
             let clamp = |x: f64| x.clamp(0.0, f) as u32;
@@ -1467,6 +1622,45 @@ mod tests {
             layer.apply(patch),
             Err(EditError::PatchSize { .. })
         ));
+    }
+
+    #[test]
+    fn a_long_thin_diagonal_rut_refines_only_the_cells_it_crosses_within_the_post_budget() {
+        let mut layer = EditLayer::new(grid(), 64);
+        let from = GeoPoint {
+            lat_deg: 36.005,
+            lon_deg: -120.995,
+        };
+        let (mn, me) = cig_geo::metres_per_degree(from.lat_deg);
+        let to = GeoPoint {
+            lat_deg: from.lat_deg + 1400.0 / mn,
+            lon_deg: from.lon_deg + 1400.0 / me,
+        };
+        let rut = TerrainEdit {
+            shape: EditShape::Rut {
+                from,
+                to,
+                width_m: 0.05,
+                depth_m: 0.02,
+            },
+            ..crater(1, 0.0, 0.0, 1.0, 1.0)
+        };
+        layer.apply(rut).expect("the split is lowered to fit");
+        let cells = layer.cells().count();
+        // A diagonal 2 km long crosses about 2 x 66 cells of 30 m (and their corners'
+        // neighbours), not the 66 x 66 of its bounding box.
+        assert!(cells < 400, "{cells} cells refined");
+        let posts: usize = layer.cells().map(|(_, c)| c.deltas_m.len()).sum();
+        assert!(
+            posts as u64 <= MAX_EDIT_POSTS + MAX_EDIT_POSTS / 4,
+            "{posts} posts"
+        );
+        // Still there on the lattice.
+        let mid = (
+            0.5 * (from.lat_deg + to.lat_deg),
+            0.5 * (from.lon_deg + to.lon_deg),
+        );
+        assert!(layer.shape_delta_m(mid.0, mid.1) < -0.019);
     }
 
     #[test]

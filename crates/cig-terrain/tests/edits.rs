@@ -196,6 +196,16 @@ proptest! {
             };
             cache.update_edits(|e| e.apply(edit(k as u32, shape))).expect("edit");
         }
+        // Wherever a shape changes the ground, its cells were refined (no cell it reaches
+        // is left out).
+        for _ in 0..400 {
+            let (x, y) = (next() * 240.0 - 120.0, next() * 240.0 - 120.0);
+            let (la, lo) = (lat0 + y / mn, lon0 + x / me);
+            let edits = q.edits();
+            if edits.shape_delta_m(la, lo).abs() > 0.05 {
+                prop_assert!(edits.delta_m(la, lo) != 0.0, "unrefined at {x}, {y}");
+            }
+        }
         let a = (next() * 200.0 - 100.0, next() * 200.0 - 100.0);
         let b = (next() * 200.0 - 100.0, next() * 200.0 - 100.0);
         let at = |p: (f64, f64)| (lat0 + p.1 / mn, lon0 + p.0 / me);

@@ -139,29 +139,33 @@ pub fn crater(args: &CraterArgs, config: &Config) -> anyhow::Result<()> {
         .hot(lat, lon)
         .with_context(|| format!("no terrain at --at {} in {}", args.at, args.db.display()))?;
     let moisture = moisture(args.wet);
-    let (radius_m, depth_m, lip_radius_m, lip_height_m) =
-        match (args.charge_kg, args.radius_m, args.depth_m) {
-            (Some(charge_kg), None, None) => {
-                let dims = cig_dynterrain::crater::dimensions(ground.material, moisture, charge_kg)
+    let (radius_m, depth_m, lip_radius_m, lip_height_m) = match (
+        args.charge_kg,
+        args.radius_m,
+        args.depth_m,
+    ) {
+        (Some(charge_kg), None, None) => {
+            let dims = cig_dynterrain::crater::dimensions(ground.material, moisture, charge_kg)
                     .context("--charge-kg")?
                     .with_context(|| {
                         format!(
-                            "no crater: a {charge_kg} kg charge on {} makes none",
-                            ground.material
+                            "no crater: a {charge_kg} kg charge on {} at {lat:.6}, {lon:.6} makes none: {}",
+                            ground.material,
+                            args.db.display()
                         )
                     })?;
-                (
-                    dims.radius_m,
-                    dims.depth_m,
-                    dims.lip_radius_m,
-                    dims.lip_height_m,
-                )
-            }
-            (None, Some(radius_m), Some(depth_m)) => {
-                (radius_m, depth_m, 1.25 * radius_m, 0.25 * depth_m)
-            }
-            _ => anyhow::bail!("give either --charge-kg, or both --radius-m and --depth-m"),
-        };
+            (
+                dims.radius_m,
+                dims.depth_m,
+                dims.lip_radius_m,
+                dims.lip_height_m,
+            )
+        }
+        (None, Some(radius_m), Some(depth_m)) => {
+            (radius_m, depth_m, 1.25 * radius_m, 0.25 * depth_m)
+        }
+        _ => anyhow::bail!("give either --charge-kg, or both --radius-m and --depth-m"),
+    };
     let mut layer = (*cache.edits()).clone();
     let edit = TerrainEdit {
         author: OPERATOR,

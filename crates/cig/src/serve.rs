@@ -328,8 +328,13 @@ pub fn run(args: &ServeArgs, config: &Config) -> anyhow::Result<()> {
             // Synchronous mode and no host frame within a period: nothing new to draw.
             continue;
         };
-        if let Some(journal) = journal.as_mut() {
-            journal.record(&cache)?;
+        if let Some(j) = journal.as_mut() {
+            // A disk that fails does not stop the IG: the edits stay in memory, and the journal
+            // is dropped with one message.
+            if let Err(e) = j.record(&cache) {
+                tracing::error!("terrain edits journal stopped: {e:#}");
+                journal = None;
+            }
         }
         totals.lights = snapshot.lights.len();
         totals.lights_max = totals.lights_max.max(totals.lights);
