@@ -353,7 +353,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         discard;
     }
     let ne = textureSample(normal_atlas, atlas_sampler, in.uv).xyz * 2.0 - 1.0;
-    var n = normalize(node.axis_e.xyz * ne.x + node.axis_n.xyz * ne.y + node.axis_u.xyz * ne.z);
+    let ground_n = normalize(node.axis_e.xyz * ne.x + node.axis_n.xyz * ne.y + node.axis_u.xyz * ne.z);
+    var n = ground_n;
     // A patch's own normal: its fine posts carry the edits' shape, the node's normals do not.
     if (in.patched == 1u && dot(in.patch_normal, in.patch_normal) > 0.0) {
         n = normalize(in.patch_normal);
@@ -383,8 +384,10 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         if (is_sea(kind, in.rel)) {
             discard;
         }
-        let t_k = th_surface_temp(kind, n) + texture_k + th_hot_spots(in.rel);
-        return th_shown(t_k, th_emissivity(kind), n, in.rel);
+        // The thermal channel does not see the edits' shapes yet (their slopes' sun and sky
+        // would need the surface model's history): it takes the ground's own normal.
+        let t_k = th_surface_temp(kind, ground_n) + texture_k + th_hot_spots(in.rel);
+        return th_shown(t_k, th_emissivity(kind), ground_n, in.rel);
     }
     var surface: Surface;
     var albedo: vec3<f32>;
