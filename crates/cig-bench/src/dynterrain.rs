@@ -37,17 +37,13 @@ fn step_error(what: &str, e: impl std::fmt::Display) -> BenchError {
     }
 }
 
-/// A small deterministic generator (SplitMix64) for the places.
+/// A small deterministic generator for the places: SplitMix64 over a counter.
 struct Places(u64);
 
 impl Places {
     fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
+        self.0 += 1;
+        (cig_dis::detonation::splitmix64(self.0) >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 

@@ -735,24 +735,6 @@ proptest! {
 // and parse that PDU through `__new__`.
 
 const PREAMBLE: &str = r"
-import sys, json, struct
-from io import BytesIO
-from opendis.DataOutputStream import DataOutputStream
-from opendis.DataInputStream import DataInputStream
-from opendis.PduFactory import createPdu
-from opendis.dis7 import *
-
-def finish(pdu, pdu_type, family):
-    pdu.pduType = pdu_type
-    pdu.protocolFamily = family
-    pdu.protocolVersion = 7
-    pdu.exerciseID = 4
-    pdu.pduStatus = 0
-    buf = BytesIO()
-    pdu.serialize(DataOutputStream(buf))
-    data = bytearray(buf.getvalue())
-    data[8:10] = len(data).to_bytes(2, 'big')
-    return bytes(data)
 
 def linear_pdu():
     p = LinearObjectStatePdu.__new__(LinearObjectStatePdu)

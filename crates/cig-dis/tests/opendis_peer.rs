@@ -18,29 +18,9 @@ use cig_dis::remote::{dr_input_from_entity_state, EntityKey, EntityTypeCode};
 use cig_dis::{DrAlgorithm, EffectsRequested, EulerAngles};
 use glam::DVec3;
 
-const PREAMBLE: &str = r"
-import sys, json
-from io import BytesIO
-from opendis.DataOutputStream import DataOutputStream
-from opendis.PduFactory import createPdu
-from opendis.dis7 import *
-
-def finish(pdu, pdu_type, family):
-    pdu.pduType = pdu_type
-    pdu.protocolFamily = family
-    pdu.protocolVersion = 7
-    pdu.exerciseID = 4
-    pdu.pduStatus = 0
-    buf = BytesIO()
-    pdu.serialize(DataOutputStream(buf))
-    data = bytearray(buf.getvalue())
-    data[8:10] = len(data).to_bytes(2, 'big')
-    return bytes(data)
-";
-
 /// Runs a Python script with opendis; `None` (and a message) when the peer is unavailable.
 fn python(script: &str, arg: &str) -> Option<String> {
-    common::python(PREAMBLE, script, arg)
+    common::python("", script, arg)
 }
 
 #[test]

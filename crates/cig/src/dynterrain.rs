@@ -96,13 +96,6 @@ impl EditJournal {
     }
 }
 
-/// Seconds since 1970, UTC, now.
-fn now_utc_s() -> f64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0.0, |d| d.as_secs_f64())
-}
-
 fn moisture(wet: bool) -> SoilMoisture {
     if wet {
         SoilMoisture::Wet
@@ -113,19 +106,11 @@ fn moisture(wet: bool) -> SoilMoisture {
 
 /// Parses "LAT,LON" in degrees.
 fn lat_lon(text: &str) -> anyhow::Result<(f64, f64)> {
-    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    let [lat, lon] = parts.as_slice() else {
-        anyhow::bail!("--at {text}: expected LAT,LON in degrees");
-    };
-    let lat: f64 = lat
-        .parse()
-        .with_context(|| format!("--at {text}: latitude {lat} is not a number"))?;
-    let lon: f64 = lon
-        .parse()
-        .with_context(|| format!("--at {text}: longitude {lon} is not a number"))?;
+    let v = crate::render::parse_numbers(text, "--at", &[2])?;
+    let (lat, lon) = (v[0], v[1]);
     anyhow::ensure!(
-        lat.is_finite() && lon.is_finite() && lat.abs() <= 90.0,
-        "--at {text}: not a place on the earth"
+        lat.abs() <= 90.0,
+        "--at \"{text}\": latitude {lat} is not on the earth"
     );
     Ok((lat, lon))
 }
@@ -172,7 +157,7 @@ pub fn crater(args: &CraterArgs, config: &Config) -> anyhow::Result<()> {
         sequence: layer
             .last_sequence(OPERATOR)
             .map_or(1, |s| s.saturating_add(1)),
-        time_utc_s: now_utc_s(),
+        time_utc_s: crate::serve::unix_now_s(),
         shape: EditShape::Crater {
             centre: GeoPoint {
                 lat_deg: lat,

@@ -1152,7 +1152,7 @@ impl LockSlave {
 }
 
 /// The seconds since 1970 now.
-fn unix_now_s() -> f64 {
+pub fn unix_now_s() -> f64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0.0, |d| d.as_secs_f64())

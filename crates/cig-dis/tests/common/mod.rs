@@ -3,7 +3,30 @@
 
 use std::process::Command;
 
-/// Runs `preamble` then `script` in Python with opendis, with `arg` as its argument; `None`
+/// What every peer script starts with: the imports, and `finish`, which serialises a PDU with
+/// its header set as cig's tests expect (version 7, exercise 4, the length written in).
+const BASE_PREAMBLE: &str = r"
+import sys, json, struct
+from io import BytesIO
+from opendis.DataOutputStream import DataOutputStream
+from opendis.DataInputStream import DataInputStream
+from opendis.PduFactory import createPdu
+from opendis.dis7 import *
+
+def finish(pdu, pdu_type, family):
+    pdu.pduType = pdu_type
+    pdu.protocolFamily = family
+    pdu.protocolVersion = 7
+    pdu.exerciseID = 4
+    pdu.pduStatus = 0
+    buf = BytesIO()
+    pdu.serialize(DataOutputStream(buf))
+    data = bytearray(buf.getvalue())
+    data[8:10] = len(data).to_bytes(2, 'big')
+    return bytes(data)
+";
+
+/// Runs the common preamble, `preamble` and then `script` in Python with opendis, with `arg` as its argument; `None`
 /// (and a message) when the peer is unavailable.
 pub fn python(preamble: &str, script: &str, arg: &str) -> Option<String> {
     let probe = Command::new("python3")
@@ -16,7 +39,7 @@ pub fn python(preamble: &str, script: &str, arg: &str) -> Option<String> {
             return None;
         }
     }
-    let full = format!("{preamble}\n{script}");
+    let full = format!("{BASE_PREAMBLE}\n{preamble}\n{script}");
     let out = Command::new("python3")
         .args(["-c", &full, arg])
         .output()
