@@ -44,6 +44,86 @@ pub enum ImpactSize {
     Large,
 }
 
+/// A munition's impact on the ground, as the firing simulation reports it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroundImpact {
+    /// The event; the firing entity is object 1 and the munition object 2 of its site and
+    /// application.
+    pub event: EventIdentity,
+    /// Where it burst, ECEF metres.
+    pub location_ecef_m: DVec3,
+    /// The munition's SISO-REF-010 entity type: kind, domain, country, category,
+    /// subcategory, specific, extra.
+    pub munition: (u8, u8, u16, u8, u8, u8, u8),
+    /// Warhead (SISO-REF-010 UID 60; 1000 high explosive).
+    pub warhead: u16,
+}
+
+impl GroundImpact {
+    /// The Detonation PDU's body: a munition descriptor of one round, coming down at
+    /// 300 m/s, result 3 (ground impact).
+    #[must_use]
+    pub fn message(&self) -> crate::codec::DisMessage {
+        use dis_rs::detonation::model::DetonationDescriptor;
+        use dis_rs::enumerations::{
+            Country, DetonationResult, EntityKind, MunitionDescriptorWarhead, PlatformDomain,
+        };
+        use dis_rs::model::{
+            EntityId, EntityType, EventId, Location, MunitionDescriptor, VectorF32,
+        };
+        use dis_rs::BodyRaw;
+        let (kind, domain, country, category, subcategory, specific, extra) = self.munition;
+        let e = self.event;
+        let munition = MunitionDescriptor {
+            entity_type: EntityType {
+                kind: EntityKind::from(kind),
+                domain: PlatformDomain::from(domain),
+                country: Country::from(country),
+                category,
+                subcategory,
+                specific,
+                extra,
+            },
+            warhead: MunitionDescriptorWarhead::from(self.warhead),
+            quantity: 1,
+            ..MunitionDescriptor::default()
+        };
+        let p = self.location_ecef_m;
+        let detonation = Detonation::builder()
+            .with_source_entity_id(EntityId::new(e.site, e.application, 1))
+            .with_target_entity_id(EntityId::new(0, 0, 0))
+            .with_exploding_entity_id(EntityId::new(e.site, e.application, 2))
+            .with_event_id(EventId::new(e.site, e.application, e.event_number))
+            .with_velocity(VectorF32::new(0.0, 0.0, -300.0))
+            .with_world_location(Location::new(p.x, p.y, p.z))
+            .with_descriptor(DetonationDescriptor::Munition(munition))
+            .with_entity_location(VectorF32::new(0.0, 0.0, 0.0))
+            .with_detonation_result(DetonationResult::from(3))
+            .build();
+        crate::codec::DisMessage::Detonation(Box::new(detonation))
+    }
+
+    /// The Detonation PDU (DIS 7) of exercise `exercise_id`, stamped `seconds_past_hour`
+    /// (absolute time).
+    ///
+    /// # Errors
+    /// When the PDU cannot be encoded.
+    pub fn pdu(
+        &self,
+        exercise_id: u8,
+        seconds_past_hour: f64,
+    ) -> Result<Vec<u8>, crate::codec::EncodeError> {
+        crate::codec::encode_pdu(
+            crate::codec::EncodeHeader {
+                version: crate::codec::DisVersion::V7,
+                exercise_id,
+                timestamp: crate::codec::timestamp_from_seconds_past_hour(seconds_past_hour, true),
+            },
+            &self.message(),
+        )
+    }
+}
+
 /// The identity of a DIS event (Event ID record): unique per firing application.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct EventIdentity {

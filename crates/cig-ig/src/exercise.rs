@@ -65,6 +65,8 @@ pub struct ExerciseCounters {
     pub craters_made: u64,
     /// Terrain edits taken from other nodes' Object State PDUs (new ones only).
     pub terrain_edits_received: u64,
+    /// Edits other nodes healed (deactivated Object States) that were held here.
+    pub terrain_edits_healed: u64,
     /// Edits refused: Object State PDUs whose edit the database refused (outside it, bad
     /// sizes) or that came beyond `MAX_REMOTE_EDITS_PER_S`, and Detonations' craters refused.
     pub terrain_edits_refused: u64,
@@ -132,6 +134,12 @@ pub struct Exercise {
     last_tick_s: Option<f64>,
     /// Other nodes' new edits taken in the current second: (the second, how many).
     edit_second: (f64, u32),
+    /// Edits healed here or by other nodes, the newest [`terrain_edits::MAX_HEALS_KEPT`]:
+    /// announced again with the edits, their re-announcements as live edits ignored.
+    heals: std::collections::VecDeque<TerrainEdit>,
+    healed_ids: std::collections::HashSet<cig_terrain::EditId>,
+    /// Nodes (site, application) whose ruts came in: they lay their own vehicles' ruts.
+    rut_authors: std::collections::HashSet<(u16, u16)>,
 }
 
 /// Other nodes' new terrain edits taken a second at most; more are counted refused (the
@@ -244,6 +252,9 @@ impl Exercise {
             edits_owed: 0.0,
             last_tick_s: None,
             edit_second: (f64::NEG_INFINITY, 0),
+            heals: std::collections::VecDeque::new(),
+            healed_ids: std::collections::HashSet::new(),
+            rut_authors: std::collections::HashSet::new(),
         };
         exercise.queue_time(now_s, &first);
         exercise
@@ -340,6 +351,23 @@ impl Exercise {
         self.edit_second.1 <= MAX_REMOTE_EDITS_PER_S
     }
 
+    /// The remote ground vehicles whose ruts fall to this node: every land platform of the
+    /// exercise at `now_s` whose own node sends no ruts (a simulation that is not an IG),
+    /// while this node keeps the exercise's time (one node of the exercise lays them, and
+    /// they reach the others as its edits; with no time master, none does).
+    pub fn remote_rut_vehicles(&self, now_s: f64) -> Vec<RemoteEntitySnapshot> {
+        if self.time.role() != cig_dis::TimeRole::Master {
+            return Vec::new();
+        }
+        let mut vehicles = self.remote.snapshot_where(now_s, |_| true);
+        vehicles.retain(|r| {
+            r.entity_type.kind == 1
+                && r.entity_type.domain == 1
+                && !self.rut_authors.contains(&(r.key.site, r.key.application))
+        });
+        vehicles
+    }
+
     /// This node's DIS simulation address, as a terrain edit's author.
     pub fn address(&self) -> cig_terrain::edits::EditAuthor {
         cig_terrain::edits::EditAuthor {
@@ -354,12 +382,46 @@ impl Exercise {
         self.send_edit(now_s, edit, query);
     }
 
+    /// Sends the heal of an edit this node removed (the host's, the operator's); it is
+    /// announced again with the edits for as long as it is among the newest heals.
+    pub fn announce_heal(&mut self, now_s: f64, edit: &TerrainEdit, query: &mut QuerySession) {
+        self.remember_heal(edit.clone());
+        self.send_edit_as(now_s, edit, query, true);
+    }
+
+    /// Keeps a heal (the newest [`terrain_edits::MAX_HEALS_KEPT`]).
+    fn remember_heal(&mut self, edit: TerrainEdit) {
+        if self.healed_ids.insert(edit.id()) {
+            self.heals.push_back(edit);
+            while self.heals.len() > terrain_edits::MAX_HEALS_KEPT {
+                if let Some(old) = self.heals.pop_front() {
+                    self.healed_ids.remove(&old.id());
+                }
+            }
+        }
+    }
+
     fn send_edit(&mut self, now_s: f64, edit: &TerrainEdit, query: &mut QuerySession) {
+        self.send_edit_as(now_s, edit, query, false);
+    }
+
+    fn send_edit_as(
+        &mut self,
+        now_s: f64,
+        edit: &TerrainEdit,
+        query: &mut QuerySession,
+        healed: bool,
+    ) {
         let anchor = edit.shape.anchor();
         let height_m = query
             .hot(anchor.lat_deg, anchor.lon_deg)
             .map_or(0.0, |s| s.height_ellipsoid_m());
-        let Some(message) = terrain_edits::pdu_of_edit(edit, height_m) else {
+        let message = if healed {
+            terrain_edits::heal_pdu_of_edit(edit, height_m)
+        } else {
+            terrain_edits::pdu_of_edit(edit, height_m)
+        };
+        let Some(message) = message else {
             return;
         };
         if let Ok(bytes) = encode_pdu(self.header(now_s), &message) {
@@ -377,29 +439,36 @@ impl Exercise {
             .map_or(0.0, |t| (now_s - t).clamp(0.0, 1.0));
         self.last_tick_s = Some(now_s);
         let edits = Arc::clone(query.edits());
-        if edits.is_empty() {
+        // The edits held, then the heals known.
+        let total = edits.len() + self.heals.len();
+        if total == 0 {
             self.edits_owed = 0.0;
             return;
         }
-        self.edits_owed += dt_s * edits.len() as f64 / terrain_edits::REANNOUNCE_S;
-        let due = (self.edits_owed.floor() as usize).min(edits.len());
+        self.edits_owed += dt_s * total as f64 / terrain_edits::REANNOUNCE_S;
+        let due = (self.edits_owed.floor() as usize).min(total);
         if due == 0 {
             return;
         }
         self.edits_owed -= due as f64;
-        if self.edit_cursor >= edits.len() {
+        if self.edit_cursor >= total {
             self.edit_cursor = 0;
         }
-        let batch: Vec<TerrainEdit> = edits
-            .edits()
-            .chain(edits.edits())
+        let all = || {
+            edits
+                .edits()
+                .map(|e| (e, false))
+                .chain(self.heals.iter().map(|e| (e, true)))
+        };
+        let batch: Vec<(TerrainEdit, bool)> = all()
+            .chain(all())
             .skip(self.edit_cursor)
             .take(due)
-            .cloned()
+            .map(|(e, healed)| (e.clone(), healed))
             .collect();
-        self.edit_cursor = (self.edit_cursor + due) % edits.len();
-        for edit in &batch {
-            self.send_edit(now_s, edit, query);
+        self.edit_cursor = (self.edit_cursor + due) % total;
+        for (edit, healed) in &batch {
+            self.send_edit_as(now_s, edit, query, *healed);
         }
     }
 
@@ -463,7 +532,37 @@ impl Exercise {
                 }
                 DisMessage::PointObjectState(_) | DisMessage::LinearObjectState(_) => {
                     let time_s = self.event_time_unix_s(now_s, pdu.header.timestamp);
-                    match terrain_edits::edit_of_pdu(&pdu.message, time_s) {
+                    let deactivated = terrain_edits::is_deactivated(&pdu.message);
+                    let edit = terrain_edits::edit_of_pdu(&pdu.message, time_s);
+                    // A node that sends ruts lays its own vehicles' ruts.
+                    if let Some(e) = edit.as_ref().filter(|_| !deactivated) {
+                        if matches!(e.shape, cig_terrain::edits::EditShape::Rut { .. }) {
+                            self.rut_authors
+                                .insert((e.author.site, e.author.application));
+                        }
+                    }
+                    match edit {
+                        // A heal: the edit goes (if held) and is remembered healed.
+                        Some(edit) if deactivated => {
+                            let id = edit.id();
+                            if !self.healed_ids.contains(&id) {
+                                if !self.edit_budget(now_s) {
+                                    self.counters.terrain_edits_refused += 1;
+                                } else {
+                                    if query.edits().contains(id)
+                                        && query
+                                            .cache()
+                                            .update_edits(|layer| layer.remove(id))
+                                            .is_ok()
+                                    {
+                                        self.counters.terrain_edits_healed += 1;
+                                    }
+                                    self.remember_heal(edit);
+                                }
+                            }
+                        }
+                        // A healed edit announced by a node that missed the heal.
+                        Some(edit) if self.healed_ids.contains(&edit.id()) => {}
                         // Re-announcements of edits held (every node's, this one's echoed back)
                         // change nothing and cost nothing.
                         Some(edit) if query.edits().contains(edit.id()) => {}

@@ -41,7 +41,11 @@
 //!   the wave surface at the frame's time (material water, the wave's normal), and a clamped
 //!   entity there floats; collision segments and volumes test the terrain only (its sea posts
 //!   at mean sea level, not the waves).
-//! - User-defined packets: kept for the caller (`take_user_packets`).
+//! - User-defined packets: kept with the version and byte order of the message they came in
+//!   (`take_user_packets`, [`UserPacket`]) and counted; the world's step takes them and
+//!   carries out cig's Terrain Edit Requests (`crate::terrain_edits::TerrainEditRequest`,
+//!   what came of them in [`IgSession::edit_requests`]); other user-defined packets are
+//!   dropped.
 //!
 //! Line of sight also sees the obscurants: the smoke, flame and dust on the clear part of the
 //! line are a translucent surface of alpha 255·(1 − T), T the Beer–Lambert transmittance
@@ -617,6 +621,17 @@ pub struct SessionCounters {
     pub answers_deferred: u64,
     pub answers_dropped: u64,
     pub los_obscured: u64,
+    /// User-defined packets received (cig's Terrain Edit Requests among them).
+    pub user_defined_packets: u64,
+}
+
+/// A user-defined packet as the host sent it: its fields are in the byte order of its
+/// message, which the codec cannot read for it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UserPacket {
+    pub packet: UserDefined,
+    pub version: Version,
+    pub byte_order: ByteOrder,
 }
 
 /// One line-of-sight request to answer.
@@ -726,7 +741,9 @@ pub struct IgSession {
     told: std::collections::BTreeSet<String>,
     /// The scenario's entities, restored after a reset.
     initial_entities: Vec<IgEntity>,
-    user_packets: Vec<UserDefined>,
+    user_packets: Vec<UserPacket>,
+    /// What came of the host's Terrain Edit Requests.
+    edit_requests: crate::terrain_edits::HostEditRequests,
     /// Host version and byte order, from the last message.
     host_format: Option<(Version, ByteOrder)>,
     ig_mode: u8,
@@ -799,6 +816,7 @@ impl IgSession {
             told: std::collections::BTreeSet::new(),
             initial_entities: Vec::new(),
             user_packets: Vec::new(),
+            edit_requests: crate::terrain_edits::HostEditRequests::default(),
             host_format: None,
             ig_mode: 1,
             ig_frame_number: 0,
@@ -927,9 +945,17 @@ impl IgSession {
     pub fn take_time_set(&mut self) -> Option<HostTimeSet> {
         self.time_set.take()
     }
-    /// User-defined packets received since the last call.
-    pub fn take_user_packets(&mut self) -> Vec<UserDefined> {
+    /// User-defined packets received since the last call (at most
+    /// [`MAX_STANDING_REQUESTS`] wait), with their message's version and byte order.
+    pub fn take_user_packets(&mut self) -> Vec<UserPacket> {
         std::mem::take(&mut self.user_packets)
+    }
+    /// What came of the host's Terrain Edit Requests.
+    pub fn edit_requests(&self) -> &crate::terrain_edits::HostEditRequests {
+        &self.edit_requests
+    }
+    pub fn edit_requests_mut(&mut self) -> &mut crate::terrain_edits::HostEditRequests {
+        &mut self.edit_requests
     }
     /// Queues an IG Message for the host (deduplicated; at most 16 wait).
     /// A Component Control: a view's point of interest ([`POINT_OF_INTEREST_COMPONENT`]) and
@@ -1275,8 +1301,17 @@ impl IgSession {
                 true
             }
             Packet::UserDefined(u) => {
+                self.counters.user_defined_packets += 1;
+                // Set by `apply` for the message this packet came in.
+                let Some((version, byte_order)) = self.host_format else {
+                    return false;
+                };
                 if self.user_packets.len() < MAX_STANDING_REQUESTS {
-                    self.user_packets.push(u.clone());
+                    self.user_packets.push(UserPacket {
+                        packet: u.clone(),
+                        version,
+                        byte_order,
+                    });
                 }
                 true
             }

@@ -107,8 +107,20 @@ pub struct ThermalWorld {
     place: Option<Geodetic>,
     /// Fresh craters and impact points: (effect time of the event, ECEF point, the spot).
     spots: Vec<(f64, DVec3, cig_thermal::HotSpot)>,
+    /// The terrain's crater edits younger than [`CRATER_HEAT_S`]: (UTC time made, ECEF point
+    /// of the bowl's bottom, radius).
+    craters: Vec<(f64, DVec3, f64)>,
+    /// The edits read so far (their count, and the layer's revision then).
+    craters_seen: (usize, u64),
     visibility_m: f64,
 }
+
+/// How long a crater's ground stays warmer than the ground around it, s (the disturbed
+/// soil's hour, `cig_thermal::HotSpot::disturbed_soil`, to a tenth of a kelvin).
+pub const CRATER_HEAT_S: f64 = 6.0 * 3600.0;
+
+/// Warm craters kept (the newest); the renderer draws the nearest of their spots.
+pub const MAX_WARM_CRATERS: usize = 1024;
 
 impl ThermalWorld {
     /// The state for a scenario's `[thermal]` section (or the defaults).
@@ -123,6 +135,8 @@ impl ThermalWorld {
             heat: BTreeMap::new(),
             scene: None,
             spots: Vec::new(),
+            craters: Vec::new(),
+            craters_seen: (0, 0),
             place: None,
             visibility_m: 23_000.0,
         }
@@ -243,13 +257,29 @@ impl ThermalWorld {
         );
         scene.base_alt_m = place.alt_m;
         let effect_now = cig_effects::effect_time_s(now);
-        scene.hot_spots = self
+        // A crater's heat: its hot core for minutes, its disturbed soil for hours; an impact
+        // that made a crater is the crater's (its own spot would count the heat twice).
+        let crater_spots = self.craters.iter().flat_map(|&(t, p, radius_m)| {
+            [
+                cig_thermal::HotSpot::crater(radius_m),
+                cig_thermal::HotSpot::disturbed_soil(radius_m),
+            ]
+            .map(|spot| (p, spot.radius_m, spot.rise_k(now - t)))
+        });
+        let near_crater = |p: &DVec3| {
+            self.craters
+                .iter()
+                .any(|(_, c, r)| c.distance_squared(*p) < (r + 1.0) * (r + 1.0))
+        };
+        let impact_spots = self
             .spots
             .iter()
-            .filter_map(|(t, p, spot)| {
-                let rise = spot.rise_k(effect_now - t);
-                (rise > 0.2).then(|| (p.to_array(), spot.radius_m as f32, rise as f32))
-            })
+            .filter(|(_, p, spot)| spot.radius_m < 1.0 || !near_crater(p))
+            .map(|(t, p, spot)| (*p, spot.radius_m, spot.rise_k(effect_now - t)));
+        scene.hot_spots = impact_spots
+            .chain(crater_spots)
+            .filter(|(_, _, rise)| *rise > 0.2)
+            .map(|(p, radius_m, rise)| (p.to_array(), radius_m as f32, rise as f32))
             .collect();
         self.scene = Some(Arc::new(scene));
         Ok(())
@@ -269,6 +299,55 @@ impl ThermalWorld {
                 (*t, *p, spot)
             })
             .collect();
+    }
+
+    /// Follows the terrain's crater edits (any author: detonations, the host's, the
+    /// operator's): the ones made within [`CRATER_HEAT_S`] of `now_unix_s` are warm. Reads
+    /// only the edits added since the last call (all of them again after a removal or a new
+    /// layer); each new crater's bottom is found by `query`.
+    pub fn follow_craters(
+        &mut self,
+        layer: &cig_terrain::edits::EditLayer,
+        query: &mut cig_terrain::QuerySession,
+        now_unix_s: f64,
+    ) {
+        let (seen, revision) = self.craters_seen;
+        if layer.revision() != revision || layer.len() != seen {
+            let start = if layer.len() >= seen && layer.revision() >= revision {
+                seen
+            } else {
+                self.craters.clear();
+                0
+            };
+            for edit in layer.edits_from(start) {
+                let cig_terrain::edits::EditShape::Crater {
+                    centre, radius_m, ..
+                } = &edit.shape
+                else {
+                    continue;
+                };
+                if now_unix_s - edit.time_utc_s > CRATER_HEAT_S {
+                    continue;
+                }
+                if let Ok(ground) = query.hot(centre.lat_deg, centre.lon_deg) {
+                    let bottom = Geodetic::new(
+                        centre.lat_deg,
+                        centre.lon_deg,
+                        ground.height_msl_m + ground.geoid_undulation_m,
+                    );
+                    self.craters
+                        .push((edit.time_utc_s, bottom.to_ecef(), *radius_m));
+                }
+            }
+            self.craters_seen = (layer.len(), layer.revision());
+        }
+        self.craters
+            .retain(|(t, _, _)| now_unix_s - t <= CRATER_HEAT_S);
+        // The newest first, at most the shader's spots.
+        if self.craters.len() > MAX_WARM_CRATERS {
+            self.craters.sort_by(|a, b| b.0.total_cmp(&a.0));
+            self.craters.truncate(MAX_WARM_CRATERS);
+        }
     }
 
     /// The frame's thermal scene, once the table runs.
@@ -385,6 +464,112 @@ mod tests {
         .expect("step");
         let air = w.scene().expect("scene").air_k - CELSIUS_0_K;
         assert!((air - 35.0).abs() < 0.01, "{air}");
+    }
+
+    /// A flat 65 x 65 post database, 30 m apart, of grass.
+    fn flat_query() -> cig_terrain::QuerySession {
+        use cig_terrain::database::{GeoidGrid, Manifest, MemoryTileStore, TerrainDatabase};
+        use cig_terrain::raster::{GeoGrid, Raster};
+        let (n, e) = cig_geo::metres_per_degree(36.0);
+        let grid = GeoGrid {
+            south_lat_deg: 36.0,
+            west_lon_deg: -121.0,
+            dlat_deg: 30.0 / n,
+            dlon_deg: 30.0 / e,
+            rows: 65,
+            cols: 65,
+        };
+        let raster = Raster {
+            grid,
+            elevation_m: vec![100.0; grid.len()],
+            material: Some(vec![cig_terrain::Material::Grass; grid.len()]),
+        };
+        let store = Arc::new(MemoryTileStore::new());
+        let summary = cig_terrain::build::build_pyramid::<cig_terrain::build::BuildError>(
+            &raster,
+            64,
+            &mut |t| {
+                store.insert(t.key, t.encode());
+                Ok(())
+            },
+        )
+        .expect("build");
+        let manifest = Manifest::from_build(&summary, GeoidGrid::zero(), 0, vec![]);
+        let db =
+            TerrainDatabase::new(manifest, store as Arc<dyn cig_terrain::TileStore>).expect("db");
+        let cache = cig_terrain::TileCache::new(Arc::new(db), cig_terrain::PagingConfig::default())
+            .expect("cache");
+        cig_terrain::QuerySession::new(Arc::new(cache))
+    }
+
+    #[test]
+    fn crater_edits_are_hot_and_cool_and_an_impact_there_is_not_counted_twice() {
+        use cig_terrain::edits::{EditAuthor, EditShape, GeoPoint, TerrainEdit};
+        let mut q = flat_query();
+        let t0 = cig_environment::UtcTime::parse_iso8601("2026-06-21T06:00:00Z").expect("t");
+        let (lat, lon) = (36.0 + 0.004, -121.0 + 0.005);
+        let crater = |sequence: u32, time_utc_s: f64, lat_deg: f64| TerrainEdit {
+            author: EditAuthor::default(),
+            sequence,
+            time_utc_s,
+            shape: EditShape::Crater {
+                centre: GeoPoint {
+                    lat_deg,
+                    lon_deg: lon,
+                },
+                radius_m: 2.0,
+                depth_m: 0.8,
+                lip_radius_m: 2.5,
+                lip_height_m: 0.2,
+            },
+        };
+        // A fresh crater, and one made a day before (cold).
+        q.cache()
+            .update_edits(|l| {
+                l.apply(crater(1, t0.unix_seconds(), lat))?;
+                l.apply(crater(2, t0.unix_seconds() - 86_400.0, lat + 0.001))
+            })
+            .expect("craters");
+        let place = Geodetic::new(36.0, -121.0, 0.0);
+        let mut w = ThermalWorld::new(None);
+        // The Detonation that made it, as an impact: its spot is the crater's.
+        let at = cig_effects::effect_time_s(t0.unix_seconds());
+        let bottom = Geodetic::new(lat, lon, 99.2).to_ecef();
+        w.set_impacts(&[(at, bottom, cig_dis::ImpactSize::Large)]);
+        let spots_at = |w: &mut ThermalWorld,
+                        q: &mut cig_terrain::QuerySession,
+                        t: cig_environment::UtcTime| {
+            let edits = q.cache().edits();
+            w.follow_craters(&edits, q, t.unix_seconds());
+            w.step(t, place, None, 0.0, 20_000.0, &[]).expect("step");
+            w.scene().expect("scene").hot_spots.clone()
+        };
+        let fresh = spots_at(&mut w, &mut q, t0);
+        // The crater's core and its disturbed soil; the impact's own spot left out.
+        assert_eq!(fresh.len(), 2, "{fresh:?}");
+        let core = fresh.iter().map(|s| s.2).fold(0.0f32, f32::max);
+        assert!(core > 250.0, "{fresh:?}");
+        let centre = DVec3::from_array(fresh[0].0);
+        assert!(centre.distance(bottom) < 0.5, "at the bowl's bottom");
+        // Ten minutes on: the core has cooled to about a third, the soil hardly.
+        let later = spots_at(&mut w, &mut q, t0.plus_seconds(600.0));
+        let core_later = later.iter().map(|s| s.2).fold(0.0f32, f32::max);
+        assert!(core_later < core / 2.5, "{later:?}");
+        // Two hours on: only the disturbed soil, a kelvin or so.
+        let hours = spots_at(&mut w, &mut q, t0.plus_seconds(7200.0));
+        assert_eq!(hours.len(), 1, "{hours:?}");
+        assert!((0.5..3.0).contains(&hours[0].2), "{hours:?}");
+        // Healed: no crater, no heat; the impact's spot is its own again.
+        q.cache()
+            .update_edits(|l| {
+                l.remove(cig_terrain::edits::EditId {
+                    author: EditAuthor::default(),
+                    sequence: 1,
+                })
+            })
+            .expect("healed");
+        let healed = spots_at(&mut w, &mut q, t0.plus_seconds(60.0));
+        assert!(healed.iter().all(|s| s.1 == 4.0), "{healed:?}");
     }
 
     #[test]

@@ -737,6 +737,7 @@ impl IgWorld {
         self.run_owned_effects(query, effect_time_s, &world_velocities);
         self.run_vehicle_dust(query, effect_time_s, &world_velocities);
         self.run_vehicle_ruts(query, now);
+        self.run_host_terrain_edits(query, now);
         if let Some(x) = self.exercise.as_mut() {
             if now - self.last_process_publish_s >= 1.0 && !self.smoke.is_empty() {
                 self.last_process_publish_s = now;
@@ -1212,6 +1213,9 @@ impl IgWorld {
         if let Some(x) = &self.exercise {
             self.thermal.set_impacts(x.recent_impacts());
         }
+        let edits = query.cache().edits();
+        self.thermal
+            .follow_craters(&edits, query, self.unix_time_s());
         // The air's visibility at the eye (the host's weather, else the scenario's).
         let visibility_m =
             self.first_eye
@@ -1428,8 +1432,8 @@ impl IgWorld {
         }
     }
 
-    /// Ruts behind the ground vehicles this IG moves (its scenario's and its host's) on the
-    /// ground (`crate::terrain_edits::RutTracker`), added to the terrain's edits and announced
+    /// Ruts behind the ground vehicles this IG moves (its scenario's and its host's), and the
+    /// exercise's that fall to it, on the ground (`crate::terrain_edits::RutTracker`), added to the terrain's edits and announced
     /// to the exercise; the soil is wet while it rains or snows.
     fn run_vehicle_ruts(&mut self, query: &mut QuerySession, now_s: f64) {
         let mut vehicles = Vec::new();
@@ -1445,10 +1449,31 @@ impl IgWorld {
             };
             if query.hat(pose.position).is_ok_and(|(hat, _)| hat < 1.5) {
                 vehicles.push(crate::terrain_edits::RutVehicle {
-                    id: *id,
+                    id: u64::from(*id),
                     position: pose.position,
                     load,
                 });
+            }
+        }
+        // The exercise's ground vehicles whose own nodes lay no ruts, while this IG keeps the
+        // exercise's time (`Exercise::remote_rut_vehicles`).
+        if let Some(x) = &self.exercise {
+            for r in x.remote_rut_vehicles(self.monotonic_s) {
+                let model = self.session.models().model_for_dis(&r.entity_type);
+                let Some(load) = self.session.models().vehicle_load(model) else {
+                    continue;
+                };
+                if query.hat(r.geodetic).is_ok_and(|(hat, _)| hat < 1.5) {
+                    vehicles.push(crate::terrain_edits::RutVehicle {
+                        id: crate::terrain_edits::remote_rut_id(
+                            r.key.site,
+                            r.key.application,
+                            r.key.entity,
+                        ),
+                        position: r.geodetic,
+                        load,
+                    });
+                }
             }
         }
         let author = self.exercise.as_ref().map_or(
@@ -1486,6 +1511,38 @@ impl IgWorld {
                 if added {
                     x.announce_edit(now_s, rut, query);
                 }
+            }
+        }
+    }
+
+    /// The host's Terrain Edit Requests of this frame (cig's user-defined CIGI packet,
+    /// `crate::terrain_edits::TerrainEditRequest`): craters made or healed in one change of
+    /// the terrain's edits, authored by this IG, problems told to the host, new craters
+    /// announced to the exercise. Other user-defined packets are dropped (the session counts
+    /// them).
+    fn run_host_terrain_edits(&mut self, query: &mut QuerySession, now_s: f64) {
+        let packets = self.session.take_user_packets();
+        if packets.is_empty() {
+            return;
+        }
+        let author = self
+            .exercise
+            .as_ref()
+            .map_or(crate::terrain_edits::LOCAL_AUTHOR, Exercise::address);
+        let time_s = self.unix_time_s();
+        let done = self
+            .session
+            .edit_requests_mut()
+            .apply(&packets, author, time_s, query);
+        for problem in done.problems {
+            self.session.tell_host(problem);
+        }
+        if let Some(x) = self.exercise.as_mut() {
+            for edit in &done.added {
+                x.announce_edit(now_s, edit, query);
+            }
+            for edit in &done.healed {
+                x.announce_heal(now_s, edit, query);
             }
         }
     }

@@ -2,15 +2,7 @@
 //! joiner gets the earlier edits from the others' re-announcements, and edits survive their
 //! Object State PDUs.
 
-use cig_dis::codec::{encode_pdu, DisMessage, DisVersion, EncodeHeader};
-use cig_dis::dis_rs::detonation::model::{Detonation, DetonationDescriptor};
-use cig_dis::dis_rs::enumerations::{
-    Country, DetonationResult, EntityKind, MunitionDescriptorWarhead, PlatformDomain,
-};
-use cig_dis::dis_rs::model::{
-    EntityId, EntityType, EventId, Location, MunitionDescriptor, VectorF32,
-};
-use cig_dis::dis_rs::BodyRaw;
+use cig_dis::codec::{encode_pdu, DisVersion, EncodeHeader};
 use cig_effects::EffectsConfig;
 use cig_environment::UtcTime;
 use cig_geo::Geodetic;
@@ -97,41 +89,17 @@ fn world(application: u16) -> IgWorld {
 fn shell(q: &mut QuerySession, event: u16, row: f64, col: f64, above_m: f64) -> Vec<u8> {
     let (lat, lon) = at(row, col);
     let ground = q.hot(lat, lon).expect("hot").height_ellipsoid_m();
-    let impact = Geodetic::new(lat, lon, ground + above_m).to_ecef();
-    let munition = MunitionDescriptor {
-        entity_type: EntityType {
-            kind: EntityKind::from(2),
-            domain: PlatformDomain::from(9),
-            country: Country::from(225),
-            category: 2,
-            subcategory: 14,
-            specific: 2,
-            extra: 0,
+    let impact = cig_dis::detonation::GroundImpact {
+        event: cig_dis::detonation::EventIdentity {
+            site: 7,
+            application: 8,
+            event_number: event,
         },
-        warhead: MunitionDescriptorWarhead::from(1000),
-        quantity: 1,
-        ..MunitionDescriptor::default()
+        location_ecef_m: Geodetic::new(lat, lon, ground + above_m).to_ecef(),
+        munition: (2, 9, 225, 2, 14, 2, 0),
+        warhead: 1000,
     };
-    let detonation = Detonation::builder()
-        .with_source_entity_id(EntityId::new(7, 8, 1))
-        .with_target_entity_id(EntityId::new(0, 0, 0))
-        .with_exploding_entity_id(EntityId::new(7, 8, 2))
-        .with_event_id(EventId::new(7, 8, event))
-        .with_velocity(VectorF32::new(0.0, 0.0, -300.0))
-        .with_world_location(Location::new(impact.x, impact.y, impact.z))
-        .with_descriptor(DetonationDescriptor::Munition(munition))
-        .with_entity_location(VectorF32::new(0.0, 0.0, 0.0))
-        .with_detonation_result(DetonationResult::from(3))
-        .build();
-    encode_pdu(
-        EncodeHeader {
-            version: DisVersion::V7,
-            exercise_id: 3,
-            timestamp: cig_dis::codec::timestamp_from_seconds_past_hour(1.0, true),
-        },
-        &DisMessage::Detonation(Box::new(detonation)),
-    )
-    .expect("encode")
+    impact.pdu(3, 1.0).expect("encode")
 }
 
 #[test]
@@ -369,4 +337,315 @@ fn a_tank_driven_across_sand_onto_a_paved_road_leaves_ruts_only_in_the_sand() {
         .expect("hot")
         .height_msl_m;
     assert!(after < before - 0.01, "{before} -> {after}");
+}
+
+/// A host message: IG Control and these packets, in `version` and `order`.
+fn host_datagram(
+    version: cig_cigi::Version,
+    order: cig_cigi::ByteOrder,
+    packets: Vec<cig_cigi::Packet>,
+) -> Vec<u8> {
+    let mut all = vec![cig_cigi::Packet::IgControl(cig_cigi::IgControl {
+        ig_mode: 1,
+        ..cig_cigi::IgControl::default()
+    })];
+    all.extend(packets);
+    let mut bytes = Vec::new();
+    cig_cigi::encode_message(&cig_cigi::Message::new(version, order, all), &mut bytes)
+        .expect("encode");
+    bytes
+}
+
+#[test]
+fn a_hosts_crater_requests_make_craters_every_ig_of_the_exercise_sees_and_heal_here() {
+    use cig_cigi::{ByteOrder, Packet, UserDefined, Version};
+    use cig_ig::terrain_edits::{CraterSize, EditRequestAction, TerrainEditRequest};
+    let (mut qa, mut qb) = (query(), query());
+    let (mut a, mut b) = (world(20), world(21));
+    let (lat, lon) = at(60.3, 30.6);
+    let (lat2, lon2) = at(70.2, 20.4);
+    let hot = |q: &mut QuerySession, lat, lon| q.hot(lat, lon).expect("hot").height_msl_m;
+    let (before, before2) = (hot(&mut qa, lat, lon), hot(&mut qa, lat2, lon2));
+    let request = |request_id, action| TerrainEditRequest { request_id, action };
+    let crater = |id, lat_deg, lon_deg, size| {
+        request(
+            id,
+            EditRequestAction::Crater {
+                lat_deg,
+                lon_deg,
+                size,
+            },
+        )
+    };
+    let packet = |r: TerrainEditRequest, version, order| {
+        Packet::UserDefined(r.to_packet(version, order).expect("packet"))
+    };
+    let first = host_datagram(
+        Version::V4_0,
+        ByteOrder::BigEndian,
+        vec![
+            packet(
+                crater(1, lat, lon, CraterSize::Charge { charge_kg: 100.0 }),
+                Version::V4_0,
+                ByteOrder::BigEndian,
+            ),
+            // Outside the database: refused.
+            packet(
+                crater(2, 37.5, lon, CraterSize::Charge { charge_kg: 5.0 }),
+                Version::V4_0,
+                ByteOrder::BigEndian,
+            ),
+            // Too short: malformed.
+            Packet::UserDefined(UserDefined {
+                packet_id: 0x10DC,
+                data: vec![0; 28],
+            }),
+            // Another user packet: passed over.
+            Packet::UserDefined(UserDefined {
+                packet_id: 0x1234,
+                data: vec![0; 4],
+            }),
+        ],
+    );
+    let second = host_datagram(
+        Version::V3_3,
+        ByteOrder::LittleEndian,
+        vec![packet(
+            crater(
+                3,
+                lat2,
+                lon2,
+                CraterSize::Explicit {
+                    radius_m: 3.0,
+                    depth_m: 1.25,
+                },
+            ),
+            Version::V3_3,
+            ByteOrder::LittleEndian,
+        )],
+    );
+    for frame in 0..60 * 2 {
+        if frame == 5 {
+            a.receive_cigi(&first).expect("host message");
+        }
+        if frame == 6 {
+            a.receive_cigi(&second).expect("host message");
+            // The same request again: one crater.
+            a.receive_cigi(&second).expect("host message");
+        }
+        a.step(1.0 / 60.0, &mut qa);
+        b.step(1.0 / 60.0, &mut qb);
+        for d in a.take_dis_outgoing() {
+            b.receive_dis(&d, &mut qb);
+        }
+        let _ = b.take_dis_outgoing();
+    }
+    let counters = a.session().edit_requests().counters();
+    assert_eq!(
+        (
+            counters.received,
+            counters.craters_made,
+            counters.refused,
+            counters.malformed
+        ),
+        (5, 2, 2, 1),
+        "{counters:?}"
+    );
+    assert_eq!(a.session().counters().user_defined_packets, 6);
+    // 100 kg in dry sand: C_D 0.149, about 0.69 m deep (HOT within 5 cm of the shape: the
+    // bowl is drawn on fine posts).
+    let depth = before - hot(&mut qa, lat, lon);
+    let dims = cig_dynterrain::crater::dimensions(
+        Material::Sand,
+        cig_dynterrain::soil::SoilMoisture::Dry,
+        100.0,
+    )
+    .expect("charge")
+    .expect("a crater");
+    assert!((depth - dims.depth_m).abs() < 0.05, "{depth} vs {dims:?}");
+    let depth2 = before2 - hot(&mut qa, lat2, lon2);
+    assert!((depth2 - 1.25).abs() < 0.05, "{depth2}");
+    // B got both from A's Object State PDUs: the same ground to the millimetre.
+    for (lat, lon) in [(lat, lon), (lat2, lon2)] {
+        let (ha, hb) = (hot(&mut qa, lat, lon), hot(&mut qb, lat, lon));
+        assert!((ha - hb).abs() < 1e-3, "{ha} vs {hb}");
+    }
+    assert_eq!(
+        b.exercise().expect("b").counters().terrain_edits_received,
+        2
+    );
+    // Healing request 1 puts A's ground back, and B's: the heal goes out as the crater's
+    // Object State deactivated.
+    a.receive_cigi(&host_datagram(
+        Version::V3_3,
+        ByteOrder::BigEndian,
+        vec![
+            packet(
+                request(1, EditRequestAction::Heal),
+                Version::V3_3,
+                ByteOrder::BigEndian,
+            ),
+            packet(
+                request(99, EditRequestAction::Heal),
+                Version::V3_3,
+                ByteOrder::BigEndian,
+            ),
+        ],
+    ))
+    .expect("host message");
+    a.step(1.0 / 60.0, &mut qa);
+    assert!((hot(&mut qa, lat, lon) - before).abs() < 1e-9);
+    let counters = a.session().edit_requests().counters();
+    assert_eq!((counters.healed, counters.refused), (1, 3), "{counters:?}");
+    // Both ways for 12 s (B re-announcing the crater it held until the heal came changes
+    // nothing on A), then a third IG joins and gets the second crater but not the healed one.
+    let mut qc = query();
+    let mut c = world(22);
+    for frame in 0..60 * 24 {
+        a.step(1.0 / 60.0, &mut qa);
+        b.step(1.0 / 60.0, &mut qb);
+        let late = frame >= 60 * 12;
+        if late {
+            c.step(1.0 / 60.0, &mut qc);
+        }
+        let (from_a, from_b) = (a.take_dis_outgoing(), b.take_dis_outgoing());
+        let from_c = if late {
+            c.take_dis_outgoing()
+        } else {
+            Vec::new()
+        };
+        for d in &from_a {
+            b.receive_dis(d, &mut qb);
+            if late {
+                c.receive_dis(d, &mut qc);
+            }
+        }
+        for d in &from_b {
+            a.receive_dis(d, &mut qa);
+            if late {
+                c.receive_dis(d, &mut qc);
+            }
+        }
+        for d in &from_c {
+            a.receive_dis(d, &mut qa);
+            b.receive_dis(d, &mut qb);
+        }
+    }
+    assert_eq!(b.exercise().expect("b").counters().terrain_edits_healed, 1);
+    for q in [&mut qa, &mut qb, &mut qc] {
+        assert!(
+            (hot(q, lat, lon) - before).abs() < 1e-9,
+            "healed everywhere"
+        );
+        assert!(
+            (before2 - hot(q, lat2, lon2) - 1.25).abs() < 0.05,
+            "the other stays"
+        );
+    }
+}
+
+/// A ground vehicle of a simulation that is not an IG (it sends no ruts) leaves ruts: the
+/// exercise's time master lays them and sends them, the other IG takes them and lays none.
+#[test]
+fn a_remote_vehicle_of_a_simulation_leaves_the_same_ruts_on_every_ig() {
+    use cig_dis::publisher::{OwnedEntityPublisher, OwnedEntityState, PublisherConfig};
+    use cig_dis::remote::{EntityKey, EntityTypeCode};
+    let (mut qa, mut qb) = (query(), query());
+    // A keeps the exercise's time (application 10), B follows.
+    let (mut a, mut b) = (world(10), world(11));
+    let mut truck = OwnedEntityPublisher::new(
+        EntityKey {
+            site: 5,
+            application: 5,
+            entity: 1,
+        },
+        EntityTypeCode {
+            kind: 1,
+            domain: 1,
+            country: 222,
+            category: 6,
+            subcategory: 1,
+            specific: 0,
+            extra: 0,
+        },
+        1,
+        "TRUCK",
+        PublisherConfig::default(),
+    );
+    let (lat0, lon0) = at(50.0, 10.0);
+    let (_, lon1) = at(50.0, 11.0);
+    let (_, east_m) = cig_geo::metres_per_degree(lat0);
+    let dlon_per_s = 8.0 / ((lon1 - lon0) * east_m) * (lon1 - lon0);
+    let dt = 1.0 / 60.0;
+    for frame in 0..60 * 40 {
+        let t = frame as f64 * dt;
+        let lon = lon0 + dlon_per_s * t;
+        let ground = qa.hot(lat0, lon).expect("hot").height_ellipsoid_m();
+        let here = Geodetic::new(lat0, lon, ground);
+        let east = cig_geo::EnuFrame::new(here).enu_vector_to_ecef(glam::DVec3::X);
+        let state = OwnedEntityState {
+            position_ecef_m: here.to_ecef(),
+            velocity_ecef_mps: east * 8.0,
+            ..OwnedEntityState::default()
+        };
+        if let Some((_, body)) = truck.update(t, &state) {
+            let pdu = encode_pdu(
+                EncodeHeader {
+                    version: DisVersion::V7,
+                    exercise_id: 3,
+                    timestamp: cig_dis::codec::timestamp_from_seconds_past_hour(t, true),
+                },
+                &cig_dis::codec::DisMessage::EntityState(Box::new(body)),
+            )
+            .expect("encode");
+            a.receive_dis(&pdu, &mut qa);
+            b.receive_dis(&pdu, &mut qb);
+        }
+        a.step(dt, &mut qa);
+        b.step(dt, &mut qb);
+        let (from_a, from_b) = (a.take_dis_outgoing(), b.take_dis_outgoing());
+        for d in &from_a {
+            b.receive_dis(d, &mut qb);
+        }
+        for d in &from_b {
+            a.receive_dis(d, &mut qa);
+        }
+    }
+    let ruts = |q: &mut QuerySession| -> Vec<TerrainEdit> {
+        q.edits()
+            .edits()
+            .filter(|e| matches!(e.shape, EditShape::Rut { .. }))
+            .cloned()
+            .collect()
+    };
+    let (on_a, on_b) = (ruts(&mut qa), ruts(&mut qb));
+    // 300 m of sand in 8 m pieces, two wheel lines.
+    assert!(on_a.len() >= 40, "{} ruts", on_a.len());
+    assert!(on_a
+        .iter()
+        .all(|r| (r.author.site, r.author.application) == (1, 10)));
+    // B has A's ruts (as carried by the PDUs: the same to a micrometre) and laid none.
+    assert_eq!(
+        on_a.iter().map(TerrainEdit::id).collect::<Vec<_>>(),
+        on_b.iter().map(TerrainEdit::id).collect::<Vec<_>>()
+    );
+    for r in &on_a[4..] {
+        let at = r.shape.anchor();
+        let (ha, hb) = (
+            qa.hot(at.lat_deg, at.lon_deg).expect("hot").height_msl_m,
+            qb.hot(at.lat_deg, at.lon_deg).expect("hot").height_msl_m,
+        );
+        assert!((ha - hb).abs() < 1e-3, "{ha} vs {hb}");
+    }
+    let track = on_a[6].shape.anchor();
+    let mut fresh = query();
+    let plain = fresh
+        .hot(track.lat_deg, track.lon_deg)
+        .expect("hot")
+        .height_msl_m;
+    let rutted = qb
+        .hot(track.lat_deg, track.lon_deg)
+        .expect("hot")
+        .height_msl_m;
+    assert!(rutted < plain - 0.01, "{plain} -> {rutted}");
 }

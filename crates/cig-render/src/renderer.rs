@@ -563,7 +563,8 @@ fn drawn_ground_fog(snapshot: &FrameSnapshot) -> Option<cig_scene::FogLayer> {
 /// ground fog or the flat sky waits for one pipeline's compilation.
 struct TerrainPipelines {
     module: wgpu::ShaderModule,
-    layouts: [wgpu::BindGroupLayout; 2],
+    /// The terrain's, the atmosphere's and the edit patches' marks'.
+    layouts: [wgpu::BindGroupLayout; 3],
     /// Whether the device draws lines (wireframe).
     wire_supported: bool,
     built: HashMap<(Option<ShaderSwitches>, bool), wgpu::RenderPipeline>,
@@ -590,7 +591,7 @@ impl TerrainPipelines {
                     3 => Float32
                 ],
             })];
-            let [terrain_layout, atmosphere_layout] = &self.layouts;
+            let [terrain_layout, atmosphere_layout, marks_layout] = &self.layouts;
             let constants = switches.map(ShaderSwitches::constants);
             pipeline(
                 gpu,
@@ -598,7 +599,7 @@ impl TerrainPipelines {
                 &PipelineSpec {
                     label: if wire { "terrain wireframe" } else { "terrain" },
                     module: &self.module,
-                    layouts: &[terrain_layout, atmosphere_layout],
+                    layouts: &[terrain_layout, atmosphere_layout, marks_layout],
                     buffers: &buffers,
                     depth_write: true,
                     depth_compare: if wire {
@@ -864,7 +865,11 @@ impl Renderer {
         })];
         let mut terrain_pipelines = TerrainPipelines {
             module: terrain_module,
-            layouts: [terrain_layout, atmosphere.layout.clone()],
+            layouts: [
+                terrain_layout,
+                atmosphere.layout.clone(),
+                terrain.marks_layout.clone(),
+            ],
             wire_supported: gpu
                 .device
                 .features()
@@ -1226,7 +1231,7 @@ impl Renderer {
             } else {
                 0.0
             },
-            self.frame,
+            (self.frame, snapshot.unix_time_s),
             options.mesh_budget,
             &mut terrain_frame,
         );
@@ -1376,6 +1381,7 @@ impl Renderer {
             &self.gpu,
             &terrain_frame.patch_vertices,
             &terrain_frame.patch_indices,
+            &terrain_frame.patch_marks,
         );
         let klod_nominal = self.detail.klod_for(&camera.view);
         let klod = self
@@ -1579,6 +1585,7 @@ impl Renderer {
             pass.set_pipeline(terrain_pipeline);
             pass.set_bind_group(0, &self.terrain_bind, &[]);
             pass.set_bind_group(1, &self.atmosphere.scene_bind, &[]);
+            pass.set_bind_group(2, &self.terrain.marks_bind, &[]);
             pass.set_vertex_buffer(0, self.terrain.vertex_pool.slice(..));
             if !terrain_frame.indices.is_empty() {
                 pass.set_index_buffer(

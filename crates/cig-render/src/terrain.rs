@@ -17,7 +17,7 @@
 //! its statistics.
 
 use crate::gpu::Gpu;
-use cig_scene::edit_patch::{build_node_patch, NodePatch};
+use cig_scene::edit_patch::{CellPatches, NodePatch, PatchMarks, PatchedNode};
 use cig_scene::lod::{NodeKey, SelectedNode, TerrainLod};
 use cig_scene::terrain_mesh::{self, NodeCut, TerrainVertex};
 use cig_terrain::TileCache;
@@ -55,6 +55,8 @@ struct Slot {
     /// edits revision `patch_revision`.
     patch: Option<std::sync::Arc<NodePatch>>,
     patch_revision: Option<u64>,
+    /// The patch's cells, remade only where the edits changed them.
+    cell_patches: CellPatches,
 }
 
 /// The terrain's GPU resources.
@@ -76,6 +78,12 @@ pub struct TerrainGpu {
     /// A view's terrain-edit patches (made when there are any).
     pub patch_vertices: Option<wgpu::Buffer>,
     pub patch_indices: Option<wgpu::Buffer>,
+    /// The patches' marks (`TerrainFrame::patch_marks`), the terrain pipelines' group 2.
+    patch_marks: wgpu::Buffer,
+    pub marks_layout: wgpu::BindGroupLayout,
+    pub marks_bind: wgpu::BindGroup,
+    /// UTC time the patch marks' times count from (set by the first frame).
+    marks_origin_utc_s: Option<f64>,
     slots: Vec<Option<Slot>>,
     by_key: HashMap<NodeKey, usize>,
     /// Where this view's records place nodes in the draped imagery (none without imagery).
@@ -106,7 +114,14 @@ pub struct TerrainFrame {
     /// (`-(slot + 1)`, less a half at a skirt's foot), and their triangles.
     pub patch_vertices: Vec<TerrainVertex>,
     pub patch_indices: Vec<u32>,
+    /// The patches' marks: first the frame's time from the marks' origin (x), then one per
+    /// patch vertex (the shader reads vertex `i`'s at `i + 1`).
+    pub patch_marks: Vec<PatchMarks>,
 }
+
+/// How far the frame's time may be from the patch marks' time origin before the origin moves
+/// (and every patch is rebuilt): 10 days, where single floats still hold a second.
+const MARKS_ORIGIN_SPAN_S: f64 = 864_000.0;
 
 /// Skirt depth of a node drawn from its own level's data, metres: the floor under the depth
 /// that grows with distance (see [`TerrainGpu::prepare`]).
@@ -156,6 +171,12 @@ impl TerrainGpu {
                 view_formats: &[],
             })
         };
+        let marks_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("terrain edit marks"),
+            entries: &[crate::pass::storage_entry(0)],
+        });
+        let patch_marks = marks_buffer(device, 1024);
+        let marks_bind = marks_bind_group(device, &marks_layout, &patch_marks);
         TerrainGpu {
             node_cells,
             vertices_per_node,
@@ -171,6 +192,10 @@ impl TerrainGpu {
             colour_atlas: atlas("terrain colours", wgpu::TextureFormat::Rgba8UnormSrgb),
             patch_vertices: None,
             patch_indices: None,
+            patch_marks,
+            marks_layout,
+            marks_bind,
+            marks_origin_utc_s: None,
             slots: (0..capacity).map(|_| None).collect(),
             by_key: HashMap::new(),
             imagery_frame: None,
@@ -211,13 +236,31 @@ impl TerrainGpu {
         min_morph: &[f32],
         eye_ecef: glam::DVec3,
         allowed_error_per_m: f64,
-        frame: u64,
+        (frame, now_utc_s): (u64, f64),
         build_budget: usize,
         out: &mut TerrainFrame,
     ) -> MeshStats {
         let skirt_per_m = (SKIRT_OVER_ALLOWED_ERROR * allowed_error_per_m) as f32;
         let mut stats = MeshStats::default();
         let edits = cache.edits();
+        // The marks' times are kept near the frame's (single floats): a new origin, hour
+        // aligned, remakes every patch.
+        let origin_utc_s = match self.marks_origin_utc_s {
+            Some(o) if (now_utc_s - o).abs() <= MARKS_ORIGIN_SPAN_S => o,
+            _ => {
+                let o = if now_utc_s.is_finite() {
+                    (now_utc_s / 3600.0).floor() * 3600.0
+                } else {
+                    0.0
+                };
+                self.marks_origin_utc_s = Some(o);
+                for slot in self.slots.iter_mut().flatten() {
+                    slot.patch_revision = None;
+                    slot.cell_patches = CellPatches::default();
+                }
+                o
+            }
+        };
         // Pass 1: a slot for every node that can have one this frame.
         let mut slot_of: Vec<Option<usize>> = Vec::with_capacity(nodes.len());
         for node in nodes {
@@ -274,6 +317,7 @@ impl TerrainGpu {
                                 last_used_frame: frame,
                                 patch: None,
                                 patch_revision: None,
+                                cell_patches: CellPatches::default(),
                             });
                             self.by_key.insert(node.key, index);
                             stats.built += 1;
@@ -300,14 +344,16 @@ impl TerrainGpu {
                             .filter(|(k, _)| k.level == 0)
                         {
                             slot.patch_revision = Some(revision);
-                            slot.patch = build_node_patch(
-                                &lod.layout,
-                                lod.geoid(),
-                                slot.key,
-                                (k, &data),
-                                slot.centre_ecef,
-                                &edits,
-                            )
+                            slot.patch = PatchedNode {
+                                layout: &lod.layout,
+                                geoid: lod.geoid(),
+                                key: slot.key,
+                                tile: (k, &data),
+                                centre_ecef: slot.centre_ecef,
+                                edits: &edits,
+                                time_origin_utc_s: origin_utc_s,
+                            }
+                            .build(&mut slot.cell_patches)
                             .map(std::sync::Arc::new);
                         }
                     }
@@ -363,6 +409,9 @@ impl TerrainGpu {
         out.indices.clear();
         out.patch_vertices.clear();
         out.patch_indices.clear();
+        out.patch_marks.clear();
+        out.patch_marks
+            .push([(now_utc_s - origin_utc_s) as f32, 0.0, 0.0, 0.0]);
         out.nodes = 0;
         for (i, (node, slot)) in nodes.iter().zip(&slot_of).enumerate() {
             if let Some(index) = slot {
@@ -441,6 +490,7 @@ impl TerrainGpu {
                 }));
             out.patch_indices
                 .extend(patch.indices.iter().map(|&i| first + i));
+            out.patch_marks.extend_from_slice(&patch.marks);
         }
         out.records[index] = record;
         let base = index as u32 * self.vertices_per_node;
@@ -451,10 +501,23 @@ impl TerrainGpu {
 
     /// Writes a view's terrain-edit patches to their buffers, growing them when they do not
     /// fit.
-    pub fn write_patches(&mut self, gpu: &Gpu, vertices: &[TerrainVertex], indices: &[u32]) {
+    pub fn write_patches(
+        &mut self,
+        gpu: &Gpu,
+        vertices: &[TerrainVertex],
+        indices: &[u32],
+        marks: &[PatchMarks],
+    ) {
         if indices.is_empty() {
             return;
         }
+        let marks_bytes = std::mem::size_of_val(marks) as u64;
+        if self.patch_marks.size() < marks_bytes {
+            self.patch_marks = marks_buffer(&gpu.device, marks_bytes);
+            self.marks_bind = marks_bind_group(&gpu.device, &self.marks_layout, &self.patch_marks);
+        }
+        gpu.queue
+            .write_buffer(&self.patch_marks, 0, bytemuck::cast_slice(marks));
         let vertex_bytes = std::mem::size_of_val(vertices) as u64;
         let index_bytes = std::mem::size_of_val(indices) as u64;
         let grow = |buffer: &mut Option<wgpu::Buffer>, bytes: u64, usage, label| {
@@ -651,6 +714,31 @@ pub(crate) fn texels_per_post(detail_level: u8, node_level: u8, texels_per_side:
     let exponent = (i32::from(detail_level) + 1 - i32::from(node_level)).clamp(0, 30);
     let side = texels_per_side.saturating_sub(1).max(1);
     (1u32 << exponent).min(side) as f32
+}
+
+/// A storage buffer for patch marks of at least `bytes` (a power of two).
+fn marks_buffer(device: &wgpu::Device, bytes: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("terrain edit marks"),
+        size: bytes.next_power_of_two().max(1024),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+fn marks_bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    buffer: &wgpu::Buffer,
+) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("terrain edit marks"),
+        layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: buffer.as_entire_binding(),
+        }],
+    })
 }
 
 #[cfg(test)]

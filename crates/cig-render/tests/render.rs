@@ -1212,7 +1212,8 @@ fn a_slowly_approached_model_never_pops() {
 }
 
 /// Terrain edits around a point of the hills: three craters (6, 3.7 and 1.5 m across), a
-/// 40 m tank ditch with its spoil, a berm and a tank's fighting position.
+/// 40 m tank ditch with its spoil, a berm, a tank's fighting position and a tank's two ruts
+/// (20 m at 14 and 17.4 m north), all made at `MORNING_UNIX_S`.
 fn dig_in(cache: &cig_terrain::TileCache, centre: Geodetic) {
     use cig_terrain::edits::{EditAuthor, EditShape, GeoPoint, SpoilSide, TerrainEdit};
     let frame = EnuFrame::new(centre);
@@ -1253,6 +1254,18 @@ fn dig_in(cache: &cig_terrain::TileCache, centre: Geodetic) {
             length_m: 9.0,
             width_m: 4.5,
             depth_m: 2.0,
+        },
+        EditShape::Rut {
+            from: at(-5.0, 14.0),
+            to: at(15.0, 14.0),
+            width_m: 0.6,
+            depth_m: 0.08,
+        },
+        EditShape::Rut {
+            from: at(-5.0, 17.4),
+            to: at(15.0, 17.4),
+            width_m: 0.6,
+            depth_m: 0.08,
         },
     ];
     for (sequence, shape) in shapes.into_iter().enumerate() {
@@ -1326,4 +1339,81 @@ fn terrain_edits_are_drawn_without_holes_at_every_level_of_detail() {
             }
         }
     }
+}
+
+/// The edits' dynamic texture: a fresh crater is scorched and a tank's fresh tracks are dark
+/// on the grass; two days later the scorch has weathered and the tracks' marks are gone
+/// (their ruts' shape stays).
+#[test]
+fn fresh_craters_are_scorched_and_track_marks_fade() {
+    let db = hills();
+    let cache = cache(&db);
+    dig_in(&cache, hills_point(0.0, 0.0, 0.0));
+    let mut renderer = renderer(&cache);
+    let size = (256, 192);
+    let luma = |image: &cig_render::Image, x: u32, y: u32| {
+        let k = ((y * image.width + x) * 4) as usize;
+        let px = &image.rgba[k..k + 3];
+        0.2126 * f64::from(px[0]) + 0.7152 * f64::from(px[1]) + 0.0722 * f64::from(px[2])
+    };
+    let shot = |renderer: &mut cig_render::Renderer, north_m: f64, east_m: f64, unix_s: f64| {
+        let v = view(
+            hills_point(north_m, east_m, 20.0),
+            (0.0, -89.0, 0.0),
+            60.0,
+            size,
+        );
+        render(
+            renderer,
+            &cache,
+            &FrameSnapshot::new(unix_s, vec![v]),
+            false,
+        )
+        .0
+    };
+    let later = MORNING_UNIX_S + 2.0 * 86_400.0;
+    // The crater's middle, looking down on it.
+    let (fresh, weathered) = (
+        shot(&mut renderer, 0.0, 0.0, MORNING_UNIX_S),
+        shot(&mut renderer, 0.0, 0.0, later),
+    );
+    write_png(&fresh, &out_dir().join("crater_fresh.png"));
+    write_png(&weathered, &out_dir().join("crater_weathered.png"));
+    let middle = |image: &cig_render::Image| {
+        let (cx, cy) = (size.0 / 2, size.1 / 2);
+        let mut sum = 0.0;
+        for y in cy - 12..cy + 12 {
+            for x in cx - 12..cx + 12 {
+                sum += luma(image, x, y);
+            }
+        }
+        sum / 576.0
+    };
+    let (scorched, bare) = (middle(&fresh), middle(&weathered));
+    assert!(
+        scorched < 0.6 * bare,
+        "the fresh crater's middle is {scorched:.1}, two days later {bare:.1}"
+    );
+    // The tracks, looking down between them.
+    let (fresh, faded) = (
+        shot(&mut renderer, 15.7, 5.0, MORNING_UNIX_S),
+        shot(&mut renderer, 15.7, 5.0, later),
+    );
+    write_png(&fresh, &out_dir().join("tracks_fresh.png"));
+    write_png(&faded, &out_dir().join("tracks_faded.png"));
+    let marked = (0..size.1)
+        .flat_map(|y| (0..size.0).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let k = ((y * size.0 + x) * 4) as usize;
+            let change: u32 = (0..3)
+                .map(|c| u32::from(fresh.rgba[k + c].abs_diff(faded.rgba[k + c])))
+                .sum();
+            change > 24
+        })
+        .count();
+    // Two strips 0.6 m wide and 20 m long at 11 px a metre: at most 2 x 7 x 220 px.
+    assert!(
+        (600..6000).contains(&marked),
+        "{marked} px changed where the fresh tracks are"
+    );
 }

@@ -68,6 +68,7 @@ use crate::terrain_mesh::{adaptive_errors, NodeCut};
 use crate::view::Camera;
 use cig_geo::{EnuFrame, Geodetic, LatLonTrig};
 use cig_terrain::database::GeoidLookup;
+use cig_terrain::edits::EditLayer;
 use cig_terrain::tile::{NodeBounds, Tile};
 use cig_terrain::{TileCache, TileKey};
 use glam::DVec3;
@@ -183,6 +184,13 @@ struct NodeBox {
     box_max: DVec3,
     /// The node's geometric error (`NodeBounds::error_m` of its data).
     error_m: f32,
+    /// What the terrain's edits add to the error of a node drawn without them (a coarser
+    /// node: only the finest level draws the edits' patches), metres.
+    edit_error_m: f32,
+    /// The highest and lowest change the edits make under the node (in its box), and the
+    /// cache's edits revision they were taken at.
+    edit_range_m: (f32, f32),
+    edit_stamp: u64,
     /// Slot of the first of the node's four children (in `children()` order), or
     /// [`NO_CHILDREN`] before the node was first refined.
     first_child: u32,
@@ -213,6 +221,9 @@ const EMPTY_BOX: NodeBox = NodeBox {
     box_min: DVec3::ZERO,
     box_max: DVec3::ZERO,
     error_m: 0.0,
+    edit_error_m: 0.0,
+    edit_range_m: (0.0, 0.0),
+    edit_stamp: 0,
     first_child: NO_CHILDREN,
     data_level: UNBUILT,
     adaptive: false,
@@ -405,12 +416,42 @@ impl TerrainLod {
         None
     }
 
-    /// Builds the box of `key` from the data of `data_level` into `slot`.
-    fn build(&mut self, slot: usize, key: NodeKey, tile_key: TileKey, tile: &Tile) {
-        let bounds = self.layout.node_bounds_in(key, tile_key, &tile.nodes);
+    /// The highest and lowest change the terrain's edits make under `key`.
+    fn edit_range_m(&self, edits: &EditLayer, key: NodeKey) -> (f32, f32) {
+        let (r0, c0) = self.layout.finest_origin(key);
+        let span = self.layout.finest_span(key.level);
+        edits.range_over_m((r0, r0 + span), (c0, c0 + span))
+    }
+
+    /// Builds the box of `key` from the data of `data_level` into `slot`, with the terrain's
+    /// edits under it (`edit_range_m`, taken at the cache's edits revision `edit_stamp`):
+    /// the box holds the edited surface, and a node coarser than the finest level, which
+    /// draws the ground without them, counts their largest change in its error, so the
+    /// selection refines over an edit as far as it shows.
+    fn build(
+        &mut self,
+        slot: usize,
+        key: NodeKey,
+        (tile_key, tile): (TileKey, &Tile),
+        edit_range_m: (f32, f32),
+        edit_stamp: u64,
+    ) {
+        let mut bounds = self.layout.node_bounds_in(key, tile_key, &tile.nodes);
+        if bounds.min_m <= bounds.max_m {
+            bounds.max_m += edit_range_m.0;
+            bounds.min_m += edit_range_m.1;
+        }
+        let edit_error_m = if key.level > 0 {
+            edit_range_m.0.max(-edit_range_m.1)
+        } else {
+            0.0
+        };
         if let (Some(dst), Some(points)) = (self.boxes.get_mut(slot), self.points.get_mut(slot)) {
             *dst = NodeBox {
                 first_child: dst.first_child,
+                edit_error_m,
+                edit_range_m,
+                edit_stamp,
                 adaptive: adaptive_errors(&self.layout, key, (tile_key, tile)).is_some(),
                 ..node_box(
                     &self.layout,
@@ -452,6 +493,9 @@ impl TerrainLod {
             self.clear();
         }
         let mut scratch = std::mem::take(&mut self.scratch);
+        // The revision first: a change between the two reads is seen again next frame.
+        let edits_revision = cache.edits_revision();
+        let edits = cache.edits();
         scratch.stack.clear();
         scratch.wanted.clear();
         scratch.tiles.clear();
@@ -481,9 +525,23 @@ impl TerrainLod {
                     .push((f64::INFINITY, self.layout.tile_of(key, key.level)));
                 continue;
             };
-            if self.boxes.get(slot).map(|b| b.data_level) != Some(data_level) {
+            let (built_level, edit_stamp, edit_range_m) =
+                self.boxes.get(slot).map_or((UNBUILT, 0, (0.0, 0.0)), |b| {
+                    (b.data_level, b.edit_stamp, b.edit_range_m)
+                });
+            let mut rebuild = built_level != data_level;
+            let mut edits_now = edit_range_m;
+            if edit_stamp != edits_revision {
+                edits_now = self.edit_range_m(&edits, key);
+                if edits_now != edit_range_m {
+                    rebuild = true;
+                } else if let Some(b) = self.boxes.get_mut(slot) {
+                    b.edit_stamp = edits_revision;
+                }
+            }
+            if rebuild {
                 if let Some((tile_key, tile)) = scratch.source(cache, &self.layout, key) {
-                    self.build(slot, key, tile_key, &tile);
+                    self.build(slot, key, (tile_key, &tile), edits_now, edits_revision);
                 }
             }
             let Some(g) = self.boxes.get(slot).copied() else {
@@ -504,8 +562,11 @@ impl TerrainLod {
             let local = DVec3::new(d.dot(g.axes[0]), d.dot(g.axes[1]), d.dot(g.axes[2]));
             let distance_m = (local.clamp(g.box_min, g.box_max) - local).length();
             let error_m = f64::from(g.error_m.max(0.0));
-            let range_m =
-                error_range_m(error_m, camera.pixels_per_tangent, settings.max_pixel_error);
+            let range_m = error_range_m(
+                error_m + f64::from(g.edit_error_m),
+                camera.pixels_per_tangent,
+                settings.max_pixel_error,
+            );
             let cut = own_cut(parent_cut, error_m, settings);
             let wants_refine = key.level > 0 && distance_m < range_m;
             if wants_refine {
@@ -866,6 +927,9 @@ fn node_box(
         box_min,
         box_max,
         error_m: layout.node_error_m(key.level, bounds.error_m),
+        edit_error_m: 0.0,
+        edit_range_m: (0.0, 0.0),
+        edit_stamp: 0,
         first_child: NO_CHILDREN,
         data_level,
         adaptive: false,
@@ -1400,6 +1464,7 @@ mod tests {
         let tile_cells = layout.pyramid.finest_cells_per_tile(0);
         let n = layout.node_cells as usize;
         let (mut worst_px, mut posts) = (0.0f64, 0usize);
+        let edits = cache.edits();
         for node in &selection.nodes {
             let data_key = layout.tile_of(node.key, node.data_level);
             let data = cache.resident(data_key).expect("every tile is resident");
@@ -1452,6 +1517,19 @@ mod tests {
                         };
                         (k, fraction)
                     };
+                    // A finest node's cells next to an edit are drawn by its patches (checked
+                    // by `edit_patch`'s tests), not by its mesh.
+                    if node.key.level == 0
+                        && [(0, 0), (0, 1), (1, 0), (1, 1)].iter().any(|&(dr, dc)| {
+                            let cell = (r.wrapping_sub(dr), c.wrapping_sub(dc));
+                            u32::try_from(cell.0).is_ok_and(|row| {
+                                u32::try_from(cell.1)
+                                    .is_ok_and(|col| edits.cell((row, col)).is_some())
+                            })
+                        })
+                    {
+                        continue;
+                    }
                     let (i, u) = along(r, r0, grid.rows as u64 - 1);
                     let (j, v) = along(c, c0, grid.cols as u64 - 1);
                     let shown = surface.point(&drawn, i as f64 + u, j as f64 + v);
@@ -1466,6 +1544,7 @@ mod tests {
                         (c - u64::from(tile_key.col) * tile_cells) as usize,
                     ));
                     let (lat, lon) = layout.lat_lon_of_finest(r as f64, c as f64);
+                    let h = h + edits.delta_m(lat, lon);
                     let truth =
                         Geodetic::new(lat, lon, h + lod.geoid().undulation_m(lat, lon)).to_ecef();
                     let px = (shown - truth).length() * camera.pixels_per_tangent
@@ -1834,6 +1913,104 @@ mod tests {
                 "view {k}: {worst_px:.3} px drawn: refined too far"
             );
         }
+    }
+
+    /// Edits are drawn by the finest level only, so a coarser node over one counts the
+    /// edit's change in its error: over a 3 m deep ditch dug 3 km from a ship's bridge on the
+    /// flat sea (whose coarse nodes carry no error of their own), the selection refines to
+    /// the finest level over the ditch and the drawn surface stays within the pixel of the
+    /// edited one; healed, the coarse nodes come back.
+    #[test]
+    fn edits_count_in_coarser_nodes_errors_so_the_bound_holds_over_them() {
+        use cig_terrain::edits::{EditAuthor, EditShape, GeoPoint, SpoilSide, TerrainEdit};
+        let db = flat_sea_database();
+        let cache = cache_with(&db, 0..db.layout().levels, false);
+        let mut lod = lod_for(&db);
+        let (lat, lon) = (SOUTH_LAT_DEG + 0.5 * 10.0 * DLAT_DEG * 300.0, WEST_LON_DEG);
+        let eye_lon = lon + 0.5 * 10.0 * DLON_DEG * 300.0;
+        let (_, east_m) = cig_geo::metres_per_degree(lat);
+        let ditch_lon = eye_lon + 3000.0 / east_m;
+        let ditch = TerrainEdit {
+            author: EditAuthor {
+                site: 1,
+                application: 1,
+            },
+            sequence: 1,
+            time_utc_s: 1.8e9,
+            shape: EditShape::Ditch {
+                from: GeoPoint {
+                    lat_deg: lat - 0.006,
+                    lon_deg: ditch_lon,
+                },
+                to: GeoPoint {
+                    lat_deg: lat + 0.006,
+                    lon_deg: ditch_lon,
+                },
+                width_m: 24.0,
+                depth_m: 3.0,
+                spoil: SpoilSide::Both,
+            },
+        };
+        let mut view = view_at(
+            0.5 * 10.0,
+            0.5 * 10.0,
+            20.0,
+            (90.0, -1.0, 0.0),
+            60.0,
+            (1920, 1080),
+        );
+        view.eye.lon_deg = eye_lon;
+        view.eye.lat_deg = lat;
+        let camera = view.camera();
+        let settings = LodSettings {
+            max_pixel_error: 1.0,
+        };
+        let over_ditch = |selection: &Selection, lod: &TerrainLod| {
+            selection
+                .nodes
+                .iter()
+                .filter(|n| {
+                    let (r0, c0) = lod.layout.finest_origin(n.key);
+                    let span = lod.layout.finest_span(n.key.level);
+                    let (lat0, lon0) = lod.layout.lat_lon_of_finest(r0 as f64, c0 as f64);
+                    let (lat1, lon1) = lod
+                        .layout
+                        .lat_lon_of_finest((r0 + span) as f64, (c0 + span) as f64);
+                    (lon0..=lon1).contains(&ditch_lon) && lat0 < lat + 0.006 && lat1 > lat - 0.006
+                })
+                .map(|n| n.key.level)
+                .collect::<Vec<u8>>()
+        };
+        let plain = lod.select(&cache, &camera, &settings);
+        let plain_levels = over_ditch(&plain, &lod);
+        assert!(
+            plain_levels.iter().all(|&l| l > 0),
+            "unedited, the sea is drawn coarse there: {plain_levels:?}"
+        );
+        cache
+            .update_edits(|layer| layer.apply(ditch))
+            .expect("the ditch is dug");
+        let edited = lod.select(&cache, &camera, &settings);
+        let edited_levels = over_ditch(&edited, &lod);
+        assert!(
+            edited_levels.contains(&0),
+            "the finest level draws the ditch: {edited_levels:?}"
+        );
+        let (worst_px, posts) = drawn_error_px(&lod, &cache, &camera, &edited);
+        assert!(posts > 1000, "{posts} posts measured");
+        assert!(
+            worst_px <= 1.0,
+            "{worst_px:.3} px drawn over the ditch, 1 allowed"
+        );
+        cache
+            .update_edits(|layer| {
+                let id = layer.edits().next().map(|e| e.id()).expect("one edit");
+                layer.remove(id)
+            })
+            .expect("healed");
+        let healed = lod.select(&cache, &camera, &settings);
+        assert_eq!(over_ditch(&healed, &lod), plain_levels);
+        assert_eq!(healed.nodes.len(), plain.nodes.len());
     }
 
     proptest! {

@@ -3,7 +3,9 @@
 //!
 //! Format: JSON Lines. The first line names the format, its version and the database the
 //! edits belong to (its finest lattice: south-west post, spacing, posts); each further line is
-//! one [`TerrainEdit`] as `cig_terrain::edits` serialises it, in the order they were applied.
+//! one [`TerrainEdit`] as `cig_terrain::edits` serialises it, in the order they were applied,
+//! or the heal of an earlier one (`{"healed":{"author":{"site":..,"application":..},
+//! "sequence":..}}`: the edit is removed, as `cig serve --edits` records a host's heal).
 //! Every line ends with a newline, so a file cut short (a last line without one) is told
 //! from a whole one. Reading is all-or-nothing: a file that is truncated, malformed, from
 //! another database, or holds an edit the database refuses is an error naming the line, and
@@ -13,7 +15,7 @@
 //! Limits: two databases with the same lattice are taken as the same database (the header
 //! does not fingerprint the posts).
 
-use cig_terrain::edits::{EditError, EditLayer, TerrainEdit};
+use cig_terrain::edits::{EditError, EditId, EditLayer, TerrainEdit};
 use cig_terrain::GeoGrid;
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -113,6 +115,12 @@ fn header_line(grid: &GeoGrid) -> String {
     serde_json::to_string(&header).unwrap_or_default()
 }
 
+/// A line healing an earlier edit.
+#[derive(Serialize, Deserialize)]
+struct HealLine {
+    healed: EditId,
+}
+
 fn edit_line(edit: &TerrainEdit) -> Result<String, EditsFileError> {
     serde_json::to_string(edit).map_err(|e| EditsFileError::Io {
         reason: format!("cannot write an edit: {e}"),
@@ -176,8 +184,19 @@ pub fn read_edits(path: &Path, grid: &GeoGrid) -> Result<Vec<TerrainEdit>, Edits
         if line.trim().is_empty() {
             continue;
         }
-        let edit: TerrainEdit =
+        let value: serde_json::Value =
             serde_json::from_str(line).map_err(|e| line_err(k + 1, e.to_string()))?;
+        if value.get("healed").is_some() {
+            let heal: HealLine =
+                serde_json::from_value(value).map_err(|e| line_err(k + 1, e.to_string()))?;
+            layer
+                .remove(heal.healed)
+                .map_err(|e| line_err(k + 1, e.to_string()))?;
+            edits.retain(|e: &TerrainEdit| e.id() != heal.healed);
+            continue;
+        }
+        let edit: TerrainEdit =
+            serde_json::from_value(value).map_err(|e| line_err(k + 1, e.to_string()))?;
         check(&mut layer, &edit).map_err(|e| line_err(k + 1, e.to_string()))?;
         edits.push(edit);
     }
@@ -271,6 +290,20 @@ impl EditAppender {
             .map_err(|e| io_err(&self.path, e))
     }
 
+    /// Appends the heal of an earlier edit as one whole line, flushed.
+    pub fn append_heal(&mut self, id: EditId) -> Result<(), EditsFileError> {
+        let mut line =
+            serde_json::to_string(&HealLine { healed: id }).map_err(|e| EditsFileError::Io {
+                reason: format!("cannot write a heal: {e}"),
+                path: self.path.clone(),
+            })?;
+        line.push('\n');
+        self.file
+            .write_all(line.as_bytes())
+            .and_then(|()| self.file.flush())
+            .map_err(|e| io_err(&self.path, e))
+    }
+
     pub fn path(&self) -> &Path {
         &self.path
     }
@@ -347,6 +380,25 @@ mod tests {
         assert_eq!(existing, edits);
         appender.append(&crater(3, 2.0)).expect("append");
         assert_eq!(read_edits(&path, &grid()).expect("read").len(), 3);
+        // A heal removes its edit; a heal of an edit not held names its line.
+        appender.append_heal(crater(2, 3.0).id()).expect("heal");
+        let healed = read_edits(&path, &grid()).expect("read");
+        assert_eq!(healed, vec![crater(1, 1.5), crater(3, 2.0)]);
+        let healed_text = std::fs::read_to_string(&path).expect("text");
+        appender.append_heal(crater(9, 3.0).id()).expect("heal");
+        let err = read_edits(&path, &grid()).expect_err("unknown heal");
+        assert!(err.to_string().starts_with("line 6:"), "{err}");
+        std::fs::write(
+            &path,
+            healed_text.replace("\"sequence\":2}}", "\"sequence\":\"x\"}}"),
+        )
+        .expect("bad heal");
+        assert!(read_edits(&path, &grid()).is_err());
+        std::fs::write(
+            &path,
+            healed_text.lines().take(4).collect::<Vec<_>>().join("\n") + "\n",
+        )
+        .expect("restore");
         // Cut anywhere inside the last line: truncated.
         let text = std::fs::read_to_string(&path).expect("text");
         for cut in [text.len() - 1, text.len() - 20] {

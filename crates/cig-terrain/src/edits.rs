@@ -815,6 +815,11 @@ fn edge_neighbours((r, c): CellKey) -> [Option<CellKey>; 4] {
     ]
 }
 
+/// Levels of [`EditLayer`]'s block pyramid: blocks of 2 to `2^BLOCK_LEVELS` finest cells
+/// a side (a node of any level of a database up to 2^24 posts a side finds its range in
+/// at most nine blocks).
+const BLOCK_LEVELS: usize = 24;
+
 /// Sub-cells along a side of a refined window's block (`RefinedCell::block_max_m`).
 pub const BLOCK_SUB_CELLS: u32 = 8;
 
@@ -887,6 +892,37 @@ impl RefinedCell {
     }
 }
 
+/// What the edits over a point did to its ground, for the drawn surface's dynamic texture
+/// (source 002's texture swaps and overlays): the freshest rut through it (tracks' marks
+/// fade over hours while their shape stays), the freshest crater scorching it, and how far
+/// the other edits (earthworks, craters' bowls and lips) moved it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GroundMarks {
+    /// 0 to 1: how much a rut marks the point (1 from 1 cm of sinkage), and when the
+    /// freshest such rut was made (UTC seconds; meaningless while the weight is 0).
+    pub track: f32,
+    pub track_time_utc_s: f64,
+    /// 0 to 1: a crater's scorch (1 inside 0.7 of its radius, none past its lip at 1.25),
+    /// and when the freshest such crater was made.
+    pub scorch: f32,
+    pub scorch_time_utc_s: f64,
+    /// The largest height change any edit but a rut makes here, metres.
+    pub earth_moved_m: f64,
+}
+
+/// Adds a mark of weight `w` made at `time_s` to a (weight, time) pair: the heavier weight,
+/// the freshest time of the marks that weigh anything.
+fn take_mark((weight, time): (&mut f32, &mut f64), w: f32, time_s: f64) {
+    if w > 0.0 {
+        *time = if *weight > 0.0 {
+            time.max(time_s)
+        } else {
+            time_s
+        };
+        *weight = weight.max(w);
+    }
+}
+
 /// Where one finest cell is: (row, column) of its south-west post on the finest lattice.
 pub type CellKey = (u32, u32);
 
@@ -939,6 +975,11 @@ pub struct EditLayer {
     /// The refined cells of each finest tile, and the revision that last changed them.
     tile_members: CellMap<Arc<HashSet<CellKey>>>,
     tile_revisions: CellMap<u64>,
+    /// The highest change (0 or more) and the lowest (0 or less) in aligned blocks of
+    /// `2^(k + 1)` finest cells a side, keyed by the block's (row, column) at `k`: a pyramid
+    /// over the refined cells, for a node of any level to find its edits' range in a few
+    /// look-ups ([`EditLayer::range_over_m`]).
+    blocks: Vec<CellMap<(f32, f32)>>,
     /// Each author's highest sequence number.
     last_sequences: HashMap<EditAuthor, u32>,
     max_raise_m: f32,
@@ -969,6 +1010,7 @@ impl EditLayer {
             tiles: CellMap::default(),
             tile_members: CellMap::default(),
             tile_revisions: CellMap::default(),
+            blocks: vec![CellMap::default(); BLOCK_LEVELS],
             last_sequences: HashMap::new(),
             max_raise_m: 0.0,
             revision: 0,
@@ -995,6 +1037,21 @@ impl EditLayer {
             .filter_map(|id| self.entries.get(id).map(|e| &e.edit))
     }
 
+    /// The edits from the `start`-th applied on, in the order they were applied (the ones
+    /// added since a reader last saw `start` edits, when none was removed since).
+    pub fn edits_from(&self, start: usize) -> impl Iterator<Item = &TerrainEdit> + '_ {
+        self.order
+            .get(start..)
+            .unwrap_or_default()
+            .iter()
+            .filter_map(|id| self.entries.get(id).map(|e| &e.edit))
+    }
+
+    /// The edit `id`, if held.
+    pub fn get(&self, id: EditId) -> Option<&TerrainEdit> {
+        self.entries.get(&id).map(|e| &e.edit)
+    }
+
     pub fn contains(&self, id: EditId) -> bool {
         self.entries.contains_key(&id)
     }
@@ -1018,9 +1075,50 @@ impl EditLayer {
         self.cells.get(&key).map(|c| &**c)
     }
 
+    /// The refined cell at a finest cell as the layer shares it: the same `Arc` until the
+    /// cell changes (an edit through it applied or healed), so a reader can keep what it
+    /// made of the cell and remake it only when this changes.
+    pub fn shared_cell(&self, key: CellKey) -> Option<&Arc<RefinedCell>> {
+        self.cells.get(&key)
+    }
+
     /// Every refined cell.
     pub fn cells(&self) -> impl Iterator<Item = (CellKey, &RefinedCell)> + '_ {
         self.cells.iter().map(|(k, c)| (*k, &**c))
+    }
+
+    /// What the edits through the finest cell `key` did to the ground at a point (exact
+    /// shapes, before the lattice); nothing outside the refined cells.
+    pub fn ground_marks(&self, key: CellKey, lat_deg: f64, lon_deg: f64) -> GroundMarks {
+        let mut marks = GroundMarks::default();
+        let Some(cell) = self.cells.get(&key) else {
+            return marks;
+        };
+        for entry in cell.edits.iter().filter_map(|id| self.entries.get(id)) {
+            let time_s = entry.edit.time_utc_s;
+            match (&entry.edit.shape, &entry.local.form) {
+                (EditShape::Rut { .. }, _) => {
+                    let w = (entry.local.delta_m(lat_deg, lon_deg).abs() / 0.01).min(1.0) as f32;
+                    take_mark((&mut marks.track, &mut marks.track_time_utc_s), w, time_s);
+                }
+                (EditShape::Crater { .. }, Form::Crater { radius_m, .. }) => {
+                    let l = &entry.local;
+                    let x = (lon_deg - l.lon0_deg) * l.m_per_deg.1;
+                    let y = (lat_deg - l.lat0_deg) * l.m_per_deg.0;
+                    let t = ((1.25 - x.hypot(y) / radius_m) / 0.55).clamp(0.0, 1.0);
+                    let w = (t * t * (3.0 - 2.0 * t)) as f32;
+                    take_mark((&mut marks.scorch, &mut marks.scorch_time_utc_s), w, time_s);
+                    marks.earth_moved_m =
+                        marks.earth_moved_m.max(l.delta_m(lat_deg, lon_deg).abs());
+                }
+                _ => {
+                    marks.earth_moved_m = marks
+                        .earth_moved_m
+                        .max(entry.local.delta_m(lat_deg, lon_deg).abs());
+                }
+            }
+        }
+        marks
     }
 
     /// The highest change anywhere (0 or more), metres.
@@ -1169,8 +1267,9 @@ impl EditLayer {
         Ok(Applied::Added)
     }
 
-    /// Removes (heals) an edit: its cells return to what the other edits make of them.
-    pub fn remove(&mut self, id: EditId) -> Result<(), EditError> {
+    /// Removes (heals) an edit: its cells return to what the other edits make of them. The
+    /// edit removed.
+    pub fn remove(&mut self, id: EditId) -> Result<TerrainEdit, EditError> {
         let Some(entry) = self.entries.remove(&id) else {
             return Err(EditError::Unknown {
                 author_site: id.author.site,
@@ -1202,7 +1301,7 @@ impl EditLayer {
             }
         }
         self.rebuild(touched);
-        Ok(())
+        Ok(entry.edit.clone())
     }
 
     /// Recomputes the touched cells and their refined edge neighbours (whose T-junction maps
@@ -1211,6 +1310,8 @@ impl EditLayer {
         self.revision += 1;
         let mut tiles_changed: HashSet<(u32, u32)> = HashSet::new();
         let mut todo: HashSet<CellKey> = HashSet::new();
+        let mut changed_blocks: HashSet<CellKey> =
+            touched.iter().map(|&(r, c)| (r / 2, c / 2)).collect();
         for key in touched {
             if self.cells.get(&key).is_some_and(|c| c.edits.is_empty()) {
                 self.cells.remove(&key);
@@ -1238,6 +1339,7 @@ impl EditLayer {
                 });
                 let cell = self.compute_cell(key, split, coarser, edits);
                 self.cells.insert(key, Arc::new(cell));
+                changed_blocks.insert((key.0 / 2, key.1 / 2));
                 let tile = self.tile_of(key);
                 let members = self.tile_members.entry(tile).or_default();
                 if !members.contains(&key) {
@@ -1267,6 +1369,62 @@ impl EditLayer {
             }
         }
         self.max_raise_m = self.tiles.values().fold(0.0, |m, r| m.max(r.0));
+        self.update_blocks(changed_blocks);
+    }
+
+    /// Recomputes the block pyramid's blocks over changed cells, level by level from their
+    /// four children.
+    fn update_blocks(&mut self, mut changed: HashSet<CellKey>) {
+        for k in 0..BLOCK_LEVELS {
+            let mut parents = HashSet::with_capacity(changed.len());
+            for &(br, bc) in &changed {
+                let mut range = None::<(f32, f32)>;
+                for (dr, dc) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                    let child = (2 * br + dr, 2 * bc + dc);
+                    let r = if k == 0 {
+                        self.cells
+                            .get(&child)
+                            .map(|c| (c.max_m.max(0.0), c.min_m.min(0.0)))
+                    } else {
+                        self.blocks[k - 1].get(&child).copied()
+                    };
+                    if let Some((hi, lo)) = r {
+                        range = Some(range.map_or((hi, lo), |(h, l)| (h.max(hi), l.min(lo))));
+                    }
+                }
+                match range {
+                    Some(r) => self.blocks[k].insert((br, bc), r),
+                    None => self.blocks[k].remove(&(br, bc)),
+                };
+                parents.insert((br / 2, bc / 2));
+            }
+            changed = parents;
+        }
+    }
+
+    /// The highest change (0 or more) and the lowest (0 or less) over finest cells `rows`
+    /// and `cols` (half-open), or a range that holds it (whole aligned blocks): (0, 0) where
+    /// nothing changed. At most nine look-ups.
+    pub fn range_over_m(&self, rows: (u64, u64), cols: (u64, u64)) -> (f32, f32) {
+        if self.cells.is_empty() || rows.1 <= rows.0 || cols.1 <= cols.0 {
+            return (0.0, 0.0);
+        }
+        let span = (rows.1 - rows.0).max(cols.1 - cols.0);
+        // Blocks at least half the span: at most three a side.
+        let k = (63 - span.leading_zeros() as usize).clamp(1, BLOCK_LEVELS) - 1;
+        let shift = k + 1;
+        let mut range = (0.0f32, 0.0f32);
+        for br in (rows.0 >> shift)..=((rows.1 - 1) >> shift) {
+            for bc in (cols.0 >> shift)..=((cols.1 - 1) >> shift) {
+                let (Ok(br), Ok(bc)) = (u32::try_from(br), u32::try_from(bc)) else {
+                    continue;
+                };
+                if let Some(&(hi, lo)) = self.blocks[k].get(&(br, bc)) {
+                    range = (range.0.max(hi), range.1.min(lo));
+                }
+            }
+        }
+        range
     }
 
     /// The split a cell's edits ask for: the finest of theirs.
@@ -1466,6 +1624,79 @@ mod tests {
                 lip_height_m: 0.25 * depth_m,
             },
         }
+    }
+
+    #[test]
+    fn the_block_pyramid_bounds_every_range_of_cells_and_follows_healing() {
+        let mut layer = EditLayer::new(grid(), 64);
+        let places = [
+            (36.01, -120.99),
+            (36.0105, -120.9895),
+            (36.05, -120.95),
+            (36.06, -120.93),
+        ];
+        for (i, &(lat, lon)) in places.iter().enumerate() {
+            layer
+                .apply(crater(
+                    i as u32 + 1,
+                    lat,
+                    lon,
+                    3.0 + i as f64,
+                    1.0 + 0.5 * i as f64,
+                ))
+                .expect("crater");
+        }
+        let brute = |layer: &EditLayer, rows: (u64, u64), cols: (u64, u64)| {
+            layer
+                .cells()
+                .filter(|((r, c), _)| {
+                    (rows.0..rows.1).contains(&u64::from(*r))
+                        && (cols.0..cols.1).contains(&u64::from(*c))
+                })
+                .fold((0.0f32, 0.0f32), |(h, l), (_, cell)| {
+                    (h.max(cell.max_m), l.min(cell.min_m))
+                })
+        };
+        let mut state = 7u64;
+        let mut next = |n: u64| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) % n
+        };
+        let mut nonzero = 0;
+        for _ in 0..2000 {
+            let (r0, c0) = (next(256), next(256));
+            let span = 1 + next(64);
+            let rows = (r0, (r0 + span).min(256));
+            let cols = (c0, (c0 + span).min(256));
+            let exact = brute(&layer, rows, cols);
+            let got = layer.range_over_m(rows, cols);
+            assert!(
+                got.0 >= exact.0 && got.1 <= exact.1,
+                "{rows:?} {cols:?}: {got:?} < {exact:?}"
+            );
+            nonzero += usize::from(exact != (0.0, 0.0));
+        }
+        assert!(nonzero > 20, "{nonzero}");
+        // The whole database; and an aligned node away from every edit sees none.
+        let all = brute(&layer, (0, 256), (0, 256));
+        assert_eq!(layer.range_over_m((0, 256), (0, 256)), all);
+        assert!(all.0 > 0.3 && all.1 < -2.0, "{all:?}");
+        assert_eq!(layer.range_over_m((128, 144), (0, 16)), (0.0, 0.0));
+        // Healed: nothing left anywhere.
+        for i in 0..places.len() {
+            let id = EditId {
+                author: EditAuthor {
+                    site: 1,
+                    application: 2,
+                },
+                sequence: i as u32 + 1,
+            };
+            layer.remove(id).expect("heal");
+        }
+        assert_eq!(layer.range_over_m((0, 256), (0, 256)), (0.0, 0.0));
+        assert!(layer.blocks.iter().all(|b| b.is_empty()));
     }
 
     #[test]

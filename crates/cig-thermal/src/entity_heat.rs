@@ -233,6 +233,17 @@ impl HotSpot {
         }
     }
 
+    /// The disturbed, fractured soil of a crater's bowl and lip out to `1.25 radius_m`:
+    /// 10 K over the ground, decaying over an hour (Jacobs ch. 7: disturbed soil stays warm
+    /// for an hour; the freshly turned earth is also drier and darker).
+    pub fn disturbed_soil(radius_m: f64) -> HotSpot {
+        HotSpot {
+            initial_rise_k: 10.0,
+            tau_s: 3600.0,
+            radius_m: 1.25 * radius_m,
+        }
+    }
+
     /// A small-arms or fragment impact point: 150 K, decaying within seconds.
     pub fn impact() -> HotSpot {
         HotSpot {

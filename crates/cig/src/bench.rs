@@ -208,6 +208,8 @@ pub fn sensor(args: &BenchSensorArgs, config: &Config) -> anyhow::Result<()> {
 pub fn dynterrain(args: &BenchDynterrainArgs, config: &Config) -> anyhow::Result<()> {
     let options = cig_bench::dynterrain::DynTerrainOptions {
         db: args.db.clone(),
+        frames: args.frames,
+        size: parse_size(&args.size).context("--size")?,
         paging: config.paging.clone(),
         commit: commit(),
     };

@@ -358,8 +358,8 @@ pub struct ServeArgs {
     pub idle_exit_s: Option<f64>,
     /// Terrain edits journal: start from the edits in FILE (made with `cig db edits
     /// --export` or an earlier `serve --edits`; created when missing) and append every edit
-    /// made while serving (craters from detonations, other nodes' edits), so the terrain's
-    /// state survives a restart. The database's tiles are never changed.
+    /// made while serving (craters from detonations, the host's Terrain Edit Requests, ruts,
+    /// other nodes' edits) and every heal, so the terrain's state survives a restart. The database's tiles are never changed.
     #[arg(long, value_name = "FILE")]
     pub edits: Option<PathBuf>,
     /// Exposure: `view` adapts to what the view shows; `natural` keeps the natural
@@ -701,6 +701,12 @@ pub struct BenchDynterrainArgs {
     /// file is not read or changed).
     #[arg(long)]
     pub db: PathBuf,
+    /// Frames of the pass under 100 craters a second (60 Hz).
+    #[arg(long, default_value_t = 180)]
+    pub frames: usize,
+    /// Frame size of that pass.
+    #[arg(long, default_value = "640x360")]
+    pub size: String,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,

@@ -3,10 +3,10 @@
 use crate::cli::{CraterArgs, EditsArgs, SoilArgs};
 use crate::config::Config;
 use anyhow::Context;
+use cig_dynterrain::crater::CraterDimensions;
 use cig_dynterrain::soil::{RunningGear, SoilMoisture, VehicleLoad};
-use cig_terrain::edits::{
-    EditAuthor, EditError, EditId, EditLayer, EditShape, GeoPoint, TerrainEdit,
-};
+use cig_ig::terrain_edits::{crater_at, CraterSize};
+use cig_terrain::edits::{EditAuthor, EditError, EditId, EditLayer, TerrainEdit};
 use cig_terrain::{PagingConfig, QuerySession, TileCache};
 use cig_terrain_io::edits::{
     layer_of, read_database_edits, read_edits, write_edits, EditAppender, EDITS_FILE,
@@ -77,7 +77,7 @@ impl EditJournal {
         })
     }
 
-    /// Appends the edits made since the last call; how many.
+    /// Appends the edits made and the heals done since the last call; how many lines.
     pub fn record(&mut self, cache: &TileCache) -> anyhow::Result<usize> {
         let revision = cache.edits_revision();
         if revision == self.revision {
@@ -85,14 +85,28 @@ impl EditJournal {
         }
         self.revision = revision;
         let edits = cache.edits();
-        let mut added = 0;
+        let mut lines = 0;
         for edit in edits.edits() {
             if self.written.insert(edit.id()) {
                 self.appender.append(edit)?;
-                added += 1;
+                lines += 1;
             }
         }
-        Ok(added)
+        if self.written.len() > edits.len() {
+            let mut healed: Vec<EditId> = self
+                .written
+                .iter()
+                .filter(|id| !edits.contains(**id))
+                .copied()
+                .collect();
+            healed.sort();
+            for id in healed {
+                self.appender.append_heal(id)?;
+                self.written.remove(&id);
+                lines += 1;
+            }
+        }
+        Ok(lines)
     }
 }
 
@@ -118,39 +132,15 @@ fn lat_lon(text: &str) -> anyhow::Result<(f64, f64)> {
 /// `cig db crater`: adds a crater to the database's edits.
 pub fn crater(args: &CraterArgs, config: &Config) -> anyhow::Result<()> {
     let (lat, lon) = lat_lon(&args.at)?;
-    let cache = open_cache(&args.db, &config.paging)?;
-    let mut q = QuerySession::new(Arc::clone(&cache));
-    let ground = q
-        .hot(lat, lon)
-        .with_context(|| format!("no terrain at --at {} in {}", args.at, args.db.display()))?;
-    let moisture = moisture(args.wet);
-    let (radius_m, depth_m, lip_radius_m, lip_height_m) = match (
-        args.charge_kg,
-        args.radius_m,
-        args.depth_m,
-    ) {
-        (Some(charge_kg), None, None) => {
-            let dims = cig_dynterrain::crater::dimensions(ground.material, moisture, charge_kg)
-                    .context("--charge-kg")?
-                    .with_context(|| {
-                        format!(
-                            "no crater: a {charge_kg} kg charge on {} at {lat:.6}, {lon:.6} makes none: {}",
-                            ground.material,
-                            args.db.display()
-                        )
-                    })?;
-            (
-                dims.radius_m,
-                dims.depth_m,
-                dims.lip_radius_m,
-                dims.lip_height_m,
-            )
-        }
-        (None, Some(radius_m), Some(depth_m)) => {
-            (radius_m, depth_m, 1.25 * radius_m, 0.25 * depth_m)
-        }
+    let size = match (args.charge_kg, args.radius_m, args.depth_m) {
+        (Some(charge_kg), None, None) => CraterSize::Charge { charge_kg },
+        (None, Some(radius_m), Some(depth_m)) => CraterSize::Explicit { radius_m, depth_m },
         _ => anyhow::bail!("give either --charge-kg, or both --radius-m and --depth-m"),
     };
+    let cache = open_cache(&args.db, &config.paging)?;
+    let mut q = QuerySession::new(Arc::clone(&cache));
+    let crater = crater_at(&mut q, lat, lon, size, moisture(args.wet))
+        .with_context(|| format!("no crater at --at {} in {}", args.at, args.db.display()))?;
     let mut layer = (*cache.edits()).clone();
     let edit = TerrainEdit {
         author: OPERATOR,
@@ -158,17 +148,14 @@ pub fn crater(args: &CraterArgs, config: &Config) -> anyhow::Result<()> {
             .last_sequence(OPERATOR)
             .map_or(1, |s| s.saturating_add(1)),
         time_utc_s: crate::serve::unix_now_s(),
-        shape: EditShape::Crater {
-            centre: GeoPoint {
-                lat_deg: lat,
-                lon_deg: lon,
-            },
-            radius_m,
-            depth_m,
-            lip_radius_m,
-            lip_height_m,
-        },
+        shape: crater.shape(),
     };
+    let CraterDimensions {
+        radius_m,
+        depth_m,
+        lip_radius_m,
+        lip_height_m,
+    } = crater.dimensions;
     layer
         .apply(edit)
         .with_context(|| format!("crater refused: {}", args.db.display()))?;
@@ -179,7 +166,7 @@ pub fn crater(args: &CraterArgs, config: &Config) -> anyhow::Result<()> {
         println!(
             "{}",
             serde_json::json!({
-                "lat": lat, "lon": lon, "material": ground.material.name(),
+                "lat": lat, "lon": lon, "material": crater.material.name(),
                 "radius_m": radius_m, "depth_m": depth_m,
                 "lip_radius_m": lip_radius_m, "lip_height_m": lip_height_m,
                 "edits": layer.len(),
@@ -192,7 +179,7 @@ pub fn crater(args: &CraterArgs, config: &Config) -> anyhow::Result<()> {
             depth_m,
             lip_height_m,
             lip_radius_m,
-            ground.material,
+            crater.material,
             layer.len(),
             path.display()
         );

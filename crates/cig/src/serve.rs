@@ -102,8 +102,6 @@ struct Totals {
     /// lamps), and the most in any frame.
     lights: usize,
     lights_max: usize,
-    /// User-defined CIGI packets received (no extension handles them yet: counted, dropped).
-    user_defined_packets: u64,
     /// Synchronous mode: host frames applied without being drawn (the channel was behind),
     /// the most in one frame, and the latency from a host frame's arrival to its frame drawn.
     host_frames_skipped: u64,
@@ -667,7 +665,6 @@ impl LoopState {
                 world.receive_dis(&d.bytes, query);
             }
         }
-        totals.user_defined_packets += world.session_mut().take_user_packets().len() as u64;
         if self.channel.sync {
             world.step_to_host_clock(self.period_s, query);
         } else {
@@ -1209,6 +1206,7 @@ fn report(
     json: bool,
 ) -> anyhow::Result<()> {
     let c = world.session().counters();
+    let requests = world.session().edit_requests().counters();
     let mean_ms = totals.frame_ms_sum / (totals.frames.max(1) as f64);
     let exercise = world.exercise().map(|x| {
         let e = x.counters();
@@ -1222,6 +1220,11 @@ fn report(
             "impacts_started": e.impacts_started,
             "environmental_processes": e.environmental_processes,
             "pdus_sent": e.pdus_sent,
+            "craters_made": e.craters_made,
+            "terrain_edits_received": e.terrain_edits_received,
+            "terrain_edits_healed": e.terrain_edits_healed,
+            "terrain_edits_refused": e.terrain_edits_refused,
+            "terrain_edits_sent": e.terrain_edits_sent,
             "remote_entities": x.remote_len(),
             "time_role": format!("{:?}", x.time_role()),
         })
@@ -1246,7 +1249,14 @@ fn report(
             "collisions_reported": c.collisions_reported,
             "queue_dropped": cigi.stats().dropped_queue_full,
             "problems_noted": totals.problems_noted,
-            "user_defined_packets": totals.user_defined_packets,
+            "user_defined_packets": c.user_defined_packets,
+            "terrain_edit_requests": {
+                "received": requests.received,
+                "craters_made": requests.craters_made,
+                "healed": requests.healed,
+                "refused": requests.refused,
+                "malformed": requests.malformed,
+            },
             "warnings_logged": totals.warnings_logged,
             "entities": world.session().entities().len(),
             "address": cigi.local_addr().to_string(),

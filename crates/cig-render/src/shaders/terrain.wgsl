@@ -46,6 +46,15 @@ struct Imagery {
 @group(0) @binding(7) var imagery_pages: texture_2d_array<u32>;
 // Repeating: the clipmap's windows are toroidal.
 @group(0) @binding(8) var imagery_sampler: sampler;
+// The terrain edits' dynamic texture (terrain.rs TerrainFrame::patch_marks): [0].x the frame's
+// time from the marks' origin (s); then per patch vertex: track weight, its time, scorch
+// weight, its time.
+@group(2) @binding(0) var<storage, read> patch_marks: array<vec4<f32>>;
+
+// Tracks' marks fade over hours (the ruts' shapes stay): e-folding time, s.
+const TRACK_FADE_S: f32 = 14400.0;
+// A crater's scorch weathers over a day.
+const SCORCH_FADE_S: f32 = 86400.0;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -58,8 +67,10 @@ struct VertexOut {
     @location(4) @interpolate(flat) patched: u32,
     // The place on the node's grid (east, north; 0 to 1).
     @location(5) grid: vec2<f32>,
-    // A patch's normal (ECEF), interpolated from its posts'.
+    // A patch's edits' slope plus the up times one plus how disturbed (ECEF), interpolated.
     @location(6) patch_normal: vec3<f32>,
+    // A patch's marks now: track, scorch (0 to 1, faded with their age).
+    @location(7) marks: vec2<f32>,
 };
 
 @vertex
@@ -100,6 +111,15 @@ fn vs_main(
     out.node = slot;
     out.patched = patched;
     out.patch_normal = select(vec3<f32>(0.0), morph_target, patched == 1u);
+    out.marks = vec2<f32>(0.0);
+    if (patched == 1u) {
+        let now = patch_marks[0].x;
+        let m = patch_marks[vertex_index + 1u];
+        out.marks = vec2<f32>(
+            m.x * exp(-max(now - m.y, 0.0) / TRACK_FADE_S),
+            m.z * exp(-max(now - m.w, 0.0) / SCORCH_FADE_S),
+        );
+    }
     out.grid = uv;
     return out;
 }
@@ -318,6 +338,8 @@ fn is_sea(kind: u32, rel: vec3<f32>) -> bool {
 
 // Linear albedo of freshly turned earth (dark loam, about 0.06).
 const DISTURBED_SOIL: vec3<f32> = vec3<f32>(0.075, 0.055, 0.038);
+// Soot and burnt earth of a fresh crater.
+const SCORCHED: vec3<f32> = vec3<f32>(0.022, 0.020, 0.018);
 
 // Whether the node's cell at `grid` is drawn by a terrain-edit patch instead.
 fn patched_cell(node: Node, grid: vec2<f32>) -> bool {
@@ -355,9 +377,13 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let ne = textureSample(normal_atlas, atlas_sampler, in.uv).xyz * 2.0 - 1.0;
     let ground_n = normalize(node.axis_e.xyz * ne.x + node.axis_n.xyz * ne.y + node.axis_u.xyz * ne.z);
     var n = ground_n;
-    // A patch's own normal: its fine posts carry the edits' shape, the node's normals do not.
-    if (in.patched == 1u && dot(in.patch_normal, in.patch_normal) > 0.0) {
-        n = normalize(in.patch_normal);
+    // A patch's normal: the node's own tilted by the edits' slope (edit_patch.rs: the
+    // field is the slope along the ground plus the up times one plus how disturbed).
+    let up = node.axis_u.xyz;
+    let patch_up = dot(in.patch_normal, up);
+    if (in.patched == 1u && patch_up > 0.5) {
+        let slope = in.patch_normal - up * patch_up;
+        n = normalize(ground_n / max(dot(ground_n, up), 0.2) + slope);
     }
     let distance_m = length(in.rel);
     if (sensor_on()) {
@@ -451,12 +477,17 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         discard;
     }
     if (in.patched == 1u) {
-        // Earth the edits moved: bare, dark soil (the patch normal's length is one plus how
-        // disturbed the ground is).
-        let disturbed = clamp(length(in.patch_normal) - 1.0, 0.0, 1.0);
+        // Earth the edits moved: bare, dark soil.
+        let disturbed = clamp(patch_up - 1.0, 0.0, 1.0);
         let plane = vec2<f32>(dot(in.rel, g.detail_east.xyz), dot(in.rel, g.detail_north.xyz));
-        let soil = DISTURBED_SOIL * (0.75 + 0.5 * value_noise(plane / 0.6 + vec2<f32>(17.0, 5.0)));
+        let grain = value_noise(plane / 0.6 + vec2<f32>(17.0, 5.0));
+        let soil = DISTURBED_SOIL * (0.75 + 0.5 * grain);
         albedo = mix(albedo, soil, 0.85 * disturbed);
+        // Track marks: crushed vegetation and compacted, darker soil along the ruts, fading.
+        albedo = mix(albedo, 0.8 * soil, 0.8 * in.marks.x);
+        // Scorch: soot over the crater and its lip, ragged at its edge.
+        let ragged = clamp(in.marks.y * 1.6 - 0.6 * value_noise(plane / 0.35 + vec2<f32>(3.0, 11.0)), 0.0, 1.0);
+        albedo = mix(albedo, SCORCHED * (0.7 + 0.6 * grain), 0.9 * ragged);
     }
     if (nvg_on()) {
         albedo = nvg_terrain_albedo(surface.kind, albedo);
