@@ -17,7 +17,7 @@
 //! its statistics.
 
 use crate::gpu::Gpu;
-use cig_scene::edit_patch::{CellPatches, NodePatch, PatchMarks, PatchedNode};
+use cig_scene::edit_patch::{CellPatches, NodePatches, PatchMarks, PatchedNode};
 use cig_scene::lod::{NodeKey, SelectedNode, TerrainLod};
 use cig_scene::terrain_mesh::{self, NodeCut, TerrainVertex};
 use cig_terrain::TileCache;
@@ -53,7 +53,7 @@ struct Slot {
     last_used_frame: u64,
     /// The terrain edits' patches over the node (finest-level data only), as of the cache's
     /// edits revision `patch_revision`.
-    patch: Option<std::sync::Arc<NodePatch>>,
+    patch: Option<std::sync::Arc<NodePatches>>,
     patch_revision: Option<u64>,
     /// The patch's cells, remade only where the edits changed them.
     cell_patches: CellPatches,
@@ -481,16 +481,18 @@ impl TerrainGpu {
         if let Some(patch) = slot.patch.as_ref().filter(|_| slot.data_level == 0) {
             record.refined = patch.refined_mask;
             record.edit[0] = self.node_cells as f32;
-            let first = out.patch_vertices.len() as u32;
             let tag = -(index as f32 + 1.0);
-            out.patch_vertices
-                .extend(patch.vertices.iter().map(|v| TerrainVertex {
-                    skirt: tag - 0.5 * v.skirt,
-                    ..*v
-                }));
-            out.patch_indices
-                .extend(patch.indices.iter().map(|&i| first + i));
-            out.patch_marks.extend_from_slice(&patch.marks);
+            for piece in &patch.pieces {
+                let first = out.patch_vertices.len() as u32;
+                out.patch_vertices
+                    .extend(piece.vertices.iter().map(|v| TerrainVertex {
+                        skirt: tag - 0.5 * v.skirt,
+                        ..*v
+                    }));
+                out.patch_indices
+                    .extend(piece.indices.iter().map(|&i| first + i));
+                out.patch_marks.extend_from_slice(&piece.marks);
+            }
         }
         out.records[index] = record;
         let base = index as u32 * self.vertices_per_node;

@@ -2,11 +2,11 @@
 //! (`cig_terrain::edits::RefinedCell`) as a patch of triangles on its fine posts, which the
 //! renderer draws in place of the node's own triangles over that cell.
 //!
-//! Algorithm: a refined cell of split `f` is cut into aligned squares, halved down to blocks
-//! of `min(f, 8)` sub-cells a side where they meet the cell's refined window; blocks that
-//! overlap it are drawn at the fine posts (the cell's triangulated height plus the edits'
-//! change there), every square clear of it, where nothing changed, as two triangles (a
-//! crater's cell of split 128 is about 50 squares and its window, not 256 blocks). Every triangle is split along the cell's own diagonal, so each lies on the
+//! Algorithm: a refined cell of split `f` is cut into aligned squares, halved down to single
+//! sub-cells where they meet the cell's refined window; those are drawn at the fine posts (the
+//! cell's triangulated height plus the edits' change there), every square clear of it, where
+//! nothing changed, as two triangles (a 155 mm crater's cell of split 128 is its window's
+//! 12 x 12 posts and about 50 squares, not 256 blocks of 8 x 8). Every triangle is split along the cell's own diagonal, so each lies on the
 //! surface the queries answer on (`cig_terrain::query`): drawn and queried are one surface. The
 //! T-junctions where fine blocks meet plain ones, and where the patch meets the node's own
 //! triangles or a neighbour's patch of another split, are coplanar (no change on those edges,
@@ -39,8 +39,9 @@ use glam::DVec3;
 use std::collections::HashMap;
 use std::sync::Arc;
 
-/// Sub-cells a side of a patch's blocks.
-const BLOCK: u32 = 8;
+/// Sub-cells a side of the smallest squares (the fine posts): squares are halved down to
+/// single sub-cells where they meet the refined window, so only the window is drawn fine.
+const BLOCK: u32 = 1;
 
 /// One node's patches: vertices relative to the node's centre (skirt 0 on the surface, 1 at
 /// a skirt's foot), triangles, and which of the node's cells they replace.
@@ -52,6 +53,36 @@ pub struct NodePatch {
     pub refined_mask: [u32; 8],
     /// Per vertex, the ground's dynamic texture ([`PatchMarks`]).
     pub marks: Vec<PatchMarks>,
+}
+
+/// A node's patches as the cells' own pieces (each a [`NodePatch`] of one cell, indices from
+/// its first vertex), shared with the cache that keeps them: remaking a node after an edit
+/// copies no cell it did not change; the renderer concatenates the pieces as it fills a
+/// frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodePatches {
+    pub pieces: Vec<Arc<NodePatch>>,
+    /// Bit `row * node_cells + col` set for each patched cell.
+    pub refined_mask: [u32; 8],
+}
+
+impl NodePatches {
+    /// The pieces in one patch.
+    pub fn joined(&self) -> NodePatch {
+        let mut patch = NodePatch {
+            refined_mask: self.refined_mask,
+            ..NodePatch::default()
+        };
+        for piece in &self.pieces {
+            let first = patch.vertices.len() as u32;
+            patch.vertices.extend_from_slice(&piece.vertices);
+            patch.marks.extend_from_slice(&piece.marks);
+            patch
+                .indices
+                .extend(piece.indices.iter().map(|&k| first + k));
+        }
+        patch
+    }
 }
 
 /// A patch vertex's marks (`cig_terrain::edits::GroundMarks`) as the shader reads them:
@@ -81,7 +112,7 @@ pub fn build_node_patch(
         edits,
         time_origin_utc_s,
     };
-    node.build(&mut CellPatches::default())
+    node.build(&mut CellPatches::default()).map(|p| p.joined())
 }
 
 /// A node whose patches are made: everything a cell's patch depends on but the cell.
@@ -121,7 +152,7 @@ impl CellPatches {
 impl PatchedNode<'_> {
     /// The node's patches, or `None` when no edit touches it; the cells unchanged since
     /// `reuse` last saw them are copied from it, and `reuse` keeps this build's cells.
-    pub fn build(&self, reuse: &mut CellPatches) -> Option<NodePatch> {
+    pub fn build(&self, reuse: &mut CellPatches) -> Option<NodePatches> {
         let (layout, key, tile, edits) = (self.layout, self.key, self.tile, self.edits);
         if key.level != 0 || tile.0.level != 0 || edits.is_empty() {
             reuse.cells.clear();
@@ -136,7 +167,7 @@ impl PatchedNode<'_> {
             return None;
         }
         let (r0, c0) = layout.finest_origin(key);
-        let mut patch = NodePatch::default();
+        let mut patch = NodePatches::default();
         let mut kept = HashMap::with_capacity(reuse.cells.len());
         for i in 0..n {
             for j in 0..n {
@@ -153,20 +184,17 @@ impl PatchedNode<'_> {
                         None => continue,
                     },
                 };
-                let first = patch.vertices.len() as u32;
-                patch.vertices.extend_from_slice(&piece.vertices);
-                patch.marks.extend_from_slice(&piece.marks);
-                patch
-                    .indices
-                    .extend(piece.indices.iter().map(|&k| first + k));
                 for (w, bits) in patch.refined_mask.iter_mut().zip(piece.refined_mask) {
                     *w |= bits;
                 }
-                kept.insert((r, c), (Arc::clone(shared), piece));
+                kept.insert((r, c), (Arc::clone(shared), Arc::clone(&piece)));
+                if !piece.indices.is_empty() {
+                    patch.pieces.push(piece);
+                }
             }
         }
         reuse.cells = kept;
-        (!patch.indices.is_empty()).then_some(patch)
+        (!patch.pieces.is_empty()).then_some(patch)
     }
 
     /// The patch of refined cell `(r, c)`, the node's cell `(i, j)` (row, column), with its
@@ -513,19 +541,17 @@ mod tests {
                 time_origin_utc_s: 0.0,
             }
         }
-        assert_eq!(
-            node(
-                &layout,
-                &geoid,
-                key,
-                (tile_key, &tile),
-                centre,
-                &cache.edits()
-            )
-            .build(&mut reuse)
-            .as_ref(),
-            Some(&patch)
-        );
+        let first = node(
+            &layout,
+            &geoid,
+            key,
+            (tile_key, &tile),
+            centre,
+            &cache.edits(),
+        )
+        .build(&mut reuse)
+        .expect("a patch");
+        assert_eq!(first.joined(), patch);
         let cells_before = reuse.len();
         cache
             .update_edits(|e| {
@@ -552,6 +578,13 @@ mod tests {
         let reused = node(&layout, &geoid, key, (tile_key, &tile), centre, &edits)
             .build(&mut reuse)
             .expect("a patch");
+        // Only the rut's cells are new: the crater's pieces are the very ones kept.
+        assert!(first
+            .pieces
+            .iter()
+            .all(|p| reused.pieces.iter().any(|q| Arc::ptr_eq(p, q))));
+        assert!(reused.pieces.len() > first.pieces.len());
+        let reused = reused.joined();
         let fresh = build_node_patch(&layout, &geoid, key, (tile_key, &tile), centre, &edits, 0.0)
             .expect("a patch");
         assert_eq!(reused, fresh);
