@@ -351,12 +351,12 @@ impl Exercise {
         self.edit_second.1 <= MAX_REMOTE_EDITS_PER_S
     }
 
-    /// The remote ground vehicles whose ruts fall to this node: every land platform of the
-    /// exercise at `now_s` whose own node sends no ruts (a simulation that is not an IG),
-    /// while this node keeps the exercise's time (one node of the exercise lays them, and
+    /// The remote ground vehicles whose ruts fall to this node, when the scenario's `[dis]
+    /// remote_ruts` asks: every land platform of the exercise at `now_s` whose own node sends
+    /// no ruts (a simulation that is not an IG), while this node keeps the exercise's time (one node of the exercise lays them, and
     /// they reach the others as its edits; with no time master, none does).
     pub fn remote_rut_vehicles(&self, now_s: f64) -> Vec<RemoteEntitySnapshot> {
-        if self.time.role() != cig_dis::TimeRole::Master {
+        if !self.settings.remote_ruts || self.time.role() != cig_dis::TimeRole::Master {
             return Vec::new();
         }
         let mut vehicles = self.remote.snapshot_where(now_s, |_| true);

@@ -131,6 +131,8 @@
 //! delivery = "broadcast"               # unicast:HOST:PORT, broadcast, multicast:GROUP
 //! bind = "loopback"                    # loopback, any, an address or an interface name
 //! time_master = false                  # seed the exercise's world time from start_time
+//! remote_ruts = false                  # as the time master, lay ruts for the exercise's
+//!                                      # ground vehicles whose nodes lay none
 //! accepted_sites = []                  # empty: all
 //! ```
 //!
@@ -790,6 +792,12 @@ pub struct DisSettings {
     pub bind: String,
     #[serde(default)]
     pub time_master: bool,
+    /// While this IG keeps the exercise's time, it lays ruts for the exercise's land
+    /// platforms whose own nodes lay none (`Exercise::remote_rut_vehicles`). Off by default:
+    /// each rut refines cells on every node, and hundreds of vehicles' ruts cost memory
+    /// (see `terrain_edits::MAX_RUTS_PER_S`).
+    #[serde(default)]
+    pub remote_ruts: bool,
     #[serde(default)]
     pub accepted_sites: Vec<u16>,
     /// Protocol version written: 7 (default) or 6.
@@ -829,6 +837,7 @@ impl Default for DisSettings {
             delivery: default_delivery(),
             bind: default_bind(),
             time_master: false,
+            remote_ruts: false,
             accepted_sites: Vec::new(),
             version: 7,
         }

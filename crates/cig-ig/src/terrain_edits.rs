@@ -540,7 +540,16 @@ const RUT_JUMP_M: f64 = 60.0;
 pub struct RutTracker {
     last: std::collections::BTreeMap<u64, GeoPoint>,
     next_sequence: Option<u32>,
+    /// Ruts laid in the current second: (the second, how many).
+    second: (f64, u32),
+    /// Pieces of travel left without ruts, the second's budget spent.
+    pub dropped: u64,
 }
+
+/// Ruts laid at most each second (the vehicles listed first get theirs first: the IG's own
+/// before the exercise's): every rut is an edit every node carries, refines cells and is
+/// announced again, so an exercise of hundreds of vehicles cannot lay one every 8 m each.
+pub const MAX_RUTS_PER_S: u32 = 20;
 
 /// A vehicle the rut tracker follows: its id (a session entity's id, or a remote entity's
 /// [`remote_rut_id`]), where it is, the load it puts on the ground.
@@ -588,6 +597,14 @@ impl RutTracker {
                 continue;
             }
             self.last.insert(v.id, here);
+            let second = time_utc_s.floor();
+            if self.second.0 != second {
+                self.second = (second, 0);
+            }
+            if self.second.1 + 2 > MAX_RUTS_PER_S {
+                self.dropped += 1;
+                continue;
+            }
             let mid = (
                 0.5 * (last.lat_deg + here.lat_deg),
                 0.5 * (last.lon_deg + here.lon_deg),
@@ -616,6 +633,7 @@ impl RutTracker {
                     lat_deg: p.lat_deg + side * gauge_m * ry / mn,
                     lon_deg: p.lon_deg + side * gauge_m * rx / me,
                 };
+                self.second.1 += 1;
                 ruts.push(as_sent(TerrainEdit {
                     author,
                     sequence: *sequence,

@@ -68,8 +68,13 @@ fn at(row: f64, col: f64) -> (f64, f64) {
 }
 
 fn world(application: u16) -> IgWorld {
+    world_with(application, "")
+}
+
+/// [`world`] with more lines in its `[dis]` section.
+fn world_with(application: u16, dis_lines: &str) -> IgWorld {
     let scenario = format!(
-        "start_time = \"2026-06-21T12:00:00Z\"\n[dis]\nsite = 1\napplication = {application}\nexercise = 3\n{}",
+        "start_time = \"2026-06-21T12:00:00Z\"\n[dis]\nsite = 1\napplication = {application}\nexercise = 3\n{}{dis_lines}",
         if application == 10 { "time_master = true\n" } else { "" }
     );
     IgWorld::new(
@@ -551,8 +556,9 @@ fn a_remote_vehicle_of_a_simulation_leaves_the_same_ruts_on_every_ig() {
     use cig_dis::publisher::{OwnedEntityPublisher, OwnedEntityState, PublisherConfig};
     use cig_dis::remote::{EntityKey, EntityTypeCode};
     let (mut qa, mut qb) = (query(), query());
-    // A keeps the exercise's time (application 10), B follows.
-    let (mut a, mut b) = (world(10), world(11));
+    // A keeps the exercise's time (application 10) and lays the remote vehicles' ruts, B
+    // follows (and would lay none if it kept the time: remote_ruts is off there).
+    let (mut a, mut b) = (world_with(10, "remote_ruts = true\n"), world(11));
     let mut truck = OwnedEntityPublisher::new(
         EntityKey {
             site: 5,
@@ -648,4 +654,45 @@ fn a_remote_vehicle_of_a_simulation_leaves_the_same_ruts_on_every_ig() {
         .expect("hot")
         .height_msl_m;
     assert!(rutted < plain - 0.01, "{plain} -> {rutted}");
+}
+
+/// However many vehicles move, at most `MAX_RUTS_PER_S` ruts are laid a second, the vehicles
+/// listed first served first.
+#[test]
+fn ruts_are_laid_within_a_budget_per_second() {
+    use cig_dynterrain::soil::{RunningGear, SoilMoisture, VehicleLoad};
+    use cig_ig::terrain_edits::{RutTracker, RutVehicle, MAX_RUTS_PER_S};
+    let mut q = query();
+    let load = VehicleLoad::new(62_000.0, 5.8, RunningGear::Tracked).expect("load");
+    let fleet = |step_cols: f64| -> Vec<RutVehicle> {
+        (0..30u32)
+            .map(|k| {
+                let (lat, lon) = at(10.0 + 3.0 * f64::from(k), 5.0 + step_cols);
+                RutVehicle {
+                    id: u64::from(k),
+                    position: Geodetic::new(lat, lon, 0.0),
+                    load,
+                }
+            })
+            .collect()
+    };
+    let mut tracker = RutTracker::default();
+    let author = EditAuthor {
+        site: 1,
+        application: 1,
+    };
+    let t0 = 1.8e9;
+    assert!(tracker
+        .advance(&fleet(0.0), author, t0, SoilMoisture::Dry, &mut q)
+        .is_empty());
+    // Every vehicle 9 m on (0.3 of a 30 m cell) within the same second.
+    let ruts = tracker.advance(&fleet(0.3), author, t0 + 0.5, SoilMoisture::Dry, &mut q);
+    assert_eq!(ruts.len(), MAX_RUTS_PER_S as usize);
+    assert_eq!(tracker.dropped, 30 - u64::from(MAX_RUTS_PER_S) / 2);
+    // The first ten vehicles (rows 10 to 37) got theirs.
+    let (last_served, _) = at(38.5, 0.0);
+    assert!(ruts.iter().all(|r| r.shape.anchor().lat_deg < last_served));
+    // The next second, a new budget.
+    let more = tracker.advance(&fleet(0.6), author, t0 + 1.2, SoilMoisture::Dry, &mut q);
+    assert_eq!(more.len(), MAX_RUTS_PER_S as usize);
 }
