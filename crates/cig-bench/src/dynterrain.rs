@@ -20,6 +20,12 @@
 //!    median after 10 frames of warm-up (`stall_plain`, `stall_with_craters`; target: no
 //!    frame over twice the median), and the ratio of the passes' medians.
 //!
+//! 4. What ruts cost to keep: 20 tracked vehicles driving winding 600 m paths in the square
+//!    leave their ruts as the IG's rut tracker lays them (8 m pieces, two lines 2.6 m apart,
+//!    0.6 m wide, 8 cm deep): the edit layer's bytes and the drawn patches' bytes (every
+//!    finest node they cross, made fresh) per metre of rut line, and the median time to
+//!    apply one (`rut_apply_ms`, the layer's part).
+//!
 //! Limits: one run of each pass; the pass is short (`--frames`, 180 by default: 3 s and 300
 //! craters), at `--size` (640 x 360 by default) so a software rasteriser finishes it.
 
@@ -275,6 +281,9 @@ pub fn run(options: &DynTerrainOptions) -> Result<Report, BenchError> {
     drop(query);
     drop(cache);
 
+    // 4. What ruts cost to keep.
+    let ruts = rut_memory(&database, &node_layout, &geoid)?;
+
     // 3. The picture under fire.
     let fire = pass_under_fire(&database, options)?;
     let json = serde_json::json!({
@@ -299,6 +308,7 @@ pub fn run(options: &DynTerrainOptions) -> Result<Report, BenchError> {
         "los_blocked_plain": blocked_plain,
         "los_blocked_edited": blocked_edited,
         "pass": fire.json,
+        "ruts": ruts.json,
         "targets": {
             "crater_apply_ms": 1.0,
             "hat_ratio": 0.5,
@@ -324,11 +334,131 @@ pub fn run(options: &DynTerrainOptions) -> Result<Report, BenchError> {
         blocked_plain,
         blocked_edited,
         sightlines.len(),
-    ) + &fire.summary;
+    ) + &ruts.summary
+        + &fire.summary;
     Ok(Report { json, summary })
 }
 
-/// Part 3's result.
+/// Part 4: the ruts' memory.
+fn rut_memory(
+    database: &Arc<cig_terrain::TerrainDatabase>,
+    node_layout: &cig_scene::lod::NodeLayout,
+    geoid: &cig_terrain::database::GeoidLookup,
+) -> Result<FireReport, BenchError> {
+    const VEHICLES: u32 = 20;
+    const PIECES: u32 = 75;
+    const PIECE_M: f64 = 8.0;
+    const GAUGE_M: f64 = 2.6;
+    let layout = *database.layout();
+    let (lat0, lon0) = layout.grid.centre_deg();
+    let (mn, me) = cig_geo::metres_per_degree(lat0);
+    let mut places = Places(2222);
+    let mut layer = EditLayer::new(layout.grid, layout.tile_cells);
+    let empty_bytes = layer.memory_bytes();
+    let author = EditAuthor {
+        site: 9,
+        application: 11,
+    };
+    let mut apply_ms = Vec::new();
+    let mut sequence = 0u32;
+    for _ in 0..VEHICLES {
+        let (mut x, mut y) = (
+            (places.next() * 2.0 - 1.0) * 500.0,
+            (places.next() * 2.0 - 1.0) * 500.0,
+        );
+        let mut heading = places.next() * std::f64::consts::TAU;
+        for _ in 0..PIECES {
+            heading += (places.next() - 0.5) * 0.4;
+            let (dx, dy) = (PIECE_M * heading.sin(), PIECE_M * heading.cos());
+            // Across the travel, to the right.
+            let (rx, ry) = (heading.cos(), -heading.sin());
+            for side in [-0.5, 0.5] {
+                let at = |x: f64, y: f64| GeoPoint {
+                    lat_deg: lat0 + (y + side * GAUGE_M * ry) / mn,
+                    lon_deg: lon0 + (x + side * GAUGE_M * rx) / me,
+                };
+                sequence += 1;
+                let edit = TerrainEdit {
+                    author,
+                    sequence,
+                    time_utc_s: 1.9e9,
+                    shape: EditShape::Rut {
+                        from: at(x, y),
+                        to: at(x + dx, y + dy),
+                        width_m: 0.6,
+                        depth_m: 0.08,
+                    },
+                };
+                let started = Instant::now();
+                layer.apply(edit).map_err(|e| step_error("a rut", e))?;
+                apply_ms.push(started.elapsed().as_secs_f64() * 1e3);
+            }
+            (x, y) = (x + dx, y + dy);
+        }
+    }
+    let rut_m = f64::from(sequence) * PIECE_M;
+    let layer_bytes = layer.memory_bytes() - empty_bytes;
+    // Every finest node a rut crosses, its patches made fresh.
+    let span = u64::from(node_layout.node_cells);
+    let mut nodes: Vec<cig_scene::lod::NodeKey> = layer
+        .cells()
+        .map(|((r, c), _)| cig_scene::lod::NodeKey {
+            level: 0,
+            row: (u64::from(r) / span) as u32,
+            col: (u64::from(c) / span) as u32,
+        })
+        .collect();
+    nodes.sort_by_key(|k| (k.row, k.col));
+    nodes.dedup();
+    let (mut patch_bytes, mut patch_vertices) = (0usize, 0usize);
+    for &key in &nodes {
+        let tile_key = node_layout.tile_of(key, 0);
+        let tile = database
+            .load_tile(tile_key)
+            .map_err(|e| step_error("a tile under a rut", e))?;
+        let centre = layout.grid.centre_deg();
+        let patches = cig_scene::edit_patch::PatchedNode {
+            layout: node_layout,
+            geoid,
+            key,
+            tile: (tile_key, &tile),
+            centre_ecef: Geodetic::new(centre.0, centre.1, 0.0).to_ecef(),
+            edits: &layer,
+            time_origin_utc_s: 1.9e9,
+        }
+        .build(&mut cig_scene::edit_patch::CellPatches::default());
+        for piece in patches.iter().flat_map(|p| &p.pieces) {
+            patch_bytes += piece.bytes();
+            patch_vertices += piece.vertices.len();
+        }
+    }
+    let layer_per_m = layer_bytes as f64 / rut_m;
+    let patch_per_m = patch_bytes as f64 / rut_m;
+    Ok(FireReport {
+        json: serde_json::json!({
+            "ruts": sequence,
+            "rut_line_m": rut_m,
+            "refined_cells": layer.cells().count(),
+            "nodes": nodes.len(),
+            "rut_apply_ms": median(&apply_ms),
+            "layer_bytes": layer_bytes,
+            "layer_bytes_per_m": layer_per_m,
+            "patch_bytes": patch_bytes,
+            "patch_bytes_per_m": patch_per_m,
+            "patch_vertices_per_m": patch_vertices as f64 / rut_m,
+        }),
+        summary: format!(
+            "\n{sequence} ruts ({:.1} km of rut line): the edit layer {:.0} bytes a metre, the drawn patches {:.0} bytes a metre ({:.1} vertices); a rut applied in {:.3} ms",
+            rut_m / 1000.0,
+            layer_per_m,
+            patch_per_m,
+            patch_vertices as f64 / rut_m,
+            median(&apply_ms),
+        ),
+    })
+}
+
+/// Part 3's (and part 4's) result.
 struct FireReport {
     json: serde_json::Value,
     summary: String,

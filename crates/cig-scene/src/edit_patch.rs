@@ -3,10 +3,11 @@
 //! renderer draws in place of the node's own triangles over that cell.
 //!
 //! Algorithm: a refined cell of split `f` is cut into aligned squares, halved down to single
-//! sub-cells where they meet the cell's refined window; those are drawn at the fine posts (the
-//! cell's triangulated height plus the edits' change there), every square clear of it, where
-//! nothing changed, as two triangles (a 155 mm crater's cell of split 128 is its window's
-//! 12 x 12 posts and about 50 squares, not 256 blocks of 8 x 8). Every triangle is split along the cell's own diagonal, so each lies on the
+//! sub-cells where the edits changed a post of them; those are drawn at the fine posts (the
+//! cell's triangulated height plus the edits' change there), every square where nothing
+//! changed as two triangles (a 155 mm crater's cell of split 128 is its window's 12 x 12 posts
+//! and about 50 squares, not 256 blocks of 8 x 8; a rut crossing a cell diagonally is its
+//! band of changed posts, not the square window around it). Every triangle is split along the cell's own diagonal, so each lies on the
 //! surface the queries answer on (`cig_terrain::query`): drawn and queried are one surface. The
 //! T-junctions where fine blocks meet plain ones, and where the patch meets the node's own
 //! triangles or a neighbour's patch of another split, are coplanar (no change on those edges,
@@ -40,7 +41,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 /// Sub-cells a side of the smallest squares (the fine posts): squares are halved down to
-/// single sub-cells where they meet the refined window, so only the window is drawn fine.
+/// single sub-cells where the edits changed a post, so only the changed ground is drawn fine.
 const BLOCK: u32 = 1;
 
 /// One node's patches: vertices relative to the node's centre (skirt 0 on the surface, 1 at
@@ -53,6 +54,15 @@ pub struct NodePatch {
     pub refined_mask: [u32; 8],
     /// Per vertex, the ground's dynamic texture ([`PatchMarks`]).
     pub marks: Vec<PatchMarks>,
+}
+
+impl NodePatch {
+    /// Bytes its vertices, marks and triangles take.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of_val(&self.vertices[..])
+            + std::mem::size_of_val(&self.marks[..])
+            + std::mem::size_of_val(&self.indices[..])
+    }
 }
 
 /// A node's patches as the cells' own pieces (each a [`NodePatch`] of one cell, indices from
@@ -225,7 +235,7 @@ impl PatchedNode<'_> {
         let diagonal = Tile::cell_diagonal(ti, tj);
         let bit = (i * n + j) as usize;
         patch.refined_mask[bit / 32] |= 1 << (bit % 32);
-        let f = cell.split;
+        let f = cell.lattice.split;
         let bs = BLOCK.min(f);
         let side = (f + 1) as usize;
         let mut index_of = vec![u32::MAX; side * side];
@@ -275,10 +285,10 @@ impl PatchedNode<'_> {
                 // carries how much (1 untouched, 2 fully disturbed, from 1 cm of change);
                 // ruts' marks and craters' scorch fade with their age, so they go to
                 // the shader with their times.
-                let in_window = a >= cell.origin.0
-                    && b >= cell.origin.1
-                    && a < cell.origin.0 + cell.posts.0
-                    && b < cell.origin.1 + cell.posts.1;
+                let in_window = a >= cell.lattice.origin.0
+                    && b >= cell.lattice.origin.1
+                    && a < cell.lattice.origin.0 + cell.lattice.posts.0
+                    && b < cell.lattice.origin.1 + cell.lattice.posts.1;
                 let marks = if in_window {
                     let (lat, lon) = layout.lat_lon_of_finest(row_f, col_f);
                     edits.ground_marks((r32, c32), lat, lon)
@@ -308,8 +318,11 @@ impl PatchedNode<'_> {
             }
             index_of[k]
         };
-        let (wa0, wb0) = cell.origin;
-        let (wa1, wb1) = (wa0 + cell.posts.0 - 1, wb0 + cell.posts.1 - 1);
+        let (wa0, wb0) = cell.lattice.origin;
+        let (wa1, wb1) = (
+            wa0 + cell.lattice.posts.0 - 1,
+            wb0 + cell.lattice.posts.1 - 1,
+        );
         let mut quad = |a0: u32, b0: u32, a1: u32, b1: u32, patch: &mut NodePatch| {
             let sw = vertex(a0, b0, patch);
             let se = vertex(a1, b0, patch);
@@ -321,12 +334,38 @@ impl PatchedNode<'_> {
             };
             patch.indices.extend_from_slice(&tris);
         };
-        // Aligned squares, halved down to blocks where they meet the window: a square clear
-        // of it is two triangles (an aligned square lies wholly on one side of the cell's
-        // diagonal or has its own diagonal on it, so its triangles are on the cell's planes).
+        // Which of the window's posts the edits changed, as counts over the posts south-west
+        // of each (a summed-area table), so any square asks in four reads.
+        let lattice = &cell.lattice;
+        let (na, nb) = (lattice.posts.0 as usize, lattice.posts.1 as usize);
+        let mut changed = vec![0u32; (na + 1) * (nb + 1)];
+        for b in 0..nb {
+            for a in 0..na {
+                let here = u32::from(lattice.post_m(a, b) != 0.0);
+                changed[(b + 1) * (na + 1) + a + 1] =
+                    here + changed[b * (na + 1) + a + 1] + changed[(b + 1) * (na + 1) + a]
+                        - changed[b * (na + 1) + a];
+            }
+        }
+        // Whether a post of the square from (a0, b0) to (a1, b1) (sub-cells of the cell,
+        // edges included) changed.
+        let changes = |a0: u32, b0: u32, a1: u32, b1: u32| -> bool {
+            let (x0, x1) = (a0.max(wa0), a1.min(wa1));
+            let (y0, y1) = (b0.max(wb0), b1.min(wb1));
+            if x0 > x1 || y0 > y1 {
+                return false;
+            }
+            let at = |x: u32, y: u32| changed[(y - wb0) as usize * (na + 1) + (x - wa0) as usize];
+            at(x1 + 1, y1 + 1) + at(x0, y0) > at(x0, y1 + 1) + at(x1 + 1, y0)
+        };
+        // Aligned squares, halved down to single sub-cells where the edits changed a post of
+        // them: a square with none is two triangles (an aligned square lies wholly on one side
+        // of the cell's diagonal or has its own diagonal on it, so its triangles are on the
+        // cell's planes, and the posts of the halved squares along its edges, unchanged, lie
+        // on them too).
         let mut squares = vec![(0u32, 0u32, f)];
         while let Some((a0, b0, size)) = squares.pop() {
-            let fine = a0 < wa1 && a0 + size > wa0 && b0 < wb1 && b0 + size > wb0;
+            let fine = changes(a0, b0, a0 + size, b0 + size);
             if !fine {
                 quad(a0, b0, a0 + size, b0 + size, &mut patch);
             } else if size > bs {
@@ -553,25 +592,29 @@ mod tests {
         .expect("a patch");
         assert_eq!(first.joined(), patch);
         let cells_before = reuse.len();
+        // A rut 0.6 m wide and 0.1 m deep between two (latitude, longitude) points.
+        let rut = |sequence: u32, time_utc_s: f64, from: (f64, f64), to: (f64, f64)| {
+            let point = |(lat_deg, lon_deg)| GeoPoint { lat_deg, lon_deg };
+            TerrainEdit {
+                author: EditAuthor::default(),
+                sequence,
+                time_utc_s,
+                shape: EditShape::Rut {
+                    from: point(from),
+                    to: point(to),
+                    width_m: 0.6,
+                    depth_m: 0.1,
+                },
+            }
+        };
         cache
             .update_edits(|e| {
-                e.apply(TerrainEdit {
-                    author: EditAuthor::default(),
-                    sequence: 2,
-                    time_utc_s: 60.0,
-                    shape: EditShape::Rut {
-                        from: GeoPoint {
-                            lat_deg: lat + 100.0 / mn,
-                            lon_deg: lon,
-                        },
-                        to: GeoPoint {
-                            lat_deg: lat + 100.0 / mn,
-                            lon_deg: lon + 20.0 / me,
-                        },
-                        width_m: 0.6,
-                        depth_m: 0.1,
-                    },
-                })
+                e.apply(rut(
+                    2,
+                    60.0,
+                    (lat + 100.0 / mn, lon),
+                    (lat + 100.0 / mn, lon + 20.0 / me),
+                ))
             })
             .expect("rut");
         let edits = cache.edits();
@@ -591,5 +634,60 @@ mod tests {
         assert!(reuse.len() > cells_before, "{} cells", reuse.len());
         // The rut's posts carry its track mark and time.
         assert!(fresh.marks.iter().any(|m| m[0] == 1.0 && m[1] == 60.0));
+        // A rut across a cell's diagonal is drawn fine along its band only: far fewer
+        // vertices than the window's posts, and still on the queried surface.
+        let cell_centre = |r: u32, c: u32| {
+            (
+                36.0 + (f64::from(r) + 0.5) * grid.dlat_deg,
+                -121.0 + (f64::from(c) + 0.5) * grid.dlon_deg,
+            )
+        };
+        let (la, lo) = cell_centre(20, 20);
+        cache
+            .update_edits(|e| {
+                e.apply(rut(
+                    3,
+                    90.0,
+                    (la - 14.0 / mn, lo - 14.0 / me),
+                    (la + 14.0 / mn, lo + 14.0 / me),
+                ))
+            })
+            .expect("diagonal rut");
+        let edits = cache.edits();
+        let rut_cell = edits.cell((20, 20)).expect("refined");
+        let window_posts = rut_cell.lattice.posts.0 * rut_cell.lattice.posts.1;
+        assert!(
+            window_posts > 100 * 100,
+            "{window_posts} posts in the window"
+        );
+        let diagonal_node = NodeKey {
+            level: 0,
+            row: 20 / layout.node_cells,
+            col: 20 / layout.node_cells,
+        };
+        let patch = build_node_patch(
+            &layout,
+            &geoid,
+            diagonal_node,
+            (tile_key, &tile),
+            centre,
+            &edits,
+            0.0,
+        )
+        .expect("a patch");
+        let surface = patch.vertices.iter().filter(|v| v.skirt == 0.0).count();
+        assert!(
+            (surface as u32) < window_posts / 5,
+            "{surface} vertices for a window of {window_posts} posts"
+        );
+        let mut deepest = 0.0f64;
+        for v in patch.vertices.iter().filter(|v| v.skirt == 0.0) {
+            let p = Geodetic::from_ecef(centre + DVec3::from_array(v.position.map(f64::from)));
+            let hot = q.hot(p.lat_deg, p.lon_deg).expect("hot").height_msl_m;
+            assert!((p.alt_m - hot).abs() < 0.01, "{} vs {hot}", p.alt_m);
+            let plain = p.alt_m - edits.delta_m(p.lat_deg, p.lon_deg);
+            deepest = deepest.max(plain - p.alt_m);
+        }
+        assert!(deepest > 0.08, "the rut's bottom is drawn: {deepest} m");
     }
 }

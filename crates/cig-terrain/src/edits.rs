@@ -14,12 +14,15 @@
 //! footprints cover ([`RefinedCell`]). The sub-cells are split along the same diagonal as their
 //! cell, so each sub-triangle lies inside one of the cell's two triangles and the surface is
 //! exactly the triangulation of (the cell's triangulated height + the change) at the fine posts:
-//! the queries' surface and the renderer's patch are one. A refined window's border carries no
+//! the queries' surface and the renderer's patch are one. The changes are kept in 16-bit steps
+//! of [`LATTICE_STEP_M`] (1/512 m) in overlapping blocks of one cache line ([`CellLattice`]),
+//! so a height query reads one line of them. A refined window's border carries no
 //! change (footprints end inside it), so its posts lie on the cell's own triangles: the
 //! T-junctions there are coplanar and leave no crack. Each refined cell has the split its own
 //! edits ask for; where it shares an edge with a cell split more coarsely, its posts on that
 //! edge between the coarser cell's are set on the coarser cell's edge (the source's T-junction
-//! map), so the two surfaces meet exactly.
+//! map), so the two surfaces meet, to within half a step (a millimetre; the drawn patches'
+//! skirts close it).
 //! Removing an edit (healing) recomputes its cells from the edits left; a cell left with none
 //! returns to its coarse form.
 //!
@@ -823,17 +826,170 @@ const BLOCK_LEVELS: usize = 24;
 /// Sub-cells along a side of a refined window's block (`RefinedCell::block_max_m`).
 pub const BLOCK_SUB_CELLS: u32 = 8;
 
-/// A finest cell carrying changes on a finer lattice over a window of it.
+/// The changes of the refined cells are kept in steps of this many metres (a power of two,
+/// so a step count times it is exact in single floats): 16-bit counts reach
+/// [`MAX_EDIT_HEIGHT_M`] with room to spare.
+pub const LATTICE_STEP_M: f32 = 1.0 / 512.0;
+
+/// A change rounded to the lattice's steps ([`LATTICE_STEP_M`]).
+#[inline]
+pub fn lattice_rounded_m(change_m: f32) -> f32 {
+    (change_m / LATTICE_STEP_M).round() * LATTICE_STEP_M
+}
+
+/// Fine posts along a [`PostBlock`] (east, north).
+const BLOCK_POSTS: (usize, usize) = (8, 4);
+
+/// 8 x 4 fine posts of a lattice (rows south to north) in one 64-byte cache line, as counts of
+/// [`LATTICE_STEP_M`]. Neighbouring blocks share their edge posts, so every sub-cell's four
+/// corners lie in one block: a height query reads one line of the lattice.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct PostBlock([i16; BLOCK_POSTS.0 * BLOCK_POSTS.1]);
+
+/// The fine lattice of a refined cell: the changes at the posts of its window. The layer
+/// keeps it beside the cell's key (not behind the cell's record), so a height query reads it
+/// in the same look-up that finds the cell, and the posts it needs in one cache line.
 #[derive(Clone, Debug)]
-pub struct RefinedCell {
+pub struct CellLattice {
     /// Sub-cells per side of the whole cell (a power of two).
     pub split: u32,
     /// The window's south-west fine post (east, north), in sub-cells from the cell's corner.
     pub origin: (u32, u32),
     /// Fine posts along the window (east, north); at least 2 each.
     pub posts: (u32, u32),
-    /// The change at each fine post of the window, metres (rows south to north).
-    pub deltas_m: Vec<f32>,
+    /// Blocks along the window's east.
+    blocks_east: u32,
+    /// The split, the window's origin and its last sub-cell as floats, for the queries.
+    split_f: f64,
+    origin_f: (f64, f64),
+    last_f: (f64, f64),
+    /// The window's posts in overlapping blocks (rows of blocks south to north).
+    blocks: Arc<[PostBlock]>,
+}
+
+impl CellLattice {
+    /// The lattice of a window's posts (`changes_m`, rows south to north, each a multiple of
+    /// [`LATTICE_STEP_M`]: [`lattice_rounded_m`]).
+    fn new(split: u32, origin: (u32, u32), posts: (u32, u32), changes_m: &[f32]) -> CellLattice {
+        let (na, nb) = (posts.0 as usize, posts.1 as usize);
+        debug_assert_eq!(changes_m.len(), na * nb);
+        let (ea, eb) = (BLOCK_POSTS.0 - 1, BLOCK_POSTS.1 - 1);
+        let (blocks_east, blocks_north) = ((na - 1).div_ceil(ea), (nb - 1).div_ceil(eb));
+        let mut blocks = vec![PostBlock([0; 32]); blocks_east * blocks_north];
+        for (k, block) in blocks.iter_mut().enumerate() {
+            let (a0, b0) = ((k % blocks_east) * ea, (k / blocks_east) * eb);
+            for y in 0..BLOCK_POSTS.1 {
+                for x in 0..BLOCK_POSTS.0 {
+                    let (a, b) = (a0 + x, b0 + y);
+                    if a < na && b < nb {
+                        let steps = (changes_m[b * na + a] / LATTICE_STEP_M).round();
+                        block.0[y * BLOCK_POSTS.0 + x] =
+                            steps.clamp(f32::from(i16::MIN), f32::from(i16::MAX)) as i16;
+                    }
+                }
+            }
+        }
+        CellLattice {
+            split,
+            origin,
+            posts,
+            split_f: f64::from(split),
+            origin_f: (f64::from(origin.0), f64::from(origin.1)),
+            last_f: ((na - 1) as f64, (nb - 1) as f64),
+            blocks_east: blocks_east as u32,
+            blocks: blocks.into(),
+        }
+    }
+
+    /// The window's sub-cell under `(u, v)` in the cell (0 to 1 east and north) and the
+    /// fractions in it, or `None` outside the window.
+    #[inline(always)]
+    fn sub_cell(&self, u: f64, v: f64) -> Option<(usize, usize, f64, f64)> {
+        let fu = u * self.split_f - self.origin_f.0;
+        let fv = v * self.split_f - self.origin_f.1;
+        if !(fu >= 0.0 && fv >= 0.0 && fu <= self.last_f.0 && fv <= self.last_f.1) {
+            return None;
+        }
+        // The last sub-cell holds the window's far edges.
+        let a = fu.min(self.last_f.0 - 1.0) as usize;
+        let b = fv.min(self.last_f.1 - 1.0) as usize;
+        Some((a, b, fu - a as f64, fv - b as f64))
+    }
+
+    /// The block holding sub-cell `(a, b)` of the window and the index of its south-west post
+    /// in it.
+    #[inline(always)]
+    fn block_of(&self, a: usize, b: usize) -> (&PostBlock, usize) {
+        let (ea, eb) = (BLOCK_POSTS.0 - 1, BLOCK_POSTS.1 - 1);
+        let (p, q) = (a / ea, b / eb);
+        let block = &self.blocks[q * self.blocks_east as usize + p];
+        (block, (b - q * eb) * BLOCK_POSTS.0 + (a - p * ea))
+    }
+
+    /// The change at `(u, v)` in the cell (0 to 1 east and north), on the sub-cells split along
+    /// `diagonal`.
+    #[inline]
+    pub fn delta_m(&self, u: f64, v: f64, diagonal: Diagonal) -> f64 {
+        match self.sub_cell(u, v) {
+            Some((a, b, x, y)) => triangulated_height(self.corners(a, b), x, y, diagonal),
+            None => 0.0,
+        }
+    }
+
+    /// The slopes of the change per sub-cell (east, north) at `(u, v)`.
+    pub fn slopes(&self, u: f64, v: f64, diagonal: Diagonal) -> (f64, f64) {
+        match self.sub_cell(u, v) {
+            Some((a, b, x, y)) => triangulated_slopes(self.corners(a, b), x, y, diagonal),
+            None => (0.0, 0.0),
+        }
+    }
+
+    /// Asks the memory system for the posts [`CellLattice::delta_m`] reads at `(u, v)`
+    /// without waiting for them.
+    #[inline]
+    pub fn prefetch_posts(&self, u: f64, v: f64) {
+        if let Some((a, b, _, _)) = self.sub_cell(u, v) {
+            crate::hint::prefetch(self.block_of(a, b).0);
+        }
+    }
+
+    /// The changes at the corners of the window's sub-cell `(a, b)` (east, north), in
+    /// [`triangulated_height`]'s order.
+    #[inline]
+    pub fn corners(&self, a: usize, b: usize) -> [f32; 4] {
+        let (block, k) = self.block_of(a, b);
+        let e = BLOCK_POSTS.0;
+        [
+            block.0[k],
+            block.0[k + 1],
+            block.0[k + e],
+            block.0[k + e + 1],
+        ]
+        .map(|steps| f32::from(steps) * LATTICE_STEP_M)
+    }
+
+    /// The change at the window's post `(a, b)` (east, north).
+    pub fn post_m(&self, a: usize, b: usize) -> f32 {
+        let (na, nb) = (self.posts.0 as usize, self.posts.1 as usize);
+        let (a, b) = (a.min(na - 1), b.min(nb - 1));
+        // The sub-cell the post is a south-west corner of, or the last one.
+        let (sa, sb) = (a.min(na - 2), b.min(nb - 2));
+        let (block, k) = self.block_of(sa, sb);
+        let steps = block.0[k + (b - sb) * BLOCK_POSTS.0 + (a - sa)];
+        f32::from(steps) * LATTICE_STEP_M
+    }
+
+    /// Bytes the lattice's posts take.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of_val(&*self.blocks)
+    }
+}
+
+/// A finest cell carrying changes on a finer lattice over a window of it.
+#[derive(Clone, Debug)]
+pub struct RefinedCell {
+    pub lattice: CellLattice,
     /// Lowest and highest change in the window.
     pub min_m: f32,
     pub max_m: f32,
@@ -847,48 +1003,31 @@ pub struct RefinedCell {
 }
 
 impl RefinedCell {
-    /// The change at `(u, v)` in the cell (0 to 1 east and north), on the sub-cells split along
-    /// `diagonal`.
+    /// The change at `(u, v)` in the cell ([`CellLattice::delta_m`]).
     #[inline]
     pub fn delta_m(&self, u: f64, v: f64, diagonal: Diagonal) -> f64 {
-        let f = f64::from(self.split);
-        let fu = u * f - f64::from(self.origin.0);
-        let fv = v * f - f64::from(self.origin.1);
-        let (na, nb) = (self.posts.0 as usize, self.posts.1 as usize);
-        if !(fu >= 0.0 && fv >= 0.0 && fu <= (na - 1) as f64 && fv <= (nb - 1) as f64) {
-            return 0.0;
-        }
-        let a = (fu as usize).min(na - 2);
-        let b = (fv as usize).min(nb - 2);
-        triangulated_height(self.corners(a, b), fu - a as f64, fv - b as f64, diagonal)
+        self.lattice.delta_m(u, v, diagonal)
     }
 
-    /// The slopes of the change per sub-cell (east, north) at `(u, v)`.
+    /// The slopes of the change per sub-cell ([`CellLattice::slopes`]).
     pub fn slopes(&self, u: f64, v: f64, diagonal: Diagonal) -> (f64, f64) {
-        let f = f64::from(self.split);
-        let fu = u * f - f64::from(self.origin.0);
-        let fv = v * f - f64::from(self.origin.1);
-        let (na, nb) = (self.posts.0 as usize, self.posts.1 as usize);
-        if !(fu >= 0.0 && fv >= 0.0 && fu <= (na - 1) as f64 && fv <= (nb - 1) as f64) {
-            return (0.0, 0.0);
-        }
-        let a = (fu as usize).min(na - 2);
-        let b = (fv as usize).min(nb - 2);
-        triangulated_slopes(self.corners(a, b), fu - a as f64, fv - b as f64, diagonal)
+        self.lattice.slopes(u, v, diagonal)
     }
+}
 
-    /// The changes at the corners of the window's sub-cell `(a, b)` (east, north), in
-    /// [`triangulated_height`]'s order.
-    #[inline]
-    pub fn corners(&self, a: usize, b: usize) -> [f32; 4] {
-        let na = self.posts.0 as usize;
-        let k = b * na + a;
-        [
-            self.deltas_m[k],
-            self.deltas_m[k + 1],
-            self.deltas_m[k + na],
-            self.deltas_m[k + na + 1],
-        ]
+/// A refined cell as the layer keeps it: its lattice inline, the whole record shared.
+#[derive(Clone, Debug)]
+struct CellSlot {
+    lattice: CellLattice,
+    cell: Arc<RefinedCell>,
+}
+
+impl CellSlot {
+    fn new(cell: RefinedCell) -> CellSlot {
+        CellSlot {
+            lattice: cell.lattice.clone(),
+            cell: Arc::new(cell),
+        }
     }
 }
 
@@ -968,7 +1107,7 @@ pub struct EditLayer {
     post_spacing_m: f64,
     order: Vec<EditId>,
     entries: HashMap<EditId, Arc<Entry>>,
-    cells: CellMap<Arc<RefinedCell>>,
+    cells: CellMap<CellSlot>,
     /// Per finest tile (row, column): the highest change in it (0 or more) and the lowest
     /// (0 or less).
     tiles: CellMap<(f32, f32)>,
@@ -1072,26 +1211,73 @@ impl EditLayer {
         if self.cells.is_empty() {
             return None;
         }
-        self.cells.get(&key).map(|c| &**c)
+        self.cells.get(&key).map(|c| &*c.cell)
+    }
+
+    /// The lattice of the refined cell at a finest cell, if any: [`EditLayer::cell`]'s
+    /// changes, read without reaching the cell's record.
+    #[inline]
+    pub fn lattice(&self, key: CellKey) -> Option<&CellLattice> {
+        if self.cells.is_empty() {
+            return None;
+        }
+        self.cells.get(&key).map(|c| &c.lattice)
     }
 
     /// The refined cell at a finest cell as the layer shares it: the same `Arc` until the
     /// cell changes (an edit through it applied or healed), so a reader can keep what it
     /// made of the cell and remake it only when this changes.
     pub fn shared_cell(&self, key: CellKey) -> Option<&Arc<RefinedCell>> {
-        self.cells.get(&key)
+        self.cells.get(&key).map(|c| &c.cell)
+    }
+
+    /// Bytes the layer holds: its edits (records, laid-out shapes, a height patch's posts),
+    /// its refined cells (records, lattices, blocks' highest changes) and its indices; the
+    /// hash tables counted at their entries' size, not their spare capacity.
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of;
+        let edits: usize = self
+            .entries
+            .values()
+            .map(|e| {
+                let posts = match &e.edit.shape {
+                    EditShape::HeightPatch { deltas_m, .. } => 2 * deltas_m.len() * 4,
+                    _ => 0,
+                };
+                size_of::<EditId>() + 2 * size_of::<usize>() + size_of::<Entry>() + posts
+            })
+            .sum::<usize>()
+            + self.order.len() * size_of::<EditId>();
+        let cells: usize = self
+            .cells
+            .values()
+            .map(|slot| {
+                size_of::<CellKey>()
+                    + size_of::<CellSlot>()
+                    + 2 * size_of::<usize>()
+                    + size_of::<RefinedCell>()
+                    + slot.lattice.bytes()
+                    + slot.cell.block_max_m.len() * 4
+                    + slot.cell.edits.len() * size_of::<EditId>()
+            })
+            .sum();
+        let indices = self.blocks.iter().map(|b| b.len()).sum::<usize>()
+            * (size_of::<CellKey>() + 8)
+            + self.tile_members.values().map(|m| m.len()).sum::<usize>() * size_of::<CellKey>()
+            + self.tiles.len() * 3 * (size_of::<CellKey>() + 8);
+        edits + cells + indices
     }
 
     /// Every refined cell.
     pub fn cells(&self) -> impl Iterator<Item = (CellKey, &RefinedCell)> + '_ {
-        self.cells.iter().map(|(k, c)| (*k, &**c))
+        self.cells.iter().map(|(k, c)| (*k, &*c.cell))
     }
 
     /// What the edits through the finest cell `key` did to the ground at a point (exact
     /// shapes, before the lattice); nothing outside the refined cells.
     pub fn ground_marks(&self, key: CellKey, lat_deg: f64, lon_deg: f64) -> GroundMarks {
         let mut marks = GroundMarks::default();
-        let Some(cell) = self.cells.get(&key) else {
+        let Some(CellSlot { cell, .. }) = self.cells.get(&key) else {
             return marks;
         };
         for entry in cell.edits.iter().filter_map(|id| self.entries.get(id)) {
@@ -1246,12 +1432,9 @@ impl EditLayer {
         let mut touched = Vec::new();
         for ((r, c), _) in reached {
             {
-                let cell = self.cells.entry((r, c)).or_insert_with(|| {
-                    Arc::new(RefinedCell {
-                        split: 1,
-                        origin: (0, 0),
-                        posts: (2, 2),
-                        deltas_m: vec![0.0; 4],
+                let slot = self.cells.entry((r, c)).or_insert_with(|| {
+                    CellSlot::new(RefinedCell {
+                        lattice: CellLattice::new(1, (0, 0), (2, 2), &[0.0; 4]),
                         min_m: 0.0,
                         max_m: 0.0,
                         block_max_m: vec![0.0],
@@ -1259,7 +1442,7 @@ impl EditLayer {
                         edits: Vec::new(),
                     })
                 });
-                Arc::make_mut(cell).edits.push(id);
+                Arc::make_mut(&mut slot.cell).edits.push(id);
                 touched.push((r, c));
             }
         }
@@ -1294,8 +1477,8 @@ impl EditLayer {
         let mut touched = Vec::new();
         for r in r0..=r1 {
             for c in c0..=c1 {
-                if let Some(cell) = self.cells.get_mut(&(r, c)) {
-                    Arc::make_mut(cell).edits.retain(|k| *k != id);
+                if let Some(slot) = self.cells.get_mut(&(r, c)) {
+                    Arc::make_mut(&mut slot.cell).edits.retain(|k| *k != id);
                     touched.push((r, c));
                 }
             }
@@ -1313,7 +1496,11 @@ impl EditLayer {
         let mut changed_blocks: HashSet<CellKey> =
             touched.iter().map(|&(r, c)| (r / 2, c / 2)).collect();
         for key in touched {
-            if self.cells.get(&key).is_some_and(|c| c.edits.is_empty()) {
+            if self
+                .cells
+                .get(&key)
+                .is_some_and(|c| c.cell.edits.is_empty())
+            {
                 self.cells.remove(&key);
                 let tile = self.tile_of(key);
                 if let Some(members) = self.tile_members.get_mut(&tile) {
@@ -1330,15 +1517,15 @@ impl EditLayer {
         }
         for key in todo {
             if let Some(old) = self.cells.get(&key) {
-                let edits = old.edits.clone();
+                let edits = old.cell.edits.clone();
                 let split = self.own_split(&edits);
                 let coarser = edge_neighbours(key).map(|n| {
                     n.and_then(|n| self.cells.get(&n))
-                        .map(|c| self.own_split(&c.edits))
+                        .map(|c| self.own_split(&c.cell.edits))
                         .filter(|s| *s < split)
                 });
                 let cell = self.compute_cell(key, split, coarser, edits);
-                self.cells.insert(key, Arc::new(cell));
+                self.cells.insert(key, CellSlot::new(cell));
                 changed_blocks.insert((key.0 / 2, key.1 / 2));
                 let tile = self.tile_of(key);
                 let members = self.tile_members.entry(tile).or_default();
@@ -1353,9 +1540,9 @@ impl EditLayer {
             let mut range = (0.0f32, 0.0f32);
             if let Some(members) = self.tile_members.get(&tile) {
                 for key in members.iter() {
-                    if let Some(cell) = self.cells.get(key) {
-                        range.0 = range.0.max(cell.max_m);
-                        range.1 = range.1.min(cell.min_m);
+                    if let Some(slot) = self.cells.get(key) {
+                        range.0 = range.0.max(slot.cell.max_m);
+                        range.1 = range.1.min(slot.cell.min_m);
                     }
                 }
             }
@@ -1384,7 +1571,7 @@ impl EditLayer {
                     let r = if k == 0 {
                         self.cells
                             .get(&child)
-                            .map(|c| (c.max_m.max(0.0), c.min_m.min(0.0)))
+                            .map(|c| (c.cell.max_m.max(0.0), c.cell.min_m.min(0.0)))
                     } else {
                         self.blocks[k - 1].get(&child).copied()
                     };
@@ -1506,12 +1693,15 @@ impl EditLayer {
                     .iter()
                     .map(|e| e.local.delta_m(lat, lon))
                     .sum::<f64>();
-                deltas_m.push(d.clamp(-MAX_EDIT_HEIGHT_M, MAX_EDIT_HEIGHT_M) as f32);
+                // Kept in the lattice's steps.
+                deltas_m.push(lattice_rounded_m(
+                    d.clamp(-MAX_EDIT_HEIGHT_M, MAX_EDIT_HEIGHT_M) as f32,
+                ));
             }
         }
         // The T-junction map: along an edge shared with a coarser cell, the posts between
         // the coarser cell's take the line between those (outside the window the change is
-        // nothing, on both sides).
+        // nothing, on both sides), to within half the lattice's step.
         let (na_u, nb_u) = (na as usize, nb as usize);
         for (side, coarse) in coarser.iter().enumerate() {
             let Some(coarse) = *coarse else { continue };
@@ -1543,7 +1733,7 @@ impl EditLayer {
                         let w = off as f32 / k as f32;
                         (
                             first + i as usize * stride,
-                            value(lo) * (1.0 - w) + value(hi) * w,
+                            lattice_rounded_m(value(lo) * (1.0 - w) + value(hi) * w),
                         )
                     })
                 })
@@ -1577,10 +1767,7 @@ impl EditLayer {
             }
         }
         RefinedCell {
-            split,
-            origin: (a0, b0),
-            posts: (na, nb),
-            deltas_m,
+            lattice: CellLattice::new(split, (a0, b0), (na, nb), &deltas_m),
             min_m,
             max_m,
             block_max_m,
@@ -1718,7 +1905,7 @@ mod tests {
         assert!((layer.shape_delta_m(lat, lon) + 0.6).abs() < 1e-9);
         // Beyond the lip nothing changed.
         assert_eq!(layer.delta_m(lat + 3.0 / mn, lon), 0.0);
-        assert!(layer.cells().all(|(_, c)| c.split > 1));
+        assert!(layer.cells().all(|(_, c)| c.lattice.split > 1));
     }
 
     #[test]
@@ -1775,7 +1962,7 @@ mod tests {
         layer
             .apply(crater(2, lat + 40.0 * g.dlat_deg / 30.0, lon, 25.0, 2.0))
             .expect("big");
-        let splits: HashSet<u32> = layer.cells().map(|(_, c)| c.split).collect();
+        let splits: HashSet<u32> = layer.cells().map(|(_, c)| c.lattice.split).collect();
         assert!(splits.len() >= 2, "{splits:?}");
         // Along every shared edge the two cells give the same change.
         let mut edges = 0;
@@ -1800,21 +1987,23 @@ mod tests {
                             next.delta_m(t, 0.0, next_diag),
                         )
                     };
+                    // Within half the lattice's step: the T-junction map's posts lie on the
+                    // coarser edge to the step they are kept in.
                     assert!(
-                        (here - there).abs() < 1e-5,
+                        (here - there).abs() <= 0.5 * f64::from(LATTICE_STEP_M) + 1e-6,
                         "{:?} ({}) / {:?} ({}) at {t}: {here} vs {there}",
                         (r, c),
-                        cell.split,
+                        cell.lattice.split,
                         other,
-                        next.split
+                        next.lattice.split
                     );
                 }
             }
             // The window's border carries no change unless it is the cell's edge.
-            let (na, nb) = (cell.posts.0 as usize, cell.posts.1 as usize);
-            if cell.origin.0 > 0 {
+            let nb = cell.lattice.posts.1 as usize;
+            if cell.lattice.origin.0 > 0 {
                 for b in 0..nb {
-                    assert_eq!(cell.deltas_m[b * na], 0.0);
+                    assert_eq!(cell.lattice.post_m(0, b), 0.0);
                 }
             }
         }
@@ -1881,7 +2070,10 @@ mod tests {
         // A diagonal 2 km long crosses about 2 x 66 cells of 30 m (and their corners'
         // neighbours), not the 66 x 66 of its bounding box.
         assert!(cells < 400, "{cells} cells refined");
-        let posts: usize = layer.cells().map(|(_, c)| c.deltas_m.len()).sum();
+        let posts: usize = layer
+            .cells()
+            .map(|(_, c)| (c.lattice.posts.0 * c.lattice.posts.1) as usize)
+            .sum();
         assert!(
             posts as u64 <= MAX_EDIT_POSTS + MAX_EDIT_POSTS / 4,
             "{posts} posts"

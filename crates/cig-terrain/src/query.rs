@@ -47,7 +47,7 @@ use crate::cache::TileCache;
 use crate::culture::CULTURE_BLOCK_CELLS;
 use crate::culture_hit::{segment_entry, top_at, CultureHit, CultureIndex, CultureTest, ItemFrame};
 use crate::database::{GeoidLookup, LoadError, TerrainDatabase};
-use crate::edits::{EditLayer, RefinedCell, BLOCK_SUB_CELLS};
+use crate::edits::{CellLattice, EditLayer, RefinedCell, BLOCK_SUB_CELLS};
 use crate::material::Material;
 use crate::pyramid::{quadtree_index, PyramidLayout, TileKey};
 use crate::raster::{triangulated_height, triangulated_slopes, Diagonal};
@@ -376,14 +376,8 @@ impl QuerySession {
     pub fn height_msl_m(&mut self, lat_deg: f64, lon_deg: f64) -> Result<f64, QueryError> {
         self.refresh_edits();
         let cell = self.cell(lat_deg, lon_deg)?;
-        let tile = self.tiles.get(cell.key)?;
-        let diagonal = Tile::cell_diagonal(cell.i, cell.j);
-        let height =
-            triangulated_height(tile.cell_corners(cell.i, cell.j), cell.u, cell.v, diagonal);
-        Ok(match self.edits.cell(self.global_cell(&cell)) {
-            Some(refined) => height + refined.delta_m(cell.u, cell.v, diagonal),
-            None => height,
-        })
+        let lattice = self.edits.lattice(self.global_cell(&cell));
+        height_in_cell(&mut self.tiles, &cell, lattice)
     }
 
     /// The finest lattice's (row, column) of a cell.
@@ -397,26 +391,60 @@ impl QuerySession {
     }
 
     /// Heights above terrain of many points (a frame's worth of host requests), height only:
-    /// the same answers as [`QuerySession::hat_m`] one by one, with the memory of each point's
-    /// cell requested a few points ahead so that cache misses overlap.
+    /// the same answers as [`QuerySession::hat_m`] one by one, with the memory they read
+    /// requested ahead so that cache misses overlap: without edits, each point's cell a few
+    /// points ahead; with edits, in chunks: first every point's cell and the edits' posts
+    /// under it, then the answers.
     pub fn hat_batch_m(&mut self, points: &[Geodetic], out: &mut Vec<Result<f64, QueryError>>) {
         const AHEAD: usize = 8;
+        const CHUNK: usize = 32;
+        self.refresh_edits();
         out.clear();
         out.reserve(points.len());
-        for (k, p) in points.iter().enumerate() {
-            if let Some(next) = points.get(k + AHEAD) {
-                self.prefetch_cell(next.lat_deg, next.lon_deg);
+        if self.edits.is_empty() {
+            for (k, p) in points.iter().enumerate() {
+                if let Some(next) = points.get(k + AHEAD) {
+                    self.prefetch_cell(next.lat_deg, next.lon_deg);
+                }
+                out.push(self.hat_m(*p));
             }
-            out.push(self.hat_m(*p));
+            return;
+        }
+        let edits = Arc::clone(&self.edits);
+        let mut cells: [Option<(CellRef, Option<&CellLattice>)>; CHUNK] = [None; CHUNK];
+        for chunk in points.chunks(CHUNK) {
+            for (slot, p) in cells.iter_mut().zip(chunk) {
+                *slot = self.cell(p.lat_deg, p.lon_deg).ok().map(|cell| {
+                    self.prefetch_tile_cell(&cell);
+                    let lattice = edits.lattice(self.global_cell(&cell));
+                    if let Some(l) = lattice {
+                        l.prefetch_posts(cell.u, cell.v);
+                    }
+                    (cell, lattice)
+                });
+            }
+            for (slot, p) in cells.iter().zip(chunk) {
+                out.push(match slot {
+                    Some((cell, lattice)) => height_in_cell(&mut self.tiles, cell, *lattice)
+                        .map(|h| p.alt_m - h - self.geoid.undulation_m(p.lat_deg, p.lon_deg)),
+                    // The error the point's own query gives.
+                    None => self.hat_m(*p),
+                });
+            }
         }
     }
 
     /// Asks the memory system for the cell under a point without waiting for it.
     #[inline]
     fn prefetch_cell(&self, lat_deg: f64, lon_deg: f64) {
-        let Ok(cell) = self.cell(lat_deg, lon_deg) else {
-            return;
-        };
+        if let Ok(cell) = self.cell(lat_deg, lon_deg) {
+            self.prefetch_tile_cell(&cell);
+        }
+    }
+
+    /// Asks the memory system for a cell's posts without waiting for them.
+    #[inline(always)]
+    fn prefetch_tile_cell(&self, cell: &CellRef) {
         let slot = cell.key.row as usize * self.tiles.tile_cols + cell.key.col as usize;
         if let Some(Some(tile)) = self.tiles.slots.get(slot) {
             let base = cell.i * tile.posts_per_side + cell.j;
@@ -457,8 +485,8 @@ impl QuerySession {
         if let Some(refined) = self.edits.cell(global) {
             height += refined.delta_m(u, v, diagonal);
             let (du, dv) = refined.slopes(u, v, diagonal);
-            dh_du += du * f64::from(refined.split);
-            dh_dv += dv * f64::from(refined.split);
+            dh_du += du * f64::from(refined.lattice.split);
+            dh_dv += dv * f64::from(refined.lattice.split);
         }
         let (north_m_per_deg, east_m_per_deg) = cig_geo::metres_per_degree(lat_deg);
         let dx_m = g.dlon_deg * east_m_per_deg;
@@ -1351,6 +1379,23 @@ fn cell_hit(corners: [f32; 4], piece: &Piece, cx: f64, cy: f64, s0: f64, s1: f64
     )
 }
 
+/// The surface's height above mean sea level at a point of `cell`: the tile's triangulated
+/// height plus the edits' change where the cell is refined.
+#[inline(always)]
+fn height_in_cell(
+    tiles: &mut TileSlots,
+    cell: &CellRef,
+    refined: Option<&CellLattice>,
+) -> Result<f64, QueryError> {
+    let tile = tiles.get(cell.key)?;
+    let diagonal = Tile::cell_diagonal(cell.i, cell.j);
+    let height = triangulated_height(tile.cell_corners(cell.i, cell.j), cell.u, cell.v, diagonal);
+    Ok(match refined {
+        Some(refined) => height + refined.delta_m(cell.u, cell.v, diagonal),
+        None => height,
+    })
+}
+
 /// [`cell_hit`] on a refined cell (`crate::edits`): the cell's own triangles outside the
 /// refined window, the window's sub-cells (split along the cell's diagonal, carrying the cell's
 /// height plus the edits' change) inside it, in the order the piece meets them.
@@ -1364,12 +1409,15 @@ fn refined_cell_hit(
     s1: f64,
 ) -> Option<f64> {
     let diagonal = Diagonal::of_cell(cy as usize, cx as usize);
-    let f = f64::from(refined.split);
+    let f = f64::from(refined.lattice.split);
     let (ox, oy) = (
-        cx + f64::from(refined.origin.0) / f,
-        cy + f64::from(refined.origin.1) / f,
+        cx + f64::from(refined.lattice.origin.0) / f,
+        cy + f64::from(refined.lattice.origin.1) / f,
     );
-    let (na, nb) = (refined.posts.0 as usize, refined.posts.1 as usize);
+    let (na, nb) = (
+        refined.lattice.posts.0 as usize,
+        refined.lattice.posts.1 as usize,
+    );
     // The piece in the window's sub-cells.
     let fine = Piece {
         x0: (piece.x0 - ox) * f,
@@ -1398,8 +1446,8 @@ fn refined_cell_hit(
     let base = |a: usize, b: usize| {
         triangulated_height(
             corners,
-            (f64::from(refined.origin.0) + a as f64) / f,
-            (f64::from(refined.origin.1) + b as f64) / f,
+            (f64::from(refined.lattice.origin.0) + a as f64) / f,
+            (f64::from(refined.lattice.origin.1) + b as f64) / f,
             diagonal,
         ) as f32
     };
@@ -1407,7 +1455,10 @@ fn refined_cell_hit(
     let nudge = 1e-9 / (dx.abs() + dy.abs()).max(1.0);
     // The highest the cell's own triangles reach over a block of the window: at its corners
     // or where the cell's diagonal crosses its sides (the surface is linear on each side).
-    let (ox_f, oy_f) = (f64::from(refined.origin.0), f64::from(refined.origin.1));
+    let (ox_f, oy_f) = (
+        f64::from(refined.lattice.origin.0),
+        f64::from(refined.lattice.origin.1),
+    );
     let block_base_top = |a_lo: usize, a_hi: usize, b_lo: usize, b_hi: usize| -> f64 {
         let (x0, x1) = (ox_f + a_lo as f64, ox_f + a_hi as f64);
         let (y0, y1) = (oy_f + b_lo as f64, oy_f + b_hi as f64);
@@ -1467,7 +1518,7 @@ fn refined_cell_hit(
                     .exit(a as f64, a as f64 + 1.0, b as f64, b as f64 + 1.0, sc)
                     .min(block_out)
                     .max(sc + nudge);
-                let change = refined.corners(a, b);
+                let change = refined.lattice.corners(a, b);
                 let sub = [
                     base(a, b) + change[0],
                     base(a + 1, b) + change[1],
