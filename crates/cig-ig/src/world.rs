@@ -257,7 +257,13 @@ pub struct IgWorld {
     ship_motion: BTreeMap<u16, MadeGood>,
     /// The wakes of the ships under way on the sea this frame.
     wakes: Vec<cig_scene::sea::WakeDraw>,
+    /// The ships' sterns' past places, for their wakes to follow: this IG's ships by entity id,
+    /// the exercise's by `REMOTE_WAKE | remote_instance_id`.
+    wake_tracks: BTreeMap<u64, cig_scene::sea::WakeTrack>,
 }
+
+/// The exercise's ships' keys among the wakes' tracks.
+const REMOTE_WAKE: u64 = 1 << 32;
 
 /// A scenario smoke source and the plume it runs.
 struct SmokeState {
@@ -390,6 +396,7 @@ impl IgWorld {
             remote_afloat: BTreeMap::new(),
             ship_motion: BTreeMap::new(),
             wakes: Vec::new(),
+            wake_tracks: BTreeMap::new(),
         })
     }
 
@@ -1718,8 +1725,10 @@ impl IgWorld {
         self.remote_afloat.clear();
         self.wakes.clear();
         let (Some(sea), Some(x)) = (self.session.sea(), &self.exercise) else {
+            self.wake_tracks.retain(|key, _| *key < REMOTE_WAKE);
             return;
         };
+        let mut tracked = BTreeSet::new();
         // Around the views' eyes and the database (a caller's own view lies near it).
         let (lat_deg, lon_deg) = query.cache().database().layout().grid.centre_deg();
         let centre = Geodetic::new(lat_deg, lon_deg, 0.0);
@@ -1758,16 +1767,21 @@ impl IgWorld {
                 [v.x, v.y],
                 level,
             );
-            // Its wake, from the same velocity.
+            // Its wake, from the same velocity, along the track it made.
             let course_deg = v.x.atan2(v.y).to_degrees().rem_euclid(360.0);
-            self.wakes.extend(cig_scene::sea::WakeDraw::of_ship(
-                model,
-                pose.position,
-                course_deg,
-                v.x.hypot(v.y),
-            ));
+            let key = REMOTE_WAKE | u64::from(remote_instance_id(r.key));
+            if let Some(wake) =
+                cig_scene::sea::WakeDraw::of_ship(model, pose.position, course_deg, v.x.hypot(v.y))
+            {
+                let track = self.wake_tracks.entry(key).or_default();
+                track.record(self.monotonic_s, wake.stern());
+                tracked.insert(key);
+                self.wakes.push(wake.following(track, self.monotonic_s));
+            }
             self.remote_afloat.insert(remote_instance_id(r.key), pose);
         }
+        self.wake_tracks
+            .retain(|key, _| *key < REMOTE_WAKE || tracked.contains(key));
     }
 
     /// This IG's own ships on the sea: their speed and course made good (sampled at least
@@ -1775,6 +1789,7 @@ impl IgWorld {
     fn track_own_ships(&mut self, query: &mut QuerySession) {
         if self.session.sea().is_none() {
             self.ship_motion.clear();
+            self.wake_tracks.retain(|key, _| *key >= REMOTE_WAKE);
             self.session.set_ship_velocities(BTreeMap::new());
             return;
         }
@@ -1819,14 +1834,17 @@ impl IgWorld {
                     ..at_rest
                 };
             }
-            self.wakes.extend(cig_scene::sea::WakeDraw::of_ship(
-                &e.model,
-                p,
-                entry.course_deg,
-                entry.speed_mps,
-            ));
+            if let Some(wake) =
+                cig_scene::sea::WakeDraw::of_ship(&e.model, p, entry.course_deg, entry.speed_mps)
+            {
+                let track = self.wake_tracks.entry(u64::from(*id)).or_default();
+                track.record(now, wake.stern());
+                self.wakes.push(wake.following(track, now));
+            }
         }
         self.ship_motion.retain(|id, _| seen.contains(id));
+        self.wake_tracks
+            .retain(|key, _| *key >= REMOTE_WAKE || seen.contains(&(*key as u16)));
         let velocities = self
             .ship_motion
             .iter()

@@ -774,6 +774,17 @@ fn the_search_over_the_waves_finds_the_first_crest_a_dense_march_finds() {
     }
 }
 
+/// A 64 x 48 view from 100 m over a point.
+fn small_view_over(lat: f64, lon: f64) -> View {
+    View {
+        eye: Geodetic::new(lat, lon, 100.0),
+        orientation: Hpr::default(),
+        fov: FovDeg::symmetric(60.0, 45.0),
+        width_px: 64,
+        height_px: 48,
+    }
+}
+
 #[test]
 fn a_ship_under_way_leaves_a_wake_along_its_course_at_its_speed() {
     let (lat, lon) = at_post(32.0, 20.0);
@@ -785,19 +796,13 @@ fn a_ship_under_way_leaves_a_wake_along_its_course_at_its_speed() {
     );
     let mut q = query();
     let mut w = world_with(&scenario, false);
-    let fallback = View {
-        eye: Geodetic::new(lat, lon, 100.0),
-        orientation: Hpr::default(),
-        fov: FovDeg::symmetric(60.0, 45.0),
-        width_px: 64,
-        height_px: 48,
-    };
+    let fallback = small_view_over(lat, lon);
     for _ in 0..120 {
         w.step(1.0 / 60.0, &mut q);
     }
     let snapshot = w.snapshot(64, 48, &fallback);
     assert_eq!(snapshot.wakes.len(), 1, "{:?}", snapshot.wakes);
-    let wake = snapshot.wakes[0];
+    let wake = &snapshot.wakes[0];
     assert!((wake.speed_mps - 8.0).abs() < 0.4, "{wake:?}");
     let course_error = (wake.heading_deg - 270.0 + 180.0).rem_euclid(360.0) - 180.0;
     assert!(course_error.abs() < 2.0, "{wake:?}");
@@ -818,4 +823,62 @@ fn a_ship_under_way_leaves_a_wake_along_its_course_at_its_speed() {
         w.step(1.0 / 60.0, &mut q);
     }
     assert!(w.snapshot(64, 48, &fallback).wakes.is_empty());
+}
+
+#[test]
+fn a_ship_that_turned_leaves_its_wake_along_the_track_it_made() {
+    // West 25 s at 8 m/s (200 m), then north: the wake's track bends round the corner.
+    let (lat, lon) = at_post(20.0, 20.0);
+    let (corner_lat, corner_lon) = at_post(20.0, 20.0 - 200.0 / SPACING_M);
+    let (north_lat, north_lon) = at_post(40.0, 20.0 - 200.0 / SPACING_M);
+    let scenario = format!(
+        "start_time = \"2026-06-21T12:00:00Z\"\n[sea]\nsea_state = 2\n\
+         [[entities]]\nid = 1\nmodel = \"patrol_craft\"\nlat_deg = {lat}\nlon_deg = {lon}\n\
+         clamp = \"height_and_attitude\"\nspeed_mps = 8\n\
+         path = [[{corner_lat}, {corner_lon}], [{north_lat}, {north_lon}]]\n"
+    );
+    let mut q = query();
+    let mut w = world_with(&scenario, false);
+    let fallback = small_view_over(lat, lon);
+    // 45 s: the corner at 25 s, then 20 s north.
+    for _ in 0..450 {
+        w.step(0.1, &mut q);
+    }
+    let snapshot = w.snapshot(64, 48, &fallback);
+    assert_eq!(snapshot.wakes.len(), 1, "{:?}", snapshot.wakes);
+    let wake = &snapshot.wakes[0];
+    let course_error = (wake.heading_deg + 180.0).rem_euclid(360.0) - 180.0;
+    assert!(course_error.abs() < 3.0, "heading north: {wake:?}");
+    assert!(wake.track.len() >= 4, "{:?}", wake.track);
+    let frame = EnuFrame::new(wake.stern());
+    let places: Vec<(glam::DVec3, f64)> = wake
+        .track
+        .iter()
+        .map(|(p, age)| (frame.geodetic_to_enu(*p), *age))
+        .collect();
+    // Newest first, each older; the newest on the present leg (straight astern, south), the
+    // oldest before the corner: east of the northward leg, where the ship came from.
+    assert!(places.windows(2).all(|p| p[1].1 > p[0].1), "{places:?}");
+    let (newest, _) = places[0];
+    assert!(newest.x.abs() < 3.0 && newest.y <= 0.5, "{places:?}");
+    let (oldest, oldest_age) = places[places.len() - 1];
+    assert!(oldest_age > 20.0, "{places:?}");
+    assert!(
+        oldest.x > 50.0,
+        "the track before the corner lies east: {places:?}"
+    );
+    // A straight course's wake has its track straight astern.
+    let straight = scenario.replace(&format!(", [{north_lat}, {north_lon}]"), "");
+    let mut w = world_with(&straight, false);
+    for _ in 0..200 {
+        w.step(0.1, &mut q);
+    }
+    let snapshot = w.snapshot(64, 48, &fallback);
+    let wake = &snapshot.wakes[0];
+    let frame = EnuFrame::new(wake.stern());
+    for (p, _) in &wake.track {
+        let at = frame.geodetic_to_enu(*p);
+        // West-bound: astern is east, on the line.
+        assert!(at.y.abs() < 2.0 && at.x >= -0.5, "{at}");
+    }
 }

@@ -1,7 +1,7 @@
 //! The GPU device: adapter choice (hardware first, then a software rasteriser such as Mesa's
 //! lavapipe), and errors when there is none.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Why rendering could not start or go on.
 #[derive(Debug, thiserror::Error)]
@@ -46,6 +46,15 @@ pub struct Gpu {
     pub info: wgpu::AdapterInfo,
     /// True when the device can time GPU work (timestamp queries).
     pub timestamps: bool,
+    /// The errors the device reported outside any error scope since they were last taken.
+    errors: Arc<Mutex<GpuErrors>>,
+}
+
+/// Errors a device reported: how many, and the first one's text.
+#[derive(Debug, Default)]
+struct GpuErrors {
+    count: u64,
+    first: Option<String>,
 }
 
 impl Gpu {
@@ -131,9 +140,18 @@ impl Gpu {
             adapter: info.name.clone(),
             reason: e.to_string(),
         })?;
-        // wgpu's default handler panics on a validation error; a frame that fails is logged.
-        device.on_uncaptured_error(std::sync::Arc::new(|error| {
+        // wgpu's default handler panics on a validation error. A live frame that fails is
+        // logged and the IG goes on; the error is also kept, so a one-shot picture
+        // (`cig render`) can refuse to write what the GPU rejected ([`Gpu::take_errors`]).
+        let errors = Arc::new(Mutex::new(GpuErrors::default()));
+        let kept = Arc::clone(&errors);
+        device.on_uncaptured_error(Arc::new(move |error| {
             tracing::error!("GPU error: {error}");
+            let mut kept = kept
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            kept.count += 1;
+            kept.first.get_or_insert_with(|| error.to_string());
         }));
         tracing::info!(adapter = %info.name, backend = ?info.backend, "GPU device ready");
         Ok(Arc::new(Gpu {
@@ -143,7 +161,20 @@ impl Gpu {
             queue,
             info,
             timestamps,
+            errors,
         }))
+    }
+
+    /// The errors the device reported outside any error scope (a shader or pipeline the
+    /// driver refused, a command recorded wrongly) since the last call: how many, and the
+    /// first one's text; `None` when there were none.
+    pub fn take_errors(&self) -> Option<(u64, String)> {
+        let mut errors = self
+            .errors
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let taken = std::mem::take(&mut *errors);
+        (taken.count > 0).then(|| (taken.count, taken.first.unwrap_or_default()))
     }
 
     /// "name (backend, type)" for logs and statistics.

@@ -24,8 +24,9 @@
 //! the eye for the whole view (where it differs by more than half a metre the cut leaves the
 //! posts drawn); the earth's curvature is its Gaussian radius at the eye (the posts' true
 //! curvature differs by up to 0.35 % with direction: half a metre at about 40 km); no
-//! refraction of what lies below the surface, no shadows on the water; wakes lie along the
-//! ships' present course.
+//! refraction of what lies below the surface, no shadows on the water; a wake's turbulent foam
+//! follows its stern's last 40 s in chords 5 s apart and goes on straight beyond (the bow wave
+//! and the Kelvin arms lie on the present course).
 
 use crate::gpu::Gpu;
 use crate::pass::uniform_entry;
@@ -47,7 +48,7 @@ pub const MAX_EXPLICIT_WAVES: usize = 8;
 pub const MAX_WAKES: usize = 8;
 
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct SeaUniform {
     /// ECEF east at the eye; w: rings.
     east: [f32; 4],
@@ -75,7 +76,25 @@ struct SeaUniform {
     /// course (east, north); then speed (m/s), length and beam (m), the arms' half-angle
     /// (radians); then the foam made (0..1), its e-folding time (s).
     wakes: [[f32; 4]; 3 * MAX_WAKES],
+    /// Per wake, [`WAKE_POINTS`] points of its turbulent wake's centreline from the stern
+    /// astern: place relative to the eye (east, north, metres), the foam's age (s) and the
+    /// wake's width (m) there; the last carries the track on straight to where the foam is
+    /// gone.
+    wake_tracks: [[f32; 4]; WAKE_POINTS * MAX_WAKES],
 }
+
+/// Points of a wake's centreline in the uniform: the stern, its past places, the straight end.
+const WAKE_POINTS: usize = cig_scene::sea::WAKE_TRACK_POINTS + 2;
+
+/// A wake's centreline as the uniform holds it (`SeaUniform::wake_tracks`).
+type WakeLine = [[f32; 4]; WAKE_POINTS];
+
+// sea.wgsl indexes a wake's centreline by 10 and holds 8 wakes' of them.
+const _: () = assert!(WAKE_POINTS == 10 && WAKE_POINTS * MAX_WAKES == 80);
+
+/// The straight end of a wake's centreline reaches this many foam e-folding times past its
+/// last place (under 2 % of the foam is left there).
+const WAKE_END_E_FOLDINGS: f64 = 4.0;
 
 /// The sea's GPU state: three texture arrays (displacement, LEAN slopes, displacement
 /// gradient), one layer per cascade, rebuilt when the cascades' size changes.
@@ -290,7 +309,7 @@ impl SeaPass {
             ],
             water: [sea.water_rgb[0], sea.water_rgb[1], sea.water_rgb[2], 0.0],
             thermal: [(sea.water_temperature_c + 273.15) as f32, 0.0, 0.0, 0.0],
-            ..SeaUniform::default()
+            ..bytemuck::Zeroable::zeroed()
         };
         // The highest explicit waves, their phases worked out at the eye in double precision.
         let mut explicit: Vec<_> = sea.explicit_waves.iter().collect();
@@ -314,8 +333,9 @@ impl SeaPass {
                 0.0,
             ];
         }
-        // The nearest wakes, their sterns relative to the eye in its east and north.
-        let mut near: Vec<(f64, [[f32; 4]; 3])> = wakes
+        // The nearest wakes, their sterns relative to the eye in its east and north, and
+        // their centrelines astern along the sterns' past places.
+        let mut near: Vec<(f64, [[f32; 4]; 3], WakeLine)> = wakes
             .iter()
             .map(|w| {
                 let centre = here.geodetic_to_enu(w.position);
@@ -324,6 +344,7 @@ impl SeaPass {
                     centre.x - s * 0.5 * w.length_m,
                     centre.y - c * 0.5 * w.length_m,
                 ];
+                let (line, points) = wake_centreline(&here, w, stern, [s, c]);
                 (
                     stern[0].hypot(stern[1]),
                     [
@@ -337,18 +358,25 @@ impl SeaPass {
                         [
                             w.foam_generation as f32,
                             w.foam_e_folding_s as f32,
-                            0.0,
+                            points as f32,
                             0.0,
                         ],
                     ],
+                    line,
                 )
             })
             .collect();
         near.sort_by(|a, b| a.0.total_cmp(&b.0));
         near.truncate(MAX_WAKES);
         uniform.thermal[1] = near.len() as f32;
-        for (slots, (_, wake)) in uniform.wakes.chunks_exact_mut(3).zip(near) {
+        for ((slots, line_slots), (_, wake, line)) in uniform
+            .wakes
+            .chunks_exact_mut(3)
+            .zip(uniform.wake_tracks.chunks_exact_mut(WAKE_POINTS))
+            .zip(near)
+        {
             slots.copy_from_slice(&wake);
+            line_slots.copy_from_slice(&line);
         }
         for (slot, grid) in uniform.cascades.iter_mut().zip(cascades) {
             let frac = |x: f64| (x / grid.tile_m).rem_euclid(1.0) as f32;
@@ -519,4 +547,59 @@ impl MipScratch {
             side = next;
         }
     }
+}
+
+/// A wake's turbulent centreline for the shader, relative to the eye (`here`): the stern now
+/// (age 0), the stern's past places newer than where the foam is gone, then a straight end
+/// along the last piece (or astern along the course, `course` its sine and cosine, when there
+/// is no track) out to [`WAKE_END_E_FOLDINGS`] foam e-folding times. The points used.
+fn wake_centreline(
+    here: &cig_geo::EnuFrame,
+    wake: &cig_scene::sea::WakeDraw,
+    stern: [f64; 2],
+    course: [f64; 2],
+) -> (WakeLine, usize) {
+    let mut points: Vec<([f64; 2], f64)> = vec![(stern, 0.0)];
+    for &(place, age_s) in &wake.track {
+        let at = here.geodetic_to_enu(place);
+        let (last, last_age) = points[points.len() - 1];
+        // Past places at the stern's own (the newest just taken) or not older add nothing.
+        if age_s > last_age && (at.x - last[0]).hypot(at.y - last[1]) > 0.5 {
+            points.push(([at.x, at.y], age_s));
+        }
+        if points.len() == WAKE_POINTS - 1 {
+            break;
+        }
+    }
+    let (last, last_age) = points[points.len() - 1];
+    let direction = match points.len() {
+        1 => [-course[0], -course[1]],
+        n => {
+            let (before, _) = points[n - 2];
+            let d = [last[0] - before[0], last[1] - before[1]];
+            let length = d[0].hypot(d[1]).max(1e-9);
+            [d[0] / length, d[1] / length]
+        }
+    };
+    let end_s = WAKE_END_E_FOLDINGS * wake.foam_e_folding_s;
+    let reach_m = wake.speed_mps.max(0.5) * end_s;
+    points.push((
+        [
+            last[0] + direction[0] * reach_m,
+            last[1] + direction[1] * reach_m,
+        ],
+        last_age + end_s,
+    ));
+    // The turbulent wake is a beam wide at the stern and widens as s^(1/5) along it.
+    let mut line: WakeLine = [[0.0; 4]; WAKE_POINTS];
+    let mut along_m = 0.0;
+    let mut previous = stern;
+    for (slot, (at, age_s)) in line.iter_mut().zip(&points) {
+        along_m += (at[0] - previous[0]).hypot(at[1] - previous[1]);
+        previous = *at;
+        let beam_m = wake.beam_m.max(0.1);
+        let width_m = beam_m * (along_m / beam_m).max(1.0).powf(0.2);
+        *slot = [at[0] as f32, at[1] as f32, *age_s as f32, width_m as f32];
+    }
+    (line, points.len())
 }

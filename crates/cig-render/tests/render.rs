@@ -1417,3 +1417,22 @@ fn fresh_craters_are_scorched_and_track_marks_fade() {
         "{marked} px changed where the fresh tracks are"
     );
 }
+
+#[test]
+fn a_gpu_error_is_kept_until_taken() {
+    // A device of its own: the shared one's errors belong to the other tests.
+    let gpu = cig_render::Gpu::headless().expect("a GPU adapter (install mesa-vulkan-drivers)");
+    assert_eq!(gpu.take_errors(), None);
+    // A buffer mapped both for reading and for writing: refused without a feature the IG never
+    // asks for.
+    let _refused = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("refused"),
+        size: 16,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::MAP_WRITE,
+        mapped_at_creation: false,
+    });
+    let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+    let (count, first) = gpu.take_errors().expect("the error is kept");
+    assert!(count >= 1 && !first.is_empty(), "{count}: {first}");
+    assert_eq!(gpu.take_errors(), None, "taken once");
+}

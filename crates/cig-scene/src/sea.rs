@@ -127,9 +127,10 @@ pub fn ride_the_sea(
     entity.orientation.roll_deg = motion.roll_deg;
 }
 
-/// A ship's wake as the sea draws it (`cig_sea::wake`): the Kelvin arms from the bow, the bow
-/// wave and the foam of the turbulent wake astern, on a straight course.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A ship's wake as the sea draws it (`cig_sea::wake`): the Kelvin arms from the bow and the
+/// bow wave on the present course, and the foam of the turbulent wake astern along the stern's
+/// past track (straight on where the track ends).
+#[derive(Clone, Debug, PartialEq)]
 pub struct WakeDraw {
     /// The ship's reference point (the middle of its waterline), above the ellipsoid.
     pub position: Geodetic,
@@ -144,6 +145,60 @@ pub struct WakeDraw {
     pub foam_generation: f64,
     /// The foam's e-folding time, seconds.
     pub foam_e_folding_s: f64,
+    /// The stern's past places, newest first, each with its age (seconds): the turbulent
+    /// wake follows them ([`WakeTrack`]). Empty: astern along the present course.
+    pub track: Vec<(Geodetic, f64)>,
+}
+
+/// Most past places of a stern a wake keeps ([`WakeTrack`]).
+pub const WAKE_TRACK_POINTS: usize = 8;
+/// A stern's past places are kept this far apart in time, seconds: eight cover the last 40 s
+/// of a turn, where its foam is the brightest, in chords of at most 15 degrees of the
+/// tightest turn (3 degrees a second: they sag under 2 m from a 190 m circle); the foam older
+/// than that is drawn on along the last chord.
+pub const WAKE_TRACK_SPACING_S: f64 = 5.0;
+
+/// A ship's stern's past places, for its wake to follow the track it made: one every
+/// [`WAKE_TRACK_SPACING_S`], at most [`WAKE_TRACK_POINTS`]; forgotten when the ship jumps
+/// (moved faster than any ship) or was not seen for a while.
+#[derive(Clone, Debug, Default)]
+pub struct WakeTrack {
+    /// (time in seconds of the caller's clock, the stern's place), newest first.
+    points: std::collections::VecDeque<(f64, Geodetic)>,
+}
+
+/// A stern that moved faster than this between two of its places jumped, m/s.
+const WAKE_TRACK_JUMP_MPS: f64 = 60.0;
+
+impl WakeTrack {
+    /// Notes the stern's place at `now_s` (the caller's monotonic clock).
+    pub fn record(&mut self, now_s: f64, stern: Geodetic) {
+        if let Some(&(then_s, place)) = self.points.front() {
+            let dt_s = now_s - then_s;
+            let moved_m = cig_geo::EnuFrame::new(place)
+                .geodetic_to_enu(stern)
+                .truncate()
+                .length();
+            // Written so that a NaN place or time starts the track again.
+            let plausible = (0.0..=3.0 * WAKE_TRACK_SPACING_S).contains(&dt_s)
+                && (0.0..=WAKE_TRACK_JUMP_MPS * dt_s + 5.0).contains(&moved_m);
+            if !plausible {
+                self.points.clear();
+            } else if dt_s < WAKE_TRACK_SPACING_S {
+                return;
+            }
+        }
+        self.points.push_front((now_s, stern));
+        self.points.truncate(WAKE_TRACK_POINTS);
+    }
+
+    /// The places with their ages at `now_s`, newest first, for [`WakeDraw::track`].
+    pub fn drawn(&self, now_s: f64) -> Vec<(Geodetic, f64)> {
+        self.points
+            .iter()
+            .map(|&(then_s, place)| (place, (now_s - then_s).max(0.0)))
+            .collect()
+    }
 }
 
 /// Ships under way slower than this leave no wake drawn, m/s (about 1 knot).
@@ -174,7 +229,59 @@ impl WakeDraw {
                 .ok()?,
             foam_generation: cig_sea::wake::foam_generation(speed_mps).ok()?,
             foam_e_folding_s: cig_sea::wake::DEFAULT_FOAM_E_FOLDING_S,
+            track: Vec::new(),
         })
+    }
+
+    /// The middle of the stern's waterline: half a length astern of the reference point along
+    /// the course.
+    pub fn stern(&self) -> Geodetic {
+        let frame = cig_geo::EnuFrame::new(self.position);
+        let (s, c) = self.heading_deg.to_radians().sin_cos();
+        let half = 0.5 * self.length_m;
+        frame.enu_to_geodetic(glam::DVec3::new(-s * half, -c * half, 0.0))
+    }
+
+    /// This wake as a ship's that has been turning at `turn_deg_s` (positive to starboard) at
+    /// its present speed: its stern's past places on that circle, one every
+    /// [`WAKE_TRACK_SPACING_S`] (a single picture's stand-in for the track a running IG
+    /// records with [`WakeTrack`]).
+    pub fn turning(mut self, turn_deg_s: f64) -> WakeDraw {
+        if !turn_deg_s.is_finite() {
+            return self;
+        }
+        let frame = cig_geo::EnuFrame::new(self.position);
+        let omega = turn_deg_s.to_radians();
+        const STEP_S: f64 = 0.5;
+        let (mut east_m, mut north_m, mut age_s) = (0.0, 0.0, 0.0);
+        let mut heading = self.heading_deg.to_radians();
+        let mut track = Vec::with_capacity(WAKE_TRACK_POINTS);
+        for k in 1..=WAKE_TRACK_POINTS {
+            // Back along the circle: each half second the ship came along its heading at the
+            // middle of it.
+            while age_s < k as f64 * WAKE_TRACK_SPACING_S - 1e-9 {
+                let middle = heading - 0.5 * omega * STEP_S;
+                east_m -= self.speed_mps * middle.sin() * STEP_S;
+                north_m -= self.speed_mps * middle.cos() * STEP_S;
+                heading -= omega * STEP_S;
+                age_s += STEP_S;
+            }
+            let then = WakeDraw {
+                position: frame.enu_to_geodetic(glam::DVec3::new(east_m, north_m, 0.0)),
+                heading_deg: heading.to_degrees(),
+                track: Vec::new(),
+                ..self.clone()
+            };
+            track.push((then.stern(), age_s));
+        }
+        self.track = track;
+        self
+    }
+
+    /// This wake following `track`'s past places of its stern at `now_s`.
+    pub fn following(mut self, track: &WakeTrack, now_s: f64) -> WakeDraw {
+        self.track = track.drawn(now_s);
+        self
     }
 }
 
@@ -191,6 +298,84 @@ pub fn slope_variance(grid: &CascadeGrid) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn destroyer(heading_deg: f64) -> WakeDraw {
+        WakeDraw::of_ship(
+            "destroyer",
+            Geodetic::new(36.0, -121.0, 0.0),
+            heading_deg,
+            10.0,
+        )
+        .expect("a wake")
+    }
+
+    #[test]
+    fn a_wake_track_keeps_the_sterns_places_apart_and_forgets_a_jump() {
+        let mut track = WakeTrack::default();
+        let wake = destroyer(0.0);
+        let frame = cig_geo::EnuFrame::new(wake.stern());
+        // North at 10 m/s, noted every frame for 100 s.
+        for k in 0..=6000 {
+            let t = f64::from(k) / 60.0;
+            track.record(
+                t,
+                frame.enu_to_geodetic(glam::DVec3::new(0.0, 10.0 * t, 0.0)),
+            );
+        }
+        let drawn = track.drawn(100.0);
+        assert_eq!(drawn.len(), WAKE_TRACK_POINTS);
+        for (k, (place, age_s)) in drawn.iter().enumerate() {
+            assert!(
+                (age_s - k as f64 * WAKE_TRACK_SPACING_S).abs() < 0.02,
+                "{drawn:?}"
+            );
+            let north = frame.geodetic_to_enu(*place).y;
+            assert!((north - 10.0 * (100.0 - age_s)).abs() < 0.01, "{north}");
+        }
+        // A jump of a kilometre in a frame starts the track again.
+        track.record(
+            100.02,
+            frame.enu_to_geodetic(glam::DVec3::new(1000.0, 1000.0, 0.0)),
+        );
+        assert_eq!(track.drawn(100.02).len(), 1);
+        // So does a clock gone back.
+        track.record(50.0, wake.stern());
+        assert_eq!(track.drawn(50.0).len(), 1);
+    }
+
+    #[test]
+    fn a_turning_ships_wake_lies_on_its_circle_and_a_steady_ones_straight_astern() {
+        let frame = cig_geo::EnuFrame::new(destroyer(0.0).stern());
+        let straight = destroyer(0.0).turning(0.0);
+        assert_eq!(straight.track.len(), WAKE_TRACK_POINTS);
+        for (place, age_s) in &straight.track {
+            let at = frame.geodetic_to_enu(*place);
+            assert!(
+                at.x.abs() < 0.01 && (at.y + 10.0 * age_s).abs() < 0.05,
+                "{at}"
+            );
+        }
+        // Turning to starboard at 3 degrees a second it came from the south-east (heading
+        // north-west before): its circle's radius is V / omega about a centre to starboard
+        // (east of the ship), and the stern's past places keep their distance from it.
+        let turning = destroyer(0.0).turning(3.0);
+        let radius_m = 10.0 / 3f64.to_radians();
+        let ship = frame.geodetic_to_enu(turning.position);
+        let centre = [ship.x + radius_m, ship.y];
+        let half = 0.5 * turning.length_m;
+        for (place, _) in &turning.track {
+            let at = frame.geodetic_to_enu(*place);
+            let r = (at.x - centre[0]).hypot(at.y - centre[1]);
+            // The stern lies half a length astern along the tangent, just off the circle.
+            assert!(
+                (r - radius_m.hypot(half)).abs() < 0.5,
+                "{r} against {radius_m}"
+            );
+            assert!(at.x > ship.x + 0.01, "{at}");
+        }
+        assert!(turning.track.iter().all(|(_, a)| a.is_finite()));
+        assert!(destroyer(0.0).turning(f64::NAN).track.is_empty());
+    }
     use cig_sea::spectrum::SeaConditions;
     use cig_sea::surface::SurfaceConfig;
 

@@ -33,7 +33,8 @@
 //!   `width = B · max(1, s / B)^(1/5)` at a distance `s` astern (Tennekes & Lumley, *A First
 //!   Course in Turbulence*, 1972, ch. 4); across it the coverage falls as
 //!   `(1 − (2 d / width)²)²`. [`FoamTrail::coverage`] follows the ship's recorded track, so
-//!   a turning ship leaves a curved trail; [`wake_intensity`] assumes a straight course.
+//!   a turning ship leaves a curved trail (the renderer's foam follows the stern's past places
+//!   the same way, `cig-scene::sea::WakeTrack`); [`wake_intensity`] assumes a straight course.
 //!
 //! Limits: deep water (no finite-depth wake, which widens near depth Froude number 1); calm
 //! water (the ambient sea is added by the renderer); no wave-wave interaction, no wake of

@@ -1010,9 +1010,10 @@ pub struct RenderArgs {
     /// Draw the terrain as a wireframe.
     #[arg(long)]
     pub wireframe: bool,
-    /// Entities "MODEL,LAT,LON,ALT[,HEADING[,clamp][,speed=MPS]]" (altitude above the
-    /// ellipsoid, or above the terrain with "clamp"; a ship under way at speed MPS leaves its
-    /// wake on the sea); built-in models: tank, truck, destroyer (or ship), merchant,
+    /// Entities "MODEL,LAT,LON,ALT[,HEADING[,clamp][,speed=MPS][,turn=DEG_S]]" (altitude
+    /// above the ellipsoid, or above the terrain with "clamp"; a ship under way at speed MPS
+    /// leaves its wake on the sea, along the circle it has been turning on at DEG_S degrees a
+    /// second, positive to starboard); built-in models: tank, truck, destroyer (or ship), merchant,
     /// patrol_craft, building, tree (ships float on the sea with --sea-state or --sea-wind);
     /// or a glTF file path as MODEL.
     #[arg(long = "entity", value_name = "SPEC", allow_hyphen_values = true)]

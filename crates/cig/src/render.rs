@@ -85,10 +85,12 @@ pub fn parse_view(eye: &str, hpr: &str, fov: &str, size: &str) -> anyhow::Result
 }
 
 /// Parses "MODEL,LAT,LON,ALT[,HEADING[,clamp]]".
-pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<(EntitySpec, f64)> {
+pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<(EntitySpec, EntityMotion)> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    if parts.len() < 4 || parts.len() > 7 {
-        bail!("--entity \"{text}\" is not MODEL,LAT,LON,ALT[,HEADING[,clamp][,speed=MPS]]");
+    if parts.len() < 4 || parts.len() > 8 {
+        bail!(
+            "--entity \"{text}\" is not MODEL,LAT,LON,ALT[,HEADING[,clamp][,speed=MPS][,turn=DEG_S]]"
+        );
     }
     let nums = parse_numbers(
         &parts[1..4.max(parts.len().min(5))].join(","),
@@ -96,20 +98,30 @@ pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<(EntitySpec, f64)> {
         &[3, 4],
     )?;
     let mut clamp = Clamp::None;
-    let mut speed_mps = 0.0;
+    let mut motion = EntityMotion::default();
     for option in parts.iter().skip(5) {
+        let number = |value: &str, what: &str, range: std::ops::RangeInclusive<f64>| {
+            value
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && range.contains(v))
+                .with_context(|| {
+                    format!(
+                        "--entity \"{text}\": {what} \"{value}\" must lie in {}..{}",
+                        range.start(),
+                        range.end()
+                    )
+                })
+        };
         match option.split_once('=') {
             None if *option == "clamp" => clamp = Clamp::HeightAndAttitude,
-            Some(("speed", value)) => {
-                speed_mps = value
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite() && (0.0..=40.0).contains(v))
-                    .with_context(|| {
-                        format!("--entity \"{text}\": speed \"{value}\" must be 0..40 m/s")
-                    })?;
+            Some(("speed", value)) => motion.speed_mps = number(value, "speed (m/s)", 0.0..=40.0)?,
+            Some(("turn", value)) => {
+                motion.turn_deg_s = number(value, "turn (degrees a second)", -10.0..=10.0)?;
             }
-            _ => bail!("--entity \"{text}\": unknown option \"{option}\" (clamp or speed=MPS)"),
+            _ => bail!(
+                "--entity \"{text}\": unknown option \"{option}\" (clamp, speed=MPS or turn=DEG_S)"
+            ),
         }
     }
     let spec = EntitySpec {
@@ -122,7 +134,16 @@ pub fn parse_entity(text: &str, id: u32) -> anyhow::Result<(EntitySpec, f64)> {
         },
         clamp,
     };
-    Ok((spec, speed_mps))
+    Ok((spec, motion))
+}
+
+/// How an `--entity` moves at the picture's instant: its speed, and the rate it has been
+/// turning at (a ship's wake is drawn along that circle).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EntityMotion {
+    pub speed_mps: f64,
+    /// Degrees a second, positive to starboard.
+    pub turn_deg_s: f64,
 }
 
 /// Parses `--light "LAT,LON,ALT_M,CANDELA[,COLOUR]"` into an all-round lamp.
@@ -425,7 +446,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
             bail!("--fixed-exposure-ev {ev} must lie in -20..20");
         }
     }
-    let (specs, speeds): (Vec<EntitySpec>, Vec<f64>) = args
+    let (specs, motions): (Vec<EntitySpec>, Vec<EntityMotion>) = args
         .entities
         .iter()
         .enumerate()
@@ -627,7 +648,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
             wash = crate::sea::wash_over(sea.surface(), sea.draw(), view.eye, height_m)?;
         }
         // Ships float: on the sea under them, pitched and rolled by its waves.
-        for (entity, speed_mps) in entities.iter_mut().zip(&speeds) {
+        for (entity, EntityMotion { speed_mps, .. }) in entities.iter_mut().zip(&motions) {
             if cig_scene::sea::builtin_hull(&entity.model).is_some() {
                 let p = entity.position;
                 let course = entity.orientation.heading_deg.to_radians();
@@ -644,17 +665,18 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
                 entity.orientation = pose.orientation;
             }
         }
-        // Ships under way leave their wakes.
+        // Ships under way leave their wakes, along the circles they turn on.
         snapshot.wakes = entities
             .iter()
-            .zip(&speeds)
-            .filter_map(|(e, speed_mps)| {
+            .zip(&motions)
+            .filter_map(|(e, motion)| {
                 cig_scene::sea::WakeDraw::of_ship(
                     &e.model,
                     e.position,
                     e.orientation.heading_deg,
-                    *speed_mps,
+                    motion.speed_mps,
                 )
+                .map(|wake| wake.turning(motion.turn_deg_s))
             })
             .collect();
         snapshot.sea = Some(Arc::clone(sea.draw()));
@@ -705,6 +727,13 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     cache.wait_idle();
     cig_render::load_for_view(&mut renderer, &cache, &snapshot, 0, 64)?;
     let (mut image, stats) = cig_render::render_image(&mut renderer, &cache, &snapshot, 0)?;
+    // A picture the GPU rejected part of is not written over what is on disk.
+    if let Some((count, first)) = renderer.gpu().take_errors() {
+        anyhow::bail!(
+            "the GPU rejected this frame's work ({count} errors; the first: {first}), nothing written to {}",
+            args.out.display()
+        );
+    }
     if periscope.is_some() {
         crate::sea::draw_wash(&mut image.rgba, image.width, image.height, wash);
         crate::sea::draw_reticle(&mut image, &view);
@@ -738,5 +767,39 @@ fn on_or_off(option: &str, value: &str) -> anyhow::Result<bool> {
         "on" => Ok(true),
         "off" => Ok(false),
         other => bail!("{option} \"{other}\" is not on or off"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_entity_takes_its_speed_and_turn_and_refuses_them_out_of_range() {
+        let (spec, motion) =
+            parse_entity("destroyer,36,-121,0,90,speed=10,turn=-2.5", 1).expect("parsed");
+        assert_eq!(spec.orientation.heading_deg, 90.0);
+        assert_eq!(
+            motion,
+            EntityMotion {
+                speed_mps: 10.0,
+                turn_deg_s: -2.5
+            }
+        );
+        let (_, motion) = parse_entity("tank,36,-121,0", 2).expect("parsed");
+        assert_eq!(motion, EntityMotion::default());
+        for (bad, needle) in [
+            ("destroyer,36,-121,0,0,speed=50", "speed"),
+            ("destroyer,36,-121,0,0,turn=11", "turn"),
+            ("destroyer,36,-121,0,0,turn=NaN", "turn"),
+            ("destroyer,36,-121,0,0,yaw=3", "unknown option"),
+            (
+                "destroyer,36,-121,0,0,clamp,speed=1,turn=1,x",
+                "is not MODEL",
+            ),
+        ] {
+            let e = format!("{:#}", parse_entity(bad, 1).expect_err(bad));
+            assert!(e.contains(needle) && !e.contains('\n'), "{bad}: {e}");
+        }
     }
 }

@@ -641,7 +641,7 @@ fn in_the_thermal_infrared_the_sea_is_colder_at_grazing_angles_where_it_mirrors_
 }
 
 #[test]
-fn a_ship_under_way_draws_its_wake_astern() {
+fn a_ship_under_way_draws_its_wake_astern_and_round_its_turn() {
     let dir = tempfile::tempdir().expect("tempdir");
     let db = small_db(dir.path());
     // Looking down from 200 m at a destroyer heading north 300 m ahead (north) of the eye.
@@ -686,4 +686,21 @@ fn a_ship_under_way_draws_its_wake_astern() {
     );
     // Away from the track the sea is the same.
     assert!((beside(&under_way) - beside(&still)).abs() < 3.0);
+    // Turning to starboard at 3 degrees a second it came from the south-east: its white water
+    // bends away to the right of the frame, off the straight course's line astern.
+    let (_, _, turning) = render("turning", &format!("{ship},speed=10,turn=3"));
+    let right =
+        |rgba: &[u8]| mean_rect(rgba, w, h * 58 / 100..h * 66 / 100, w * 7 / 10..w * 8 / 10);
+    assert!(
+        right(&turning) > right(&under_way) + 40.0,
+        "right of the line: {:.0} turning, {:.0} straight",
+        right(&turning),
+        right(&under_way)
+    );
+    assert!(
+        astern(&turning) < astern(&under_way) - 40.0,
+        "on the straight line astern: {:.0} turning, {:.0} straight",
+        astern(&turning),
+        astern(&under_way)
+    );
 }

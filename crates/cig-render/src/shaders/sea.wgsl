@@ -19,11 +19,16 @@ struct SeaUniform {
     // Per wake (sea.rs): stern relative to the eye and unit course (east, north); speed,
     // length, beam, the arms' half-angle; foam made, its e-folding time.
     wakes: array<vec4<f32>, 24>,
+    // Per wake, 10 points of its turbulent wake's centreline from the stern astern (sea.rs):
+    // place relative to the eye (east, north), the foam's age (s) and the wake's width (m)
+    // there.
+    wake_tracks: array<vec4<f32>, 80>,
 };
 
 // The ships' wakes at `local` (east, north of the eye, metres), as foam cover 0..1
-// (cig_sea::wake, on straight courses): the turbulent wake's white water astern, a beam wide at
-// the stern and widening as s^(1/5), fading as exp(-age / tau); the bow wave's white water
+// (cig_sea::wake): the turbulent wake's white water astern along the stern's track (its
+// centreline's pieces, `s` metres along it), a beam wide at the stern and widening as
+// s^(1/5), fading as exp(-age / tau); the bow wave's white water
 // along the bow's sides; the Kelvin arms' broken crests at the apparent half-angle, decaying
 // as (1 + r / L)^(-1/3) from the bow, never outside Kelvin's 19.47 degrees.
 fn wake_foam(local: vec2<f32>) -> f32 {
@@ -39,13 +44,34 @@ fn wake_foam(local: vec2<f32>) -> f32 {
         let speed = max(b.x, 0.1);
         let hull_length = b.y;
         let hull_beam = b.z;
-        // The turbulent wake.
-        if (astern > 0.0) {
-            let width = hull_beam * pow(max(1.0, astern / hull_beam), 0.2);
-            let x = clamp(2.0 * across / width, 0.0, 1.0);
+        // The turbulent wake, piece by piece along the centreline (its points' widths
+        // precomputed, linear between them).
+        let points = u32(c.z);
+        for (var k = 0u; k + 1u < points; k++) {
+            let p0 = sea.wake_tracks[10u * w + k];
+            let p1 = sea.wake_tracks[10u * w + k + 1u];
+            let piece = p1.xy - p0.xy;
+            let length2 = dot(piece, piece);
+            if (length2 < 1e-4) {
+                continue;
+            }
+            let rel = local - p0.xy;
+            let t_raw = dot(rel, piece) / length2;
+            // Nothing ahead of the stern.
+            if (k == 0u && t_raw < 0.0) {
+                continue;
+            }
+            let t = clamp(t_raw, 0.0, 1.0);
+            let off = rel - piece * t;
+            let off2 = dot(off, off);
+            let width = mix(p0.w, p1.w, t);
+            if (off2 >= 0.25 * width * width) {
+                continue;
+            }
+            let x = 2.0 * sqrt(off2) / width;
             let band = (1.0 - x * x) * (1.0 - x * x);
             // Broken white water behind the stern, then the lasting trail.
-            let age = astern / speed;
+            let age = mix(p0.z, p1.z, t);
             foam = max(foam, c.x * (0.5 * exp(-age / 15.0) + 0.45 * exp(-age / c.y)) * band);
         }
         // The bow wave: white water hugging the fore body, as long as the hull's fore third.
