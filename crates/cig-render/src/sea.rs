@@ -25,8 +25,9 @@
 //! posts drawn); the earth's curvature is its Gaussian radius at the eye (the posts' true
 //! curvature differs by up to 0.35 % with direction: half a metre at about 40 km); no
 //! refraction of what lies below the surface, no shadows on the water; a wake's turbulent foam
-//! follows its stern's last 40 s in chords 5 s apart and goes on straight beyond (the bow wave
-//! and the Kelvin arms lie on the present course).
+//! follows its stern's last two minutes in chords 5 s apart for the first 40 s and about 20 s
+//! apart after, and goes on straight beyond (the bow wave and the Kelvin arms lie on the
+//! present course).
 
 use crate::gpu::Gpu;
 use crate::pass::uniform_entry;
@@ -89,8 +90,8 @@ const WAKE_POINTS: usize = cig_scene::sea::WAKE_TRACK_POINTS + 2;
 /// A wake's centreline as the uniform holds it (`SeaUniform::wake_tracks`).
 type WakeLine = [[f32; 4]; WAKE_POINTS];
 
-// sea.wgsl indexes a wake's centreline by 10 and holds 8 wakes' of them.
-const _: () = assert!(WAKE_POINTS == 10 && WAKE_POINTS * MAX_WAKES == 80);
+// sea.wgsl indexes a wake's centreline by 14 and holds 8 wakes' of them.
+const _: () = assert!(WAKE_POINTS == 14 && WAKE_POINTS * MAX_WAKES == 112);
 
 /// The straight end of a wake's centreline reaches this many foam e-folding times past its
 /// last place (under 2 % of the foam is left there).

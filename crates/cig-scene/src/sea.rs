@@ -151,16 +151,36 @@ pub struct WakeDraw {
 }
 
 /// Most past places of a stern a wake keeps ([`WakeTrack`]).
-pub const WAKE_TRACK_POINTS: usize = 8;
-/// A stern's past places are kept this far apart in time, seconds: eight cover the last 40 s
-/// of a turn, where its foam is the brightest, in chords of at most 15 degrees of the
-/// tightest turn (3 degrees a second: they sag under 2 m from a 190 m circle); the foam older
-/// than that is drawn on along the last chord.
+pub const WAKE_TRACK_POINTS: usize = 12;
+/// The newest past places of a stern are kept this far apart in time, seconds: the first
+/// [`WAKE_TRACK_NEAR_POINTS`] cover the last 40 s of a turn, where its foam is the brightest,
+/// in chords of at most 15 degrees of the tightest turn (3 degrees a second: they sag under
+/// 2 m from a 190 m circle).
 pub const WAKE_TRACK_SPACING_S: f64 = 5.0;
+/// Past places kept at [`WAKE_TRACK_SPACING_S`].
+pub const WAKE_TRACK_NEAR_POINTS: usize = 8;
+/// Older places are kept one in each span of this many seconds (of the caller's clock), so
+/// the track reaches two minutes back; the foam older than that is drawn on along the last
+/// chord.
+pub const WAKE_TRACK_FAR_SPACING_S: f64 = 20.0;
+
+/// The ages of a track's places (seconds) for a steady ship, newest first: the spacing
+/// [`WakeTrack`] keeps.
+fn steady_track_ages_s() -> impl Iterator<Item = f64> {
+    let near = WAKE_TRACK_NEAR_POINTS as f64 * WAKE_TRACK_SPACING_S;
+    (1..=WAKE_TRACK_POINTS).map(move |k| {
+        if k <= WAKE_TRACK_NEAR_POINTS {
+            k as f64 * WAKE_TRACK_SPACING_S
+        } else {
+            near + (k - WAKE_TRACK_NEAR_POINTS) as f64 * WAKE_TRACK_FAR_SPACING_S
+        }
+    })
+}
 
 /// A ship's stern's past places, for its wake to follow the track it made: one every
-/// [`WAKE_TRACK_SPACING_S`], at most [`WAKE_TRACK_POINTS`]; forgotten when the ship jumps
-/// (moved faster than any ship) or was not seen for a while.
+/// [`WAKE_TRACK_SPACING_S`] for the newest [`WAKE_TRACK_NEAR_POINTS`], then one in each
+/// [`WAKE_TRACK_FAR_SPACING_S`] of the clock, at most [`WAKE_TRACK_POINTS`]; forgotten when
+/// the ship jumps (moved faster than any ship) or was not seen for a while.
 #[derive(Clone, Debug, Default)]
 pub struct WakeTrack {
     /// (time in seconds of the caller's clock, the stern's place), newest first.
@@ -189,6 +209,15 @@ impl WakeTrack {
             }
         }
         self.points.push_front((now_s, stern));
+        // Past the near places, one in each far span of the clock: a place that has just
+        // left the near ones stays only if no older kept place shares its span.
+        let span = |t: f64| (t / WAKE_TRACK_FAR_SPACING_S).floor();
+        if let Some(&(t, _)) = self.points.get(WAKE_TRACK_NEAR_POINTS) {
+            let older = self.points.get(WAKE_TRACK_NEAR_POINTS + 1);
+            if older.is_some_and(|&(o, _)| span(o) == span(t)) {
+                self.points.remove(WAKE_TRACK_NEAR_POINTS);
+            }
+        }
         self.points.truncate(WAKE_TRACK_POINTS);
     }
 
@@ -243,9 +272,9 @@ impl WakeDraw {
     }
 
     /// This wake as a ship's that has been turning at `turn_deg_s` (positive to starboard) at
-    /// its present speed: its stern's past places on that circle, one every
-    /// [`WAKE_TRACK_SPACING_S`] (a single picture's stand-in for the track a running IG
-    /// records with [`WakeTrack`]).
+    /// its present speed: its stern's past places on that circle, as far apart as a
+    /// [`WakeTrack`] keeps them (a single picture's stand-in for the track a running IG
+    /// records).
     pub fn turning(mut self, turn_deg_s: f64) -> WakeDraw {
         if !turn_deg_s.is_finite() {
             return self;
@@ -256,10 +285,10 @@ impl WakeDraw {
         let (mut east_m, mut north_m, mut age_s) = (0.0, 0.0, 0.0);
         let mut heading = self.heading_deg.to_radians();
         let mut track = Vec::with_capacity(WAKE_TRACK_POINTS);
-        for k in 1..=WAKE_TRACK_POINTS {
+        for wanted_s in steady_track_ages_s() {
             // Back along the circle: each half second the ship came along its heading at the
             // middle of it.
-            while age_s < k as f64 * WAKE_TRACK_SPACING_S - 1e-9 {
+            while age_s < wanted_s - 1e-9 {
                 let middle = heading - 0.5 * omega * STEP_S;
                 east_m -= self.speed_mps * middle.sin() * STEP_S;
                 north_m -= self.speed_mps * middle.cos() * STEP_S;
@@ -314,30 +343,43 @@ mod tests {
         let mut track = WakeTrack::default();
         let wake = destroyer(0.0);
         let frame = cig_geo::EnuFrame::new(wake.stern());
-        // North at 10 m/s, noted every frame for 100 s.
-        for k in 0..=6000 {
+        // North at 10 m/s, noted every frame for 200 s.
+        for k in 0..=12_000 {
             let t = f64::from(k) / 60.0;
             track.record(
                 t,
                 frame.enu_to_geodetic(glam::DVec3::new(0.0, 10.0 * t, 0.0)),
             );
+            if k % 600 == 0 {
+                let ages: Vec<f64> = track.drawn(t).iter().map(|(_, a)| *a).collect();
+                assert!(ages.windows(2).all(|a| a[1] > a[0]), "{ages:?}");
+            }
         }
-        let drawn = track.drawn(100.0);
+        let drawn = track.drawn(200.0);
         assert_eq!(drawn.len(), WAKE_TRACK_POINTS);
         for (k, (place, age_s)) in drawn.iter().enumerate() {
-            assert!(
-                (age_s - k as f64 * WAKE_TRACK_SPACING_S).abs() < 0.02,
-                "{drawn:?}"
-            );
             let north = frame.geodetic_to_enu(*place).y;
-            assert!((north - 10.0 * (100.0 - age_s)).abs() < 0.01, "{north}");
+            assert!((north - 10.0 * (200.0 - age_s)).abs() < 0.01, "{north}");
+            if k < WAKE_TRACK_NEAR_POINTS {
+                assert!(
+                    (age_s - k as f64 * WAKE_TRACK_SPACING_S).abs() < 0.02,
+                    "{drawn:?}"
+                );
+            } else {
+                // One in each 20 s span of the clock, so 5 to 25 s apart.
+                let gap = age_s - drawn[k - 1].1;
+                assert!(gap > 4.9 && gap < 25.1, "{drawn:?}");
+            }
         }
+        // About two minutes back.
+        let oldest = drawn[WAKE_TRACK_POINTS - 1].1;
+        assert!((100.0..=125.0).contains(&oldest), "{drawn:?}");
         // A jump of a kilometre in a frame starts the track again.
         track.record(
-            100.02,
+            200.02,
             frame.enu_to_geodetic(glam::DVec3::new(1000.0, 1000.0, 0.0)),
         );
-        assert_eq!(track.drawn(100.02).len(), 1);
+        assert_eq!(track.drawn(200.02).len(), 1);
         // So does a clock gone back.
         track.record(50.0, wake.stern());
         assert_eq!(track.drawn(50.0).len(), 1);
@@ -355,11 +397,12 @@ mod tests {
                 "{at}"
             );
         }
-        // Turning to starboard at 3 degrees a second it came from the south-east (heading
-        // north-west before): its circle's radius is V / omega about a centre to starboard
-        // (east of the ship), and the stern's past places keep their distance from it.
-        let turning = destroyer(0.0).turning(3.0);
-        let radius_m = 10.0 / 3f64.to_radians();
+        // Turning to starboard at 1.5 degrees a second it came from the south-east (heading
+        // north-west before; the track's two minutes are half the circle): its circle's
+        // radius is V / omega about a centre to starboard (east of the ship), and the stern's
+        // past places keep their distance from it.
+        let turning = destroyer(0.0).turning(1.5);
+        let radius_m = 10.0 / 1.5f64.to_radians();
         let ship = frame.geodetic_to_enu(turning.position);
         let centre = [ship.x + radius_m, ship.y];
         let half = 0.5 * turning.length_m;

@@ -19,10 +19,10 @@ struct SeaUniform {
     // Per wake (sea.rs): stern relative to the eye and unit course (east, north); speed,
     // length, beam, the arms' half-angle; foam made, its e-folding time.
     wakes: array<vec4<f32>, 24>,
-    // Per wake, 10 points of its turbulent wake's centreline from the stern astern (sea.rs):
+    // Per wake, 14 points of its turbulent wake's centreline from the stern astern (sea.rs):
     // place relative to the eye (east, north), the foam's age (s) and the wake's width (m)
     // there.
-    wake_tracks: array<vec4<f32>, 80>,
+    wake_tracks: array<vec4<f32>, 112>,
 };
 
 // The ships' wakes at `local` (east, north of the eye, metres), as foam cover 0..1
@@ -48,8 +48,8 @@ fn wake_foam(local: vec2<f32>) -> f32 {
         // precomputed, linear between them).
         let points = u32(c.z);
         for (var k = 0u; k + 1u < points; k++) {
-            let p0 = sea.wake_tracks[10u * w + k];
-            let p1 = sea.wake_tracks[10u * w + k + 1u];
+            let p0 = sea.wake_tracks[14u * w + k];
+            let p1 = sea.wake_tracks[14u * w + k + 1u];
             let piece = p1.xy - p0.xy;
             let length2 = dot(piece, piece);
             if (length2 < 1e-4) {
