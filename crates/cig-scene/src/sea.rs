@@ -177,10 +177,10 @@ fn steady_track_ages_s() -> impl Iterator<Item = f64> {
     })
 }
 
-/// A ship's stern's past places, for its wake to follow the track it made: one every
-/// [`WAKE_TRACK_SPACING_S`] for the newest [`WAKE_TRACK_NEAR_POINTS`], then one in each
-/// [`WAKE_TRACK_FAR_SPACING_S`] of the clock, at most [`WAKE_TRACK_POINTS`]; forgotten when
-/// the ship jumps (moved faster than any ship) or was not seen for a while.
+/// A ship's stern's past places, for its wake to follow the track it made: one in each
+/// [`WAKE_TRACK_SPACING_S`] of the clock for the newest [`WAKE_TRACK_NEAR_POINTS`], then one
+/// in each [`WAKE_TRACK_FAR_SPACING_S`], at most [`WAKE_TRACK_POINTS`]; forgotten when the
+/// ship jumps (moved faster than any ship) or was not seen for a while.
 #[derive(Clone, Debug, Default)]
 pub struct WakeTrack {
     /// (time in seconds of the caller's clock, the stern's place), newest first.
@@ -202,9 +202,12 @@ impl WakeTrack {
             // Written so that a NaN place or time starts the track again.
             let plausible = (0.0..=3.0 * WAKE_TRACK_SPACING_S).contains(&dt_s)
                 && (0.0..=WAKE_TRACK_JUMP_MPS * dt_s + 5.0).contains(&moved_m);
+            // One place in each span of the clock (not one a span after the last), so channels
+            // of one IG, drawing the same frames, keep the same places.
+            let span = |t: f64| (t / WAKE_TRACK_SPACING_S).floor();
             if !plausible {
                 self.points.clear();
-            } else if dt_s < WAKE_TRACK_SPACING_S {
+            } else if span(now_s) == span(then_s) {
                 return;
             }
         }
