@@ -344,7 +344,7 @@ fn rut_memory(
     database: &Arc<cig_terrain::TerrainDatabase>,
     node_layout: &cig_scene::lod::NodeLayout,
     geoid: &cig_terrain::database::GeoidLookup,
-) -> Result<FireReport, BenchError> {
+) -> Result<PartReport, BenchError> {
     const VEHICLES: u32 = 20;
     const PIECES: u32 = 75;
     const PIECE_M: f64 = 8.0;
@@ -434,7 +434,7 @@ fn rut_memory(
     }
     let layer_per_m = layer_bytes as f64 / rut_m;
     let patch_per_m = patch_bytes as f64 / rut_m;
-    Ok(FireReport {
+    Ok(PartReport {
         json: serde_json::json!({
             "ruts": sequence,
             "rut_line_m": rut_m,
@@ -458,8 +458,8 @@ fn rut_memory(
     })
 }
 
-/// Part 3's (and part 4's) result.
-struct FireReport {
+/// A part's result: its figures and its lines of the summary.
+struct PartReport {
     json: serde_json::Value,
     summary: String,
 }
@@ -471,7 +471,7 @@ const CRATERS_PER_S: f64 = 100.0;
 fn pass_under_fire(
     database: &Arc<cig_terrain::TerrainDatabase>,
     options: &DynTerrainOptions,
-) -> Result<FireReport, BenchError> {
+) -> Result<PartReport, BenchError> {
     crate::require((20..=100_000).contains(&options.frames), || {
         format!("--frames {} must be between 20 and 100000", options.frames)
     })?;
@@ -571,7 +571,7 @@ fn pass_under_fire(
     let (stall_plain, median_plain) = stall(&plain);
     let (stall_fired, median_fired) = stall(&fired);
     let craters = (options.frames as f64 * dt_s * CRATERS_PER_S) as u32;
-    Ok(FireReport {
+    Ok(PartReport {
         json: serde_json::json!({
             "adapter": gpu.describe(),
             "frames": options.frames,

@@ -1774,9 +1774,8 @@ impl IgWorld {
                 cig_scene::sea::WakeDraw::of_ship(model, pose.position, course_deg, v.x.hypot(v.y))
             {
                 let track = self.wake_tracks.entry(key).or_default();
-                track.record(self.monotonic_s, wake.stern());
+                self.wakes.push(track.follow(self.monotonic_s, wake));
                 tracked.insert(key);
-                self.wakes.push(wake.following(track, self.monotonic_s));
             }
             self.remote_afloat.insert(remote_instance_id(r.key), pose);
         }
@@ -1838,8 +1837,7 @@ impl IgWorld {
                 cig_scene::sea::WakeDraw::of_ship(&e.model, p, entry.course_deg, entry.speed_mps)
             {
                 let track = self.wake_tracks.entry(u64::from(*id)).or_default();
-                track.record(now, wake.stern());
-                self.wakes.push(wake.following(track, now));
+                self.wakes.push(track.follow(now, wake));
             }
         }
         self.ship_motion.retain(|id, _| seen.contains(id));

@@ -482,17 +482,17 @@ impl TerrainGpu {
             record.refined = patch.refined_mask;
             record.edit[0] = self.node_cells as f32;
             let tag = -(index as f32 + 1.0);
-            for piece in &patch.pieces {
-                let first = out.patch_vertices.len() as u32;
-                out.patch_vertices
-                    .extend(piece.vertices.iter().map(|v| TerrainVertex {
-                        skirt: tag - 0.5 * v.skirt,
-                        ..*v
-                    }));
-                out.patch_indices
-                    .extend(piece.indices.iter().map(|&i| first + i));
-                out.patch_marks.extend_from_slice(&piece.marks);
-            }
+            patch.append_to(
+                (
+                    &mut out.patch_vertices,
+                    &mut out.patch_indices,
+                    &mut out.patch_marks,
+                ),
+                |v| TerrainVertex {
+                    skirt: tag - 0.5 * v.skirt,
+                    ..*v
+                },
+            );
         }
         out.records[index] = record;
         let base = index as u32 * self.vertices_per_node;

@@ -83,15 +83,26 @@ impl NodePatches {
             refined_mask: self.refined_mask,
             ..NodePatch::default()
         };
-        for piece in &self.pieces {
-            let first = patch.vertices.len() as u32;
-            patch.vertices.extend_from_slice(&piece.vertices);
-            patch.marks.extend_from_slice(&piece.marks);
-            patch
-                .indices
-                .extend(piece.indices.iter().map(|&k| first + k));
-        }
+        self.append_to(
+            (&mut patch.vertices, &mut patch.indices, &mut patch.marks),
+            |v| *v,
+        );
         patch
+    }
+
+    /// Appends the pieces' vertices (each as `vertex` makes it), triangles (indices counted
+    /// from the vertices already there) and marks to a frame's buffers.
+    pub fn append_to(
+        &self,
+        (vertices, indices, marks): (&mut Vec<TerrainVertex>, &mut Vec<u32>, &mut Vec<PatchMarks>),
+        vertex: impl Fn(&TerrainVertex) -> TerrainVertex,
+    ) {
+        for piece in &self.pieces {
+            let first = vertices.len() as u32;
+            vertices.extend(piece.vertices.iter().map(&vertex));
+            indices.extend(piece.indices.iter().map(|&k| first + k));
+            marks.extend_from_slice(&piece.marks);
+        }
     }
 }
 

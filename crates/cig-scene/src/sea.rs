@@ -224,6 +224,13 @@ impl WakeTrack {
         self.points.truncate(WAKE_TRACK_POINTS);
     }
 
+    /// `wake` at `now_s`, its stern's place noted first, following the places kept.
+    pub fn follow(&mut self, now_s: f64, mut wake: WakeDraw) -> WakeDraw {
+        self.record(now_s, wake.stern());
+        wake.track = self.drawn(now_s);
+        wake
+    }
+
     /// The places with their ages at `now_s`, newest first, for [`WakeDraw::track`].
     pub fn drawn(&self, now_s: f64) -> Vec<(Geodetic, f64)> {
         self.points
@@ -307,12 +314,6 @@ impl WakeDraw {
             track.push((then.stern(), age_s));
         }
         self.track = track;
-        self
-    }
-
-    /// This wake following `track`'s past places of its stern at `now_s`.
-    pub fn following(mut self, track: &WakeTrack, now_s: f64) -> WakeDraw {
-        self.track = track.drawn(now_s);
         self
     }
 }
