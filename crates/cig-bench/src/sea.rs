@@ -82,6 +82,7 @@ pub fn run(options: &SeaOptions) -> Result<Report, BenchError> {
             None,
             origin,
             time.unix_seconds() + f64::from(k) / 60.0,
+            &std::collections::BTreeMap::new(),
         )
         .map_err(|e| sea_error("the sea", e))?;
         frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
@@ -302,6 +303,7 @@ impl Periscope {
             None,
             origin,
             self.unix_time_s,
+            &std::collections::BTreeMap::new(),
         )
         .map_err(|e| sea_error("the sea", e))?;
         let now = sea
@@ -345,7 +347,7 @@ impl Periscope {
                 critical_radius_m: None,
             };
             if let Some(hull) = cig_scene::sea::builtin_hull(model) {
-                now.ride(&mut ship, &hull, [0.0, 0.0], level_m);
+                now.ride(&mut ship, &hull, [0.0, 0.0], level_m, None);
             }
             snapshot.entities.push(ship);
         }

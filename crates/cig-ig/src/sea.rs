@@ -6,10 +6,17 @@
 //!    fetch); without one, a fully developed sea of the host's global wind (CIGI Atmosphere
 //!    Control), calm when it sets none. The sea exists when the scenario has a `[sea]` or the
 //!    host enables global Maritime Surface Conditions or a global Wave Control wave.
-//! 2. The host's enabled global Wave Control waves are added as explicit Gerstner waves
+//! 2. The host's enabled Wave Control waves are added as explicit Gerstner waves
 //!    (`cig_sea::surface::WaveComponent`); CIGI's Leading (the phase angle of the crest, ±180°)
 //!    sharpens the crest, `|leading| / 90°` of a trochoid's displacement (a Gerstner wave has no
 //!    forward lean). Values outside the sea model's ranges are clamped and told to the host once.
+//!    A global wave applies everywhere; a regional one over its active Environmental Region
+//!    (its rounded rectangle, fading out across its transition perimeter, [`region_area`]);
+//!    an entity's within [`ENTITY_WAVES_RADIUS_M`] of where the entity stood last frame,
+//!    fading out over [`ENTITY_WAVES_TRANSITION_M`] more ([`entity_area`]). As CIGI's regional
+//!    conditions take precedence over its global ones, entities' waves take precedence over
+//!    regions' and regions' over the global ones (`cig_sea::surface::WaveArea`): the height
+//!    queries, line of sight, the ships and the renderer all weigh them so.
 //! 3. The water's level, temperature, clarity and whitecaps: the host's Maritime Surface
 //!    Conditions (a region's where the point lies in an active region, else the global ones),
 //!    else the scenario's.
@@ -24,7 +31,11 @@
 //! of terrain there is the wave surface's height above MSL with the material water and the
 //! wave's normal; a clamped entity floats: its height is the sea's, and a ship's model (one
 //! with a hull, `cig_scene::sea::builtin_hull`) heaves, pitches and rolls with the waves it
-//! spans when clamped for attitude.
+//! spans when clamped for attitude: its steady response to the wind sea (cached per hull,
+//! heading and velocity) plus its response to the host's waves as they apply where it is,
+//! and, after a change of course, speed or sea, the transient that rings down into the new
+//! steady state (`cig_sea::response::ShipRide`, kept per ship, [`ShipKey`], from frame to
+//! frame; forgotten after [`RIDE_FORGOTTEN_S`] unused).
 //!
 //! Line of sight over the sea ([`SeaNow::first_hit`]): standard terrestrial refraction
 //! bends a nearly horizontal ray toward the earth with a curvature `k / R` (`k` =
@@ -61,9 +72,12 @@
 //! terrain's hit; the terrain's hits on sea posts give way to the sea's (the terrain is asked
 //! again beyond them), and a sightline that leaves the database is answered by the sea there.
 //!
-//! Limits: one wind sea for the whole world (regional and entity-scoped Wave Control waves are
-//! kept but not applied; regional Maritime Surface Conditions set the level, temperature and
-//! clarity where they apply, the drawn sea takes those at the eye); the sea over a water post
+//! Limits: one wind sea for the whole world (the host's explicit waves may be regional or an
+//! entity's; regional Maritime Surface Conditions set the level, temperature and clarity where
+//! they apply, the drawn sea takes those at the eye; entity-scoped Maritime Surface Conditions
+//! are kept, not applied); the renderer draws the 8 highest explicit waves; a ship that
+//! appears on an IG after a change of its course carries no transient from it there; the sea
+//! over a water post
 //! does not test whether the post's water is connected to the open sea. Line of sight: one
 //! refraction coefficient along the ray (no ducting or mirage), the parabolic approximation
 //! of the earth (0.1 mm over 30 km), one sea level along the sightline (the level at its
@@ -71,17 +85,18 @@
 //! along its direction (they differ by `k x D / (2 R)`, 1 cm at 500 m of a 2 km vector); the
 //! slope bound is the grids' (the surface's steepest slope between grid points may be a
 //! little more), so the sightline may pass through a ripple's tip by millimetres to a
-//! centimetre; after [`MAX_LOS_SAMPLES`] samples the search gives up and counts the sightline blocked where its unresolved stretch begins. Over land the
-//! sightline is the terrain's, geometric (no refraction); where the terrain's sightline runs
-//! under the sea posts, land is looked for in steps of half a post (culture objects there are
-//! not seen).
+//! centimetre; after [`MAX_LOS_SAMPLES`] samples the search gives up and counts the sightline
+//! blocked where its unresolved stretch begins. Over land the sightline is the terrain's, bent
+//! by the same standard refraction (with or without a sea, as the eye sees it drawn); where
+//! the terrain's sightline runs under the sea posts, land is looked for in steps of half a
+//! post (culture objects there are not seen).
 
 use cig_cigi::{MaritimeSurfaceConditionsControl, WaveControl};
 use cig_geo::{EnuFrame, Geodetic};
 use cig_scene::sea::SeaDraw;
-use cig_sea::response::ResponseCache;
+use cig_sea::response::{ResponseCache, SeawayResponse, ShipRide};
 use cig_sea::spectrum::SeaConditions;
-use cig_sea::surface::{SeaSurface, SurfaceConfig, WaveComponent};
+use cig_sea::surface::{AreaKind, SeaSurface, SurfaceConfig, WaveArea, WaveComponent};
 use cig_terrain::{Material, QueryError, QuerySession, SurfacePoint};
 use std::sync::Arc;
 
@@ -196,6 +211,63 @@ pub fn wave_component(w: &WaveControl) -> (WaveComponent, bool) {
     (wave, clamped)
 }
 
+/// A host's wave: its key (scope, entity or region, wave), the packet, the area it applies in.
+type HostWave<'a> = (&'a (u8, u16, u8), &'a WaveControl, Option<usize>);
+
+/// CIGI's scopes of Wave Control (and the other environment packets).
+const SCOPE_GLOBAL: u8 = 0;
+const SCOPE_REGIONAL: u8 = 1;
+const SCOPE_ENTITY: u8 = 2;
+
+/// An entity's waves (CIGI Wave Control of entity scope) apply in full within this distance of
+/// it, metres...
+pub const ENTITY_WAVES_RADIUS_M: f64 = 1000.0;
+/// ...and fade out over this much further, metres.
+pub const ENTITY_WAVES_TRANSITION_M: f64 = 1000.0;
+
+/// The area of the sea's plane a CIGI environmental region covers: its rounded rectangle
+/// (sizes, rotation, corner radius) and its transition perimeter, centred where its centre
+/// falls in the plane (the region's rotation is taken from true north at its centre; the
+/// plane's north differs by the meridians' convergence, under a degree within 100 km of the
+/// plane's origin at mid-latitudes). Host values out of range are clamped.
+pub fn region_area(plane: &EnuFrame, region: &cig_cigi::EnvironmentalRegionControl) -> WaveArea {
+    let size = |v: f32| host_value(v, 0.0, 2.0e7, 0.0);
+    WaveArea {
+        centre_m: cig_scene::sea::sea_plane_xy(plane, region.latitude_deg, region.longitude_deg)
+            .map(|v| {
+                if v.is_finite() {
+                    v.clamp(-1e9, 1e9)
+                } else {
+                    0.0
+                }
+            }),
+        half_size_m: [size(region.size_x_m) / 2.0, size(region.size_y_m) / 2.0],
+        rotation_deg: host_value(region.rotation_deg, -1.0e6, 1.0e6, 0.0),
+        corner_radius_m: host_value(region.corner_radius_m, 0.0, 1.0e7, 0.0),
+        transition_m: host_value(region.transition_perimeter_m, 0.0, 1.0e7, 0.0),
+        kind: AreaKind::Region,
+    }
+}
+
+/// The area around an entity at (`lat_deg`, `lon_deg`) its waves cover: a disc of
+/// [`ENTITY_WAVES_RADIUS_M`] fading out over [`ENTITY_WAVES_TRANSITION_M`].
+pub fn entity_area(plane: &EnuFrame, lat_deg: f64, lon_deg: f64) -> WaveArea {
+    WaveArea {
+        centre_m: cig_scene::sea::sea_plane_xy(plane, lat_deg, lon_deg).map(|v| {
+            if v.is_finite() {
+                v.clamp(-1e9, 1e9)
+            } else {
+                0.0
+            }
+        }),
+        half_size_m: [0.0, 0.0],
+        rotation_deg: 0.0,
+        corner_radius_m: ENTITY_WAVES_RADIUS_M,
+        transition_m: ENTITY_WAVES_TRANSITION_M,
+        kind: AreaKind::Entity,
+    }
+}
+
 /// The sea at the frame's time.
 pub struct SeaNow {
     surface: SeaSurface,
@@ -207,7 +279,30 @@ pub struct SeaNow {
     bounds: std::sync::OnceLock<WaveBounds>,
     /// The ships' responses to these waves, kept from frame to frame while the waves last.
     responses: Arc<std::sync::Mutex<ResponseCache>>,
+    /// The ships' rides, kept from frame to frame (and across changes of the waves).
+    rides: Arc<std::sync::Mutex<Rides>>,
 }
+
+/// Which ship a ride belongs to: one of this IG's entities or one of the DIS exercise's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum ShipKey {
+    Own(u16),
+    Remote(u32),
+}
+
+/// A ship's ride and the sea time it was last used.
+#[derive(Clone, Debug)]
+struct KeptRide {
+    ride: ShipRide,
+    used_s: f64,
+}
+
+/// The ships' rides by ship.
+type Rides = std::collections::BTreeMap<ShipKey, KeptRide>;
+
+/// A ride not used for this long (sea time, seconds) is forgotten: the ship starts again in
+/// the steady state when it comes back.
+pub const RIDE_FORGOTTEN_S: f64 = 10.0;
 
 impl SeaNow {
     /// What the renderer draws.
@@ -482,11 +577,16 @@ impl Chord {
 /// the earth's radius of curvature in its azimuth at its middle: what the terrain's line of
 /// sight bends by where the sea's does.
 pub fn sightline_refraction(a: Geodetic, b: Geodetic) -> cig_terrain::Refraction {
+    sightline_refraction_with_k(a, b, STANDARD_REFRACTION_K)
+}
+
+/// [`sightline_refraction`] with the coefficient `k` (0: a straight sightline).
+pub fn sightline_refraction_with_k(a: Geodetic, b: Geodetic, k: f64) -> cig_terrain::Refraction {
     let (ea, eb) = (a.to_ecef(), b.to_ecef());
     let mid = Geodetic::from_ecef((ea + eb) * 0.5);
     let along = EnuFrame::new(mid).ecef_vector_to_enu(eb - ea);
     cig_terrain::Refraction {
-        k: STANDARD_REFRACTION_K,
+        k,
         earth_radius_m: radius_of_curvature_m(mid.lat_deg, along.x, along.y),
     }
 }
@@ -784,11 +884,15 @@ pub struct WorldSea {
     seed: u64,
     /// Explicit waves of the sea's own (`cig render --sea-wave`), before the host's.
     own_waves: Vec<WaveComponent>,
+    /// Explicit waves of the sea's own confined to regions, before the host's.
+    own_regional_waves: Vec<(WaveComponent, cig_cigi::EnvironmentalRegionControl)>,
     /// Waves already told to the host as clamped.
     told_waves: std::collections::BTreeSet<(u8, u16, u8)>,
     now: Option<Arc<SeaNow>>,
     /// The ships' responses to the present waves (made anew when they change).
     responses: Option<Arc<std::sync::Mutex<ResponseCache>>>,
+    /// The ships' rides (their transients outlive a change of the waves).
+    rides: Arc<std::sync::Mutex<Rides>>,
 }
 
 /// Why the sea could not be updated (told to the host once by the caller).
@@ -816,9 +920,11 @@ impl WorldSea {
             scenario_water: water,
             seed,
             own_waves: Vec::new(),
+            own_regional_waves: Vec::new(),
             told_waves: std::collections::BTreeSet::new(),
             now: None,
             responses: None,
+            rides: Arc::default(),
         }
     }
 
@@ -834,13 +940,30 @@ impl WorldSea {
         Ok(self)
     }
 
+    /// Adds explicit waves of the sea's own, each applying only over its region (as a host's
+    /// regional Wave Control would; `cig render --sea-wave ...@REGION`).
+    ///
+    /// # Errors
+    /// A wave out of range (see `cig_sea::surface::WaveComponent::new`).
+    pub fn with_regional_waves(
+        mut self,
+        waves: Vec<(WaveComponent, cig_cigi::EnvironmentalRegionControl)>,
+    ) -> Result<WorldSea, WorldSeaError> {
+        for (wave, _) in &waves {
+            wave.validate()?;
+        }
+        self.own_regional_waves = waves;
+        Ok(self)
+    }
+
     /// The sea at the frame's time (after [`WorldSea::update`]), if there is one.
     pub fn now(&self) -> Option<&Arc<SeaNow>> {
         self.now.as_ref()
     }
 
     /// Computes the sea at `unix_time_s` for the host's environment, in the tangent plane of
-    /// `origin`; returns the host waves whose values had to be clamped (each told once). The
+    /// `origin` (`entity_places`: where this IG's entities are, for the host's entity-scoped
+    /// waves); returns the host waves whose values had to be clamped (each told once). The
     /// surface is rebuilt only when the wind sea changes, and reused in place when no one else
     /// holds the last frame's sea.
     ///
@@ -852,20 +975,50 @@ impl WorldSea {
         eye_msl: Option<Geodetic>,
         origin: Geodetic,
         unix_time_s: f64,
+        entity_places: &std::collections::BTreeMap<u16, Geodetic>,
     ) -> Result<Vec<String>, WorldSeaError> {
         let host_global = environment
             .maritime
             .get(&(0, 0))
             .filter(|m| m.surface_conditions_enable);
-        let host_waves: Vec<(&(u8, u16, u8), &WaveControl)> = environment
-            .waves
-            .iter()
-            .filter(|(key, w)| key.0 == 0 && w.wave_enable)
-            .collect();
+        let plane = EnuFrame::new(origin);
+        // The host's enabled waves with where each applies: everywhere, an active region, or
+        // around an entity this IG has placed (one area per region or entity).
+        let mut areas: Vec<WaveArea> = Vec::new();
+        let mut area_of: std::collections::BTreeMap<(u8, u16), usize> =
+            std::collections::BTreeMap::new();
+        let mut host_waves: Vec<HostWave> = Vec::new();
+        for (key, w) in environment.waves.iter().filter(|(_, w)| w.wave_enable) {
+            let (scope, id) = (key.0, key.1);
+            let area = match scope {
+                SCOPE_GLOBAL => None,
+                SCOPE_REGIONAL | SCOPE_ENTITY => {
+                    let shape = if scope == SCOPE_REGIONAL {
+                        environment
+                            .regions
+                            .get(&id)
+                            .filter(|r| r.region_state == 1)
+                            .map(|r| region_area(&plane, r))
+                    } else {
+                        entity_places
+                            .get(&id)
+                            .map(|p| entity_area(&plane, p.lat_deg, p.lon_deg))
+                    };
+                    let Some(shape) = shape else { continue };
+                    Some(*area_of.entry((scope, id)).or_insert_with(|| {
+                        areas.push(shape);
+                        areas.len() - 1
+                    }))
+                }
+                _ => continue,
+            };
+            host_waves.push((key, w, area));
+        }
         let present = self.scenario_conditions.is_some()
             || host_global.is_some()
             || !host_waves.is_empty()
-            || !self.own_waves.is_empty();
+            || !self.own_waves.is_empty()
+            || !self.own_regional_waves.is_empty();
         if !present {
             self.now = None;
             return Ok(Vec::new());
@@ -889,7 +1042,13 @@ impl WorldSea {
         };
         let mut told = Vec::new();
         let mut waves = self.own_waves.clone();
-        for (key, w) in host_waves {
+        let mut placed = vec![None; waves.len()];
+        for (wave, region) in &self.own_regional_waves {
+            areas.push(region_area(&plane, region));
+            waves.push(*wave);
+            placed.push(Some(areas.len() - 1));
+        }
+        for (key, w, area) in host_waves {
             let (wave, clamped) = wave_component(w);
             if clamped && self.told_waves.insert(*key) {
                 told.push(format!(
@@ -898,6 +1057,7 @@ impl WorldSea {
                 ));
             }
             waves.push(wave);
+            placed.push(area);
         }
         let last = self.now.take().map(|now| {
             Arc::try_unwrap(now).map_or_else(|shared| shared.surface.clone(), |own| own.surface)
@@ -909,9 +1069,13 @@ impl WorldSea {
                 SeaSurface::new(&conditions, self.seed, SurfaceConfig::default())?
             }
         };
-        if surface.explicit_waves() != waves.as_slice() {
-            self.responses = None;
-            surface.set_explicit_waves(waves)?;
+        // The ships' cached responses are to the wind sea and swell alone: the host's waves,
+        // which apply by place, are each ship's own (`SeaNow::ride`).
+        if surface.explicit_waves() != waves.as_slice()
+            || surface.explicit_wave_areas() != placed.as_slice()
+            || surface.wave_areas() != areas.as_slice()
+        {
+            surface.set_placed_waves(waves, placed, areas)?;
         }
         surface.update(cig_scene::sea::wave_clock_s(unix_time_s))?;
         let water = self.scenario_water.with_host(host_global);
@@ -928,6 +1092,11 @@ impl WorldSea {
             Arc::clone(self.responses.get_or_insert_with(|| {
                 Arc::new(std::sync::Mutex::new(ResponseCache::of(&surface)))
             }));
+        let now_s = surface.time_s();
+        self.rides
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .retain(|_, kept| kept.used_s <= now_s && kept.used_s >= now_s - RIDE_FORGOTTEN_S);
         self.now = Some(Arc::new(SeaNow {
             surface,
             draw: Arc::new(draw),
@@ -935,6 +1104,7 @@ impl WorldSea {
             water,
             bounds: std::sync::OnceLock::new(),
             responses,
+            rides: Arc::clone(&self.rides),
         }));
         Ok(told)
     }
@@ -955,26 +1125,61 @@ impl SeaNow {
     /// A ship of `hull` rides the sea: `entity` (its position, heading) is set on the waves
     /// at the sea's mean level `level_ellipsoid_m` (above the ellipsoid) with the heave, pitch
     /// and roll of its response to them at its heading and `velocity_enu_mps` (east, north,
-    /// the velocity it makes good), at the sea's time.
+    /// the velocity it makes good), at the sea's time. A `ship` named keeps its ride from
+    /// frame to frame: a change of its heading, velocity or the waves rings down through
+    /// its natural periods (`cig_sea::response::ShipRide`); `None`, the steady state.
     pub fn ride(
         &self,
         entity: &mut cig_scene::EntityInstance,
         hull: &cig_sea::motion::HullParameters,
         velocity_enu_mps: [f64; 2],
         level_ellipsoid_m: f64,
+        ship: Option<ShipKey>,
     ) {
         let response = self
             .responses
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner)
             .response(hull, entity.orientation.heading_deg, velocity_enu_mps);
-        cig_scene::sea::ride_the_sea(
-            entity,
-            &response,
-            self.surface.time_s(),
-            self.draw.origin,
-            level_ellipsoid_m,
+        let t_s = self.surface.time_s();
+        let at = cig_scene::sea::sea_plane_xy(
+            &self.plane,
+            entity.position.lat_deg,
+            entity.position.lon_deg,
         );
+        // The host's waves as they apply where the ship is.
+        let weights = self.surface.explicit_weights_at(at[0], at[1]);
+        let explicit_waves = self.surface.explicit_linear_waves(&weights);
+        let explicit = (!explicit_waves.is_empty()).then(|| {
+            SeawayResponse::new(
+                hull,
+                &explicit_waves,
+                entity.orientation.heading_deg,
+                velocity_enu_mps,
+            )
+        });
+        let ride = match ship {
+            None => ShipRide::steady(response, explicit, velocity_enu_mps),
+            Some(key) => {
+                let mut rides = self
+                    .rides
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                let kept = rides.entry(key).or_insert_with(|| KeptRide {
+                    ride: ShipRide::steady(
+                        Arc::clone(&response),
+                        explicit.clone(),
+                        velocity_enu_mps,
+                    ),
+                    used_s: t_s,
+                });
+                kept.ride
+                    .change(hull, (response, explicit), velocity_enu_mps, at, t_s);
+                kept.used_s = t_s;
+                kept.ride.clone()
+            }
+        };
+        cig_scene::sea::ride_the_sea(entity, &ride, t_s, self.draw.origin, level_ellipsoid_m);
     }
 
     /// An entity of `model` afloat at `at` (latitude, longitude, degrees; the height above the
@@ -982,9 +1187,10 @@ impl SeaNow {
     /// hull) heaves, pitches and rolls as it responds to the waves at its heading and
     /// `velocity_enu_mps` (east, north: the velocity it makes good), anything else follows the
     /// wave under it; pitch and roll come from the sea only when `clamp` asks for the attitude.
+    /// A `ship` named keeps its ride from frame to frame ([`SeaNow::ride`]).
     #[expect(
         clippy::too_many_arguments,
-        reason = "an entity's model, attitude, clamp, place, velocity and the sea's level: each needed, none grouped elsewhere"
+        reason = "an entity's model, attitude, clamp, place, velocity, the sea's level and which ship it is: each needed, none grouped elsewhere"
     )]
     pub fn float(
         &self,
@@ -995,6 +1201,7 @@ impl SeaNow {
         at: [f64; 3],
         velocity_enu_mps: [f64; 2],
         level_msl_m: f64,
+        ship: Option<ShipKey>,
     ) -> crate::pose::Pose {
         let [lat_deg, lon_deg, above_m] = at;
         let level_ellipsoid_m = level_msl_m + query.geoid_undulation_m(lat_deg, lon_deg);
@@ -1008,7 +1215,13 @@ impl SeaNow {
         };
         let attitude = clamp == cig_scene::snapshot::Clamp::HeightAndAttitude;
         if let Some(hull) = cig_scene::sea::builtin_hull(model) {
-            self.ride(&mut instance, &hull, velocity_enu_mps, level_ellipsoid_m);
+            self.ride(
+                &mut instance,
+                &hull,
+                velocity_enu_mps,
+                level_ellipsoid_m,
+                ship,
+            );
         } else {
             let [x, y] = cig_scene::sea::sea_plane_xy(&self.plane, lat_deg, lon_deg);
             let wave = self.surface.sample(x, y);

@@ -842,6 +842,12 @@ impl IgSession {
         self.ship_velocities = velocities;
     }
 
+    /// Sets one ship's velocity (east, north, m/s) before the poses are resolved: one the
+    /// scenario's script or the host's rates give this frame.
+    pub fn set_ship_velocity(&mut self, id: u16, velocity_enu_mps: [f64; 2]) {
+        self.ship_velocities.insert(id, velocity_enu_mps);
+    }
+
     /// The scenario's water, which the host's Maritime Surface Conditions override.
     pub fn set_scenario_water(&mut self, water: crate::sea::Water) {
         self.scenario_water = water;
@@ -1710,6 +1716,7 @@ impl IgSession {
                             [lat_deg, lon_deg, alt_m],
                             self.ship_velocities.get(&id).copied().unwrap_or_default(),
                             level,
+                            Some(crate::sea::ShipKey::Own(id)),
                         )
                     }),
                 };
@@ -2108,11 +2115,14 @@ impl IgSession {
         a: Geodetic,
         b: Geodetic,
     ) -> (Option<cig_terrain::LosResult>, Option<[f64; 3]>) {
-        let Some(sea) = &self.sea else {
-            return (query.los(a, b).ok(), None);
-        };
-        // The terrain's sightline bends as the sea's does.
+        // The sightline bends as what the eye sees does (standard terrestrial refraction),
+        // over land and sea alike.
         let refraction = crate::sea::sightline_refraction(a, b);
+        let Some(sea) = &self.sea else {
+            let terrain =
+                query.los_refracted(a, b, cig_terrain::CultureTest::LineOfSight, refraction);
+            return (terrain.ok(), None);
+        };
         let terrain =
             match query.los_refracted(a, b, cig_terrain::CultureTest::LineOfSight, refraction) {
                 Ok(r) => r.hit,

@@ -167,7 +167,32 @@ struct MadeGood {
     course_deg: f64,
 }
 
-/// This IG's ships' speed is sampled over at least this long, seconds.
+/// The horizontal velocity (east, north), m/s, the host's Rate Control gives a geodetic
+/// entity, if it gives one.
+fn host_velocity_enu_mps(e: &IgEntity) -> Option<[f64; 2]> {
+    let rates = e.rates?;
+    if !matches!(e.placement, Placement::Geodetic { .. }) {
+        return None;
+    }
+    let [x, y, z] = rates.linear_mps;
+    let enu = if rates.body_axes {
+        crate::pose::offset_enu(
+            e.orientation,
+            BodyOffset {
+                x_m: x,
+                y_m: y,
+                z_m: z,
+            },
+        )
+    } else {
+        // World axes: x north, y east, z down.
+        DVec3::new(y, x, -z)
+    };
+    Some([enu.x, enu.y])
+}
+
+/// This IG's ships' speed is sampled over at least this long, seconds (unless the host's
+/// Rate Control gives it).
 const SHIP_SPEED_SAMPLE_S: f64 = 0.5;
 /// A ship's last place older than this starts its speed over (a jump, a pause), seconds.
 const SHIP_SPEED_STALE_S: f64 = 5.0;
@@ -657,9 +682,13 @@ impl IgWorld {
         }
         self.session.advance(dt, query);
         self.update_sea(query);
+        // Ships whose velocity the script or the host gives ride the sea with it this frame.
+        for (id, velocity) in self.known_ship_velocities(&script_velocity) {
+            self.session.set_ship_velocity(id, velocity);
+        }
         self.session.resolve_poses(query);
         self.float_remote_ships(query);
-        self.track_own_ships(query);
+        self.track_own_ships(query, &self.known_ship_velocities(&script_velocity));
         let effect_time_s = effect_time_s(self.clock.now().unix_seconds());
         if self
             .effects
@@ -1703,11 +1732,19 @@ impl IgWorld {
             .map(|e| Geodetic::new(e.lat_deg, e.lon_deg, e.alt_m - self.eye_geoid_m));
         // The session lets go of last frame's sea so that its surface is reused in place.
         self.session.set_sea(None);
+        // Where this IG's entities stood last frame (for the host's entity-scoped waves).
+        let entity_places: BTreeMap<u16, Geodetic> = self
+            .session
+            .poses()
+            .iter()
+            .map(|(id, pose)| (*id, pose.position))
+            .collect();
         let result = self.sea.update(
             self.session.environment(),
             eye_msl,
             origin,
             self.clock.now().unix_seconds(),
+            &entity_places,
         );
         match result {
             Ok(told) => {
@@ -1766,6 +1803,7 @@ impl IgWorld {
                 [lat_deg, lon_deg, 0.0],
                 [v.x, v.y],
                 level,
+                Some(crate::sea::ShipKey::Remote(remote_instance_id(r.key))),
             );
             // Its wake, from the same velocity, along the track it made.
             let course_deg = v.x.atan2(v.y).to_degrees().rem_euclid(360.0);
@@ -1783,9 +1821,31 @@ impl IgWorld {
             .retain(|key, _| *key < REMOTE_WAKE || tracked.contains(key));
     }
 
-    /// This IG's own ships on the sea: their speed and course made good (sampled at least
-    /// [`SHIP_SPEED_SAMPLE_S`] apart), and their wakes.
-    fn track_own_ships(&mut self, query: &mut QuerySession) {
+    /// The horizontal velocities (east, north, m/s) the scenario's scripts (`scripted`) or the
+    /// host's Rate Control give this IG's entities that are ships.
+    fn known_ship_velocities(&self, scripted: &BTreeMap<u16, DVec3>) -> BTreeMap<u16, [f64; 2]> {
+        self.session
+            .entities()
+            .iter()
+            .filter(|(_, e)| {
+                e.life == EntityLife::Active && cig_scene::sea::builtin_hull(&e.model).is_some()
+            })
+            .filter_map(|(id, e)| {
+                let known = scripted
+                    .get(id)
+                    .map(|v| [v.x, v.y])
+                    .or_else(|| host_velocity_enu_mps(e));
+                known.map(|v| (*id, v))
+            })
+            .collect()
+    }
+
+    /// This IG's own ships on the sea: their speed and course made good, and their wakes.
+    /// The velocity is the scenario script's or the host's Rate Control's where they give
+    /// one (from the ship's first frame), else sampled from its places at least
+    /// [`SHIP_SPEED_SAMPLE_S`] apart (the ship is taken at rest until the first sample; the
+    /// change then rings down through its natural periods, `cig_sea::response::ShipRide`).
+    fn track_own_ships(&mut self, query: &mut QuerySession, known: &BTreeMap<u16, [f64; 2]>) {
         if self.session.sea().is_none() {
             self.ship_motion.clear();
             self.wake_tracks.retain(|key, _| *key >= REMOTE_WAKE);
@@ -1818,7 +1878,22 @@ impl IgWorld {
             };
             let entry = self.ship_motion.entry(*id).or_insert(at_rest);
             let dt_s = now - entry.at_s;
-            if dt_s > SHIP_SPEED_STALE_S {
+            if let Some(&velocity) = known.get(id) {
+                // The script or the host's rates say it at once.
+                let speed_mps = velocity[0].hypot(velocity[1]);
+                *entry = MadeGood {
+                    speed_mps,
+                    course_deg: if speed_mps > 0.1 {
+                        velocity[0]
+                            .atan2(velocity[1])
+                            .to_degrees()
+                            .rem_euclid(360.0)
+                    } else {
+                        pose.orientation.heading_deg
+                    },
+                    ..at_rest
+                };
+            } else if dt_s > SHIP_SPEED_STALE_S {
                 *entry = at_rest;
             } else if dt_s >= SHIP_SPEED_SAMPLE_S {
                 let moved = EnuFrame::new(entry.position).geodetic_to_enu(p);

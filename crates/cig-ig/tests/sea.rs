@@ -29,16 +29,22 @@ const SPACING_M: f64 = 60.0;
 /// 65 x 65 posts 60 m apart: the western half sea (water posts at 0 m MSL), the eastern half
 /// land at 20 m.
 fn query() -> QuerySession {
+    database(SPACING_M, 32)
+}
+
+/// 65 x 65 posts `spacing_m` apart: the western `sea_columns` sea (water posts at 0 m MSL),
+/// the rest land at 20 m.
+fn database(spacing_m: f64, sea_columns: usize) -> QuerySession {
     let (n, e) = cig_geo::metres_per_degree(SOUTH);
     let grid = GeoGrid {
         south_lat_deg: SOUTH,
         west_lon_deg: WEST,
-        dlat_deg: SPACING_M / n,
-        dlon_deg: SPACING_M / e,
+        dlat_deg: spacing_m / n,
+        dlon_deg: spacing_m / e,
         rows: 65,
         cols: 65,
     };
-    let sea = |k: usize| k % grid.cols < 32;
+    let sea = |k: usize| k % grid.cols < sea_columns;
     let raster = Raster {
         grid,
         elevation_m: (0..grid.len())
@@ -567,6 +573,52 @@ fn line_of_sight_over_open_sea_sees_the_refracted_bulge_of_the_earth() {
 }
 
 #[test]
+fn line_of_sight_over_land_without_a_sea_is_refracted_too() {
+    // Land at 20 m, 25.6 km across, and no sea in the world: the IG's sightlines bend as
+    // what the eye sees does.
+    let mut q = database(400.0, 0);
+    let mut w = world_with("", false);
+    assert!(w.sea().is_none());
+    let k = cig_ig::sea::STANDARD_REFRACTION_K;
+    let (_, east_radius) = radii_m(SOUTH + 0.05);
+    let r_eff = east_radius / (1.0 - k);
+    let start = offset_point(4_000.0, 6_000.0);
+    let pair = |id: u16, span: f64, above_m: f64| {
+        let end = offset_point(4_000.0 + span, 6_000.0);
+        los_segment(
+            id,
+            (start.0, start.1, 20.0 + above_m),
+            (end.0, end.1, 20.0 + above_m),
+        )
+    };
+    send(
+        &mut w,
+        1,
+        vec![
+            // 16 km 4.2 m above the ground: the refracted bulge is 4.36 m, hidden.
+            pair(1, 16_000.0, 4.2),
+            // 16 km 4.8 m up: clear with refraction, hidden without it (5.02 m).
+            pair(2, 16_000.0, 4.8),
+        ],
+    );
+    let reply = frame(&mut w, &mut q);
+    let answers = los_answers(&reply);
+    let blocked = &answers[&1];
+    assert!(blocked.valid && !blocked.visible, "{blocked:?}");
+    // Grazing, the range moves about 5 km per metre of height: 100 m is 2 cm.
+    let expected = 8_000.0 - (8_000.0_f64.powi(2) - 2.0 * 4.2 * r_eff).sqrt();
+    assert!(
+        (blocked.range_m - expected).abs() < 100.0,
+        "range {} against {expected}",
+        blocked.range_m
+    );
+    let clear = &answers[&2];
+    assert!(clear.valid && clear.visible, "{clear:?}");
+    assert!(16_000.0_f64.powi(2) / (8.0 * east_radius) > 4.8);
+    assert!(16_000.0_f64.powi(2) / (8.0 * r_eff) < 4.8);
+}
+
+#[test]
 fn a_line_of_sight_vector_down_to_the_sea_off_the_database_meets_it() {
     let mut q = query();
     let mut w = world_with("[sea]\nsea_state = 0\n", false);
@@ -640,11 +692,20 @@ fn the_sea_replaces_the_databases_sea_posts_and_the_coast_still_blocks() {
         "{:?}",
         with_sea[&1]
     );
+    // Without a sea the terrain's sightline bends as much and clears its sea posts too; the
+    // geometric chord would not.
     assert!(
-        without[&1].valid && !without[&1].visible,
-        "the terrain alone: {:?}",
+        without[&1].valid && without[&1].visible,
+        "the terrain alone, refracted: {:?}",
         without[&1]
     );
+    let geometric = q
+        .los(
+            Geodetic::new(south.0, south.1, 4.1 + f64::from(GEOID_M)),
+            Geodetic::new(north.0, north.1, 4.1 + f64::from(GEOID_M)),
+        )
+        .expect("los");
+    assert!(!geometric.visible, "{geometric:?}");
     for answers in [&with_sea, &without] {
         let coast = &answers[&2];
         assert!(coast.valid && !coast.visible, "{coast:?}");
@@ -881,4 +942,181 @@ fn a_ship_that_turned_leaves_its_wake_along_the_track_it_made() {
         // West-bound: astern is east, on the line.
         assert!(at.y.abs() < 2.0 && at.x >= -0.5, "{at}");
     }
+}
+
+/// A world whose clock starts `after_s` seconds after [`world_with`]'s.
+fn world_started(scenario: &str, after_s: f64) -> IgWorld {
+    IgWorld::new(
+        Scenario::from_toml(scenario).expect("scenario"),
+        WorldConfig {
+            session: SessionConfig::default(),
+            start: UtcTime::from_calendar(2026, 6, 21, 12, 0, after_s).expect("time"),
+            fog_mode: FogMode::Exponential,
+            effects: EffectsConfig::default(),
+            join_exercise: false,
+        },
+    )
+    .expect("world")
+}
+
+#[test]
+fn a_ship_that_turns_rings_down_into_its_new_motion_and_knows_its_speed_at_once() {
+    // A patrol craft in sea state 6 runs west at 8 m/s and turns north at the corner, 200 m
+    // on, at 25 s (A). B starts at the corner at 25 s already heading north; C starts 80 m
+    // south of the corner at 15 s heading north, so it is where B is from 25 s on.
+    let ship = |from: (f64, f64), path: &[(f64, f64)]| {
+        let path: Vec<String> = path.iter().map(|(a, b)| format!("[{a}, {b}]")).collect();
+        format!(
+            "[sea]\nsea_state = 6\nwind_from_deg = 270\n\
+             [[entities]]\nid = 1\nmodel = \"patrol_craft\"\nlat_deg = {}\nlon_deg = {}\n\
+             clamp = \"height_and_attitude\"\nspeed_mps = 8\npath = [{}]\n",
+            from.0,
+            from.1,
+            path.join(", ")
+        )
+    };
+    let start = at_post(20.0, 20.0);
+    let corner = at_post(20.0, 20.0 - 200.0 / SPACING_M);
+    let north = at_post(60.0, 20.0 - 200.0 / SPACING_M);
+    let south = at_post(20.0 - 80.0 / SPACING_M, 20.0 - 200.0 / SPACING_M);
+    let mut q = query();
+    let mut a = world_with(&ship(start, &[corner, north]), false);
+    let mut b = world_started(&ship(corner, &[north]), 25.0);
+    let mut c = world_started(&ship(south, &[corner, north]), 15.0);
+    let dt = 0.1;
+    for _ in 0..100 {
+        c.step(dt, &mut q);
+    }
+    let mut rolls_a = Vec::new();
+    for _ in 0..250 {
+        a.step(dt, &mut q);
+        rolls_a.push(ship_motion(&a)[2]);
+    }
+    let mut differences = Vec::new();
+    for k in 0..900 {
+        a.step(dt, &mut q);
+        b.step(dt, &mut q);
+        c.step(dt, &mut q);
+        let (ma, mb, mc) = (ship_motion(&a), ship_motion(&b), ship_motion(&c));
+        if k < 10 {
+            // B knows its speed from its first frame: it rides as C, which has sailed this
+            // course for 10 s (no half second at rest).
+            for (x, y) in mb.iter().zip(&mc) {
+                assert!((x - y).abs() < 1e-4, "frame {k}: B {mb:?} against C {mc:?}");
+            }
+        }
+        rolls_a.push(ma[2]);
+        differences.push((ma[2] - mb[2]).abs());
+    }
+    // Through the turn A's roll changes no faster than it does anywhere else on its run.
+    let steps: Vec<f64> = rolls_a.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    let at_turn = steps[248..252].iter().copied().fold(0.0, f64::max);
+    let elsewhere = steps[..240].iter().copied().fold(0.0, f64::max);
+    assert!(
+        at_turn <= 1.2 * elsewhere,
+        "roll step at the turn {at_turn} deg, elsewhere at most {elsewhere}"
+    );
+    // Just after the turn A still rolls as it did before, then rings down into B's motion.
+    let early = differences[..20].iter().copied().fold(0.0, f64::max);
+    let late = differences[800..].iter().copied().fold(0.0, f64::max);
+    assert!(early > 0.5, "A against B just after the turn: {early} deg");
+    assert!(
+        late < 0.02 * early,
+        "A against B 80 s on: {late} deg (early {early})"
+    );
+}
+
+#[test]
+fn regional_and_entity_waves_apply_where_the_host_puts_them() {
+    // A calm sea, a 2 m swell confined to a region 3 km west of the database and a 1 m wave
+    // around the ship (entity 1) on the database's sea.
+    let mut q = query();
+    let mut w = world_with(&ship_scenario(0), false);
+    let region_centre = offset_point(-3_000.0, 1_000.0);
+    let ship = at_post(32.0, 12.0);
+    let far = offset_point(-9_000.0, 1_000.0);
+    let wave = |scope: u8, id: u16, height: f32, wavelength_m: f32, period_s: f32| {
+        Packet::WaveControl(WaveControl {
+            entity_or_region_id: id,
+            wave_id: 1,
+            wave_enable: true,
+            scope,
+            height_m: height,
+            wavelength_m,
+            period_s,
+            direction_deg: 90.0,
+            ..WaveControl::default()
+        })
+    };
+    send(
+        &mut w,
+        1,
+        vec![
+            Packet::EnvironmentalRegionControl(EnvironmentalRegionControl {
+                region_id: 4,
+                region_state: 1,
+                latitude_deg: region_centre.0,
+                longitude_deg: region_centre.1,
+                size_x_m: 1_500.0,
+                size_y_m: 1_500.0,
+                transition_perimeter_m: 300.0,
+                ..EnvironmentalRegionControl::default()
+            }),
+            wave(1, 4, 2.0, 80.0, 7.2),
+            // A swell longer than the ship, which it follows.
+            wave(2, 1, 1.0, 400.0, 16.0),
+        ],
+    );
+    frame(&mut w, &mut q);
+    // The waves' span along a wavelength at a place, as HOT answers it.
+    let span = |w: &mut IgWorld, q: &mut QuerySession, (lat, lon): (f64, f64), step_m: f64| {
+        let (_, e) = cig_geo::metres_per_degree(lat);
+        let requests = (0..16)
+            .map(|k| hot_request(10 + k, (lat, lon + f64::from(k) * step_m / e)))
+            .collect();
+        send(w, 2, requests);
+        let answers = hot_answers(&frame(w, q));
+        assert_eq!(answers.len(), 16);
+        let heights: Vec<f64> = answers.iter().map(|a| a.2).collect();
+        heights.iter().copied().fold(f64::MIN, f64::max)
+            - heights.iter().copied().fold(f64::MAX, f64::min)
+    };
+    let in_region = span(&mut w, &mut q, region_centre, 5.0);
+    let by_the_ship = span(&mut w, &mut q, (ship.0, ship.1 - 0.003), 25.0);
+    let elsewhere = span(&mut w, &mut q, far, 25.0);
+    assert!((in_region - 2.0).abs() < 0.3, "in the region: {in_region}");
+    assert!(
+        (by_the_ship - 1.0).abs() < 0.2,
+        "by the ship: {by_the_ship}"
+    );
+    assert!(elsewhere < 0.05, "elsewhere the sea is calm: {elsewhere}");
+    // The ship rides its own wave: it heaves by about its height.
+    let mut heave = Vec::new();
+    for _ in 0..80 {
+        w.step(0.25, &mut q);
+        heave.push(ship_motion(&w)[0]);
+    }
+    let heave_span = heave.iter().copied().fold(f64::MIN, f64::max)
+        - heave.iter().copied().fold(f64::MAX, f64::min);
+    assert!(
+        heave_span > 0.7 && heave_span < 1.2,
+        "the ship heaves {heave_span} m in its 1 m swell"
+    );
+    // The region deactivated: its wave is gone, and the sea there is calm.
+    send(
+        &mut w,
+        3,
+        vec![Packet::EnvironmentalRegionControl(
+            EnvironmentalRegionControl {
+                region_id: 4,
+                region_state: 0,
+                latitude_deg: region_centre.0,
+                longitude_deg: region_centre.1,
+                ..EnvironmentalRegionControl::default()
+            },
+        )],
+    );
+    frame(&mut w, &mut q);
+    let in_region = span(&mut w, &mut q, region_centre, 5.0);
+    assert!(in_region < 0.05, "the region gone: {in_region}");
 }

@@ -45,6 +45,9 @@ pub const MAX_CASCADES: usize = 4;
 /// The most explicit waves (CIGI Wave Control) drawn: the highest.
 pub const MAX_EXPLICIT_WAVES: usize = 8;
 
+/// The most areas the drawn explicit waves are confined to (one per wave at most).
+pub const MAX_WAVE_AREAS: usize = MAX_EXPLICIT_WAVES;
+
 /// The most ships' wakes drawn: the nearest.
 pub const MAX_WAKES: usize = 8;
 
@@ -71,8 +74,15 @@ struct SeaUniform {
     /// phase at the point under the eye (w, wrapped); then its amplitude and horizontal
     /// displacement amplitude (xy).
     waves: [[f32; 4]; 2 * MAX_EXPLICIT_WAVES],
-    /// x: the water's surface temperature (K), for a thermal sensor's view; y: wakes drawn.
+    /// x: the water's surface temperature (K), for a thermal sensor's view; y: wakes drawn;
+    /// z: wave areas drawn.
     thermal: [f32; 4],
+    /// Per wave area (`cig_sea::surface::WaveArea`): its centre relative to the eye in the sea
+    /// plane's axes (xy) and half sizes (zw); then the cosine and sine of its rotation, its
+    /// corner radius and its transition band (m).
+    areas: [[f32; 4]; 2 * MAX_WAVE_AREAS],
+    /// Per wave area, 1 a region's, 2 an entity's.
+    area_kinds: [[f32; 4]; MAX_WAVE_AREAS / 4],
     /// Per wake: the stern's place relative to the eye (east, north, metres) and the unit
     /// course (east, north); then speed (m/s), length and beam (m), the arms' half-angle
     /// (radians); then the foam made (0..1), its e-folding time (s).
@@ -312,12 +322,46 @@ impl SeaPass {
             thermal: [(sea.water_temperature_c + 273.15) as f32, 0.0, 0.0, 0.0],
             ..bytemuck::Zeroable::zeroed()
         };
-        // The highest explicit waves, their phases worked out at the eye in double precision.
-        let mut explicit: Vec<_> = sea.explicit_waves.iter().collect();
-        explicit.sort_by(|a, b| b.amplitude_m.total_cmp(&a.amplitude_m));
+        // The highest explicit waves, their phases worked out at the eye in double precision,
+        // and the areas they are confined to.
+        let mut explicit: Vec<_> = sea
+            .explicit_waves
+            .iter()
+            .zip(sea.explicit_areas.iter().chain(std::iter::repeat(&None)))
+            .collect();
+        explicit.sort_by(|a, b| b.0.amplitude_m.total_cmp(&a.0.amplitude_m));
         explicit.truncate(MAX_EXPLICIT_WAVES);
         uniform.water[3] = explicit.len() as f32;
-        for (slots, wave) in uniform.waves.chunks_exact_mut(2).zip(explicit) {
+        let mut drawn_areas: Vec<usize> = Vec::new();
+        for (slots, (wave, area)) in uniform.waves.chunks_exact_mut(2).zip(explicit) {
+            // The slot of its area, plus one (0: everywhere).
+            let area_slot = match area.and_then(|i| sea.wave_areas.get(i).map(|a| (i, a))) {
+                None => 0.0,
+                Some((i, a)) => {
+                    let slot = drawn_areas.iter().position(|d| *d == i).unwrap_or_else(|| {
+                        drawn_areas.push(i);
+                        drawn_areas.len() - 1
+                    });
+                    let (sin, cos) = a.rotation_deg.to_radians().sin_cos();
+                    uniform.areas[2 * slot] = [
+                        (a.centre_m[0] - eye_x) as f32,
+                        (a.centre_m[1] - eye_y) as f32,
+                        a.half_size_m[0] as f32,
+                        a.half_size_m[1] as f32,
+                    ];
+                    uniform.areas[2 * slot + 1] = [
+                        cos as f32,
+                        sin as f32,
+                        a.corner_radius_m as f32,
+                        a.transition_m as f32,
+                    ];
+                    uniform.area_kinds[slot / 4][slot % 4] = match a.kind {
+                        cig_scene::sea::AreaKind::Region => 1.0,
+                        cig_scene::sea::AreaKind::Entity => 2.0,
+                    };
+                    (slot + 1) as f32
+                }
+            };
             let [dx, dy] = wave.direction;
             let phase = wave.k_rad_m * (dx * eye_x + dy * eye_y) - wave.omega_rad_s * sea.time_s
                 + wave.phase_rad;
@@ -330,10 +374,11 @@ impl SeaPass {
             slots[1] = [
                 wave.amplitude_m as f32,
                 wave.displacement_m as f32,
-                0.0,
+                area_slot,
                 0.0,
             ];
         }
+        uniform.thermal[2] = drawn_areas.len() as f32;
         // The nearest wakes, their sterns relative to the eye in its east and north, and
         // their centrelines astern along the sterns' past places.
         let mut near: Vec<(f64, [[f32; 4]; 3], WakeLine)> = wakes

@@ -3,13 +3,15 @@
 //! not resolve and the water's colour. The renderer draws the sea from this and nothing else,
 //! so what it draws is the surface the height queries sample.
 //!
-//! Limits: one sea per frame (no regional conditions), at one level (mean sea level plus the
-//! host's sea surface height); the renderer draws at most 8 explicit waves (CIGI Wave Control;
-//! the highest), where the height queries sample them all.
+//! Limits: one wind sea per frame (the host's explicit waves may be confined to regions or
+//! around entities), at one level (mean sea level plus the host's sea surface height); the
+//! renderer draws at most 8 explicit waves (CIGI Wave Control; the highest) in at most 8
+//! areas, where the height queries sample them all.
 
 use cig_geo::Geodetic;
 use cig_sea::motion::HullParameters;
-use cig_sea::response::SeawayResponse;
+use cig_sea::response::ShipRide;
+pub use cig_sea::surface::{AreaKind, WaveArea};
 use cig_sea::surface::{CascadeGrid, SeaSurface};
 
 /// Cox and Munk's (1954) total mean square slope of a wind sea, `0.003 + 0.00512 U10`.
@@ -71,6 +73,10 @@ pub struct SeaDraw {
     pub water_temperature_c: f64,
     /// The host's explicit waves (CIGI Wave Control), as the surface evaluates them.
     pub explicit_waves: Vec<cig_sea::surface::GerstnerWave>,
+    /// Where each explicit wave applies: `None` everywhere, else its area in `wave_areas`.
+    pub explicit_areas: Vec<Option<usize>>,
+    /// The areas explicit waves are confined to (`cig_sea::surface::WaveArea`).
+    pub wave_areas: Vec<WaveArea>,
     /// The surface's wave clock ([`wave_clock_s`]) the grids and waves are at, seconds.
     pub time_s: f64,
 }
@@ -92,6 +98,8 @@ impl SeaDraw {
             water_rgb: [0.004, 0.016, 0.028],
             water_temperature_c: 15.0,
             explicit_waves: surface.gerstner_waves().to_vec(),
+            explicit_areas: surface.explicit_wave_areas().to_vec(),
+            wave_areas: surface.wave_areas().to_vec(),
             time_s: surface.time_s(),
         }
     }
@@ -108,12 +116,12 @@ pub fn builtin_hull(model: &str) -> Option<HullParameters> {
 
 /// Sets a floating ship on the sea: its waterline (the model's origin) at the sea's mean level
 /// under it (`level_ellipsoid_m`: above the ellipsoid) plus its heave, pitched and rolled by
-/// `response` (the hull's response to the sea at its heading and velocity,
-/// `cig_sea::response`) at the sea's time `sea_time_s`. `plane_origin` is the sea's origin
-/// ([`SeaDraw::origin`]).
+/// `ride` (the hull's response to the sea at its heading and velocity, with what is left of
+/// its last change, `cig_sea::response`) at the sea's time `sea_time_s`. `plane_origin` is the
+/// sea's origin ([`SeaDraw::origin`]).
 pub fn ride_the_sea(
     entity: &mut crate::EntityInstance,
-    response: &SeawayResponse,
+    ride: &ShipRide,
     sea_time_s: f64,
     plane_origin: Geodetic,
     level_ellipsoid_m: f64,
@@ -121,7 +129,7 @@ pub fn ride_the_sea(
     let plane = cig_geo::EnuFrame::new(plane_origin);
     let [x_east_m, y_north_m] =
         sea_plane_xy(&plane, entity.position.lat_deg, entity.position.lon_deg);
-    let motion = response.motion_at(x_east_m, y_north_m, sea_time_s);
+    let motion = ride.motion_at(x_east_m, y_north_m, sea_time_s);
     entity.position.alt_m = level_ellipsoid_m + motion.heave_m;
     entity.orientation.pitch_deg = motion.pitch_deg;
     entity.orientation.roll_deg = motion.roll_deg;
@@ -478,7 +486,7 @@ mod tests {
                 };
                 ride_the_sea(
                     &mut ship,
-                    &response,
+                    &ShipRide::steady(std::sync::Arc::clone(&response), None, [2.0, 3.0]),
                     surface.time_s(),
                     sea.origin,
                     sea.level_m - 30.0,

@@ -40,9 +40,19 @@
 //! steady state: no start-up transient and no history to keep). [`crate::motion`] integrates
 //! the same oscillators in time; the two agree (the tests).
 //!
+//! 5. **Changes** ([`ShipRide`]): when the ship turns, changes speed or the sea changes at
+//!    `t₀`, the oscillators' states (heave, the two slopes, and their rates, [`ModeStates`])
+//!    at `t₀` differ from the new steady state's. The difference rings down as each mode's free
+//!    motion `e^(−ζω_n τ) (x₀ cos ω_d τ + (v₀ + ζω_n x₀)/ω_d · sin ω_d τ)` ([`MotionTransient`]),
+//!    which with the new steady state is the exact solution of the oscillator whose forcing
+//!    switched at `t₀`. A patrol craft rolling at resonance that turns into the sea: the ride
+//!    follows the time-domain integration to 0.07° rms over the next three roll periods, where
+//!    the new steady state alone is off by 7.7° (the tests).
+//!
 //! Limits: linear, uncoupled modes (no parametric roll, nonlinear righting arm, slamming or
-//! green water); the steady state for the present heading and velocity, so a change of course
-//! or speed changes the motion at once, without a transient; a rectangular waterplane (real
+//! green water); a change of course or speed is a step between two steady states (a turn is
+//! taken as the sequence of headings the IG sees, each a step; the transient follows each);
+//! a rectangular waterplane (real
 //! ones taper, letting a little less through of the waves about the ship's length); one depth
 //! factor for the three modes; the linear sea (the choppy crests' horizontal displacement is
 //! not felt); added mass and damping constant with frequency; no current (the velocity is
@@ -328,11 +338,234 @@ impl SeawayResponse {
             along += term.pitch.re * cos - term.pitch.im * sin;
             across += term.roll.re * cos - term.roll.im * sin;
         }
+        ModeStates::motion_of([heave, along, across])
+    }
+
+    /// The three oscillators' states and their rates for the ship at (`x_east_m`,
+    /// `y_north_m`) at `t_s` moving over the ground at `velocity_enu_mps`: the phase of each
+    /// wave turns at its encounter frequency `ω − k·v`, so the rate of `Re(C e^(iφ))` is
+    /// `Re(i (k·v − ω) C e^(iφ))`.
+    pub fn states_at(
+        &self,
+        x_east_m: f64,
+        y_north_m: f64,
+        t_s: f64,
+        velocity_enu_mps: [f64; 2],
+    ) -> ModeStates {
+        let mut states = ModeStates::default();
+        for term in &self.terms {
+            let phase =
+                term.k_rad_m[0] * x_east_m + term.k_rad_m[1] * y_north_m - term.omega_rad_s * t_s;
+            let (sin, cos) = phase.sin_cos();
+            let turn = term.k_rad_m[0] * velocity_enu_mps[0]
+                + term.k_rad_m[1] * velocity_enu_mps[1]
+                - term.omega_rad_s;
+            for (m, c) in [term.heave, term.pitch, term.roll].into_iter().enumerate() {
+                states.value[m] += c.re * cos - c.im * sin;
+                // Re(i w C e^(iφ)) = −w (C.re sin φ + C.im cos φ).
+                states.rate[m] -= turn * (c.re * sin + c.im * cos);
+            }
+        }
+        states
+    }
+}
+
+/// The three oscillators' states: heave (m, up), the waterplane's slope along the hull (bow
+/// up) and across it (starboard up), with their rates (per second).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ModeStates {
+    pub value: [f64; 3],
+    pub rate: [f64; 3],
+}
+
+impl ModeStates {
+    /// Heave, pitch `atan b` and roll `−atan c` from the states `[heave, b, c]`.
+    pub fn motion_of([heave, along, across]: [f64; 3]) -> ShipMotion {
         ShipMotion {
             heave_m: heave,
             pitch_deg: along.atan().to_degrees(),
             roll_deg: -across.atan().to_degrees(),
         }
+    }
+
+    fn plus(self, other: ModeStates) -> ModeStates {
+        ModeStates {
+            value: [0, 1, 2].map(|m| self.value[m] + other.value[m]),
+            rate: [0, 1, 2].map(|m| self.rate[m] + other.rate[m]),
+        }
+    }
+
+    fn minus(self, other: ModeStates) -> ModeStates {
+        ModeStates {
+            value: [0, 1, 2].map(|m| self.value[m] - other.value[m]),
+            rate: [0, 1, 2].map(|m| self.rate[m] - other.rate[m]),
+        }
+    }
+}
+
+/// A transient below this (metres of heave, or slope) is spent.
+const SPENT_TRANSIENT: f64 = 1.0e-5;
+
+/// The free motion the oscillators are left with when the forcing changes at `start_s` (the
+/// ship turns, changes speed, or the sea changes): each mode
+/// `x(τ) = e^(−ζω_n τ) (x₀ cos ω_d τ + (v₀ + ζω_n x₀) / ω_d · sin ω_d τ)`,
+/// `ω_d = ω_n √(1 − ζ²)`, `τ = t − start`, from the mismatch `x₀`, `v₀` between the motion
+/// before the change and the new steady state at that instant. The steady state plus this is
+/// the exact solution of the linear oscillator whose forcing switched at `start_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotionTransient {
+    start_s: f64,
+    /// Per mode: natural frequency (rad/s), damping ratio, `x₀`, `v₀`.
+    modes: [[f64; 4]; 3],
+}
+
+impl MotionTransient {
+    /// The free motion of `hull`'s heave, pitch and roll from the states' `mismatch` at
+    /// `start_s`.
+    pub fn new(hull: &HullParameters, start_s: f64, mismatch: ModeStates) -> MotionTransient {
+        let natural = [
+            (hull.heave_period_s(), hull.heave_damping()),
+            (hull.pitch_period_s(), hull.pitch_damping()),
+            (hull.roll_period_s(), hull.roll_damping()),
+        ];
+        let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+        MotionTransient {
+            start_s,
+            modes: [0, 1, 2].map(|m| {
+                let (period_s, zeta) = natural[m];
+                [
+                    std::f64::consts::TAU / period_s,
+                    zeta.min(0.99),
+                    finite(mismatch.value[m]),
+                    finite(mismatch.rate[m]),
+                ]
+            }),
+        }
+    }
+
+    /// The free motion's states at `t_s` (before its start: at its start).
+    pub fn at(&self, t_s: f64) -> ModeStates {
+        let tau = (t_s - self.start_s).max(0.0);
+        let mut states = ModeStates::default();
+        for (m, &[omega_n, zeta, x0, v0]) in self.modes.iter().enumerate() {
+            let decay = zeta * omega_n;
+            let omega_d = omega_n * (1.0 - zeta * zeta).sqrt();
+            let envelope = (-decay * tau).exp();
+            let (sin, cos) = (omega_d * tau).sin_cos();
+            let b = (v0 + decay * x0) / omega_d;
+            states.value[m] = envelope * (x0 * cos + b * sin);
+            // d/dτ of e^(−aτ)(x₀ cos ω_dτ + b sin ω_dτ).
+            states.rate[m] =
+                envelope * ((b * omega_d - decay * x0) * cos - (x0 * omega_d + decay * b) * sin);
+        }
+        states
+    }
+
+    /// Whether the free motion has died away by `t_s` (its envelope below 10⁻⁵ m or slope in
+    /// every mode), or `t_s` is before its start (the clock went back).
+    pub fn is_spent(&self, t_s: f64) -> bool {
+        let tau = t_s - self.start_s;
+        tau < 0.0
+            || self.modes.iter().all(|&[omega_n, zeta, x0, v0]| {
+                let omega_d = omega_n * (1.0 - zeta * zeta).sqrt();
+                let size = x0.abs() + (v0.abs() + zeta * omega_n * x0.abs()) / omega_d;
+                size * (-zeta * omega_n * tau).exp() < SPENT_TRANSIENT
+            })
+    }
+}
+
+/// One ship's ride from frame to frame: the steady response to the sea at its present heading
+/// and velocity, plus the free motion left over from its last change of course, speed or sea
+/// ([`MotionTransient`]), so the ship's motion stays continuous through a turn and rings down
+/// at its natural periods, as the time-domain oscillators of [`crate::motion`] do.
+///
+/// A pure function of the changes it was given and when: IGs that see the same ship change
+/// at the same sea time draw the same motion; one that starts later takes the steady state
+/// until the next change (the difference dies away with the transient).
+#[derive(Clone, Debug)]
+pub struct ShipRide {
+    response: Arc<SeawayResponse>,
+    /// The response to the host's explicit waves as they apply where the ship is.
+    explicit: Option<SeawayResponse>,
+    velocity_enu_mps: [f64; 2],
+    transient: Option<MotionTransient>,
+}
+
+impl ShipRide {
+    /// A ship in the steady state of `response` (and of `explicit`, its response to the host's
+    /// explicit waves where it is), moving at `velocity_enu_mps` (east, north).
+    pub fn steady(
+        response: Arc<SeawayResponse>,
+        explicit: Option<SeawayResponse>,
+        velocity_enu_mps: [f64; 2],
+    ) -> ShipRide {
+        ShipRide {
+            response,
+            explicit,
+            velocity_enu_mps: velocity_enu_mps.map(|v| if v.is_finite() { v } else { 0.0 }),
+            transient: None,
+        }
+    }
+
+    /// The response the ship is in now.
+    pub fn response(&self) -> &Arc<SeawayResponse> {
+        &self.response
+    }
+
+    /// The oscillators' states at (`x_east_m`, `y_north_m`) at `t_s`.
+    pub fn states_at(&self, x_east_m: f64, y_north_m: f64, t_s: f64) -> ModeStates {
+        let mut steady = self
+            .response
+            .states_at(x_east_m, y_north_m, t_s, self.velocity_enu_mps);
+        if let Some(explicit) = &self.explicit {
+            steady =
+                steady.plus(explicit.states_at(x_east_m, y_north_m, t_s, self.velocity_enu_mps));
+        }
+        match self.transient {
+            Some(transient) if t_s >= transient.start_s => steady.plus(transient.at(t_s)),
+            _ => steady,
+        }
+    }
+
+    /// The ship's heave, pitch and roll at (`x_east_m`, `y_north_m`) at `t_s`.
+    pub fn motion_at(&self, x_east_m: f64, y_north_m: f64, t_s: f64) -> ShipMotion {
+        let live = self.transient.is_some_and(|t| !t.is_spent(t_s));
+        if self.explicit.is_none() && !live {
+            return self.response.motion_at(x_east_m, y_north_m, t_s);
+        }
+        ModeStates::motion_of(self.states_at(x_east_m, y_north_m, t_s).value)
+    }
+
+    /// The ship now in `response` (and `explicit`) at `velocity_enu_mps` from `t_s`, where it
+    /// is at (`x_east_m`, `y_north_m`): the motion it had goes on into the new steady state
+    /// through a transient. The same response (the same `Arc`), explicit response and
+    /// velocity change nothing.
+    pub fn change(
+        &mut self,
+        hull: &HullParameters,
+        (response, explicit): (Arc<SeawayResponse>, Option<SeawayResponse>),
+        velocity_enu_mps: [f64; 2],
+        [x_east_m, y_north_m]: [f64; 2],
+        t_s: f64,
+    ) {
+        let velocity_enu_mps = velocity_enu_mps.map(|v| if v.is_finite() { v } else { 0.0 });
+        if Arc::ptr_eq(&response, &self.response)
+            && explicit == self.explicit
+            && velocity_enu_mps == self.velocity_enu_mps
+        {
+            if self.transient.is_some_and(|t| t.is_spent(t_s)) {
+                self.transient = None;
+            }
+            return;
+        }
+        let before = self.states_at(x_east_m, y_north_m, t_s);
+        let next = ShipRide::steady(response, explicit, velocity_enu_mps);
+        let after = next.states_at(x_east_m, y_north_m, t_s);
+        let transient = MotionTransient::new(hull, t_s, before.minus(after));
+        *self = ShipRide {
+            transient: (!transient.is_spent(t_s)).then_some(transient),
+            ..next
+        };
     }
 }
 
@@ -365,10 +598,12 @@ fn steps(value: f64, step: f64) -> i64 {
 }
 
 impl ResponseCache {
-    /// The cache for `surface`'s waves (make a new one when the sea's waves change).
+    /// The cache for `surface`'s wind sea and swell (make a new one when they change); the
+    /// host's explicit waves, which apply by place, are each ship's own
+    /// ([`SeaSurface::explicit_linear_waves`], [`ShipRide`]).
     pub fn of(surface: &SeaSurface) -> ResponseCache {
         ResponseCache {
-            waves: surface.linear_waves(),
+            waves: surface.spectral_linear_waves(),
             made: HashMap::new(),
         }
     }
@@ -497,16 +732,9 @@ mod tests {
         assert!(rms(&spread) > 0.3, "{spread:?}");
     }
 
-    /// The closed form against integrating the oscillators in time (crate::motion) on the
-    /// same waves, each scaled by the depth factor the closed form applies.
-    fn against_time_domain(hull: HullParameters, waves: &[LinearWave], course: StraightCourse) {
-        let response = SeawayResponse::new(
-            &hull,
-            waves,
-            course.pose_at(0.0).heading_deg,
-            course.velocity_enu_mps(),
-        );
-        let scaled: Vec<LinearWave> = waves
+    /// `waves` each scaled by the depth factor the closed form applies for `hull`.
+    fn depth_scaled(hull: &HullParameters, waves: &[LinearWave]) -> Vec<LinearWave> {
+        waves
             .iter()
             .map(|w| {
                 let k = w.k_rad_m[0].hypot(w.k_rad_m[1]);
@@ -516,7 +744,19 @@ mod tests {
                     ..*w
                 }
             })
-            .collect();
+            .collect()
+    }
+
+    /// The closed form against integrating the oscillators in time (crate::motion) on the
+    /// same waves, each scaled by the depth factor the closed form applies.
+    fn against_time_domain(hull: HullParameters, waves: &[LinearWave], course: StraightCourse) {
+        let response = SeawayResponse::new(
+            &hull,
+            waves,
+            course.pose_at(0.0).heading_deg,
+            course.velocity_enu_mps(),
+        );
+        let scaled = depth_scaled(&hull, waves);
         let sea = |x: f64, y: f64, t: f64| scaled.iter().map(|w| w.height_m(x, y, t)).sum::<f64>();
         let (t0, dt, n) = (500.0, 0.25, 160);
         let closed = closed_form(&response, &course, t0, dt, n);
@@ -534,6 +774,128 @@ mod tests {
                 rms(&difference)
             );
         }
+    }
+
+    #[test]
+    fn a_turn_rings_down_as_the_oscillators_integrated_in_time_do() {
+        // A patrol craft rolling at resonance in a beam sea (heading north, the waves
+        // travelling east) turns at t = 600 s to head into them (heading west).
+        let patrol = HullParameters::PATROL_CRAFT;
+        let resonant = G_MPS2 * patrol.roll_period_s().powi(2) / TAU;
+        let waves = [wave(0.3, resonant, 90.0, 0.4), wave(0.2, 60.0, 120.0, 1.0)];
+        let turn_s = 600.0;
+        let before = StraightCourse::new(0.0, 0.0, 0.0, 4.0, turn_s).unwrap();
+        let after = StraightCourse::new(0.0, 0.0, 270.0, 4.0, turn_s).unwrap();
+        let track = |t: f64| {
+            if t < turn_s {
+                before.pose_at(t)
+            } else {
+                after.pose_at(t)
+            }
+        };
+        let scaled = depth_scaled(&patrol, &waves);
+        let sea = |x: f64, y: f64, t: f64| scaled.iter().map(|w| w.height_m(x, y, t)).sum::<f64>();
+        let mut tracker =
+            crate::motion::ShipMotionTracker::new(crate::motion::ShipMotionModel::new(patrol));
+        let response = |c: &StraightCourse| {
+            Arc::new(SeawayResponse::new(
+                &patrol,
+                &waves,
+                c.pose_at(0.0).heading_deg,
+                c.velocity_enu_mps(),
+            ))
+        };
+        let mut ride = ShipRide::steady(response(&before), None, before.velocity_enu_mps());
+        let steady_after = response(&after);
+        // Over the first three roll periods after the turn.
+        let (mut with, mut without, mut integrated) = (Vec::new(), Vec::new(), Vec::new());
+        let mut t = turn_s - 20.0;
+        while t < turn_s + 3.0 * patrol.roll_period_s() {
+            if t >= turn_s && !Arc::ptr_eq(ride.response(), &steady_after) {
+                let p = after.pose_at(turn_s);
+                ride.change(
+                    &patrol,
+                    (Arc::clone(&steady_after), None),
+                    after.velocity_enu_mps(),
+                    [p.x_east_m, p.y_north_m],
+                    turn_s,
+                );
+            }
+            if t >= turn_s {
+                let p = track(t);
+                let stepped = tracker.motion_at(sea, track, t).unwrap();
+                integrated.push(stepped.roll_deg);
+                with.push(ride.motion_at(p.x_east_m, p.y_north_m, t).roll_deg);
+                without.push(steady_after.motion_at(p.x_east_m, p.y_north_m, t).roll_deg);
+            }
+            t += 0.25;
+        }
+        let error = |a: &[f64]| {
+            let d: Vec<f64> = a.iter().zip(&integrated).map(|(a, b)| a - b).collect();
+            rms(&d)
+        };
+        let scale = rms(&integrated);
+        assert!(scale > 1.0, "the ship still rolls after the turn: {scale}");
+        let (e_with, e_without) = (error(&with), error(&without));
+        assert!(
+            e_with < 0.05 * scale && e_with < 0.05 * e_without,
+            "roll after the turn: integrated rms {scale}, error with the transient {e_with}, \
+             steady state alone {e_without}"
+        );
+        // The transient dies away: long after, the ride is the new steady state.
+        let late = turn_s + 1000.0;
+        let p = after.pose_at(late);
+        assert_eq!(
+            ride.motion_at(p.x_east_m, p.y_north_m, late),
+            steady_after.motion_at(p.x_east_m, p.y_north_m, late)
+        );
+    }
+
+    #[test]
+    fn the_states_rates_are_the_motions_derivative() {
+        let conditions = SeaConditions::for_sea_state(5, 250.0).unwrap();
+        let surface = SeaSurface::new(&conditions, 3, SurfaceConfig::default()).unwrap();
+        let v = [3.0, -4.0];
+        let response = SeawayResponse::new(
+            &HullParameters::DESTROYER,
+            &surface.linear_waves(),
+            143.0,
+            v,
+        );
+        let transient = MotionTransient::new(
+            &HullParameters::DESTROYER,
+            100.0,
+            ModeStates {
+                value: [0.5, 0.01, -0.05],
+                rate: [0.1, 0.0, 0.02],
+            },
+        );
+        let h = 1e-4;
+        for t in [100.5, 107.0, 131.0] {
+            let at = |t: f64| {
+                let s = response.states_at(v[0] * t, v[1] * t, t, v);
+                (s, transient.at(t))
+            };
+            let ((s, tr), (s1, tr1), (s0, tr0)) = (at(t), at(t + h), at(t - h));
+            for m in 0..3 {
+                let numeric = (s1.value[m] - s0.value[m]) / (2.0 * h);
+                assert!(
+                    (numeric - s.rate[m]).abs() < 1e-5 * (1.0 + numeric.abs()),
+                    "{m}"
+                );
+                let numeric = (tr1.value[m] - tr0.value[m]) / (2.0 * h);
+                assert!(
+                    (numeric - tr.rate[m]).abs() < 1e-5 * (1.0 + numeric.abs()),
+                    "{m}"
+                );
+            }
+        }
+        // At its start the transient is its mismatch.
+        let start = transient.at(100.0);
+        assert!((start.value[0] - 0.5).abs() < 1e-12 && (start.rate[2] - 0.02).abs() < 1e-12);
+        assert!(
+            !transient.is_spent(101.0) && transient.is_spent(2000.0) && transient.is_spent(99.0)
+        );
     }
 
     #[test]

@@ -38,7 +38,12 @@
 //!   last runs to its Nyquist. Default bands: wavelengths above 31 m, 4.3 to 31 m and 0.3 to
 //!   4.3 m; the 20 m/s peak (350 m) is 45 grid points long in the first cascade.
 //! - **Explicit waves** (CIGI Wave Control): Gerstner waves added to the sampled height and
-//!   displacement ([`WaveComponent`]); they are not in the grids (the renderer adds them).
+//!   displacement ([`WaveComponent`]); they are not in the grids (the renderer adds them). A
+//!   wave applies everywhere or only over an area ([`WaveArea`]: a region's rounded rectangle
+//!   or an entity's disc, fading out across a band), entities' areas taking precedence over
+//!   regions' and regions' over the global waves; the weight scales the wave's height and
+//!   displacement at the undisplaced point (its own gradient, over a band of hundreds of
+//!   metres, is left out of the slopes).
 //! - **Sampling.** A query at a horizontal position finds the undisplaced point `x0` whose
 //!   displaced position `x0 + D(x0)` lands on it by Newton's method on the displacement (4
 //!   steps, a plain fixed-point step where the surface folds), interpolating each cascade
@@ -295,6 +300,146 @@ pub struct GerstnerWave {
     pub phase_rad: f64,
 }
 
+/// Which host waves an area holds (CIGI Wave Control's scope), for the precedence between
+/// them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AreaKind {
+    /// An environmental region's waves.
+    Region,
+    /// An entity's surroundings' waves.
+    Entity,
+}
+
+/// An area of the sea's plane some explicit waves are confined to: a rectangle with rounded
+/// corners (a CIGI Environmental Region; an entity's surroundings are a square of side twice
+/// the corner radius, a disc), and a band around it over which its waves fade out.
+///
+/// Weight of a point: 1 inside; across the transition band, `smoothstep` of the distance
+/// from the rounded rectangle's edge (1 at the edge, 0 at `transition_m` out); 0 beyond.
+/// Precedence (as CIGI's regional conditions over its global ones): where entities' areas
+/// cover a point by `E` (their weights summed, at most 1) and regions' by `R`, an entity's
+/// wave has its area's weight, a region's wave its area's weight times `1 − E`, and a global
+/// wave `(1 − E)(1 − R)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WaveArea {
+    /// The centre, metres east and north of the sea's origin.
+    pub centre_m: [f64; 2],
+    /// Half the rectangle's size along its own x and y axes, metres (`0..=1e7`).
+    pub half_size_m: [f64; 2],
+    /// The rectangle's x axis turned clockwise from east by this, degrees (finite).
+    pub rotation_deg: f64,
+    /// The corners' radius, metres (`0..=1e7`; at most the smaller half size counts, unless
+    /// the rectangle has no size: a disc).
+    pub corner_radius_m: f64,
+    /// The transition band's width, metres (`0..=1e7`; 0: a hard edge).
+    pub transition_m: f64,
+    pub kind: AreaKind,
+}
+
+impl WaveArea {
+    /// Checks the fields.
+    ///
+    /// # Errors
+    /// [`SeaError::OutOfRange`] for a value outside its range.
+    pub fn validate(&self) -> Result<(), SeaError> {
+        let finite = "finite, within ±1e9 m";
+        checked("area centre", self.centre_m[0], -1e9, 1e9, finite)?;
+        checked("area centre", self.centre_m[1], -1e9, 1e9, finite)?;
+        for half in self.half_size_m {
+            checked("area half size", half, 0.0, 1e7, "in 0..=1e7 m")?;
+        }
+        checked(
+            "area rotation",
+            self.rotation_deg,
+            -1e6,
+            1e6,
+            "finite degrees",
+        )?;
+        checked(
+            "area corner radius",
+            self.corner_radius_m,
+            0.0,
+            1e7,
+            "in 0..=1e7 m",
+        )?;
+        checked(
+            "area transition",
+            self.transition_m,
+            0.0,
+            1e7,
+            "in 0..=1e7 m",
+        )?;
+        Ok(())
+    }
+
+    /// The weight of the point (`x_m`, `y_m`) of the sea's plane, `0..=1`.
+    pub fn weight(&self, x_m: f64, y_m: f64) -> f64 {
+        let (dx, dy) = (x_m - self.centre_m[0], y_m - self.centre_m[1]);
+        let (sin, cos) = self.rotation_deg.to_radians().sin_cos();
+        // Into the rectangle's axes (its x axis turned clockwise from east).
+        let (u, v) = (dx * cos - dy * sin, dx * sin + dy * cos);
+        let [hx, hy] = self.half_size_m;
+        let radius = if hx > 0.0 || hy > 0.0 {
+            self.corner_radius_m.min(hx.min(hy))
+        } else {
+            self.corner_radius_m
+        };
+        // Signed distance from the rounded rectangle's edge (negative inside).
+        let (qx, qy) = (
+            u.abs() - (hx - radius).max(0.0),
+            v.abs() - (hy - radius).max(0.0),
+        );
+        let outside = qx.max(0.0).hypot(qy.max(0.0)) + qx.max(qy).min(0.0);
+        let distance = outside - radius;
+        if distance <= 0.0 {
+            1.0
+        } else if distance >= self.transition_m {
+            0.0
+        } else {
+            let t = 1.0 - distance / self.transition_m;
+            t * t * (3.0 - 2.0 * t)
+        }
+    }
+}
+
+/// How much entities' and regions' areas cover a point (see [`WaveArea`]).
+#[derive(Clone, Copy, Debug)]
+struct AreaPrecedence {
+    entities: f64,
+    regions: f64,
+}
+
+impl AreaPrecedence {
+    fn at(areas: &[WaveArea], x_m: f64, y_m: f64) -> AreaPrecedence {
+        let mut cover = AreaPrecedence {
+            entities: 0.0,
+            regions: 0.0,
+        };
+        for area in areas {
+            let w = area.weight(x_m, y_m);
+            match area.kind {
+                AreaKind::Entity => cover.entities += w,
+                AreaKind::Region => cover.regions += w,
+            }
+        }
+        cover.entities = cover.entities.min(1.0);
+        cover.regions = cover.regions.min(1.0);
+        cover
+    }
+
+    /// The weight at (`x_m`, `y_m`) of a wave placed in `area` (`None`: global).
+    fn weight(&self, areas: &[WaveArea], area: Option<usize>, x_m: f64, y_m: f64) -> f64 {
+        match area.and_then(|i| areas.get(i)) {
+            None if area.is_some() => 0.0,
+            None => (1.0 - self.entities) * (1.0 - self.regions),
+            Some(a) => match a.kind {
+                AreaKind::Entity => a.weight(x_m, y_m),
+                AreaKind::Region => a.weight(x_m, y_m) * (1.0 - self.entities),
+            },
+        }
+    }
+}
+
 /// One travelling linear wave: at the undisplaced point `x` (east, north of the sea's origin)
 /// and time `t` its height is `Re(A e^(i (k·x − ω t)))`, `A` its complex amplitude.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -437,6 +582,9 @@ pub struct SeaSurface {
     grids: Vec<CascadeGrid>,
     explicit: Vec<WaveComponent>,
     gerstner: Vec<GerstnerWave>,
+    /// Where each explicit wave applies: `None` everywhere, else its area in `areas`.
+    placed: Vec<Option<usize>>,
+    areas: Vec<WaveArea>,
     workspace: Workspace,
     time_s: f64,
 }
@@ -524,6 +672,8 @@ impl SeaSurface {
             grids,
             explicit: Vec::new(),
             gerstner: Vec::new(),
+            placed: Vec::new(),
+            areas: Vec::new(),
             workspace,
             time_s: 0.0,
         };
@@ -566,12 +716,63 @@ impl SeaSurface {
         &self.gerstner
     }
 
+    /// Where each explicit wave applies (as [`SeaSurface::explicit_waves`]): `None`
+    /// everywhere, else the index of its area in [`SeaSurface::wave_areas`].
+    pub fn explicit_wave_areas(&self) -> &[Option<usize>] {
+        &self.placed
+    }
+
+    /// The areas the explicit waves are confined to.
+    pub fn wave_areas(&self) -> &[WaveArea] {
+        &self.areas
+    }
+
     /// The surface as travelling linear waves (the cascades' modes, each `k` and `-k`, then the
-    /// explicit waves): the height of the undisplaced point `x` at time `t` is the sum of their
-    /// [`LinearWave::height_m`] (the choppy displacement and the grids' bilinear interpolation
-    /// aside). For what responds to the sea as a whole, such as a ship's motions
-    /// ([`crate::response`]).
+    /// explicit waves where they apply in full): the height of the undisplaced point `x` at
+    /// time `t` is the sum of their [`LinearWave::height_m`] (the choppy displacement and the
+    /// grids' bilinear interpolation aside). For what responds to the sea as a whole, such as
+    /// a ship's motions ([`crate::response`]).
     pub fn linear_waves(&self) -> Vec<LinearWave> {
+        let mut waves = self.spectral_linear_waves();
+        waves.extend(self.explicit_linear_waves(&vec![1.0; self.gerstner.len()]));
+        waves
+    }
+
+    /// The explicit waves as linear waves, each scaled by its weight (as
+    /// [`SeaSurface::explicit_weights_at`] gives them at a place); a weight of 0 leaves the
+    /// wave out.
+    pub fn explicit_linear_waves(&self, weights: &[f64]) -> Vec<LinearWave> {
+        self.gerstner
+            .iter()
+            .zip(weights)
+            .filter(|(_, weight)| **weight > 0.0)
+            .map(|(wave, weight)| {
+                let [ex, ey] = wave.direction;
+                let (sin, cos) = wave.phase_rad.sin_cos();
+                let amplitude_m = weight * wave.amplitude_m;
+                LinearWave {
+                    k_rad_m: [wave.k_rad_m * ex, wave.k_rad_m * ey],
+                    omega_rad_s: wave.omega_rad_s,
+                    amplitude_m: [amplitude_m * cos, amplitude_m * sin],
+                }
+            })
+            .collect()
+    }
+
+    /// How much of each explicit wave applies at the undisplaced point (`x_m`, `y_m`), `0..=1`
+    /// (see [`WaveArea`] for the precedence of entities' areas over regions' over the
+    /// global waves).
+    pub fn explicit_weights_at(&self, x_m: f64, y_m: f64) -> Vec<f64> {
+        let precedence = AreaPrecedence::at(&self.areas, x_m, y_m);
+        self.placed
+            .iter()
+            .map(|area| precedence.weight(&self.areas, *area, x_m, y_m))
+            .collect()
+    }
+
+    /// The cascades' modes as travelling linear waves (each `k` and `-k`), without the
+    /// explicit waves.
+    pub fn spectral_linear_waves(&self) -> Vec<LinearWave> {
         let mut waves = Vec::new();
         for synth in &self.synths {
             for mode in &synth.modes {
@@ -593,15 +794,6 @@ impl SeaSurface {
                 }
             }
         }
-        for wave in &self.gerstner {
-            let [ex, ey] = wave.direction;
-            let (sin, cos) = wave.phase_rad.sin_cos();
-            waves.push(LinearWave {
-                k_rad_m: [wave.k_rad_m * ex, wave.k_rad_m * ey],
-                omega_rad_s: wave.omega_rad_s,
-                amplitude_m: [wave.amplitude_m * cos, wave.amplitude_m * sin],
-            });
-        }
         waves
     }
 
@@ -613,8 +805,38 @@ impl SeaSurface {
     /// [`SeaError::OutOfRange`] for a wave out of range (see [`WaveComponent::new`]); the waves
     /// are then left as they were.
     pub fn set_explicit_waves(&mut self, waves: Vec<WaveComponent>) -> Result<(), SeaError> {
+        let placed = vec![None; waves.len()];
+        self.set_placed_waves(waves, placed, Vec::new())
+    }
+
+    /// Replaces the explicit waves as [`SeaSurface::set_explicit_waves`] does, each applying
+    /// where `placed` says (`None` everywhere, else only over that one of `areas`).
+    ///
+    /// # Errors
+    /// [`SeaError::OutOfRange`] for a wave or area out of range, an area index past `areas`,
+    /// or `placed` not one per wave; the waves are then left as they were.
+    pub fn set_placed_waves(
+        &mut self,
+        waves: Vec<WaveComponent>,
+        placed: Vec<Option<usize>>,
+        areas: Vec<WaveArea>,
+    ) -> Result<(), SeaError> {
         for wave in &waves {
             wave.validate()?;
+        }
+        for area in &areas {
+            area.validate()?;
+        }
+        if placed.len() != waves.len() || placed.iter().flatten().any(|i| *i >= areas.len()) {
+            #[expect(
+                clippy::cast_precision_loss,
+                reason = "a count of waves, for the message"
+            )]
+            return Err(SeaError::OutOfRange {
+                name: "explicit wave areas",
+                range: "one per wave, each naming an area given",
+                value: placed.len() as f64,
+            });
         }
         let mut gerstner: Vec<GerstnerWave> = waves
             .iter()
@@ -643,6 +865,8 @@ impl SeaSurface {
         }
         self.explicit = waves;
         self.gerstner = gerstner;
+        self.placed = placed;
+        self.areas = areas;
         Ok(())
     }
 
@@ -816,20 +1040,28 @@ impl SeaSurface {
         for grid in &self.grids {
             add_bilinear::<ALL>(grid, x_m, y_m, &mut sum);
         }
-        for wave in &self.gerstner {
+        let precedence = AreaPrecedence::at(&self.areas, x_m, y_m);
+        for (wave, area) in self.gerstner.iter().zip(&self.placed) {
+            let weight = precedence.weight(&self.areas, *area, x_m, y_m);
+            if weight <= 0.0 {
+                continue;
+            }
             let [ex, ey] = wave.direction;
             let phase = wave.k_rad_m * (ex * x_m + ey * y_m) - wave.omega_rad_s * self.time_s
                 + wave.phase_rad;
             let (sin, cos) = phase.sin_cos();
-            let compression = -wave.displacement_m * wave.k_rad_m * cos;
-            sum.dx -= wave.displacement_m * ex * sin;
-            sum.dy -= wave.displacement_m * ey * sin;
+            // The weight varies over hundreds of metres: its own gradient is left out.
+            let displacement_m = weight * wave.displacement_m;
+            let compression = -displacement_m * wave.k_rad_m * cos;
+            sum.dx -= displacement_m * ex * sin;
+            sum.dy -= displacement_m * ey * sin;
             sum.dxx += compression * ex * ex;
             sum.dyy += compression * ey * ey;
             sum.dxy += compression * ex * ey;
             if ALL {
-                let slope = -wave.amplitude_m * wave.k_rad_m * sin;
-                sum.h += wave.amplitude_m * cos;
+                let amplitude_m = weight * wave.amplitude_m;
+                let slope = -amplitude_m * wave.k_rad_m * sin;
+                sum.h += amplitude_m * cos;
                 sum.hx += slope * ex;
                 sum.hy += slope * ey;
             }
@@ -1158,6 +1390,130 @@ mod tests {
 
     fn ratio(measured: f64, expected: f64) -> f64 {
         measured / expected
+    }
+
+    #[test]
+    fn an_area_weighs_one_inside_fading_across_its_band_and_none_beyond() {
+        // 200 x 100 m turned 90° clockwise from east (its x axis runs south), corners 10 m,
+        // a 50 m band, centred 1 km east.
+        let area = WaveArea {
+            centre_m: [1000.0, 0.0],
+            half_size_m: [100.0, 50.0],
+            rotation_deg: 90.0,
+            corner_radius_m: 10.0,
+            transition_m: 50.0,
+            kind: AreaKind::Region,
+        };
+        assert_eq!(area.weight(1000.0, 0.0), 1.0);
+        assert_eq!(area.weight(1000.0, -99.0), 1.0);
+        assert_eq!(area.weight(1049.0, 0.0), 1.0);
+        // 25 m out across the band: half.
+        assert!((area.weight(1075.0, 0.0) - 0.5).abs() < 1e-9);
+        assert!((area.weight(1000.0, 125.0) - 0.5).abs() < 1e-9);
+        assert_eq!(area.weight(1100.0, 0.0), 0.0);
+        // The rounded corner: a point diagonally past the corner's circle.
+        let corner = (1050.0 - 10.0, 100.0 - 10.0);
+        let out = 10.0 + 25.0;
+        let d = out / 2.0_f64.sqrt();
+        assert!((area.weight(corner.0 + d, corner.1 + d) - 0.5).abs() < 1e-9);
+        // Across the band the weight falls steadily.
+        let mut last = 1.0;
+        for i in 0..=60 {
+            let w = area.weight(1050.0 + f64::from(i), 0.0);
+            assert!(w <= last && (0.0..=1.0).contains(&w));
+            last = w;
+        }
+        // An entity's disc: 100 m round, 50 m band.
+        let disc = WaveArea {
+            centre_m: [0.0, 0.0],
+            half_size_m: [0.0, 0.0],
+            rotation_deg: 0.0,
+            corner_radius_m: 100.0,
+            transition_m: 50.0,
+            kind: AreaKind::Entity,
+        };
+        assert_eq!(disc.weight(60.0, 79.0), 1.0);
+        assert!((disc.weight(-125.0 * 0.6, 125.0 * 0.8) - 0.5).abs() < 1e-9);
+        assert_eq!(disc.weight(150.0, 1.0), 0.0);
+        // A hard edge.
+        let hard = WaveArea {
+            transition_m: 0.0,
+            ..disc
+        };
+        assert_eq!(hard.weight(99.0, 0.0), 1.0);
+        assert_eq!(hard.weight(101.0, 0.0), 0.0);
+        assert!(WaveArea {
+            transition_m: f64::NAN,
+            ..disc
+        }
+        .validate()
+        .is_err());
+    }
+
+    #[test]
+    fn placed_waves_apply_in_their_areas_entities_over_regions_over_global() {
+        let calm = SeaConditions::new(0.0, 0.0).unwrap();
+        let mut surface = SeaSurface::new(&calm, 1, SurfaceConfig::default()).unwrap();
+        let wave = |height| WaveComponent::new(height, 100.0, 8.0, 90.0, 0.0, 0.0).unwrap();
+        let region = WaveArea {
+            centre_m: [5000.0, 0.0],
+            half_size_m: [1000.0, 1000.0],
+            rotation_deg: 0.0,
+            corner_radius_m: 0.0,
+            transition_m: 500.0,
+            kind: AreaKind::Region,
+        };
+        let entity = WaveArea {
+            centre_m: [5000.0, 0.0],
+            half_size_m: [0.0, 0.0],
+            rotation_deg: 0.0,
+            corner_radius_m: 200.0,
+            transition_m: 100.0,
+            kind: AreaKind::Entity,
+        };
+        surface
+            .set_placed_waves(
+                vec![wave(1.0), wave(3.0), wave(0.4)],
+                vec![None, Some(0), Some(1)],
+                vec![region, entity],
+            )
+            .unwrap();
+        // The largest height over a period at a point.
+        let mut crest = |x: f64, y: f64| {
+            (0..40)
+                .map(|i| {
+                    surface.update(f64::from(i) * 0.2).unwrap();
+                    surface.sample(x, y).height_m
+                })
+                .fold(f64::MIN, f64::max)
+        };
+        let open_sea = crest(0.0, 0.0);
+        let in_region = crest(5000.0, 800.0);
+        let by_the_entity = crest(5000.0, 50.0);
+        let in_the_band = crest(5000.0, 1250.0);
+        assert!((open_sea - 0.5).abs() < 0.02, "global alone: {open_sea}");
+        assert!(
+            (in_region - 1.5).abs() < 0.05,
+            "the region's alone: {in_region}"
+        );
+        assert!(
+            (by_the_entity - 0.2).abs() < 0.02,
+            "the entity's alone: {by_the_entity}"
+        );
+        // Half way across the region's band: half the region's wave, half the global one.
+        assert!((in_the_band - 1.0).abs() < 0.05, "{in_the_band}");
+        assert_eq!(
+            surface.explicit_weights_at(5000.0, 50.0),
+            vec![0.0, 0.0, 1.0]
+        );
+        // The wrong number of places, or a place naming no area, is refused.
+        assert!(surface
+            .set_placed_waves(vec![wave(1.0)], vec![], vec![])
+            .is_err());
+        assert!(surface
+            .set_placed_waves(vec![wave(1.0)], vec![Some(0)], vec![])
+            .is_err());
+        assert_eq!(surface.explicit_waves().len(), 3);
     }
 
     #[test]

@@ -650,6 +650,15 @@ pub struct LosArgs {
     pub lat2: f64,
     pub lon2: f64,
     pub alt2: f64,
+    /// Terrestrial refraction's coefficient k for the sightline: "standard" (0.13, as the IG
+    /// answers its host and draws), "off" (a straight line) or a number in -1..0.9.
+    #[arg(
+        long,
+        value_name = "K",
+        default_value = "standard",
+        allow_hyphen_values = true
+    )]
+    pub refraction: String,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -1129,8 +1138,10 @@ pub struct RenderArgs {
     /// An explicit wave on the sea (as a host's CIGI Wave Control)
     /// "HEIGHT_M,WAVELENGTH_M,PERIOD_S,TOWARD_DEG[,PHASE_DEG[,LEADING]]": trough-to-crest
     /// height 0-30 m, wavelength 0.1-5000 m, period 0.1-100 s, the direction it travels
-    /// toward, its phase at the sea's origin and crest sharpness 0-1. Repeatable; needs
-    /// --sea-state or --sea-wind (0 for a swell alone).
+    /// toward, its phase at the sea's origin and crest sharpness 0-1. Followed by
+    /// "@LAT,LON,SIZE_X_M,SIZE_Y_M[,ROTATION_DEG[,CORNER_RADIUS_M[,TRANSITION_M]]]" the wave
+    /// applies only over that region (as a host's regional Wave Control), fading out across
+    /// its transition band. Repeatable; needs --sea-state or --sea-wind (0 for a swell alone).
     #[arg(long = "sea-wave", value_name = "SPEC", allow_hyphen_values = true)]
     pub sea_waves: Vec<String>,
     /// Thermal polarity: white-hot or black-hot.

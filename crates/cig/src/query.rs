@@ -105,8 +105,10 @@ pub fn los(args: &LosArgs, config: &Config) -> anyhow::Result<()> {
     let mut q = session(&args.db, config)?;
     let from = Geodetic::new(args.lat1, args.lon1, args.alt1);
     let to = Geodetic::new(args.lat2, args.lon2, args.alt2);
+    let k = crate::sea::parse_refraction(&args.refraction)?;
+    let refraction = cig_ig::sea::sightline_refraction_with_k(from, to, k);
     let r = q
-        .los(from, to)
+        .los_refracted(from, to, cig_terrain::CultureTest::LineOfSight, refraction)
         .with_context(|| format!("no line-of-sight answer from {}", args.db.display()))?;
     if args.json {
         println!("{}", los_json(&r));

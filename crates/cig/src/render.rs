@@ -397,12 +397,15 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
     let refraction_k = crate::sea::parse_refraction(&args.refraction)?;
     let sea_conditions =
         crate::sea::conditions_from_args(args.sea_state, args.sea_wind.as_deref())?;
-    let sea_waves = args
-        .sea_waves
-        .iter()
-        .map(|text| crate::sea::parse_wave(text))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    if !sea_waves.is_empty() && sea_conditions.is_none() {
+    let mut sea_waves = Vec::new();
+    let mut regional_waves = Vec::new();
+    for text in &args.sea_waves {
+        match crate::sea::parse_wave(text)? {
+            (wave, None) => sea_waves.push(wave),
+            (wave, Some(region)) => regional_waves.push((wave, region)),
+        }
+    }
+    if !args.sea_waves.is_empty() && sea_conditions.is_none() {
         bail!("--sea-wave needs a sea: give --sea-state or --sea-wind (0 for a swell alone)");
     }
     if !(args.max_pixel_error.is_finite() && args.max_pixel_error >= 0.0) {
@@ -634,6 +637,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
         let mut world_sea =
             WorldSea::of_conditions(Some(conditions), cig_ig::sea::Water::of_scenario(None), 1)
                 .with_waves(sea_waves)
+                .and_then(|sea| sea.with_regional_waves(regional_waves))
                 .context("--sea-wave")?;
         world_sea
             .update(
@@ -641,6 +645,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
                 None,
                 cig_scene::sea::sea_origin(lat_deg, lon_deg),
                 unix_time_s,
+                &std::collections::BTreeMap::new(),
             )
             .context("the sea")?;
         let sea = world_sea.now().context("the sea")?;
@@ -660,6 +665,7 @@ pub fn run(args: &RenderArgs, config: &Config) -> anyhow::Result<()> {
                     [p.lat_deg, p.lon_deg, 0.0],
                     [speed_mps * course.sin(), speed_mps * course.cos()],
                     sea.draw().level_m,
+                    None,
                 );
                 entity.position = pose.position;
                 entity.orientation = pose.orientation;

@@ -41,12 +41,53 @@ fn sea_state_conditions(code: f64, wind_from_deg: f64) -> anyhow::Result<SeaCond
     SeaConditions::for_sea_state(code, wind_from_deg).context("--sea-state")
 }
 
-/// `--sea-wave HEIGHT_M,WAVELENGTH_M,PERIOD_S,TOWARD_DEG[,PHASE_DEG[,LEADING]]`.
-pub fn parse_wave(text: &str) -> anyhow::Result<cig_sea::surface::WaveComponent> {
-    let v = crate::render::parse_numbers(text, "--sea-wave", &[4, 5, 6])?;
+/// `--sea-wave HEIGHT_M,WAVELENGTH_M,PERIOD_S,TOWARD_DEG[,PHASE_DEG[,LEADING]]`, and where
+/// it applies: everywhere, or (after `@`) over a CIGI environmental region
+/// `LAT,LON,SIZE_X_M,SIZE_Y_M[,ROTATION_DEG[,CORNER_RADIUS_M[,TRANSITION_M]]]`.
+pub fn parse_wave(
+    text: &str,
+) -> anyhow::Result<(
+    cig_sea::surface::WaveComponent,
+    Option<cig_cigi::EnvironmentalRegionControl>,
+)> {
+    let (wave_text, region_text) = match text.split_once('@') {
+        Some((wave, region)) => (wave, Some(region)),
+        None => (text, None),
+    };
+    let v = crate::render::parse_numbers(wave_text, "--sea-wave", &[4, 5, 6])?;
     let at = |i: usize| v.get(i).copied().unwrap_or_default();
-    cig_sea::surface::WaveComponent::new(at(0), at(1), at(2), at(3), at(4), at(5))
-        .with_context(|| format!("--sea-wave \"{text}\""))
+    let wave = cig_sea::surface::WaveComponent::new(at(0), at(1), at(2), at(3), at(4), at(5))
+        .with_context(|| format!("--sea-wave \"{text}\""))?;
+    let Some(region_text) = region_text else {
+        return Ok((wave, None));
+    };
+    let r = crate::render::parse_numbers(region_text, "--sea-wave's region", &[4, 5, 6, 7])?;
+    let at = |i: usize| r.get(i).copied().unwrap_or_default();
+    if !((-90.0..=90.0).contains(&at(0)) && (-180.0..=360.0).contains(&at(1))) {
+        bail!("--sea-wave \"{text}\": the region's centre must be a latitude and longitude");
+    }
+    if [at(2), at(3), at(5), at(6)]
+        .iter()
+        .any(|v| !(0.0..=1.0e7).contains(v))
+    {
+        bail!("--sea-wave \"{text}\": the region's sizes, corner radius and transition must be 0-10,000 km");
+    }
+    #[expect(
+        clippy::cast_possible_truncation,
+        reason = "CIGI carries the region's sizes as f32; checked to be under 1e7 m"
+    )]
+    let region = cig_cigi::EnvironmentalRegionControl {
+        region_state: 1,
+        latitude_deg: at(0),
+        longitude_deg: at(1),
+        size_x_m: at(2) as f32,
+        size_y_m: at(3) as f32,
+        rotation_deg: at(4) as f32,
+        corner_radius_m: at(5) as f32,
+        transition_perimeter_m: at(6) as f32,
+        ..cig_cigi::EnvironmentalRegionControl::default()
+    };
+    Ok((wave, Some(region)))
 }
 
 /// `--refraction K`: "standard" (0.13), "off" (0) or a coefficient in -1..0.9.

@@ -287,6 +287,20 @@ fn bad_input_gives_one_line_errors_and_keeps_what_is_on_disk() {
         "query", "los", db, "35.99", "-121.22", "1e15", "35.99", "-121.21", "100"
     ]);
     assert!(line.contains("altitude"));
+    let line = error_line(argv![
+        "query",
+        "los",
+        db,
+        "35.99",
+        "-121.22",
+        "100",
+        "35.99",
+        "-121.21",
+        "100",
+        "--refraction",
+        "2"
+    ]);
+    assert!(line.contains("--refraction \"2\""), "{line}");
     // Bad command-line values.
     let y = dir.path().join("y");
     let mut args = argv!["db", "synth", "--out", y, "--origin", "95,0"];

@@ -311,6 +311,18 @@ fn a_periscope_sees_48_degrees_over_its_power_draws_its_reticle_and_washes_over(
             "wave period",
         ),
         (vec!["--sea-wave", "1,100,8,0"], "--sea-wave"),
+        (
+            vec!["--sea-state", "2", "--sea-wave", "1,100,8,0@95,0,100,100"],
+            "region's centre",
+        ),
+        (
+            vec!["--sea-state", "2", "--sea-wave", "1,100,8,0@35,0,-100,100"],
+            "region's sizes",
+        ),
+        (
+            vec!["--sea-state", "2", "--sea-wave", "1,100,8,0@35,0"],
+            "region",
+        ),
     ] {
         let out = cig()
             .args(["render", "--db"])
@@ -530,67 +542,95 @@ fn the_drawn_waves_stand_where_the_height_queries_put_them() {
         .map(f64::from)
         .min_by(|a, b| height_at(*a).total_cmp(&height_at(*b)))
         .expect("a trough");
-    let out = dir.path().join("swell.png");
-    cig()
-        .args(["render", "--db"])
-        .arg(&db)
-        .args([
-            "--eye",
-            &format!("{lat},{},{}", lon + trough_m / per_deg, eye_alt_m + 0.5),
-            "--hpr",
-            "270,0,0",
-            "--fov",
-            &fov_deg.to_string(),
-            "--size",
-            &format!("{width}x{height}"),
-            "--time",
-            time,
-            "--sea-wind",
-            "0",
-            "--sea-wave",
-            "4,300,13.9,270",
-            "--out",
-        ])
-        .arg(&out)
-        .assert()
-        .success();
-    let (_, _, rgba) = read_png_rgba(&out);
-    // The highest sightline the sea reaches ahead: over the nearest crest.
-    let mut top = f64::MIN;
-    let mut x_m = 2.0;
-    while x_m < 3000.0 {
-        let h = height_at(trough_m - x_m);
-        let angle = (h - 1.0) / x_m - x_m * (1.0 - 0.13) / (2.0 * 6_371_000.0);
-        top = top.max(angle);
-        x_m += 0.5;
-    }
-    let half_v = (fov_deg.to_radians() / 2.0).tan() * f64::from(height) / f64::from(width);
-    let want_row = f64::from(height) / 2.0 - top.tan() / half_v * f64::from(height) / 2.0;
-    // The sea's top edge: the sharpest step in brightness down the middle columns (the sky
-    // above it and the sea below change smoothly).
-    let brightness = |y: u32| {
-        let mut sum = 0.0;
-        for x in width / 2 - 10..width / 2 + 10 {
-            let i = ((y * width + x) * 4) as usize;
-            sum += f64::from(rgba[i]) + f64::from(rgba[i + 1]) + f64::from(rgba[i + 2]);
-        }
-        sum / 60.0
+    let render_edge = |wave: &str| {
+        let out = dir.path().join("swell.png");
+        cig()
+            .args(["render", "--db"])
+            .arg(&db)
+            .args([
+                "--eye",
+                &format!("{lat},{},{}", lon + trough_m / per_deg, eye_alt_m + 0.5),
+                "--hpr",
+                "270,0,0",
+                "--fov",
+                &fov_deg.to_string(),
+                "--size",
+                &format!("{width}x{height}"),
+                "--time",
+                time,
+                "--sea-wind",
+                "0",
+                "--sea-wave",
+                wave,
+                "--out",
+            ])
+            .arg(&out)
+            .assert()
+            .success();
+        let (_, _, rgba) = read_png_rgba(&out);
+        // The sea's top edge: the sharpest step in brightness down the middle columns (the
+        // sky above it and the sea below change smoothly).
+        let brightness = |y: u32| {
+            let mut sum = 0.0;
+            for x in width / 2 - 10..width / 2 + 10 {
+                let i = ((y * width + x) * 4) as usize;
+                sum += f64::from(rgba[i]) + f64::from(rgba[i + 1]) + f64::from(rgba[i + 2]);
+            }
+            sum / 60.0
+        };
+        let row = (1..height - 1)
+            .max_by(|a, b| {
+                let step = |y: u32| (brightness(y - 1) - brightness(y + 1)).abs();
+                step(*a).total_cmp(&step(*b))
+            })
+            .expect("rows");
+        (
+            f64::from(row),
+            (row.saturating_sub(6)..row + 6)
+                .map(|y| brightness(y).round())
+                .collect::<Vec<_>>(),
+        )
     };
-    let row = (1..height - 1)
-        .max_by(|a, b| {
-            let step = |y: u32| (brightness(y - 1) - brightness(y + 1)).abs();
-            step(*a).total_cmp(&step(*b))
-        })
-        .expect("rows");
+    // The row of the highest sightline the sea reaches ahead (over the nearest crest).
+    let want_row = |height_at: &dyn Fn(f64) -> f64| {
+        let mut top = f64::MIN;
+        let mut x_m = 2.0;
+        while x_m < 3000.0 {
+            let h = height_at(trough_m - x_m);
+            let angle = (h - 1.0) / x_m - x_m * (1.0 - 0.13) / (2.0 * 6_371_000.0);
+            top = top.max(angle);
+            x_m += 0.5;
+        }
+        let half_v = (fov_deg.to_radians() / 2.0).tan() * f64::from(height) / f64::from(width);
+        f64::from(height) / 2.0 - top.tan() / half_v * f64::from(height) / 2.0
+    };
+    let crest_row = want_row(&height_at);
+    let (row, rows) = render_edge("4,300,13.9,270");
     assert!(
-        (f64::from(row) - want_row).abs() < 3.0,
-        "the sea's top at row {row}, the height queries say {want_row:.1} (rows: {:?})",
-        (row.saturating_sub(6)..row + 6)
-            .map(|y| brightness(y).round())
-            .collect::<Vec<_>>()
+        (row - crest_row).abs() < 3.0,
+        "the sea's top at row {row}, the height queries say {crest_row:.1} (rows: {rows:?})"
     );
     // Without the swell the edge is the horizon, well below the crest.
-    assert!(want_row > f64::from(height) / 2.0 - 30.0 && want_row < f64::from(height) / 2.0 - 10.0);
+    let horizon_row = want_row(&|_| 0.0);
+    assert!(
+        crest_row > f64::from(height) / 2.0 - 30.0 && crest_row < f64::from(height) / 2.0 - 10.0
+    );
+    assert!(horizon_row > crest_row + 8.0, "{horizon_row} {crest_row}");
+    // The swell confined to a region (as a host's regional Wave Control): over the sightline
+    // it stands where it did; 30 km north, the sea ahead is calm to the horizon.
+    let (row, rows) = render_edge(&format!("4,300,13.9,270@{lat},{lon},8000,8000,0,0,500"));
+    assert!(
+        (row - crest_row).abs() < 3.0,
+        "in its region the swell's top at row {row}, not {crest_row:.1} (rows: {rows:?})"
+    );
+    let (row, rows) = render_edge(&format!(
+        "4,300,13.9,270@{},{lon},8000,8000,0,0,500",
+        lat + 0.3
+    ));
+    assert!(
+        (row - horizon_row).abs() < 3.0,
+        "outside its region the sea's top at row {row}, the horizon at {horizon_row:.1} (rows: {rows:?})"
+    );
 }
 
 #[test]

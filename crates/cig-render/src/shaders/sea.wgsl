@@ -14,8 +14,13 @@ struct SeaUniform {
     // Per explicit wave (sea.rs): direction in the plane's axes, wave number, phase at the
     // eye; then amplitude and horizontal displacement amplitude.
     waves: array<vec4<f32>, 16>,
-    // x: the water's surface temperature (K), y: wakes.
+    // x: the water's surface temperature (K), y: wakes, z: wave areas.
     thermal: vec4<f32>,
+    // Per wave area (sea.rs): centre relative to the eye in the plane's axes, half sizes;
+    // cosine and sine of its rotation, corner radius, transition band.
+    areas: array<vec4<f32>, 16>,
+    // Per wave area: 1 a region's, 2 an entity's.
+    area_kinds: array<vec4<f32>, 2>,
     // Per wake (sea.rs): stern relative to the eye and unit course (east, north); speed,
     // length, beam, the arms' half-angle; foam made, its e-folding time.
     wakes: array<vec4<f32>, 24>,
@@ -105,19 +110,73 @@ struct Explicit {
     gradient: vec3<f32>,
 };
 
+// The weight of wave area `i` at `p` (plane axes, from the eye), cig_sea::surface::WaveArea:
+// 1 inside its rounded rectangle, smoothstep down to 0 across its transition band.
+fn area_weight(i: u32, p: vec2<f32>) -> f32 {
+    let a = sea.areas[2u * i];
+    let b = sea.areas[2u * i + 1u];
+    let d = p - a.xy;
+    let q = vec2<f32>(d.x * b.x - d.y * b.y, d.x * b.y + d.y * b.x);
+    var radius = b.z;
+    if (a.z > 0.0 || a.w > 0.0) {
+        radius = min(radius, min(a.z, a.w));
+    }
+    let e = abs(q) - max(a.zw - vec2<f32>(radius), vec2<f32>(0.0));
+    let distance = length(max(e, vec2<f32>(0.0))) + min(max(e.x, e.y), 0.0) - radius;
+    if (distance <= 0.0) {
+        return 1.0;
+    }
+    if (b.w <= 0.0) {
+        return 0.0;
+    }
+    let t = clamp(1.0 - distance / b.w, 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+fn area_kind(i: u32) -> f32 {
+    return sea.area_kinds[i / 4u][i % 4u];
+}
+
 fn explicit_waves(local: vec2<f32>) -> Explicit {
     var out = Explicit(vec3<f32>(0.0), vec2<f32>(0.0), vec3<f32>(0.0));
     let p = to_plane(local);
+    // How much entities' and regions' areas cover the point: they take precedence.
+    var entities = 0.0;
+    var regions = 0.0;
+    let areas = u32(sea.thermal.z);
+    for (var i = 0u; i < areas; i++) {
+        let w = area_weight(i, p);
+        if (area_kind(i) > 1.5) {
+            entities += w;
+        } else {
+            regions += w;
+        }
+    }
+    entities = min(entities, 1.0);
+    regions = min(regions, 1.0);
     let count = u32(sea.water.w);
     for (var w = 0u; w < count; w++) {
         let a = sea.waves[2u * w];
         let b = sea.waves[2u * w + 1u];
+        var weight = (1.0 - entities) * (1.0 - regions);
+        if (b.z > 0.5) {
+            let i = u32(b.z + 0.5) - 1u;
+            weight = area_weight(i, p);
+            if (area_kind(i) < 1.5) {
+                weight *= 1.0 - entities;
+            }
+        }
+        if (weight <= 0.0) {
+            continue;
+        }
         let phase = a.w + a.z * dot(a.xy, p);
         let s = sin(phase);
         let c = cos(phase);
-        out.height_displacement += vec3<f32>(b.x * c, -b.y * a.xy * s);
-        out.slope += -b.x * a.z * s * a.xy;
-        let compression = -b.y * a.z * c;
+        let amplitude = weight * b.x;
+        let displacement = weight * b.y;
+        out.height_displacement += vec3<f32>(amplitude * c, -displacement * a.xy * s);
+        out.slope += -amplitude * a.z * s * a.xy;
+        let compression = -displacement * a.z * c;
         out.gradient += compression * vec3<f32>(a.x * a.x, a.y * a.y, a.x * a.y);
     }
     return out;
