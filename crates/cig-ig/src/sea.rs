@@ -5,7 +5,9 @@
 //! 1. The wind sea and swell are the scenario's `[sea]` (a WMO sea state or a wind with its
 //!    fetch); without one, a fully developed sea of the host's global wind (CIGI Atmosphere
 //!    Control), calm when it sets none. The sea exists when the scenario has a `[sea]` or the
-//!    host enables global Maritime Surface Conditions or a global Wave Control wave.
+//!    host enables global Maritime Surface Conditions or a Wave Control wave that applies
+//!    (global, over an active region, or around an entity this IG has placed last frame: an
+//!    entity's waves start on its second frame).
 //! 2. The host's enabled Wave Control waves are added as explicit Gerstner waves
 //!    (`cig_sea::surface::WaveComponent`); CIGI's Leading (the phase angle of the crest, ±180°)
 //!    sharpens the crest, `|leading| / 90°` of a trochoid's displacement (a Gerstner wave has no
@@ -277,7 +279,8 @@ pub struct SeaNow {
     water: Water,
     /// The surface's bounds for the line of sight, computed when first asked.
     bounds: std::sync::OnceLock<WaveBounds>,
-    /// The ships' responses to these waves, kept from frame to frame while the waves last.
+    /// The ships' responses to this wind sea and swell, kept from frame to frame while they
+    /// last (the host's waves are each ship's own, `SeaNow::ride`).
     responses: Arc<std::sync::Mutex<ResponseCache>>,
     /// The ships' rides, kept from frame to frame (and across changes of the waves).
     rides: Arc<std::sync::Mutex<Rides>>,
@@ -286,16 +289,25 @@ pub struct SeaNow {
 /// Which ship a ride belongs to: one of this IG's entities or one of the DIS exercise's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum ShipKey {
+    /// A CIGI entity of this IG, by its id.
     Own(u16),
+    /// A DIS exercise's entity, by the IG's instance id for it.
     Remote(u32),
 }
 
-/// A ship's ride and the sea time it was last used.
+/// A ship's ride, the hull it is of, and where (in the sea's plane, metres) and when (sea
+/// time, seconds) it was last used.
 #[derive(Clone, Debug)]
 struct KeptRide {
     ride: ShipRide,
+    hull: [u64; 7],
+    at_m: [f64; 2],
     used_s: f64,
 }
+
+/// A ship that moved faster than this between two frames jumped (a host's reposition): its
+/// ride starts again in the steady state, m/s.
+const RIDE_JUMP_MPS: f64 = 60.0;
 
 /// The ships' rides by ship.
 type Rides = std::collections::BTreeMap<ShipKey, KeptRide>;
@@ -642,13 +654,23 @@ impl SeaNow {
                 .iter()
                 .map(|w| std::f64::consts::PI * w.height_m * w.leading / w.wavelength_m)
                 .sum();
-            for w in waves {
+            // A wave confined to an area also rises across the area's band: by at most
+            // 1.5 / band of its amplitude a metre (smoothstep's steepest slope).
+            let bands = self.surface.wave_areas();
+            for (w, area) in waves.iter().zip(self.surface.explicit_wave_areas()) {
                 bounds.explicit_m += 0.5 * w.height_m;
                 bounds.displacement_m += 0.5 * w.height_m * w.leading;
                 explicit_slope += std::f64::consts::PI * w.height_m
                     / w.wavelength_m
                     / (1.0 - compression).max(0.1);
+                if let Some(band) = area.and_then(|i| bands.get(i)) {
+                    explicit_slope += 0.5 * w.height_m * 1.5 / band.band_m();
+                }
             }
+            // Global and regional waves fade where areas take precedence over them: by at
+            // most the areas' slopes summed.
+            let fading: f64 = bands.iter().map(|b| 1.5 / b.band_m()).sum();
+            explicit_slope += waves.iter().map(|w| 0.5 * w.height_m).sum::<f64>() * fading;
             bounds.rises = (0..=cascades.len())
                 .map(|m| {
                     let (long, short) = cascades.split_at(m);
@@ -889,7 +911,7 @@ pub struct WorldSea {
     /// Waves already told to the host as clamped.
     told_waves: std::collections::BTreeSet<(u8, u16, u8)>,
     now: Option<Arc<SeaNow>>,
-    /// The ships' responses to the present waves (made anew when they change).
+    /// The ships' responses to the present wind sea and swell (made anew when they change).
     responses: Option<Arc<std::sync::Mutex<ResponseCache>>>,
     /// The ships' rides (their transients outlive a change of the waves).
     rides: Arc<std::sync::Mutex<Rides>>,
@@ -1147,16 +1169,20 @@ impl SeaNow {
             entity.position.lat_deg,
             entity.position.lon_deg,
         );
-        // The host's waves as they apply where the ship is.
-        let weights = self.surface.explicit_weights_at(at[0], at[1]);
+        // The host's waves as they apply where the ship is, made at the cache's steps of
+        // heading and velocity and with the weights in 1/256ths, so that the response only
+        // changes (and starts a transient) when one of them steps.
+        let weights: Vec<f64> = self
+            .surface
+            .explicit_weights_at(at[0], at[1])
+            .iter()
+            .map(|w| (w * 256.0).round() / 256.0)
+            .collect();
         let explicit_waves = self.surface.explicit_linear_waves(&weights);
         let explicit = (!explicit_waves.is_empty()).then(|| {
-            SeawayResponse::new(
-                hull,
-                &explicit_waves,
-                entity.orientation.heading_deg,
-                velocity_enu_mps,
-            )
+            let (heading_deg, velocity) =
+                cig_sea::response::quantised(entity.orientation.heading_deg, velocity_enu_mps);
+            SeawayResponse::new(hull, &explicit_waves, heading_deg, velocity)
         });
         let ride = match ship {
             None => ShipRide::steady(response, explicit, velocity_enu_mps),
@@ -1165,17 +1191,27 @@ impl SeaNow {
                     .rides
                     .lock()
                     .unwrap_or_else(std::sync::PoisonError::into_inner);
-                let kept = rides.entry(key).or_insert_with(|| KeptRide {
+                let steady = || KeptRide {
                     ride: ShipRide::steady(
                         Arc::clone(&response),
                         explicit.clone(),
                         velocity_enu_mps,
                     ),
+                    hull: hull.bits(),
+                    at_m: at,
                     used_s: t_s,
-                });
+                };
+                let kept = rides.entry(key).or_insert_with(steady);
+                // Another hull under the same key (an id used again), or a jump: start again.
+                let moved_m = (at[0] - kept.at_m[0]).hypot(at[1] - kept.at_m[1]);
+                let jumped = moved_m > RIDE_JUMP_MPS * (t_s - kept.used_s).abs() + 1.0;
+                if kept.hull != hull.bits() || jumped {
+                    *kept = steady();
+                }
                 kept.ride
                     .change(hull, (response, explicit), velocity_enu_mps, at, t_s);
                 kept.used_s = t_s;
+                kept.at_m = at;
                 kept.ride.clone()
             }
         };

@@ -325,7 +325,8 @@ const DEFAULT_PRESSURE_MBAR: f32 = 1013.25;
 impl EnvironmentState {
     /// Whether a point lies in a region (its rounded rectangle, rotation included).
     fn region_contains(region: &EnvironmentalRegionControl, point: Geodetic) -> bool {
-        if region.region_state == 0 {
+        // 0 inactive, 1 active, 2 destroyed.
+        if region.region_state != 1 {
             return false;
         }
         let centre = Geodetic::new(region.latitude_deg, region.longitude_deg, point.alt_m);

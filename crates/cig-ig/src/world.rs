@@ -194,6 +194,9 @@ fn host_velocity_enu_mps(e: &IgEntity) -> Option<[f64; 2]> {
 /// This IG's ships' speed is sampled over at least this long, seconds (unless the host's
 /// Rate Control gives it).
 const SHIP_SPEED_SAMPLE_S: f64 = 0.5;
+/// A ship sampled faster than this was moved by the host (a jump): its speed starts over,
+/// m/s.
+const SHIP_JUMP_MPS: f64 = 60.0;
 /// A ship's last place older than this starts its speed over (a jump, a pause), seconds.
 const SHIP_SPEED_STALE_S: f64 = 5.0;
 
@@ -683,12 +686,13 @@ impl IgWorld {
         self.session.advance(dt, query);
         self.update_sea(query);
         // Ships whose velocity the script or the host gives ride the sea with it this frame.
-        for (id, velocity) in self.known_ship_velocities(&script_velocity) {
-            self.session.set_ship_velocity(id, velocity);
+        let known_velocities = self.known_ship_velocities(&script_velocity);
+        for (id, velocity) in &known_velocities {
+            self.session.set_ship_velocity(*id, *velocity);
         }
         self.session.resolve_poses(query);
         self.float_remote_ships(query);
-        self.track_own_ships(query, &self.known_ship_velocities(&script_velocity));
+        self.track_own_ships(query, &known_velocities);
         let effect_time_s = effect_time_s(self.clock.now().unix_seconds());
         if self
             .effects
@@ -1898,14 +1902,20 @@ impl IgWorld {
             } else if dt_s >= SHIP_SPEED_SAMPLE_S {
                 let moved = EnuFrame::new(entry.position).geodetic_to_enu(p);
                 let speed_mps = moved.x.hypot(moved.y) / dt_s;
-                *entry = MadeGood {
-                    speed_mps,
-                    course_deg: if speed_mps > 0.1 {
-                        moved.x.atan2(moved.y).to_degrees().rem_euclid(360.0)
-                    } else {
-                        pose.orientation.heading_deg
-                    },
-                    ..at_rest
+                *entry = if speed_mps > SHIP_JUMP_MPS {
+                    // The host moved it: a new start, not a speed (the wake's track and the
+                    // ship's ride start again too).
+                    at_rest
+                } else {
+                    MadeGood {
+                        speed_mps,
+                        course_deg: if speed_mps > 0.1 {
+                            moved.x.atan2(moved.y).to_degrees().rem_euclid(360.0)
+                        } else {
+                            pose.orientation.heading_deg
+                        },
+                        ..at_rest
+                    }
                 };
             }
             if let Some(wake) =

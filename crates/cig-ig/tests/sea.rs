@@ -1120,3 +1120,101 @@ fn regional_and_entity_waves_apply_where_the_host_puts_them() {
     let in_region = span(&mut w, &mut q, region_centre, 5.0);
     assert!(in_region < 0.05, "the region gone: {in_region}");
 }
+
+#[test]
+fn a_ships_ride_starts_again_after_a_jump_or_with_another_hull_and_odd_speeds_stay_sane() {
+    use cig_ig::sea::{ShipKey, WorldSea};
+    let mut sea = WorldSea::of_conditions(
+        Some(cig_sea::spectrum::SeaConditions::for_sea_state(6, 270.0).expect("sea state")),
+        cig_ig::sea::Water::of_scenario(None),
+        1,
+    );
+    let origin = cig_scene::sea::sea_origin(SOUTH, WEST);
+    let start_s = 1_782_000_000.0;
+    let places = std::collections::BTreeMap::new();
+    let environment = cig_ig::session::EnvironmentState::default();
+    let ship = |lat: f64, lon: f64, heading_deg: f64| cig_scene::EntityInstance {
+        id: 1,
+        model: "ship".into(),
+        position: Geodetic::new(lat, lon, 0.0),
+        orientation: Hpr {
+            heading_deg,
+            ..Hpr::default()
+        },
+        cue_important: false,
+        critical_radius_m: None,
+    };
+    let destroyer = cig_scene::sea::builtin_hull("destroyer").expect("hull");
+    let patrol = cig_scene::sea::builtin_hull("patrol_craft").expect("hull");
+    let (a, b) = (offset_point(-4_000.0, 0.0), offset_point(-1_000.0, 0.0));
+    let motion = |e: &cig_scene::EntityInstance| {
+        [
+            e.position.alt_m,
+            e.orientation.pitch_deg,
+            e.orientation.roll_deg,
+        ]
+    };
+    // Ship 1 sails north at 8 m/s for a minute at A, then turns west and is moved 3 km to B
+    // within a frame (as a host repositions it): it starts again in B's steady state, as
+    // ship 2 first seen there does. Ship 3 is a destroyer that becomes a patrol craft under
+    // the same id: it rides as ship 4, a patrol craft from the start.
+    let mut last = [[0.0; 3]; 4];
+    for k in 0..=600 {
+        let t = start_s + f64::from(k) * 0.1;
+        sea.update(&environment, None, origin, t, &places)
+            .expect("sea");
+        let now = sea.now().expect("a sea");
+        let jumped = k == 600;
+        let mut one = if jumped {
+            ship(b.0, b.1, 270.0)
+        } else {
+            ship(a.0, a.1, 0.0)
+        };
+        let velocity = if jumped { [-8.0, 0.0] } else { [0.0, 8.0] };
+        now.ride(&mut one, &destroyer, velocity, 0.0, Some(ShipKey::Own(1)));
+        let mut three = ship(a.0, a.1, 0.0);
+        let hull = if jumped { &patrol } else { &destroyer };
+        now.ride(&mut three, hull, [0.0, 8.0], 0.0, Some(ShipKey::Own(3)));
+        last[0] = motion(&one);
+        last[2] = motion(&three);
+        if jumped {
+            let mut two = ship(b.0, b.1, 270.0);
+            now.ride(
+                &mut two,
+                &destroyer,
+                [-8.0, 0.0],
+                0.0,
+                Some(ShipKey::Own(2)),
+            );
+            let mut four = ship(a.0, a.1, 0.0);
+            now.ride(&mut four, &patrol, [0.0, 8.0], 0.0, Some(ShipKey::Own(4)));
+            last[1] = motion(&two);
+            last[3] = motion(&four);
+        }
+        // An absurd speed (a host's bad rates) is taken as 40 m/s: the ride stays sane.
+        let mut wild = ship(a.0, a.1, 0.0);
+        let speed = if k % 2 == 0 { 1.0e6 } else { 0.0 };
+        now.ride(&mut wild, &patrol, [speed, 0.0], 0.0, Some(ShipKey::Own(5)));
+        let m = motion(&wild);
+        assert!(
+            m[0].abs() < 10.0 && m[1].abs() < 30.0 && m[2].abs() < 60.0,
+            "{m:?}"
+        );
+    }
+    for (x, y) in last[0].iter().zip(&last[1]) {
+        assert!(
+            (x - y).abs() < 1e-9,
+            "jumped {:?} against fresh {:?}",
+            last[0],
+            last[1]
+        );
+    }
+    for (x, y) in last[2].iter().zip(&last[3]) {
+        assert!(
+            (x - y).abs() < 1e-9,
+            "new hull {:?} against fresh {:?}",
+            last[2],
+            last[3]
+        );
+    }
+}

@@ -322,46 +322,58 @@ impl SeaPass {
             thermal: [(sea.water_temperature_c + 273.15) as f32, 0.0, 0.0, 0.0],
             ..bytemuck::Zeroable::zeroed()
         };
-        // The highest explicit waves, their phases worked out at the eye in double precision,
-        // and the areas they are confined to.
+        // The wave areas nearest the eye (all of them cover the sea's precedence, as on the
+        // CPU, up to MAX_WAVE_AREAS), and the highest explicit waves that reach the drawn sea,
+        // their phases worked out at the eye in double precision.
+        let area_distance = |a: &cig_scene::sea::WaveArea| {
+            let d = (a.centre_m[0] - eye_x).hypot(a.centre_m[1] - eye_y);
+            d - a.half_size_m[0].hypot(a.half_size_m[1]) - a.corner_radius_m - a.band_m()
+        };
+        let mut near_areas: Vec<usize> = (0..sea.wave_areas.len())
+            .filter(|i| area_distance(&sea.wave_areas[*i]) < far_m)
+            .collect();
+        near_areas.sort_by(|a, b| {
+            area_distance(&sea.wave_areas[*a]).total_cmp(&area_distance(&sea.wave_areas[*b]))
+        });
+        near_areas.truncate(MAX_WAVE_AREAS);
+        for (slot, a) in near_areas.iter().map(|i| &sea.wave_areas[*i]).enumerate() {
+            let (sin, cos) = a.rotation_deg.to_radians().sin_cos();
+            uniform.areas[2 * slot] = [
+                (a.centre_m[0] - eye_x) as f32,
+                (a.centre_m[1] - eye_y) as f32,
+                a.half_size_m[0] as f32,
+                a.half_size_m[1] as f32,
+            ];
+            uniform.areas[2 * slot + 1] = [
+                cos as f32,
+                sin as f32,
+                a.corner_radius_m as f32,
+                a.band_m() as f32,
+            ];
+            uniform.area_kinds[slot / 4][slot % 4] = match a.kind {
+                cig_scene::sea::AreaKind::Region => 1.0,
+                cig_scene::sea::AreaKind::Entity => 2.0,
+            };
+        }
+        uniform.thermal[2] = near_areas.len() as f32;
+        // Each wave with its area's slot plus one (0: everywhere); a wave whose area is not
+        // near is not drawn.
         let mut explicit: Vec<_> = sea
             .explicit_waves
             .iter()
             .zip(sea.explicit_areas.iter().chain(std::iter::repeat(&None)))
+            .filter_map(|(wave, area)| match area {
+                None => Some((wave, 0.0)),
+                Some(i) => near_areas
+                    .iter()
+                    .position(|n| n == i)
+                    .map(|slot| (wave, (slot + 1) as f32)),
+            })
             .collect();
         explicit.sort_by(|a, b| b.0.amplitude_m.total_cmp(&a.0.amplitude_m));
         explicit.truncate(MAX_EXPLICIT_WAVES);
         uniform.water[3] = explicit.len() as f32;
-        let mut drawn_areas: Vec<usize> = Vec::new();
-        for (slots, (wave, area)) in uniform.waves.chunks_exact_mut(2).zip(explicit) {
-            // The slot of its area, plus one (0: everywhere).
-            let area_slot = match area.and_then(|i| sea.wave_areas.get(i).map(|a| (i, a))) {
-                None => 0.0,
-                Some((i, a)) => {
-                    let slot = drawn_areas.iter().position(|d| *d == i).unwrap_or_else(|| {
-                        drawn_areas.push(i);
-                        drawn_areas.len() - 1
-                    });
-                    let (sin, cos) = a.rotation_deg.to_radians().sin_cos();
-                    uniform.areas[2 * slot] = [
-                        (a.centre_m[0] - eye_x) as f32,
-                        (a.centre_m[1] - eye_y) as f32,
-                        a.half_size_m[0] as f32,
-                        a.half_size_m[1] as f32,
-                    ];
-                    uniform.areas[2 * slot + 1] = [
-                        cos as f32,
-                        sin as f32,
-                        a.corner_radius_m as f32,
-                        a.transition_m as f32,
-                    ];
-                    uniform.area_kinds[slot / 4][slot % 4] = match a.kind {
-                        cig_scene::sea::AreaKind::Region => 1.0,
-                        cig_scene::sea::AreaKind::Entity => 2.0,
-                    };
-                    (slot + 1) as f32
-                }
-            };
+        for (slots, (wave, area_slot)) in uniform.waves.chunks_exact_mut(2).zip(explicit) {
             let [dx, dy] = wave.direction;
             let phase = wave.k_rad_m * (dx * eye_x + dy * eye_y) - wave.omega_rad_s * sea.time_s
                 + wave.phase_rad;
@@ -378,7 +390,6 @@ impl SeaPass {
                 0.0,
             ];
         }
-        uniform.thermal[2] = drawn_areas.len() as f32;
         // The nearest wakes, their sterns relative to the eye in its east and north, and
         // their centrelines astern along the sterns' past places.
         let mut near: Vec<(f64, [[f32; 4]; 3], WakeLine)> = wakes

@@ -37,7 +37,7 @@
 //! left out: at most 1 % of the variance for 10 000 waves), and then evaluated for any position
 //! and time in microseconds. The motion is a pure function of (sea, hull, heading, velocity,
 //! position, time): every IG that shares them draws the same ship, from its first frame (the
-//! steady state: no start-up transient and no history to keep). [`crate::motion`] integrates
+//! steady state: no start-up transient; only a change, 5. below, leaves a transient to keep). [`crate::motion`] integrates
 //! the same oscillators in time; the two agree (the tests).
 //!
 //! 5. **Changes** ([`ShipRide`]): when the ship turns, changes speed or the sea changes at
@@ -374,7 +374,9 @@ impl SeawayResponse {
 /// up) and across it (starboard up), with their rates (per second).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ModeStates {
+    /// Heave (m), slope along, slope across.
     pub value: [f64; 3],
+    /// Their rates: m/s and slope per second.
     pub rate: [f64; 3],
 }
 
@@ -421,7 +423,7 @@ pub struct MotionTransient {
 
 impl MotionTransient {
     /// The free motion of `hull`'s heave, pitch and roll from the states' `mismatch` at
-    /// `start_s`.
+    /// `start_s` (a damping ratio above 0.99 is taken as 0.99; a non-finite mismatch as 0).
     pub fn new(hull: &HullParameters, start_s: f64, mismatch: ModeStates) -> MotionTransient {
         let natural = [
             (hull.heave_period_s(), hull.heave_damping()),
@@ -493,7 +495,8 @@ pub struct ShipRide {
 
 impl ShipRide {
     /// A ship in the steady state of `response` (and of `explicit`, its response to the host's
-    /// explicit waves where it is), moving at `velocity_enu_mps` (east, north).
+    /// explicit waves where it is), moving at `velocity_enu_mps` (east, north, m/s; taken as
+    /// [`usable_velocity`]).
     pub fn steady(
         response: Arc<SeawayResponse>,
         explicit: Option<SeawayResponse>,
@@ -502,7 +505,7 @@ impl ShipRide {
         ShipRide {
             response,
             explicit,
-            velocity_enu_mps: velocity_enu_mps.map(|v| if v.is_finite() { v } else { 0.0 }),
+            velocity_enu_mps: usable_velocity(velocity_enu_mps),
             transient: None,
         }
     }
@@ -548,7 +551,7 @@ impl ShipRide {
         [x_east_m, y_north_m]: [f64; 2],
         t_s: f64,
     ) {
-        let velocity_enu_mps = velocity_enu_mps.map(|v| if v.is_finite() { v } else { 0.0 });
+        let velocity_enu_mps = usable_velocity(velocity_enu_mps);
         if Arc::ptr_eq(&response, &self.response)
             && explicit == self.explicit
             && velocity_enu_mps == self.velocity_enu_mps
@@ -587,6 +590,43 @@ pub struct ResponseCache {
     made: HashMap<ResponseKey, Arc<SeawayResponse>>,
 }
 
+/// A velocity (east, north, m/s) as the responses take it: non-finite parts 0, its speed at
+/// most 40 m/s.
+pub fn usable_velocity(velocity_enu_mps: [f64; 2]) -> [f64; 2] {
+    let velocity = velocity_enu_mps.map(|v| if v.is_finite() { v } else { 0.0 });
+    let speed = velocity[0].hypot(velocity[1]);
+    if speed > MAX_SPEED_MPS {
+        velocity.map(|v| v * MAX_SPEED_MPS / speed)
+    } else {
+        velocity
+    }
+}
+
+/// The heading and velocity of the steps a response is made at (what [`ResponseCache`]
+/// keys by): the heading in [`HEADING_STEP_DEG`] steps in `[0, 360)`, each of the velocity's
+/// parts in [`VELOCITY_STEP_MPS`] steps (non-finite values 0, the speed at most 40 m/s).
+pub fn quantised(heading_deg: f64, velocity_enu_mps: [f64; 2]) -> (f64, [f64; 2]) {
+    let (heading_step, velocity_steps) = steps_of(heading_deg, velocity_enu_mps);
+    #[expect(clippy::cast_precision_loss, reason = "the steps are small integers")]
+    (
+        heading_step as f64 * HEADING_STEP_DEG,
+        velocity_steps.map(|n| n as f64 * VELOCITY_STEP_MPS),
+    )
+}
+
+/// The heading's and velocity's steps (see [`quantised`]).
+fn steps_of(heading_deg: f64, velocity_enu_mps: [f64; 2]) -> (i64, [i64; 2]) {
+    let heading_deg = if heading_deg.is_finite() {
+        heading_deg.rem_euclid(360.0)
+    } else {
+        0.0
+    };
+    let heading_step =
+        steps(heading_deg, HEADING_STEP_DEG).rem_euclid(steps(360.0, HEADING_STEP_DEG));
+    let velocity_steps = usable_velocity(velocity_enu_mps).map(|v| steps(v, VELOCITY_STEP_MPS));
+    (heading_step, velocity_steps)
+}
+
 /// `value / step` rounded, saturating (non-finite values give 0).
 fn steps(value: f64, step: f64) -> i64 {
     #[expect(
@@ -615,21 +655,7 @@ impl ResponseCache {
         heading_deg: f64,
         velocity_enu_mps: [f64; 2],
     ) -> Arc<SeawayResponse> {
-        let heading_deg = if heading_deg.is_finite() {
-            heading_deg.rem_euclid(360.0)
-        } else {
-            0.0
-        };
-        let heading_step =
-            steps(heading_deg, HEADING_STEP_DEG).rem_euclid(steps(360.0, HEADING_STEP_DEG));
-        let velocity_steps = velocity_enu_mps.map(|v| {
-            let v = if v.is_finite() {
-                v.clamp(-MAX_SPEED_MPS, MAX_SPEED_MPS)
-            } else {
-                0.0
-            };
-            steps(v, VELOCITY_STEP_MPS)
-        });
+        let (heading_step, velocity_steps) = steps_of(heading_deg, velocity_enu_mps);
         let key = ResponseKey {
             hull: hull.bits(),
             heading_step,

@@ -315,7 +315,8 @@ pub enum AreaKind {
 /// the corner radius, a disc), and a band around it over which its waves fade out.
 ///
 /// Weight of a point: 1 inside; across the transition band, `smoothstep` of the distance
-/// from the rounded rectangle's edge (1 at the edge, 0 at `transition_m` out); 0 beyond.
+/// from the rounded rectangle's edge (1 at the edge, 0 at `transition_m` out, at least
+/// [`MIN_AREA_BAND_M`]); 0 beyond.
 /// Precedence (as CIGI's regional conditions over its global ones): where entities' areas
 /// cover a point by `E` (their weights summed, at most 1) and regions' by `R`, an entity's
 /// wave has its area's weight, a region's wave its area's weight times `1 − E`, and a global
@@ -331,8 +332,10 @@ pub struct WaveArea {
     /// The corners' radius, metres (`0..=1e7`; at most the smaller half size counts, unless
     /// the rectangle has no size: a disc).
     pub corner_radius_m: f64,
-    /// The transition band's width, metres (`0..=1e7`; 0: a hard edge).
+    /// The transition band's width, metres (`0..=1e7`; under [`MIN_AREA_BAND_M`] taken as
+    /// that).
     pub transition_m: f64,
+    /// Whose waves the area holds (for the precedence).
     pub kind: AreaKind,
 }
 
@@ -391,16 +394,28 @@ impl WaveArea {
         );
         let outside = qx.max(0.0).hypot(qy.max(0.0)) + qx.max(qy).min(0.0);
         let distance = outside - radius;
+        let band = self.band_m();
         if distance <= 0.0 {
             1.0
-        } else if distance >= self.transition_m {
+        } else if distance >= band {
             0.0
         } else {
-            let t = 1.0 - distance / self.transition_m;
+            let t = 1.0 - distance / band;
             t * t * (3.0 - 2.0 * t)
         }
     }
+
+    /// The band the weight falls across, metres: the transition, at least
+    /// [`MIN_AREA_BAND_M`] (the sea has no cliff at a hard edge).
+    pub fn band_m(&self) -> f64 {
+        self.transition_m.max(MIN_AREA_BAND_M)
+    }
 }
+
+/// An area's waves fade out over at least this, metres, even with no transition asked for:
+/// the weight's slope (at most 1.5 over the band) times a wave's amplitude stays a gentle
+/// slope of the sea, which line of sight can bound.
+pub const MIN_AREA_BAND_M: f64 = 50.0;
 
 /// How much entities' and regions' areas cover a point (see [`WaveArea`]).
 #[derive(Clone, Copy, Debug)]
@@ -728,10 +743,11 @@ impl SeaSurface {
     }
 
     /// The surface as travelling linear waves (the cascades' modes, each `k` and `-k`, then the
-    /// explicit waves where they apply in full): the height of the undisplaced point `x` at
-    /// time `t` is the sum of their [`LinearWave::height_m`] (the choppy displacement and the
-    /// grids' bilinear interpolation aside). For what responds to the sea as a whole, such as
-    /// a ship's motions ([`crate::response`]).
+    /// explicit waves): where every explicit wave applies in full (as with no areas), the
+    /// height of the undisplaced point `x` at time `t` is the sum of their
+    /// [`LinearWave::height_m`] (the choppy displacement and the grids' bilinear interpolation
+    /// aside); with areas, take [`SeaSurface::spectral_linear_waves`] and
+    /// [`SeaSurface::explicit_linear_waves`] with the weights at the place.
     pub fn linear_waves(&self) -> Vec<LinearWave> {
         let mut waves = self.spectral_linear_waves();
         waves.extend(self.explicit_linear_waves(&vec![1.0; self.gerstner.len()]));
@@ -1435,13 +1451,14 @@ mod tests {
         assert_eq!(disc.weight(60.0, 79.0), 1.0);
         assert!((disc.weight(-125.0 * 0.6, 125.0 * 0.8) - 0.5).abs() < 1e-9);
         assert_eq!(disc.weight(150.0, 1.0), 0.0);
-        // A hard edge.
+        // A hard edge asked for is softened over the least band.
         let hard = WaveArea {
             transition_m: 0.0,
             ..disc
         };
         assert_eq!(hard.weight(99.0, 0.0), 1.0);
-        assert_eq!(hard.weight(101.0, 0.0), 0.0);
+        assert!((hard.weight(100.0 + MIN_AREA_BAND_M / 2.0, 0.0) - 0.5).abs() < 1e-9);
+        assert_eq!(hard.weight(100.0 + MIN_AREA_BAND_M, 0.0), 0.0);
         assert!(WaveArea {
             transition_m: f64::NAN,
             ..disc

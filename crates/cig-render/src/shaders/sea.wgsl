@@ -126,9 +126,7 @@ fn area_weight(i: u32, p: vec2<f32>) -> f32 {
     if (distance <= 0.0) {
         return 1.0;
     }
-    if (b.w <= 0.0) {
-        return 0.0;
-    }
+    // The band, at least cig_sea::surface::MIN_AREA_BAND_M (sea.rs writes it so).
     let t = clamp(1.0 - distance / b.w, 0.0, 1.0);
     return t * t * (3.0 - 2.0 * t);
 }
