@@ -75,7 +75,14 @@ impl Gpu {
             Err(first) => {
                 let mut gl = desc;
                 gl.backends = wgpu::Backends::GL;
-                Self::with_instance(wgpu::Instance::new(gl), None).map_err(|_| first)
+                let gpu = Self::with_instance(wgpu::Instance::new(gl), None).map_err(|_| first)?;
+                tracing::warn!(
+                    "no Vulkan, Metal or DX12 adapter: drawing with OpenGL on {} (clouds and light \
+                     halos are not drawn, and frame times are not comparable with Vulkan's; \
+                     on Debian, Mesa's mesa-vulkan-drivers gives lavapipe)",
+                    gpu.info.name
+                );
+                Ok(gpu)
             }
         }
     }

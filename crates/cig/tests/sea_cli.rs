@@ -744,3 +744,61 @@ fn a_ship_under_way_draws_its_wake_astern_and_round_its_turn() {
         astern(&under_way)
     );
 }
+
+#[test]
+fn straight_down_over_a_calm_sea_the_haze_has_no_cone_at_the_nadir() {
+    // From 3 km, straight down, the morning sun low in the east: the haze between the eye
+    // and the sea is lit from all around, so it is the same in every direction round the
+    // nadir (it once took the horizon sky of each ray's azimuth: a cone, brighter toward and
+    // away from the sun, darker to the sides, seamed at the nadir).
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = small_db(dir.path());
+    let out = dir.path().join("nadir.png");
+    cig()
+        .args(["render", "--db"])
+        .arg(&db)
+        .args([
+            "--eye",
+            "35.99,-121.44,3000",
+            "--hpr",
+            "0,-89.9,0",
+            "--fov",
+            "60",
+            "--size",
+            "160x90",
+            "--time",
+            "2026-06-21T16:00:00Z",
+            "--sea-wind",
+            "0",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let (w, h, rgba) = read_png_rgba(&out);
+    let brightness = |x: u32, y: u32| {
+        let i = ((y * w + x) * 4) as usize;
+        u32::from(rgba[i]) + u32::from(rgba[i + 1]) + u32::from(rgba[i + 2])
+    };
+    // Close round the nadir (a degree or two) every direction agrees; further out the haze
+    // may brighten smoothly toward one side (the path's own light), but a cone would differ
+    // by as much at any radius.
+    for radius in [1.5_f64, 3.0] {
+        let ring: Vec<u32> = (0..16)
+            .map(|k| {
+                let a = std::f64::consts::TAU * f64::from(k) / 16.0;
+                let x = (f64::from(w / 2) + radius * a.cos()).round() as u32;
+                let y = (f64::from(h / 2) - radius * a.sin()).round() as u32;
+                brightness(x, y)
+            })
+            .collect();
+        let (lo, hi) = (
+            ring.iter().copied().min().unwrap_or(0),
+            ring.iter().copied().max().unwrap_or(0),
+        );
+        assert!(
+            hi - lo <= 9 && lo > 100,
+            "{radius} px round the nadir: {ring:?}"
+        );
+    }
+}

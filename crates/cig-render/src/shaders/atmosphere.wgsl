@@ -159,7 +159,23 @@ fn apply_atmosphere_exposed(exposed_colour: vec3<f32>, rel: vec3<f32>) -> vec3<f
         let uv = sky_view_uv(dir);
         let source = textureSampleLevel(sky_source_lut, sky_view_sampler, uv, 0.0).rgb;
         colour = colour * t + source * (vec3<f32>(1.0) - t);
-        fog_colour = textureSampleLevel(sky_view_lut, sky_view_sampler, vec2<f32>(uv.x, g.sky_frame_y.w), 0.0).rgb;
+        let row = g.sky_frame_y.w;
+        fog_colour = textureSampleLevel(sky_view_lut, sky_view_sampler, vec2<f32>(uv.x, row), 0.0).rgb;
+        // The fog's colour is the horizon sky of the ray's azimuth: what a thick fog looks like
+        // toward the horizon. A steep ray's azimuth turns half a circle through the nadir (a
+        // seamed cone on a calm sea below it), and a thick fog seen steeply down is lit from
+        // all around: toward the horizon's mean over azimuth as the ray steepens past 37
+        // degrees, all of it at 72, from four fixed azimuths a quarter turn apart (the
+        // horizon's first three harmonics in azimuth average out exactly over them).
+        let steep = smoothstep(0.6, 0.95, abs(dot(dir, g.eye_up.xyz)));
+        if (steep > 0.0) {
+            var mean = vec3<f32>(0.0);
+            for (var k = 0u; k < 4u; k++) {
+                let around = vec2<f32>(0.125 + 0.25 * f32(k), row);
+                mean += 0.25 * textureSampleLevel(sky_view_lut, sky_view_sampler, around, 0.0).rgb;
+            }
+            fog_colour = mix(fog_colour, mean, steep);
+        }
     }
     let f = fog_factor(d) * fog_layer_transmittance(rel);
     return f * colour + (1.0 - f) * fog_colour;
