@@ -235,14 +235,7 @@ pub const ENTITY_WAVES_TRANSITION_M: f64 = 1000.0;
 pub fn region_area(plane: &EnuFrame, region: &cig_cigi::EnvironmentalRegionControl) -> WaveArea {
     let size = |v: f32| host_value(v, 0.0, 2.0e7, 0.0);
     WaveArea {
-        centre_m: cig_scene::sea::sea_plane_xy(plane, region.latitude_deg, region.longitude_deg)
-            .map(|v| {
-                if v.is_finite() {
-                    v.clamp(-1e9, 1e9)
-                } else {
-                    0.0
-                }
-            }),
+        centre_m: area_centre_m(plane, region.latitude_deg, region.longitude_deg),
         half_size_m: [size(region.size_x_m) / 2.0, size(region.size_y_m) / 2.0],
         rotation_deg: host_value(region.rotation_deg, -1.0e6, 1.0e6, 0.0),
         corner_radius_m: host_value(region.corner_radius_m, 0.0, 1.0e7, 0.0),
@@ -251,17 +244,23 @@ pub fn region_area(plane: &EnuFrame, region: &cig_cigi::EnvironmentalRegionContr
     }
 }
 
+/// Where a host's point falls in the sea's plane, within the range `WaveArea` takes (a
+/// non-finite one at the origin).
+fn area_centre_m(plane: &EnuFrame, lat_deg: f64, lon_deg: f64) -> [f64; 2] {
+    cig_scene::sea::sea_plane_xy(plane, lat_deg, lon_deg).map(|v| {
+        if v.is_finite() {
+            v.clamp(-1e9, 1e9)
+        } else {
+            0.0
+        }
+    })
+}
+
 /// The area around an entity at (`lat_deg`, `lon_deg`) its waves cover: a disc of
 /// [`ENTITY_WAVES_RADIUS_M`] fading out over [`ENTITY_WAVES_TRANSITION_M`].
 pub fn entity_area(plane: &EnuFrame, lat_deg: f64, lon_deg: f64) -> WaveArea {
     WaveArea {
-        centre_m: cig_scene::sea::sea_plane_xy(plane, lat_deg, lon_deg).map(|v| {
-            if v.is_finite() {
-                v.clamp(-1e9, 1e9)
-            } else {
-                0.0
-            }
-        }),
+        centre_m: area_centre_m(plane, lat_deg, lon_deg),
         half_size_m: [0.0, 0.0],
         rotation_deg: 0.0,
         corner_radius_m: ENTITY_WAVES_RADIUS_M,
@@ -304,10 +303,6 @@ struct KeptRide {
     at_m: [f64; 2],
     used_s: f64,
 }
-
-/// A ship that moved faster than this between two frames jumped (a host's reposition): its
-/// ride starts again in the steady state, m/s.
-const RIDE_JUMP_MPS: f64 = 60.0;
 
 /// The ships' rides by ship.
 type Rides = std::collections::BTreeMap<ShipKey, KeptRide>;
@@ -984,7 +979,7 @@ impl WorldSea {
     }
 
     /// Computes the sea at `unix_time_s` for the host's environment, in the tangent plane of
-    /// `origin` (`entity_places`: where this IG's entities are, for the host's entity-scoped
+    /// `origin` (`entity_poses`: where this IG's entities are, for the host's entity-scoped
     /// waves); returns the host waves whose values had to be clamped (each told once). The
     /// surface is rebuilt only when the wind sea changes, and reused in place when no one else
     /// holds the last frame's sea.
@@ -997,7 +992,7 @@ impl WorldSea {
         eye_msl: Option<Geodetic>,
         origin: Geodetic,
         unix_time_s: f64,
-        entity_places: &std::collections::BTreeMap<u16, Geodetic>,
+        entity_poses: &std::collections::BTreeMap<u16, crate::pose::Pose>,
     ) -> Result<Vec<String>, WorldSeaError> {
         let host_global = environment
             .maritime
@@ -1022,9 +1017,9 @@ impl WorldSea {
                             .filter(|r| r.region_state == 1)
                             .map(|r| region_area(&plane, r))
                     } else {
-                        entity_places
+                        entity_poses
                             .get(&id)
-                            .map(|p| entity_area(&plane, p.lat_deg, p.lon_deg))
+                            .map(|p| entity_area(&plane, p.position.lat_deg, p.position.lon_deg))
                     };
                     let Some(shape) = shape else { continue };
                     Some(*area_of.entry((scope, id)).or_insert_with(|| {
@@ -1204,7 +1199,8 @@ impl SeaNow {
                 let kept = rides.entry(key).or_insert_with(steady);
                 // Another hull under the same key (an id used again), or a jump: start again.
                 let moved_m = (at[0] - kept.at_m[0]).hypot(at[1] - kept.at_m[1]);
-                let jumped = moved_m > RIDE_JUMP_MPS * (t_s - kept.used_s).abs() + 1.0;
+                let jumped =
+                    moved_m > cig_scene::sea::SHIP_JUMP_MPS * (t_s - kept.used_s).abs() + 1.0;
                 if kept.hull != hull.bits() || jumped {
                     *kept = steady();
                 }

@@ -164,6 +164,26 @@ pub struct Rates {
     pub body_axes: bool,
 }
 
+impl Rates {
+    /// The linear rates as a velocity in the local east, north, up frame, m/s, for an entity
+    /// of this orientation (body axes turn with it; world axes are x north, y east, z down).
+    pub fn velocity_enu_mps(&self, orientation: Hpr) -> DVec3 {
+        let [x, y, z] = self.linear_mps;
+        if self.body_axes {
+            offset_enu(
+                orientation,
+                BodyOffset {
+                    x_m: x,
+                    y_m: y,
+                    z_m: z,
+                },
+            )
+        } else {
+            DVec3::new(y, x, -z)
+        }
+    }
+}
+
 /// An articulated part's state.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PartState {
@@ -1618,18 +1638,7 @@ impl IgSession {
                     lon_deg,
                     alt_m,
                 } => {
-                    let enu = if rates.body_axes {
-                        offset_enu(
-                            e.orientation,
-                            BodyOffset {
-                                x_m: x * dt_s,
-                                y_m: y * dt_s,
-                                z_m: z * dt_s,
-                            },
-                        )
-                    } else {
-                        DVec3::new(y, x, -z) * dt_s
-                    };
+                    let enu = rates.velocity_enu_mps(e.orientation) * dt_s;
                     let here = geodetic_msl(*lat_deg, *lon_deg, *alt_m, query);
                     let there = displaced(here, enu);
                     *lat_deg = there.lat_deg;

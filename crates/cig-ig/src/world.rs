@@ -167,6 +167,24 @@ struct MadeGood {
     course_deg: f64,
 }
 
+impl MadeGood {
+    /// This sample making good `velocity_enu_mps` (east, north): its course, or (nearly still)
+    /// the heading it had at rest.
+    fn moving(self, velocity_enu_mps: [f64; 2]) -> MadeGood {
+        let [east, north] = velocity_enu_mps;
+        let speed_mps = east.hypot(north);
+        MadeGood {
+            speed_mps,
+            course_deg: if speed_mps > 0.1 {
+                east.atan2(north).to_degrees().rem_euclid(360.0)
+            } else {
+                self.course_deg
+            },
+            ..self
+        }
+    }
+}
+
 /// The horizontal velocity (east, north), m/s, the host's Rate Control gives a geodetic
 /// entity, if it gives one.
 fn host_velocity_enu_mps(e: &IgEntity) -> Option<[f64; 2]> {
@@ -174,29 +192,13 @@ fn host_velocity_enu_mps(e: &IgEntity) -> Option<[f64; 2]> {
     if !matches!(e.placement, Placement::Geodetic { .. }) {
         return None;
     }
-    let [x, y, z] = rates.linear_mps;
-    let enu = if rates.body_axes {
-        crate::pose::offset_enu(
-            e.orientation,
-            BodyOffset {
-                x_m: x,
-                y_m: y,
-                z_m: z,
-            },
-        )
-    } else {
-        // World axes: x north, y east, z down.
-        DVec3::new(y, x, -z)
-    };
+    let enu = rates.velocity_enu_mps(e.orientation);
     Some([enu.x, enu.y])
 }
 
 /// This IG's ships' speed is sampled over at least this long, seconds (unless the host's
 /// Rate Control gives it).
 const SHIP_SPEED_SAMPLE_S: f64 = 0.5;
-/// A ship sampled faster than this was moved by the host (a jump): its speed starts over,
-/// m/s.
-const SHIP_JUMP_MPS: f64 = 60.0;
 /// A ship's last place older than this starts its speed over (a jump, a pause), seconds.
 const SHIP_SPEED_STALE_S: f64 = 5.0;
 
@@ -1736,19 +1738,13 @@ impl IgWorld {
             .map(|e| Geodetic::new(e.lat_deg, e.lon_deg, e.alt_m - self.eye_geoid_m));
         // The session lets go of last frame's sea so that its surface is reused in place.
         self.session.set_sea(None);
-        // Where this IG's entities stood last frame (for the host's entity-scoped waves).
-        let entity_places: BTreeMap<u16, Geodetic> = self
-            .session
-            .poses()
-            .iter()
-            .map(|(id, pose)| (*id, pose.position))
-            .collect();
+        // Last frame's poses place the host's entity-scoped waves.
         let result = self.sea.update(
             self.session.environment(),
             eye_msl,
             origin,
             self.clock.now().unix_seconds(),
-            &entity_places,
+            self.session.poses(),
         );
         match result {
             Ok(told) => {
@@ -1884,38 +1880,17 @@ impl IgWorld {
             let dt_s = now - entry.at_s;
             if let Some(&velocity) = known.get(id) {
                 // The script or the host's rates say it at once.
-                let speed_mps = velocity[0].hypot(velocity[1]);
-                *entry = MadeGood {
-                    speed_mps,
-                    course_deg: if speed_mps > 0.1 {
-                        velocity[0]
-                            .atan2(velocity[1])
-                            .to_degrees()
-                            .rem_euclid(360.0)
-                    } else {
-                        pose.orientation.heading_deg
-                    },
-                    ..at_rest
-                };
+                *entry = at_rest.moving(velocity);
             } else if dt_s > SHIP_SPEED_STALE_S {
                 *entry = at_rest;
             } else if dt_s >= SHIP_SPEED_SAMPLE_S {
-                let moved = EnuFrame::new(entry.position).geodetic_to_enu(p);
-                let speed_mps = moved.x.hypot(moved.y) / dt_s;
-                *entry = if speed_mps > SHIP_JUMP_MPS {
+                let moved = EnuFrame::new(entry.position).geodetic_to_enu(p) / dt_s;
+                *entry = if moved.x.hypot(moved.y) > cig_scene::sea::SHIP_JUMP_MPS {
                     // The host moved it: a new start, not a speed (the wake's track and the
                     // ship's ride start again too).
                     at_rest
                 } else {
-                    MadeGood {
-                        speed_mps,
-                        course_deg: if speed_mps > 0.1 {
-                            moved.x.atan2(moved.y).to_degrees().rem_euclid(360.0)
-                        } else {
-                            pose.orientation.heading_deg
-                        },
-                        ..at_rest
-                    }
+                    at_rest.moving([moved.x, moved.y])
                 };
             }
             if let Some(wake) =

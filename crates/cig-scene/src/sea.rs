@@ -195,8 +195,9 @@ pub struct WakeTrack {
     points: std::collections::VecDeque<(f64, Geodetic)>,
 }
 
-/// A stern that moved faster than this between two of its places jumped, m/s.
-const WAKE_TRACK_JUMP_MPS: f64 = 60.0;
+/// A ship that moved faster than this between two of its places jumped (a host moved it): its
+/// wake's track, its ride on the sea and its speed made good start again, m/s.
+pub const SHIP_JUMP_MPS: f64 = 60.0;
 
 impl WakeTrack {
     /// Notes the stern's place at `now_s` (the caller's monotonic clock).
@@ -209,7 +210,7 @@ impl WakeTrack {
                 .length();
             // Written so that a NaN place or time starts the track again.
             let plausible = (0.0..=3.0 * WAKE_TRACK_SPACING_S).contains(&dt_s)
-                && (0.0..=WAKE_TRACK_JUMP_MPS * dt_s + 5.0).contains(&moved_m);
+                && (0.0..=SHIP_JUMP_MPS * dt_s + 5.0).contains(&moved_m);
             // One place in each span of the clock (not one a span after the last), so channels
             // of one IG, drawing the same frames, keep the same places.
             let span = |t: f64| (t / WAKE_TRACK_SPACING_S).floor();

@@ -328,17 +328,7 @@ impl SeawayResponse {
     /// The motion of the ship at (`x_east_m`, `y_north_m`) of the sea's frame (its
     /// waterplane's centre) at the sea's time `t_s`.
     pub fn motion_at(&self, x_east_m: f64, y_north_m: f64, t_s: f64) -> ShipMotion {
-        let (mut heave, mut along, mut across) = (0.0, 0.0, 0.0);
-        for term in &self.terms {
-            let phase =
-                term.k_rad_m[0] * x_east_m + term.k_rad_m[1] * y_north_m - term.omega_rad_s * t_s;
-            let (sin, cos) = phase.sin_cos();
-            // Re(C e^(iφ)) = C.re cos φ − C.im sin φ.
-            heave += term.heave.re * cos - term.heave.im * sin;
-            along += term.pitch.re * cos - term.pitch.im * sin;
-            across += term.roll.re * cos - term.roll.im * sin;
-        }
-        ModeStates::motion_of([heave, along, across])
+        ModeStates::motion_of(self.sum::<false>(x_east_m, y_north_m, t_s, [0.0; 2]).value)
     }
 
     /// The three oscillators' states and their rates for the ship at (`x_east_m`,
@@ -352,18 +342,33 @@ impl SeawayResponse {
         t_s: f64,
         velocity_enu_mps: [f64; 2],
     ) -> ModeStates {
+        self.sum::<true>(x_east_m, y_north_m, t_s, velocity_enu_mps)
+    }
+
+    /// The terms summed at a place and time: the states, and their rates when `RATES` (the
+    /// steady ride each frame needs only the states).
+    fn sum<const RATES: bool>(
+        &self,
+        x_east_m: f64,
+        y_north_m: f64,
+        t_s: f64,
+        velocity_enu_mps: [f64; 2],
+    ) -> ModeStates {
         let mut states = ModeStates::default();
         for term in &self.terms {
             let phase =
                 term.k_rad_m[0] * x_east_m + term.k_rad_m[1] * y_north_m - term.omega_rad_s * t_s;
             let (sin, cos) = phase.sin_cos();
-            let turn = term.k_rad_m[0] * velocity_enu_mps[0]
-                + term.k_rad_m[1] * velocity_enu_mps[1]
-                - term.omega_rad_s;
             for (m, c) in [term.heave, term.pitch, term.roll].into_iter().enumerate() {
+                // Re(C e^(iφ)) = C.re cos φ − C.im sin φ.
                 states.value[m] += c.re * cos - c.im * sin;
-                // Re(i w C e^(iφ)) = −w (C.re sin φ + C.im cos φ).
-                states.rate[m] -= turn * (c.re * sin + c.im * cos);
+                if RATES {
+                    let turn = term.k_rad_m[0] * velocity_enu_mps[0]
+                        + term.k_rad_m[1] * velocity_enu_mps[1]
+                        - term.omega_rad_s;
+                    // Re(i w C e^(iφ)) = −w (C.re sin φ + C.im cos φ).
+                    states.rate[m] -= turn * (c.re * sin + c.im * cos);
+                }
             }
         }
         states
